@@ -1,0 +1,51 @@
+#include "calib/plate.hpp"
+
+#include <cmath>
+
+namespace sweepmap {
+
+PlateRegion PlateRegion::fromConfig(const PlateConfig& plate) {
+  PlateRegion r;
+  r.inner_radius_m = plate.region_inner_radius_mm * 1e-3;
+  r.outer_radius_m = plate.region_outer_radius_mm * 1e-3;
+  r.z_center_m = plate.height_mm * 1e-3;
+  r.thickness_m = plate.region_thickness_mm * 1e-3;
+  return r;
+}
+
+bool PlateRegion::contains(const Eigen::Vector3f& p) const {
+  if (p.x() < 0.0f) return false;  // the half ring cut along Y'
+  if (std::abs(double(p.z()) - z_center_m) > 0.5 * thickness_m) return false;
+  const double rho2 = double(p.x()) * p.x() + double(p.y()) * p.y();
+  return rho2 >= inner_radius_m * inner_radius_m && rho2 <= outer_radius_m * outer_radius_m;
+}
+
+std::vector<size_t> extractPlatePoints(const std::vector<Eigen::Vector3f>& cloud_Op,
+                                       const PlateRegion& region) {
+  std::vector<size_t> idx;
+  for (size_t i = 0; i < cloud_Op.size(); ++i) {
+    if (region.contains(cloud_Op[i])) idx.push_back(i);
+  }
+  return idx;
+}
+
+PlateEstimate estimateBetaCentroid(const std::vector<Eigen::Vector3f>& cloud_Op,
+                                   const PlateRegion& region, int min_points) {
+  PlateEstimate e;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const auto& p : cloud_Op) {
+    if (!region.contains(p)) continue;
+    sum += Eigen::Vector2d(p.x(), p.y());
+    ++e.points;
+  }
+  if (e.points < min_points) {
+    e.reason = "plate not found: " + std::to_string(e.points) + " points in the region, need " +
+               std::to_string(min_points);
+    return e;
+  }
+  e.found = true;
+  e.beta_rad = std::atan2(sum.y(), sum.x());
+  return e;
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,61 @@
+#include "calib/sweep_assembly.hpp"
+
+#include <cmath>
+
+#include "calib/rotating_geometry.hpp"
+
+namespace sweepmap {
+
+AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow& window,
+                             const RigConfig& rig) {
+  AssembledSweep out;
+  out.window = window;
+  out.scans = static_cast<int>(scans.size());
+  out.alpha_rad = rig.plate.alpha_deg * M_PI / 180.0;
+  if (scans.empty()) {
+    out.reason = "no scans in the window";
+    return out;
+  }
+  out.first_ray_utime = scans.front().utime;
+  const double offset_x_m = rig.geometry.lidar_offset_x_mm * 1e-3;
+
+  size_t total = 0;
+  for (const auto& s : scans) total += s.ranges_m.size();
+  out.points_Op.reserve(total);
+  for (const auto& scan : scans) {
+    const double t_ray_s = 1e-9 * static_cast<double>(scan.time_increment_ns);
+    const double phi0 = rotating::motorAngleFromTime(scan.utime, out.first_ray_utime,
+                                                     window.omega_rad_s);
+    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      const double r = scan.ranges_m[i];
+      if (!(r >= scan.range_min_m && r <= scan.range_max_m)) continue;
+      // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
+      const double phi = phi0 + window.omega_rad_s * t_ray_s * static_cast<double>(i);
+      const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
+      out.points_Op.push_back(rotating::lidarToOPrime(p_L, phi, offset_x_m).cast<float>());
+    }
+  }
+
+  out.plate = estimateBetaCentroid(out.points_Op, PlateRegion::fromConfig(rig.plate),
+                                   rig.plate.min_points);
+  if (!rig.assembler.correct_attitude) {
+    out.reason = "correction disabled (assembler.correct_attitude=false)";
+  } else if (window.accel_overlap) {
+    out.reason = "motor ramp overlapped the lidar window";
+  } else if (!out.plate.found) {
+    out.reason = out.plate.reason;
+  } else {
+    out.corrected = true;
+    out.phi_offset_rad = rotating::phiOffset(out.alpha_rad, out.plate.beta_rad);
+  }
+  if (out.corrected) {
+    const Eigen::Matrix3f R = rotating::rotZ(out.phi_offset_rad).cast<float>();
+    out.points.reserve(out.points_Op.size());
+    for (const auto& p : out.points_Op) out.points.push_back(R * p);
+  } else {
+    out.points = out.points_Op;
+  }
+  return out;
+}
+
+}  // namespace sweepmap

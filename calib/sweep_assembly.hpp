@@ -1,0 +1,43 @@
+// Assembly of one 3D sweep of rig A from the 2D scans of its lidar window:
+// C_O' by Eq. 4-7, the plate's beta, phi_offset = alpha - beta (Eq. 10) and C_O (Eq. 8-9).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "calib/plate.hpp"
+#include "core/rig_config.hpp"
+#include "core/scan.hpp"
+
+namespace sweepmap {
+
+struct SweepWindow {
+  int64_t sweep_id = 0;
+  int mode = 0;
+  int64_t start_utime = 0;  // scans whose first ray is in [start, end) belong to the sweep
+  int64_t end_utime = 0;
+  double omega_rad_s = 0.0;  // constant shaft speed over the window
+  bool accel_overlap = false;  // the motor's timing says a ramp overlapped the window
+};
+
+struct AssembledSweep {
+  SweepWindow window;
+  int scans = 0;
+  int64_t first_ray_utime = 0;              // phi_motor = 0 here: the instant frame O' is defined
+  std::vector<Eigen::Vector3f> points_Op;   // C_O'
+  std::vector<Eigen::Vector3f> points;      // C_O when corrected, else C_O'
+  PlateEstimate plate;
+  double alpha_rad = 0.0;
+  double phi_offset_rad = 0.0;  // applied rotation (0 when not corrected)
+  bool corrected = false;
+  std::string reason;           // why not corrected
+};
+
+// `scans` must be the valid scans of the window in time order. Rays with range 0 or
+// outside [range_min, range_max] of their scan are skipped.
+AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow& window,
+                             const RigConfig& rig);
+
+}  // namespace sweepmap

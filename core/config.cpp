@@ -1,0 +1,189 @@
+#include "core/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+#include <set>
+#include <sstream>
+
+namespace sweepmap {
+namespace {
+
+std::string formatDouble(double v) {
+  std::ostringstream s;
+  s << std::setprecision(17) << v;
+  // Shortest representation that round-trips: try fewer digits first.
+  for (int p = 1; p <= 17; ++p) {
+    std::ostringstream t;
+    t << std::setprecision(p) << v;
+    if (std::stod(t.str()) == v) return t.str();
+  }
+  return s.str();
+}
+
+double parseDouble(const std::string& text) {
+  size_t used = 0;
+  const double v = std::stod(text, &used);
+  if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument("not a finite number");
+  return v;
+}
+
+void flatten(const YAML::Node& node, const std::string& prefix,
+             std::vector<std::pair<std::string, YAML::Node>>* out, const std::string& source) {
+  if (!node.IsMap()) {
+    out->emplace_back(prefix, node);
+    return;
+  }
+  for (const auto& kv : node) {
+    const std::string name = kv.first.as<std::string>();
+    const std::string key = prefix.empty() ? name : prefix + "." + name;
+    if (kv.second.IsMap()) {
+      flatten(kv.second, key, out, source);
+    } else if (kv.second.IsScalar()) {
+      out->emplace_back(key, kv.second);
+    } else {
+      throw ConfigError(source + ": key '" + key + "' must be a scalar or a map");
+    }
+  }
+}
+
+}  // namespace
+
+void ConfigSchema::addEntry(Entry entry) {
+  if (index_.count(entry.key)) throw std::logic_error("config key declared twice: " + entry.key);
+  index_[entry.key] = entries_.size();
+  entries_.push_back(std::move(entry));
+}
+
+void ConfigSchema::add(const std::string& key, double* value, const std::string& unit,
+                       const std::string& help) {
+  addEntry({key, unit, help, [value](const std::string& t) { *value = parseDouble(t); },
+            [value] { return formatDouble(*value); }});
+}
+
+void ConfigSchema::add(const std::string& key, int* value, const std::string& unit,
+                       const std::string& help) {
+  addEntry({key, unit, help,
+            [value](const std::string& t) {
+              size_t used = 0;
+              const long v = std::stol(t, &used);
+              if (used != t.size()) throw std::invalid_argument("not an integer");
+              *value = static_cast<int>(v);
+            },
+            [value] { return std::to_string(*value); }});
+}
+
+void ConfigSchema::add(const std::string& key, bool* value, const std::string& unit,
+                       const std::string& help) {
+  addEntry({key, unit, help,
+            [value](const std::string& t) {
+              if (t == "true") {
+                *value = true;
+              } else if (t == "false") {
+                *value = false;
+              } else {
+                throw std::invalid_argument("expected true or false");
+              }
+            },
+            [value] { return std::string(*value ? "true" : "false"); }});
+}
+
+void ConfigSchema::add(const std::string& key, std::string* value, const std::string& unit,
+                       const std::string& help) {
+  addEntry({key, unit, help, [value](const std::string& t) { *value = t; },
+            [value] { return *value; }});
+}
+
+void ConfigSchema::assign(const std::string& key, const std::string& text,
+                          const std::string& source) {
+  const auto it = index_.find(key);
+  if (it == index_.end()) throw ConfigError(source + ": unknown key '" + key + "'");
+  try {
+    entries_[it->second].parse(text);
+  } catch (const std::exception& e) {
+    throw ConfigError(source + ": key '" + key + "': bad value '" + text + "' (" + e.what() + ")");
+  }
+}
+
+void ConfigSchema::loadString(const std::string& yaml_text, const std::string& source) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  if (!root.IsMap()) throw ConfigError(source + ": top level must be a map of keys");
+  std::vector<std::pair<std::string, YAML::Node>> flat;
+  flatten(root, "", &flat, source);
+  std::set<std::string> seen;
+  for (const auto& [key, node] : flat) {
+    const std::string where =
+        source + ":" + std::to_string(node.Mark().line + 1);
+    assign(key, node.as<std::string>(), where);
+    seen.insert(key);
+  }
+  for (const auto& e : entries_) {
+    if (!seen.count(e.key)) throw ConfigError(source + ": missing key '" + e.key + "'");
+  }
+}
+
+void ConfigSchema::loadFile(const std::string& path) {
+  YAML::Node probe;
+  std::string text;
+  {
+    std::ifstream in(path);
+    if (!in) throw ConfigError(path + ": cannot open");
+    std::ostringstream s;
+    s << in.rdbuf();
+    text = s.str();
+  }
+  loadString(text, path);
+}
+
+void ConfigSchema::set(const std::string& assignment) {
+  const auto eq = assignment.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw ConfigError("--set: expected key=value, got '" + assignment + "'");
+  }
+  assign(assignment.substr(0, eq), assignment.substr(eq + 1), "--set");
+}
+
+void ConfigSchema::print(std::ostream& out) const {
+  size_t width = 0;
+  for (const auto& e : entries_) width = std::max(width, e.key.size());
+  for (const auto& e : entries_) {
+    out << std::left << std::setw(static_cast<int>(width)) << e.key << " = " << e.format();
+    if (!e.unit.empty()) out << " [" << e.unit << "]";
+    out << "  # " << e.help << "\n";
+  }
+}
+
+std::string ConfigSchema::toYaml() const {
+  YAML::Node root;
+  for (const auto& e : entries_) {
+    std::vector<std::string> parts;
+    std::stringstream ss(e.key);
+    for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+    // yaml-cpp nodes are reference-like: walk down creating maps.
+    YAML::Node node = root;
+    for (size_t i = 0; i + 1 < parts.size(); ++i) {
+      YAML::Node child = node[parts[i]];
+      node.reset(child);
+    }
+    node[parts.back()] = e.format();
+  }
+  YAML::Emitter em;
+  em << root;
+  return std::string(em.c_str()) + "\n";
+}
+
+std::vector<std::string> ConfigSchema::keys() const {
+  std::vector<std::string> k;
+  for (const auto& e : entries_) k.push_back(e.key);
+  return k;
+}
+
+}  // namespace sweepmap

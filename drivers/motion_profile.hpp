@@ -1,0 +1,24 @@
+// Planning of stepper motions as constant-acceleration segments. Shared by the motor
+// controller (its open-loop model of what it commanded) and the simulated stepper (the
+// true motion, with the error sources applied to the command before planning).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "drivers/shaft_trajectory.hpp"
+#include "drivers/stepper_device.hpp"
+
+namespace sweepmap {
+
+struct PlannedMotion {
+  std::vector<ShaftSegment> segments;  // in time order, the first starts at the command time
+  int64_t end_utime = 0;               // when the commanded state is reached
+};
+
+// Plans `cmd` from the state of `current` at `start_utime`, ramping at `accel_rad_s2`
+// (which overrides cmd.accel_rad_s2, so a simulation can perturb it).
+PlannedMotion planMotion(const ShaftTrajectory& current, int64_t start_utime,
+                         const StepperCommand& cmd, double accel_rad_s2);
+
+}  // namespace sweepmap

@@ -1,0 +1,223 @@
+#include "drivers/scene.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace sweepmap {
+namespace {
+
+constexpr double kWallThicknessM = 0.2;     // walls, floor and ceiling are solid slabs
+constexpr double kPostSideM = 0.060;        // square post of the rig's stand
+constexpr double kPostBelowPlateM = 0.010;  // gap between the post's top and the plate
+
+Eigen::AlignedBox3d box(double x0, double x1, double y0, double y1, double z0, double z1) {
+  return Eigen::AlignedBox3d(Eigen::Vector3d(x0, y0, z0), Eigen::Vector3d(x1, y1, z1));
+}
+
+// Footprints (XY rectangles) overlap with positive area.
+bool footprintsOverlap(const Eigen::AlignedBox3d& a, const Eigen::AlignedBox3d& b) {
+  return a.min().x() < b.max().x() && b.min().x() < a.max().x() && a.min().y() < b.max().y() &&
+         b.min().y() < a.max().y();
+}
+
+}  // namespace
+
+void SceneConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "name", &name, "", "scene name");
+  s.add(p + "room.length_m", &room_length_m, "m", "room extent along X");
+  s.add(p + "room.width_m", &room_width_m, "m", "room extent along Y");
+  s.add(p + "room.height_m", &room_height_m, "m", "floor to ceiling");
+  s.add(p + "door.center_x_m", &door_center_x_m, "m", "door recess centre along the +Y wall");
+  s.add(p + "door.width_m", &door_width_m, "m", "door recess width (along X)");
+  s.add(p + "door.height_m", &door_height_m, "m", "door recess height");
+  s.add(p + "door.depth_m", &door_depth_m, "m", "wall plane to door leaf");
+  s.add(p + "table.center_x_m", &table_center_x_m, "m", "table centre X");
+  s.add(p + "table.center_y_m", &table_center_y_m, "m", "table centre Y");
+  s.add(p + "table.length_m", &table_length_m, "m", "table extent along X");
+  s.add(p + "table.width_m", &table_width_m, "m", "table extent along Y");
+  s.add(p + "table.height_m", &table_height_m, "m", "floor to the table's top surface");
+  s.add(p + "table.top_thickness_m", &table_top_thickness_m, "m", "thickness of the top slab");
+  s.add(p + "table.leg_size_m", &table_leg_size_m, "m", "side of the square legs");
+  s.add(p + "cabinet.center_x_m", &cabinet_center_x_m, "m", "cabinet centre X");
+  s.add(p + "cabinet.center_y_m", &cabinet_center_y_m, "m", "cabinet centre Y");
+  s.add(p + "cabinet.length_m", &cabinet_length_m, "m", "cabinet extent along X");
+  s.add(p + "cabinet.width_m", &cabinet_width_m, "m", "cabinet extent along Y");
+  s.add(p + "cabinet.height_m", &cabinet_height_m, "m", "cabinet height");
+  s.add(p + "rig.x_m", &rig_x_m, "m", "rotation axis X in the room");
+  s.add(p + "rig.y_m", &rig_y_m, "m", "rotation axis Y in the room");
+  s.add(p + "rig.z_m", &rig_z_m, "m", "height of the lidar centre (origin of frame O)");
+  s.add(p + "rig.yaw_deg", &rig_yaw_deg, "deg", "frame O's X from the room's X, about Z");
+}
+
+void SceneConfig::validate(const std::string& source) const {
+  const auto require = [&source](bool ok, const std::string& key, const std::string& why) {
+    if (!ok) throw ConfigError(source + ": key '" + key + "' " + why);
+  };
+  const auto positive = [&require](double v, const std::string& key) {
+    require(v > 0.0, key, "must be positive");
+  };
+  positive(room_length_m, "room.length_m");
+  positive(room_width_m, "room.width_m");
+  positive(room_height_m, "room.height_m");
+  positive(door_width_m, "door.width_m");
+  positive(door_height_m, "door.height_m");
+  positive(door_depth_m, "door.depth_m");
+  positive(table_length_m, "table.length_m");
+  positive(table_width_m, "table.width_m");
+  positive(table_height_m, "table.height_m");
+  positive(table_top_thickness_m, "table.top_thickness_m");
+  positive(table_leg_size_m, "table.leg_size_m");
+  positive(cabinet_length_m, "cabinet.length_m");
+  positive(cabinet_width_m, "cabinet.width_m");
+  positive(cabinet_height_m, "cabinet.height_m");
+
+  const double half_l = room_length_m / 2, half_w = room_width_m / 2;
+  require(std::abs(door_center_x_m) + door_width_m / 2 < half_l, "door.center_x_m",
+          "puts the door recess outside the +Y wall");
+  require(door_height_m < room_height_m, "door.height_m", "must be below the ceiling");
+
+  require(std::abs(table_center_x_m) + table_length_m / 2 <= half_l, "table.center_x_m",
+          "puts the table outside the room");
+  require(std::abs(table_center_y_m) + table_width_m / 2 <= half_w, "table.center_y_m",
+          "puts the table outside the room");
+  require(table_height_m <= room_height_m, "table.height_m", "must be below the ceiling");
+  require(table_top_thickness_m < table_height_m, "table.top_thickness_m",
+          "must be less than the table height");
+  require(2 * table_leg_size_m <= std::min(table_length_m, table_width_m), "table.leg_size_m",
+          "legs do not fit under the top");
+
+  require(std::abs(cabinet_center_x_m) + cabinet_length_m / 2 <= half_l, "cabinet.center_x_m",
+          "puts the cabinet outside the room");
+  require(std::abs(cabinet_center_y_m) + cabinet_width_m / 2 <= half_w, "cabinet.center_y_m",
+          "puts the cabinet outside the room");
+  require(cabinet_height_m <= room_height_m, "cabinet.height_m", "must be below the ceiling");
+
+  require(std::abs(rig_x_m) + kPostSideM / 2 < half_l, "rig.x_m", "puts the rig outside the room");
+  require(std::abs(rig_y_m) + kPostSideM / 2 < half_w, "rig.y_m", "puts the rig outside the room");
+  require(rig_z_m > 0.0 && rig_z_m < room_height_m, "rig.z_m", "must be between floor and ceiling");
+  const double post = kPostSideM / 2;
+  const auto post_box =
+      box(rig_x_m - post, rig_x_m + post, rig_y_m - post, rig_y_m + post, 0, room_height_m);
+  const auto table_box = box(
+      table_center_x_m - table_length_m / 2, table_center_x_m + table_length_m / 2,
+      table_center_y_m - table_width_m / 2, table_center_y_m + table_width_m / 2, 0, room_height_m);
+  const auto cabinet_box =
+      box(cabinet_center_x_m - cabinet_length_m / 2, cabinet_center_x_m + cabinet_length_m / 2,
+          cabinet_center_y_m - cabinet_width_m / 2, cabinet_center_y_m + cabinet_width_m / 2, 0,
+          room_height_m);
+  require(!footprintsOverlap(post_box, table_box), "rig.x_m", "puts the rig's stand in the table");
+  require(!footprintsOverlap(post_box, cabinet_box), "rig.x_m",
+          "puts the rig's stand in the cabinet");
+}
+
+SceneConfig loadScene(const std::string& path, const std::vector<std::string>& overrides) {
+  SceneConfig scene;
+  ConfigSchema schema;
+  scene.declare(schema, "");
+  schema.loadFile(path);
+  for (const auto& o : overrides) schema.set(o);
+  scene.validate(path);
+  return scene;
+}
+
+Scene::Scene(const SceneConfig& config, const PlateConfig& plate) : config_(config) {
+  const SceneConfig& c = config_;
+  c.validate("scene '" + c.name + "'");
+  const double post_top_m = c.rig_z_m + plate.height_mm / 1000.0 - kPostBelowPlateM;
+  if (post_top_m <= 0.0) {
+    throw ConfigError("scene '" + c.name +
+                      "': key 'rig.z_m' leaves no room for the stand below the plate");
+  }
+
+  T_room_rig_ = Eigen::Translation3d(c.rig_x_m, c.rig_y_m, c.rig_z_m) *
+                Eigen::AngleAxisd(c.rig_yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ());
+
+  const double l = c.room_length_m / 2, w = c.room_width_m / 2, h = c.room_height_m;
+  const double t = kWallThicknessM;
+  walls_ = {{"x_min", Eigen::Vector3d::UnitX(), l},
+            {"x_max", -Eigen::Vector3d::UnitX(), l},
+            {"y_min", Eigen::Vector3d::UnitY(), w},
+            {"y_max", -Eigen::Vector3d::UnitY(), w}};
+
+  // Shell. The +Y wall is door.depth_m thicker so the recess has a back (the door leaf);
+  // the floor runs under the recess.
+  const double y_outer = w + c.door_depth_m + t;
+  const double door_x0 = c.door_center_x_m - c.door_width_m / 2;
+  const double door_x1 = c.door_center_x_m + c.door_width_m / 2;
+  boxes_ = {
+      {"floor", box(-l - t, l + t, -w - t, y_outer, -t, 0)},
+      {"ceiling", box(-l - t, l + t, -w - t, y_outer, h, h + t)},
+      {"wall_x_min", box(-l - t, -l, -w - t, y_outer, 0, h)},
+      {"wall_x_max", box(l, l + t, -w - t, y_outer, 0, h)},
+      {"wall_y_min", box(-l, l, -w - t, -w, 0, h)},
+      {"wall_y_max_left", box(-l, door_x0, w, y_outer, 0, h)},
+      {"wall_y_max_right", box(door_x1, l, w, y_outer, 0, h)},
+      {"door_lintel", box(door_x0, door_x1, w, y_outer, c.door_height_m, h)},
+      {"door_leaf", box(door_x0, door_x1, w + c.door_depth_m, y_outer, 0, c.door_height_m)},
+  };
+
+  const double tx0 = c.table_center_x_m - c.table_length_m / 2;
+  const double tx1 = c.table_center_x_m + c.table_length_m / 2;
+  const double ty0 = c.table_center_y_m - c.table_width_m / 2;
+  const double ty1 = c.table_center_y_m + c.table_width_m / 2;
+  const double leg_top = c.table_height_m - c.table_top_thickness_m;
+  const double s = c.table_leg_size_m;
+  boxes_.push_back({"table_top", box(tx0, tx1, ty0, ty1, leg_top, c.table_height_m)});
+  boxes_.push_back({"table_leg_1", box(tx0, tx0 + s, ty0, ty0 + s, 0, leg_top)});
+  boxes_.push_back({"table_leg_2", box(tx1 - s, tx1, ty0, ty0 + s, 0, leg_top)});
+  boxes_.push_back({"table_leg_3", box(tx0, tx0 + s, ty1 - s, ty1, 0, leg_top)});
+  boxes_.push_back({"table_leg_4", box(tx1 - s, tx1, ty1 - s, ty1, 0, leg_top)});
+
+  boxes_.push_back(
+      {"cabinet", box(c.cabinet_center_x_m - c.cabinet_length_m / 2,
+                      c.cabinet_center_x_m + c.cabinet_length_m / 2,
+                      c.cabinet_center_y_m - c.cabinet_width_m / 2,
+                      c.cabinet_center_y_m + c.cabinet_width_m / 2, 0, c.cabinet_height_m)});
+
+  // The stand's post, axis-aligned in the room frame whatever the rig's yaw.
+  const double p = kPostSideM / 2;
+  boxes_.push_back({"stand_post", box(c.rig_x_m - p, c.rig_x_m + p, c.rig_y_m - p, c.rig_y_m + p, 0,
+                                      post_top_m)});
+
+  for (const SceneBox& b : boxes_) {
+    slabs_.push_back({{b.box.min().x(), b.box.min().y(), b.box.min().z()},
+                      {b.box.max().x(), b.box.max().y(), b.box.max().z()}});
+  }
+}
+
+std::optional<double> Scene::raycast(const Eigen::Vector3d& origin_room,
+                                     const Eigen::Vector3d& unit_dir_room,
+                                     double max_range_m) const {
+  const double o[3] = {origin_room.x(), origin_room.y(), origin_room.z()};
+  const double d[3] = {unit_dir_room.x(), unit_dir_room.y(), unit_dir_room.z()};
+  const double inv[3] = {1.0 / d[0], 1.0 / d[1], 1.0 / d[2]};
+  double best = max_range_m;
+  bool hit = false;
+  for (const Slabs& b : slabs_) {
+    // Slab test: the ray is inside the box for t in [t_enter, t_exit].
+    double t_enter = -std::numeric_limits<double>::infinity();
+    double t_exit = best;
+    bool miss = false;
+    for (int k = 0; k < 3 && !miss; ++k) {
+      if (d[k] == 0.0) {
+        miss = o[k] < b.lo[k] || o[k] > b.hi[k];
+        continue;
+      }
+      double t0 = (b.lo[k] - o[k]) * inv[k];
+      double t1 = (b.hi[k] - o[k]) * inv[k];
+      if (t0 > t1) std::swap(t0, t1);
+      t_enter = std::max(t_enter, t0);
+      t_exit = std::min(t_exit, t1);
+      miss = t_enter > t_exit;
+    }
+    if (!miss && t_enter > 0.0) {
+      best = t_enter;
+      hit = true;
+    }
+  }
+  if (!hit) return std::nullopt;
+  return best;
+}
+
+}  // namespace sweepmap

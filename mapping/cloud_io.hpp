@@ -1,0 +1,24 @@
+// Point cloud files (XYZ, float32, metres, in whatever frame the caller's points are in).
+//
+// PCD (binary) is PCL's native format, PLY (binary little-endian) opens in CloudCompare
+// and MeshLab. Both writers are atomic (`path + ".tmp"`, then rename) and byte-
+// deterministic: the same points give the same bytes (no timestamps in either header).
+// PCL is kept out of this header.
+#pragma once
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+namespace sweepmap {
+
+// Throw std::runtime_error naming `path` on failure. Non-finite points are written as
+// they are.
+void writePcdBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points);
+void writePlyBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points);
+
+// Reads the x, y, z fields of any PCD file (ASCII, binary or compressed). Throws
+// std::runtime_error naming `path` on failure.
+std::vector<Eigen::Vector3f> readPcd(const std::string& path);
+
+}  // namespace sweepmap

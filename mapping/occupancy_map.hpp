@@ -1,0 +1,84 @@
+// 3D occupancy map of sweeps: a thin wrapper over an OctoMap OcTree.
+//
+// Frames and units: every point and origin is in the map (world) frame, in metres. The
+// caller transforms sweeps into that frame before insertion. OctoMap is kept out of this
+// header (pimpl) so that code including it does not pull in the OctoMap headers.
+//
+// Not thread-safe: one thread owns a map (insertion is heavy work; run it off the
+// receive path, see STYLE.md rule 7).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "core/rig_config.hpp"
+
+namespace sweepmap {
+
+struct MapStats {
+  int64_t sweeps_inserted = 0;  // insertCloud() calls
+  int64_t points_inserted = 0;  // finite points handed to the tree (skipped ones excluded)
+  int64_t occupied_voxels = 0;  // counted at full depth (a pruned leaf counts as 8^k voxels)
+  int64_t free_voxels = 0;      // known and not occupied, counted at full depth
+  int64_t memory_bytes = 0;     // OctoMap's estimate of the tree's memory
+  double resolution_m = 0.0;    // edge of a full-depth voxel
+};
+
+// How the rays of one cloud are cast.
+enum class InsertMode {
+  kDiscretized,  // one ray per distinct endpoint voxel, to its centre (default; see .cpp)
+  kEveryRay,     // one ray per point, to the exact point
+};
+
+enum class Occupancy { kUnknown, kFree, kOccupied };
+
+class OccupancyMap {
+ public:
+  // Throws std::invalid_argument if the config is out of range (resolution and max range
+  // must be > 0, 0.5 < prob_hit < 1, 0 < prob_miss < 0.5, 0 < clamp_min < clamp_max < 1).
+  explicit OccupancyMap(const MapperConfig& config);
+  ~OccupancyMap();
+  OccupancyMap(OccupancyMap&&) noexcept;
+  OccupancyMap& operator=(OccupancyMap&&) noexcept;
+  OccupancyMap(const OccupancyMap&) = delete;
+  OccupancyMap& operator=(const OccupancyMap&) = delete;
+
+  // Ray-casts one cloud (typically one sweep) from `sensor_origin_m`: the endpoint voxels
+  // become more occupied, the voxels along the rays more free; each voxel is updated at
+  // most once per call, occupied winning over free. Rays longer than config.max_range_m
+  // are cut at that range and mark free space only. Non-finite points are skipped and
+  // counted (skippedPoints()). Deterministic: the same calls in the same order build an
+  // identical tree. Throws std::invalid_argument for a non-finite origin.
+  void insertCloud(const std::vector<Eigen::Vector3f>& points_m,
+                   const Eigen::Vector3f& sensor_origin_m,
+                   InsertMode mode = InsertMode::kDiscretized);
+
+  MapStats stats() const;  // walks every leaf: O(tree size)
+  int64_t skippedPoints() const;
+  const MapperConfig& config() const;
+
+  // State of the full-depth voxel containing `p_m` (map frame, metres).
+  Occupancy occupancyAt(const Eigen::Vector3d& p_m) const;
+  bool occupiedAt(const Eigen::Vector3d& p_m) const {
+    return occupancyAt(p_m) == Occupancy::kOccupied;
+  }
+
+  // Writes the maximum-likelihood tree in OctoMap's binary format (.bt, readable by
+  // octovis) to `path + ".tmp"`, then renames it over `path`. Throws std::runtime_error
+  // naming `path` on failure.
+  void saveBinaryAtomic(const std::string& path) const;
+
+  // Reads a .bt file (resolution from the file; the other config fields keep their
+  // defaults; the counters start at zero). Throws std::runtime_error naming `path`.
+  static OccupancyMap loadBinary(const std::string& path);
+
+ private:
+  struct Impl;
+  explicit OccupancyMap(std::unique_ptr<Impl> impl);
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace sweepmap

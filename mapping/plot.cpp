@@ -1,0 +1,330 @@
+#include "mapping/plot.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <locale>
+#include <sstream>
+#include <stdexcept>
+
+#include "mapping/atomic_file.hpp"
+
+extern char** environ;
+
+namespace sweepmap {
+namespace {
+
+// A gnuplot single-quoted string: no escapes inside, except '' for a quote. Line breaks
+// would end the command, so they are refused in paths and flattened in titles.
+std::string quoted(const std::string& text) {
+  std::string out = "'";
+  for (char c : text) {
+    if (c == '\'') {
+      out += "''";
+    } else if (c == '\n' || c == '\r') {
+      out += ' ';
+    } else {
+      out += c;
+    }
+  }
+  return out + "'";
+}
+
+void checkPath(const std::string& path) {
+  if (path.empty()) throw std::invalid_argument("plot: empty output path");
+  if (path.find_first_of(std::string("\n\r\0", 3)) != std::string::npos) {
+    throw std::invalid_argument("plot: output path contains a line break or NUL: " + path);
+  }
+}
+
+// Files removed when the plot is done, whatever happens.
+class TempFiles {
+ public:
+  explicit TempFiles(std::string base) : base_(std::move(base)) {}
+  ~TempFiles() {
+    for (const auto& p : paths_) std::remove(p.c_str());
+  }
+  TempFiles(const TempFiles&) = delete;
+  TempFiles& operator=(const TempFiles&) = delete;
+  std::string make(const std::string& suffix) {
+    paths_.push_back(base_ + suffix);
+    return paths_.back();
+  }
+
+ private:
+  std::string base_;
+  std::vector<std::string> paths_;
+};
+
+template <typename T>
+void writeRaw(const std::string& path, const std::vector<T>& values) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(values.data()),
+            static_cast<std::streamsize>(values.size() * sizeof(T)));
+  out.close();
+  if (!out) throw std::runtime_error("plot: cannot write temporary file " + path);
+}
+
+std::string readTail(const std::string& path, size_t max_chars) {
+  std::ifstream in(path);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (text.size() > max_chars) text = "..." + text.substr(text.size() - max_chars);
+  while (!text.empty() && (text.back() == '\n' || text.back() == ' ')) text.pop_back();
+  return text;
+}
+
+// Runs `gnuplot script` without a shell; stdin and stdout are /dev/null, stderr goes to
+// `stderr_path`. Throws with the exit status and gnuplot's last words on failure.
+void runGnuplot(const std::string& script_path, const std::string& stderr_path) {
+  // A relative path starting with '-' would be read as an option.
+  const std::string script_arg = script_path[0] == '/' ? script_path : "./" + script_path;
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 1, "/dev/null", O_WRONLY, 0);
+  posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                   0644);
+  std::vector<char*> argv = {const_cast<char*>("gnuplot"), const_cast<char*>(script_arg.c_str()),
+                             nullptr};
+  pid_t pid = 0;
+  const int spawn_rc = posix_spawnp(&pid, "gnuplot", &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawn_rc != 0) {
+    throw std::runtime_error(std::string("plot: cannot run gnuplot: ") + std::strerror(spawn_rc));
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) throw std::runtime_error("plot: waitpid on gnuplot failed");
+  }
+  if (WIFEXITED(status) && WEXITSTATUS(status) == 0) return;
+  std::ostringstream msg;
+  if (WIFEXITED(status)) {
+    msg << "plot: gnuplot exited with status " << WEXITSTATUS(status);
+  } else if (WIFSIGNALED(status)) {
+    msg << "plot: gnuplot killed by signal " << WTERMSIG(status);
+  } else {
+    msg << "plot: gnuplot failed (wait status " << status << ")";
+  }
+  const std::string err = readTail(stderr_path, 600);
+  if (!err.empty()) msg << ": " << err;
+  throw std::runtime_error(msg.str());
+}
+
+// Number formatting independent of the global locale.
+std::ostringstream scriptStream() {
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s.precision(10);
+  return s;
+}
+
+void writeHeader(std::ostream& s, const std::string& png_tmp, int width_px, int height_px,
+                 const std::string& title) {
+  if (width_px <= 0 || height_px <= 0) throw std::invalid_argument("plot: bad picture size");
+  // noenhanced: '_' and '^' in titles are plain characters, not sub/superscripts.
+  s << "set terminal pngcairo size " << width_px << "," << height_px << " noenhanced\n"
+    << "set output " << quoted(png_tmp) << "\n";
+  if (!title.empty()) s << "set title " << quoted(title) << "\n";
+  s << "set grid\n";
+}
+
+void writeRange(std::ostream& s, const char* axis, const std::optional<PlotRange>& r) {
+  if (!r) return;
+  if (!(r->min < r->max)) throw std::invalid_argument(std::string("plot: empty ") + axis + "range");
+  s << "set " << axis << "range [" << r->min << ":" << r->max << "]\n";
+}
+
+// Draws the script into png_path + ".tmp" and renames it over png_path.
+void render(const std::string& png_path, const std::string& script, TempFiles& temps,
+            const std::string& png_tmp) {
+  const std::string script_path = temps.make(".gp.tmp");
+  const std::string stderr_path = temps.make(".gperr.tmp");
+  {
+    std::ofstream out(script_path, std::ios::trunc);
+    out << script;
+    out.close();
+    if (!out) throw std::runtime_error("plot: cannot write temporary file " + script_path);
+  }
+  try {
+    runGnuplot(script_path, stderr_path);
+  } catch (...) {
+    std::remove(png_tmp.c_str());
+    throw;
+  }
+  struct stat st {};
+  if (::stat(png_tmp.c_str(), &st) != 0 || st.st_size == 0) {
+    std::remove(png_tmp.c_str());
+    throw std::runtime_error("plot: gnuplot wrote no picture for " + png_path);
+  }
+  commitTmpFile(png_tmp, png_path);
+}
+
+}  // namespace
+
+bool gnuplotAvailable() {
+  const char* path_env = std::getenv("PATH");
+  std::string path = path_env ? path_env : "/usr/bin:/bin";
+  size_t start = 0;
+  while (start <= path.size()) {
+    size_t end = path.find(':', start);
+    if (end == std::string::npos) end = path.size();
+    std::string dir = path.substr(start, end - start);
+    if (dir.empty()) dir = ".";
+    if (::access((dir + "/gnuplot").c_str(), X_OK) == 0) return true;
+    start = end + 1;
+  }
+  return false;
+}
+
+void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
+                 const PlotOptions& options) {
+  checkPath(png_path);
+  if (!(options.point_size > 0.0)) throw std::invalid_argument("plotTopView: point_size <= 0");
+  if (options.max_points_per_layer == 0) {
+    throw std::invalid_argument("plotTopView: max_points_per_layer is 0");
+  }
+  TempFiles temps(png_path);
+  const std::string png_tmp = tmpPathFor(png_path);
+
+  std::ostringstream s = scriptStream();
+  writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
+  s << "set xlabel 'x [m]'\nset ylabel 'y [m]'\n"
+    << "set size ratio -1\n"  // one metre is as long on both axes
+    << "set key outside right top\n";
+  writeRange(s, "x", options.x_range_m);
+  writeRange(s, "y", options.y_range_m);
+
+  std::vector<std::string> plots;
+  for (size_t l = 0; l < layers.size(); ++l) {
+    const Layer& layer = layers[l];
+    std::vector<const Eigen::Vector3f*> kept;
+    kept.reserve(layer.points.size());
+    for (const Eigen::Vector3f& p : layer.points) {
+      if (!p.allFinite()) continue;
+      if (options.z_band_m && (p.z() < options.z_band_m->min || p.z() > options.z_band_m->max)) {
+        continue;
+      }
+      kept.push_back(&p);
+    }
+    if (kept.empty()) continue;  // gnuplot refuses an empty data file
+    // Fixed-stride subsampling: the same input always gives the same picture.
+    const size_t n = kept.size();
+    const size_t m = std::min(n, options.max_points_per_layer);
+    std::vector<float> xy;
+    xy.reserve(2 * m);
+    for (size_t k = 0; k < m; ++k) {
+      const Eigen::Vector3f& p = *kept[static_cast<size_t>((uint64_t{k} * n) / m)];
+      xy.push_back(p.x());
+      xy.push_back(p.y());
+    }
+    const std::string data_path = temps.make(".layer" + std::to_string(l) + ".tmp");
+    writeRaw(data_path, xy);
+    std::ostringstream c = scriptStream();
+    c << quoted(data_path) << " binary format='%float32%float32' using 1:2 with points pt 7 ps "
+      << options.point_size;
+    if (!layer.color.empty()) c << " lc rgb " << quoted(layer.color);
+    c << (layer.title.empty() ? std::string(" notitle") : " title " + quoted(layer.title));
+    plots.push_back(c.str());
+  }
+  if (plots.empty()) {
+    // Nothing to draw: an empty frame (autoscale has nothing to work with, so fix ranges).
+    if (!options.x_range_m) s << "set xrange [-1:1]\n";
+    if (!options.y_range_m) s << "set yrange [-1:1]\n";
+    plots.push_back("NaN notitle");
+  }
+  s << "plot ";
+  for (size_t i = 0; i < plots.size(); ++i) s << (i ? ", \\\n     " : "") << plots[i];
+  s << "\n";
+  render(png_path, s.str(), temps, png_tmp);
+}
+
+void plotSeries(const std::string& png_path, const std::vector<Series>& series,
+                const SeriesPlotOptions& options) {
+  checkPath(png_path);
+  TempFiles temps(png_path);
+  const std::string png_tmp = tmpPathFor(png_path);
+
+  std::ostringstream s = scriptStream();
+  writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
+  if (!options.x_label.empty()) s << "set xlabel " << quoted(options.x_label) << "\n";
+  if (!options.y_label.empty()) s << "set ylabel " << quoted(options.y_label) << "\n";
+  if (options.log_y) s << "set logscale y\n";
+  // Boxes: see-through, so that a series behind stays visible.
+  s << "set style fill transparent solid 0.5 border -1\n";
+  writeRange(s, "x", options.x_range);
+  writeRange(s, "y", options.y_range);
+  // A box is as wide as the gap to its neighbour: keep the outer half-boxes in the autoscaled
+  // x range, and the bars' base (y = 0) in the y range.
+  double half_box = 0.0;
+  for (const Series& ser : series) {
+    if (ser.style != "boxes" || ser.x.size() < 2) continue;
+    std::vector<double> xs = ser.x;
+    std::sort(xs.begin(), xs.end());
+    double gap = 0.0;
+    for (size_t k = 1; k < xs.size(); ++k) {
+      const double d = xs[k] - xs[k - 1];
+      if (d > 0.0 && (gap == 0.0 || d < gap)) gap = d;
+    }
+    half_box = std::max(half_box, gap / 2);
+  }
+  const bool has_boxes = std::any_of(series.begin(), series.end(),
+                                     [](const Series& ser) { return ser.style == "boxes"; });
+  if (!options.x_range && half_box > 0.0) {
+    s << "set offsets " << half_box << ", " << half_box << ", 0, 0\n";
+  }
+  if (!options.y_range && has_boxes && !options.log_y) s << "set yrange [*<0:0<*]\n";
+
+  std::vector<std::string> plots;
+  for (size_t i = 0; i < series.size(); ++i) {
+    const Series& ser = series[i];
+    if (ser.x.size() != ser.y.size()) {
+      throw std::invalid_argument("plotSeries: x and y of '" + ser.title + "' differ in length");
+    }
+    std::string with;
+    if (ser.style == "lines" || ser.style == "boxes") {
+      with = ser.style;
+    } else if (ser.style == "points") {
+      with = "points pt 7 ps 0.5";
+    } else if (ser.style == "linespoints") {
+      with = "linespoints pt 7 ps 0.5";
+    } else {
+      throw std::invalid_argument("plotSeries: unknown style '" + ser.style + "'");
+    }
+    if (ser.x.empty()) continue;
+    std::vector<double> xy;
+    xy.reserve(2 * ser.x.size());
+    for (size_t k = 0; k < ser.x.size(); ++k) {
+      xy.push_back(ser.x[k]);
+      xy.push_back(ser.y[k]);
+    }
+    const std::string data_path = temps.make(".series" + std::to_string(i) + ".tmp");
+    writeRaw(data_path, xy);
+    std::ostringstream c = scriptStream();
+    c << quoted(data_path) << " binary format='%float64%float64' using 1:2 with " << with;
+    if (!ser.color.empty()) c << " lc rgb " << quoted(ser.color);
+    c << (ser.title.empty() ? std::string(" notitle") : " title " + quoted(ser.title));
+    plots.push_back(c.str());
+  }
+  if (plots.empty()) {
+    if (!options.x_range) s << "set xrange [0:1]\n";
+    if (!options.y_range) s << "set yrange [" << (options.log_y ? "1:10" : "0:1") << "]\n";
+    plots.push_back("NaN notitle");
+  }
+  s << "plot ";
+  for (size_t i = 0; i < plots.size(); ++i) s << (i ? ", \\\n     " : "") << plots[i];
+  s << "\n";
+  render(png_path, s.str(), temps, png_tmp);
+}
+
+}  // namespace sweepmap

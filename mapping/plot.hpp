@@ -1,0 +1,69 @@
+// PNG pictures drawn by the `gnuplot` binary (Debian package gnuplot-nox, terminal
+// pngcairo). The data go to temporary binary files next to the PNG, the commands to a
+// script file (no shell is involved; paths and titles are quoted for gnuplot), and the
+// PNG is written as `png_path + ".tmp"` and renamed, so a half-drawn picture is never seen.
+// Every function throws std::runtime_error (with gnuplot's exit status and its last error
+// lines) if gnuplot is missing or fails, and std::invalid_argument for bad arguments.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace sweepmap {
+
+// True if an executable `gnuplot` is on PATH.
+bool gnuplotAvailable();
+
+struct PlotRange {
+  double min = 0.0;
+  double max = 0.0;
+};
+
+// One set of points in a top view. Coordinates in metres, in the caller's frame; the view
+// looks down the z axis (x to the right, y up).
+struct Layer {
+  std::string title;  // legend entry; empty: no entry
+  std::string color;  // gnuplot colour: "red", "#1f77b4"; empty: next default
+  std::vector<Eigen::Vector3f> points;
+};
+
+struct PlotOptions {
+  std::string title;
+  std::optional<PlotRange> x_range_m;  // unset: autoscale
+  std::optional<PlotRange> y_range_m;
+  std::optional<PlotRange> z_band_m;  // set: draw only points with min <= z <= max
+  double point_size = 0.3;            // gnuplot pointsize of a filled circle
+  int width_px = 1200;
+  int height_px = 900;
+  size_t max_points_per_layer = 200000;  // larger layers are subsampled with a fixed stride
+};
+
+// Top view (x-y) of the layers, drawn in order (the last on top), equal axis scaling.
+void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
+                 const PlotOptions& options);
+
+// A generic x-y series, for error curves and histograms.
+struct Series {
+  std::string title;
+  std::vector<double> x, y;     // same length
+  std::string style = "lines";  // "lines" | "points" | "linespoints" | "boxes"
+  std::string color;            // empty: next default colour
+};
+
+struct SeriesPlotOptions {
+  std::string title;
+  std::string x_label;
+  std::string y_label;
+  std::optional<PlotRange> x_range;
+  std::optional<PlotRange> y_range;
+  bool log_y = false;
+  int width_px = 1000;
+  int height_px = 700;
+};
+
+void plotSeries(const std::string& png_path, const std::vector<Series>& series,
+                const SeriesPlotOptions& options);
+
+}  // namespace sweepmap

@@ -1,0 +1,43 @@
+// sweepmap-assembler: collects the scans of each lidar window, builds the sweep
+// (calib/sweep_assembly.hpp) and publishes it in chunks on SWEEP_CLOUD, then its summary
+// on SWEEP_STATUS. A window is assembled once a scan at or after its end has arrived, so
+// the output depends only on the messages, not on how channels interleave.
+#pragma once
+
+#include <deque>
+#include <functional>
+
+#include "calib/sweep_assembly.hpp"
+#include "core/rig_config.hpp"
+#include "processes/node.hpp"
+
+namespace sweepmap {
+
+class AssemblerNode : public Node {
+ public:
+  explicit AssemblerNode(const RigConfig& rig);
+  std::vector<std::string> subscriptions() const override;
+  void finish(int64_t now_utime, Outbox& out) override;
+
+  // Called with every assembled sweep (offline tools keep clouds and plate data).
+  void setSweepObserver(std::function<void(const AssembledSweep&)> observer) {
+    observer_ = std::move(observer);
+  }
+
+ protected:
+  void handle(const Message& msg, Outbox& out) override;
+
+ private:
+  void onScan(const Message& msg, Outbox& out);
+  void onWindow(const Message& msg, Outbox& out);
+  void assembleReady(int64_t now_utime, bool flush, Outbox& out);
+  void publishSweep(int64_t now_utime, const SweepWindow& window, Outbox& out);
+
+  RigConfig rig_;
+  std::deque<Scan2D> scans_;      // valid scans, strictly increasing utime
+  std::deque<SweepWindow> windows_;  // closed windows, by start time
+  int64_t last_window_end_ = INT64_MIN;
+  std::function<void(const AssembledSweep&)> observer_;
+};
+
+}  // namespace sweepmap

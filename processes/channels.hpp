@@ -1,0 +1,20 @@
+// LCM channel names. The README's channel table lists them with their types.
+#pragma once
+
+namespace sweepmap {
+namespace channels {
+
+constexpr const char* kLidarScan = "LIDAR_SCAN";      // lidar_scan_t, raw
+constexpr const char* kMotorState = "MOTOR_STATE";    // motor_state_t
+constexpr const char* kMotorSwitch = "MOTOR_SWITCH";  // switch_event_t, raw
+constexpr const char* kScanWindow = "SCAN_WINDOW";    // scan_window_t
+constexpr const char* kSweepCloud = "SWEEP_CLOUD";    // cloud_chunk_t
+constexpr const char* kSweepStatus = "SWEEP_STATUS";  // sweep_status_t
+constexpr const char* kMapStats = "MAP_STATS";        // map_stats_t
+constexpr const char* kMapSave = "MAP_SAVE";          // map_save_t
+constexpr const char* kTruthShaft = "TRUTH_SHAFT";    // truth_shaft_t, simulation only
+constexpr const char* kTruthRig = "TRUTH_RIG";        // truth_rig_t, simulation only
+// Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
+
+}  // namespace channels
+}  // namespace sweepmap

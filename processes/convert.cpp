@@ -1,0 +1,130 @@
+#include "processes/convert.hpp"
+
+#include <cmath>
+
+namespace sweepmap {
+
+lidar_scan_t toLcm(const Scan2D& scan) {
+  lidar_scan_t m;
+  m.utime = scan.utime;
+  m.seq = scan.seq;
+  m.angle_min_rad = static_cast<float>(scan.angle_min_rad);
+  m.angle_increment_rad = static_cast<float>(scan.angle_increment_rad);
+  m.time_increment_ns = static_cast<int32_t>(scan.time_increment_ns);
+  m.range_min_m = static_cast<float>(scan.range_min_m);
+  m.range_max_m = static_cast<float>(scan.range_max_m);
+  m.nranges = static_cast<int32_t>(scan.ranges_m.size());
+  m.ranges_m = scan.ranges_m;
+  return m;
+}
+
+Scan2D fromLcm(const lidar_scan_t& m) {
+  Scan2D s;
+  s.utime = m.utime;
+  s.seq = m.seq;
+  s.angle_min_rad = m.angle_min_rad;
+  s.angle_increment_rad = m.angle_increment_rad;
+  s.time_increment_ns = m.time_increment_ns;
+  s.range_min_m = m.range_min_m;
+  s.range_max_m = m.range_max_m;
+  s.ranges_m = m.ranges_m;
+  return s;
+}
+
+std::string validateWindow(const scan_window_t& m) {
+  if (m.end_utime <= m.start_utime) return "window ends before it starts";
+  if (m.end_utime - m.start_utime > 600LL * 1000000) return "window longer than 10 minutes";
+  if (!std::isfinite(m.angular_velocity_rad_s) || m.angular_velocity_rad_s == 0.0) {
+    return "bad angular velocity";
+  }
+  if (!std::isfinite(m.sweep_angle_rad)) return "bad sweep angle";
+  return {};
+}
+
+SweepWindow fromLcm(const scan_window_t& m) {
+  SweepWindow w;
+  w.sweep_id = m.sweep_id;
+  w.mode = m.mode;
+  w.start_utime = m.start_utime;
+  w.end_utime = m.end_utime;
+  w.omega_rad_s = m.angular_velocity_rad_s;
+  w.accel_overlap = m.accel_overlap;
+  return w;
+}
+
+std::vector<cloud_chunk_t> toChunks(const AssembledSweep& sweep, int chunk_points) {
+  const size_t n = sweep.points.size();
+  const size_t per = static_cast<size_t>(std::max(1, chunk_points));
+  const int count = static_cast<int>(std::max<size_t>(1, (n + per - 1) / per));
+  std::vector<cloud_chunk_t> chunks;
+  chunks.reserve(static_cast<size_t>(count));
+  for (int c = 0; c < count; ++c) {
+    cloud_chunk_t m;
+    m.utime = sweep.window.start_utime;
+    m.sweep_id = sweep.window.sweep_id;
+    m.mode = sweep.window.mode;
+    m.chunk_index = c;
+    m.chunk_count = count;
+    m.total_points = static_cast<int32_t>(n);
+    m.frame = sweep.corrected ? "O" : "O'";
+    m.corrected = sweep.corrected;
+    m.phi_offset_rad = sweep.phi_offset_rad;
+    const size_t begin = static_cast<size_t>(c) * per;
+    const size_t end = std::min(n, begin + per);
+    m.npoints = static_cast<int32_t>(end > begin ? end - begin : 0);
+    m.xyz_m.resize(static_cast<size_t>(m.npoints));
+    for (size_t i = begin; i < end; ++i) {
+      const auto& p = sweep.points[i];
+      m.xyz_m[i - begin] = {p.x(), p.y(), p.z()};
+    }
+    chunks.push_back(std::move(m));
+  }
+  return chunks;
+}
+
+sweep_status_t toStatus(const AssembledSweep& sweep, int chunk_count) {
+  sweep_status_t s;
+  s.utime = sweep.window.start_utime;
+  s.sweep_id = sweep.window.sweep_id;
+  s.mode = sweep.window.mode;
+  s.scans = sweep.scans;
+  s.points = static_cast<int32_t>(sweep.points.size());
+  s.plate_points = sweep.plate.points;
+  s.beta_rad = sweep.plate.found ? sweep.plate.beta_rad : std::nan("");
+  s.alpha_rad = sweep.alpha_rad;
+  s.phi_offset_rad = sweep.phi_offset_rad;
+  s.corrected = sweep.corrected;
+  s.reason = sweep.reason;
+  s.chunk_count = chunk_count;
+  return s;
+}
+
+std::string validateChunk(const cloud_chunk_t& m) {
+  if (m.chunk_count <= 0 || m.chunk_index < 0 || m.chunk_index >= m.chunk_count) {
+    return "bad chunk index " + std::to_string(m.chunk_index) + " of " +
+           std::to_string(m.chunk_count);
+  }
+  if (m.total_points < m.npoints) return "chunk has more points than its sweep";
+  for (const auto& p : m.xyz_m) {
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+      return "non-finite point";
+    }
+  }
+  return {};
+}
+
+truth_shaft_t toLcm(const ShaftSegment& s, int64_t utime) {
+  truth_shaft_t m;
+  m.utime = utime;
+  m.start_utime = s.start_utime;
+  m.angle_rad = s.angle_rad;
+  m.velocity_rad_s = s.velocity_rad_s;
+  m.accel_rad_s2 = s.accel_rad_s2;
+  return m;
+}
+
+ShaftSegment fromLcm(const truth_shaft_t& m) {
+  return {m.start_utime, m.angle_rad, m.velocity_rad_s, m.accel_rad_s2};
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,34 @@
+// The one place where LCM messages and the library structs meet.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "calib/sweep_assembly.hpp"
+#include "core/scan.hpp"
+#include "drivers/shaft_trajectory.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/scan_window_t.hpp"
+#include "sweepmap/sweep_status_t.hpp"
+#include "sweepmap/truth_shaft_t.hpp"
+
+namespace sweepmap {
+
+lidar_scan_t toLcm(const Scan2D& scan);
+Scan2D fromLcm(const lidar_scan_t& msg);
+
+SweepWindow fromLcm(const scan_window_t& msg);
+// Empty when valid, else the reason.
+std::string validateWindow(const scan_window_t& msg);
+
+// Splits a sweep into self-describing chunks of at most `chunk_points` points.
+std::vector<cloud_chunk_t> toChunks(const AssembledSweep& sweep, int chunk_points);
+sweep_status_t toStatus(const AssembledSweep& sweep, int chunk_count);
+// Empty when valid, else the reason.
+std::string validateChunk(const cloud_chunk_t& msg);
+
+truth_shaft_t toLcm(const ShaftSegment& segment, int64_t utime);
+ShaftSegment fromLcm(const truth_shaft_t& msg);
+
+}  // namespace sweepmap

@@ -1,0 +1,43 @@
+#include "processes/lidar_node.hpp"
+
+#include <cmath>
+
+#include "processes/channels.hpp"
+#include "processes/convert.hpp"
+
+namespace sweepmap {
+
+LidarNode::LidarNode(const LidarConfig& config, LidarDevice* device)
+    : Node("lidar"), config_(config), device_(device) {}
+
+void LidarNode::advance(int64_t now_utime, Outbox& out) {
+  for (const Scan2D& scan : device_->poll(now_utime)) {
+    const std::string why = validateScan(scan, config_.beam_count);
+    if (!why.empty()) {
+      reportError("invalid", "device scan " + std::to_string(scan.seq) + " dropped: " + why);
+      continue;
+    }
+    count("scans");
+    out.publish(channels::kLidarScan, now_utime, toLcm(scan));
+  }
+}
+
+TruthFollowerNode::TruthFollowerNode(ShaftTrajectory* trajectory)
+    : Node("truth_follower"), trajectory_(trajectory) {}
+
+std::vector<std::string> TruthFollowerNode::subscriptions() const {
+  return {channels::kTruthShaft};
+}
+
+void TruthFollowerNode::handle(const Message& msg, Outbox& out) {
+  truth_shaft_t m;
+  if (!decodeMessage(msg, &m) || !std::isfinite(m.angle_rad) ||
+      !std::isfinite(m.velocity_rad_s) || !std::isfinite(m.accel_rad_s2)) {
+    reportError("invalid", "malformed truth_shaft_t");
+    return;
+  }
+  trajectory_->apply(fromLcm(m));
+  count("segments");
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,167 @@
+#include "processes/live_runner.hpp"
+
+#include <lcm/lcm-cpp.hpp>
+
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <deque>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <thread>
+
+namespace sweepmap {
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+void onSignal(int) { g_stop = true; }
+
+class Inbox {
+ public:
+  explicit Inbox(size_t capacity) : capacity_(capacity) {}
+  void push(Message m) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (queue_.size() >= capacity_) {
+      ++dropped_;
+      return;
+    }
+    queue_.push_back(std::move(m));
+    cv_.notify_one();
+  }
+  // Waits until a message is there or `deadline`; returns everything queued.
+  std::deque<Message> popUntil(std::chrono::steady_clock::time_point deadline) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    cv_.wait_until(lock, deadline, [&] { return !queue_.empty(); });
+    std::deque<Message> out;
+    out.swap(queue_);
+    return out;
+  }
+  int64_t takeDropped() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    const int64_t d = dropped_;
+    dropped_ = 0;
+    return d;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::condition_variable cv_;
+  std::deque<Message> queue_;
+  size_t capacity_;
+  int64_t dropped_ = 0;
+};
+
+class RawHandler {
+ public:
+  explicit RawHandler(Inbox* inbox) : inbox_(inbox) {}
+  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    Message m;
+    m.utime = wallUtime();
+    m.channel = channel;
+    const auto* p = static_cast<const uint8_t*>(rbuf->data);
+    m.data.assign(p, p + rbuf->data_size);
+    inbox_->push(std::move(m));
+  }
+
+ private:
+  Inbox* inbox_;
+};
+
+}  // namespace
+
+int64_t wallUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+void installStopSignals() {
+  std::signal(SIGINT, onSignal);
+  std::signal(SIGTERM, onSignal);
+}
+
+bool stopRequested() { return g_stop; }
+
+void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages) {
+  for (const auto& m : messages) {
+    lcm.publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+  }
+}
+
+int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options) {
+  if (!lcm.good()) {
+    std::cerr << "LCM initialisation failed\n";
+    return 2;
+  }
+  Inbox inbox(options.queue_capacity);
+  RawHandler handler(&inbox);
+  std::map<std::string, std::vector<Node*>> subscribers;
+  for (Node* n : nodes) {
+    for (const auto& ch : n->subscriptions()) {
+      if (subscribers[ch].empty()) lcm.subscribe(ch, &RawHandler::onMessage, &handler);
+      subscribers[ch].push_back(n);
+    }
+  }
+
+  std::atomic<bool> receiving{true};
+  std::thread receiver([&] {
+    while (receiving) lcm.handleTimeout(50);
+  });
+
+  const auto period = std::chrono::milliseconds(std::max(1, options.tick_period_ms));
+  auto next_tick = std::chrono::steady_clock::now();
+  int64_t dropped_total = 0;
+  while (!g_stop) {
+    for (Message& m : inbox.popUntil(next_tick)) {
+      const auto it = subscribers.find(m.channel);
+      if (it == subscribers.end()) continue;
+      for (Node* n : it->second) {
+        Outbox out;
+        n->receive(m, out);
+        publishAll(lcm, out.take());
+      }
+    }
+    if (std::chrono::steady_clock::now() >= next_tick) {
+      const int64_t now = wallUtime();
+      for (Node* n : nodes) {
+        Outbox out;
+        n->tick(now, out);
+        publishAll(lcm, out.take());
+      }
+      next_tick += period;
+      if (std::chrono::steady_clock::now() > next_tick + 100 * period) {
+        next_tick = std::chrono::steady_clock::now();  // fell behind: do not burst
+      }
+      const int64_t d = inbox.takeDropped();
+      if (d > 0) {
+        dropped_total += d;
+        std::cerr << "receive queue full: " << dropped_total << " messages dropped so far\n";
+      }
+      if (options.should_stop && options.should_stop()) break;
+    }
+  }
+  // Drain what arrived before the stop, then let the nodes flush.
+  for (Message& m : inbox.popUntil(std::chrono::steady_clock::now() + std::chrono::milliseconds(200))) {
+    const auto it = subscribers.find(m.channel);
+    if (it == subscribers.end()) continue;
+    for (Node* n : it->second) {
+      Outbox out;
+      n->receive(m, out);
+      publishAll(lcm, out.take());
+    }
+  }
+  const int64_t now = wallUtime();
+  for (Node* n : nodes) {
+    Outbox out;
+    n->finish(now, out);
+    n->publishStatus(now, out);
+    publishAll(lcm, out.take());
+  }
+  receiving = false;
+  receiver.join();
+  return 0;
+}
+
+}  // namespace sweepmap

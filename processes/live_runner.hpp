@@ -1,0 +1,40 @@
+// Runs nodes live over LCM. The LCM receive callback only copies the message into a
+// bounded queue (drops are counted); a worker thread hands messages to the nodes, ticks
+// them every `tick_period_ms` of wall-clock time and publishes what they return.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "processes/node.hpp"
+
+namespace lcm {
+class LCM;
+}
+
+namespace sweepmap {
+
+struct LiveOptions {
+  int tick_period_ms = 1;
+  size_t queue_capacity = 10000;
+  // Polled after every tick: return true to stop (e.g. the motor has done its sweeps).
+  std::function<bool()> should_stop;
+};
+
+// Wall-clock time [us] (CLOCK_REALTIME, as LCM's utime convention).
+int64_t wallUtime();
+
+// Installs SIGINT/SIGTERM handlers that make runLive return after finish().
+void installStopSignals();
+bool stopRequested();
+
+// Returns 0 after a clean stop (signal or should_stop), non-zero if LCM failed.
+int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options);
+
+// Publishes already encoded messages.
+void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages);
+
+}  // namespace sweepmap

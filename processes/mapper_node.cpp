@@ -1,0 +1,121 @@
+#include "processes/mapper_node.hpp"
+
+#include "mapping/occupancy_map.hpp"
+#include "processes/channels.hpp"
+#include "processes/convert.hpp"
+#include "sweepmap/map_save_t.hpp"
+#include "sweepmap/map_stats_t.hpp"
+#include "sweepmap/sweep_status_t.hpp"
+
+namespace sweepmap {
+
+MapperNode::MapperNode(const MapperConfig& config, std::string save_path)
+    : Node("mapper"),
+      config_(config),
+      save_path_(std::move(save_path)),
+      map_(std::make_unique<OccupancyMap>(config)) {}
+
+MapperNode::~MapperNode() = default;
+
+std::vector<std::string> MapperNode::subscriptions() const {
+  return {channels::kSweepCloud, channels::kSweepStatus, channels::kMapSave};
+}
+
+void MapperNode::handle(const Message& msg, Outbox& out) {
+  if (msg.channel == channels::kSweepCloud) {
+    cloud_chunk_t c;
+    if (!decodeMessage(msg, &c)) {
+      reportError("invalid", "malformed cloud_chunk_t");
+      return;
+    }
+    const std::string why = validateChunk(c);
+    if (!why.empty()) {
+      reportError("invalid", "chunk of sweep " + std::to_string(c.sweep_id) + " dropped: " + why);
+      return;
+    }
+    if (inserted_.count(c.sweep_id)) {
+      reportError("dropped", "late chunk of already inserted sweep " + std::to_string(c.sweep_id));
+      return;
+    }
+    // A newer sweep begins: older pending sweeps will not complete any more.
+    while (!pending_.empty() && pending_.begin()->first < c.sweep_id) {
+      insert(msg.utime, pending_.begin()->first, out);
+    }
+    PendingSweep& p = pending_[c.sweep_id];
+    p.chunk_count = c.chunk_count;
+    std::vector<float>& xyz = p.chunks[c.chunk_index];
+    xyz.clear();
+    xyz.reserve(c.xyz_m.size() * 3);
+    for (const auto& q : c.xyz_m) xyz.insert(xyz.end(), q.begin(), q.end());
+    last_sweep_utime_ = c.utime;
+    count("chunks");
+  } else if (msg.channel == channels::kSweepStatus) {
+    sweep_status_t s;
+    if (!decodeMessage(msg, &s)) {
+      reportError("invalid", "malformed sweep_status_t");
+      return;
+    }
+    if (pending_.count(s.sweep_id)) insert(msg.utime, s.sweep_id, out);
+  } else if (msg.channel == channels::kMapSave) {
+    map_save_t r;
+    if (!decodeMessage(msg, &r)) {
+      reportError("invalid", "malformed map_save_t");
+      return;
+    }
+    const std::string path = r.path.empty() ? save_path_ : r.path;
+    if (path.empty()) {
+      reportError("errors", "MAP_SAVE without a path and no default path configured");
+      return;
+    }
+    save(path);
+  }
+}
+
+void MapperNode::insert(int64_t now_utime, int64_t sweep_id, Outbox& out) {
+  auto it = pending_.find(sweep_id);
+  if (it == pending_.end()) return;
+  std::vector<Eigen::Vector3f> points;
+  for (const auto& [index, xyz] : it->second.chunks) {
+    for (size_t i = 0; i + 2 < xyz.size(); i += 3) points.emplace_back(xyz[i], xyz[i + 1], xyz[i + 2]);
+  }
+  if (static_cast<int>(it->second.chunks.size()) != it->second.chunk_count) {
+    ++incomplete_;
+    reportError("incomplete_sweeps",
+                "sweep " + std::to_string(sweep_id) + " inserted with " +
+                    std::to_string(it->second.chunks.size()) + " of " +
+                    std::to_string(it->second.chunk_count) + " chunks");
+  }
+  pending_.erase(it);
+  inserted_.insert(sweep_id);
+  map_->insertCloud(points, Eigen::Vector3f::Zero());
+  ++sweeps_inserted_;
+  count("sweeps");
+
+  const MapStats st = map_->stats();
+  map_stats_t m;
+  m.utime = last_sweep_utime_;
+  m.sweeps_inserted = sweeps_inserted_;
+  m.points_inserted = st.points_inserted;
+  m.resolution_m = st.resolution_m;
+  m.occupied_voxels = st.occupied_voxels;
+  m.free_voxels = st.free_voxels;
+  m.memory_bytes = st.memory_bytes;
+  m.incomplete_sweeps = incomplete_;
+  out.publish(channels::kMapStats, now_utime, m);
+}
+
+void MapperNode::save(const std::string& path) {
+  try {
+    map_->saveBinaryAtomic(path);
+    count("saves");
+  } catch (const std::exception& e) {
+    reportError("errors", e.what());
+  }
+}
+
+void MapperNode::finish(int64_t now_utime, Outbox& out) {
+  while (!pending_.empty()) insert(now_utime, pending_.begin()->first, out);
+  if (!save_path_.empty()) save(save_path_);
+}
+
+}  // namespace sweepmap

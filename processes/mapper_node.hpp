@@ -1,0 +1,49 @@
+// sweepmap-mapper: gathers the chunks of each sweep from SWEEP_CLOUD and inserts the
+// sweep into an OctoMap OcTree (sensor at the origin of the sweep's frame), publishes
+// MAP_STATS after each sweep, and saves the map (.bt, written atomically) on MAP_SAVE
+// and at finish(). A sweep is inserted when its SWEEP_STATUS arrives or a later sweep
+// starts; missing chunks cost only their points and are counted.
+#pragma once
+
+#include <map>
+#include <memory>
+#include <set>
+
+#include "core/rig_config.hpp"
+#include "processes/node.hpp"
+
+namespace sweepmap {
+
+class OccupancyMap;
+
+class MapperNode : public Node {
+ public:
+  // `save_path`: where the map goes at finish() and on an empty MAP_SAVE request ("" = none).
+  MapperNode(const MapperConfig& config, std::string save_path);
+  ~MapperNode() override;
+  std::vector<std::string> subscriptions() const override;
+  void finish(int64_t now_utime, Outbox& out) override;
+  const OccupancyMap& map() const { return *map_; }
+
+ protected:
+  void handle(const Message& msg, Outbox& out) override;
+
+ private:
+  struct PendingSweep {
+    int chunk_count = 0;
+    std::map<int, std::vector<float>> chunks;  // chunk index -> xyz triples
+  };
+  void insert(int64_t now_utime, int64_t sweep_id, Outbox& out);
+  void save(const std::string& path);
+
+  MapperConfig config_;
+  std::string save_path_;
+  std::unique_ptr<OccupancyMap> map_;
+  std::map<int64_t, PendingSweep> pending_;
+  std::set<int64_t> inserted_;
+  int64_t sweeps_inserted_ = 0;
+  int64_t incomplete_ = 0;
+  int64_t last_sweep_utime_ = 0;
+};
+
+}  // namespace sweepmap

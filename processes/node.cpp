@@ -1,0 +1,80 @@
+#include "processes/node.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <iostream>
+
+#include "sweepmap/process_status_t.hpp"
+
+namespace sweepmap {
+
+Node::Node(std::string name) : name_(std::move(name)) {}
+
+std::string Node::statusChannel() const {
+  std::string upper = name_;
+  std::transform(upper.begin(), upper.end(), upper.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::toupper(c)); });
+  return "STATUS_" + upper;
+}
+
+void Node::receive(const Message& msg, Outbox& out) {
+  count("messages_in");
+  try {
+    handle(msg, out);
+  } catch (const std::exception& e) {
+    reportError("errors", "on " + msg.channel + ": " + e.what());
+  }
+}
+
+void Node::tick(int64_t now_utime, Outbox& out) {
+  try {
+    advance(now_utime, out);
+  } catch (const std::exception& e) {
+    reportError("errors", std::string("in tick: ") + e.what());
+  }
+  if (now_utime >= next_status_utime_) {
+    publishStatus(now_utime, out);
+    next_status_utime_ = now_utime + 1000000;
+  }
+}
+
+int64_t Node::counter(const std::string& name) const {
+  const auto it = counters_.find(name);
+  return it == counters_.end() ? 0 : it->second;
+}
+
+void Node::reportError(const std::string& counter, const std::string& what) {
+  count(counter);
+  detail_ = what;
+  // Rate limit by count (deterministic): the first 10, then every 1000th.
+  ++errors_printed_;
+  if (errors_printed_ <= 10 || errors_printed_ % 1000 == 0) {
+    std::cerr << name_ << ": " << what;
+    if (errors_printed_ == 10) std::cerr << " (further errors are printed every 1000th)";
+    std::cerr << "\n";
+  }
+}
+
+void Node::setFailed(const std::string& what) {
+  failed_ = true;
+  detail_ = what;
+  std::cerr << name_ << ": FAILED: " << what << "\n";
+}
+
+void Node::publishStatus(int64_t now_utime, Outbox& out) {
+  process_status_t s;
+  s.utime = now_utime;
+  s.process = name_;
+  const bool errors = counter("errors") + counter("dropped") + counter("invalid") > 0;
+  s.health = failed_ ? process_status_t::FAILED
+                     : (errors ? process_status_t::DEGRADED : process_status_t::OK);
+  s.detail = detail_;
+  for (const auto& [k, v] : counters_) {
+    s.counter_names.push_back(k);
+    s.counter_values.push_back(v);
+  }
+  s.ncounters = static_cast<int32_t>(s.counter_names.size());
+  out.publish(statusChannel(), now_utime, s);
+}
+
+}  // namespace sweepmap

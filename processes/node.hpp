@@ -1,0 +1,91 @@
+// The shape every sweepmap process shares: a Node takes encoded LCM messages (and, for
+// nodes that drive devices, the passing of time) and returns messages to publish. It
+// does no transport I/O and never reads the wall clock for its results, so the same
+// object runs live over LCM (live_runner.hpp) and offline in a discrete-event loop
+// (offline_bus.hpp), with identical outputs.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sweepmap {
+
+// One message on a channel. `utime` is when it was published/received [us]: the log
+// event's timestamp, not a field of the message.
+struct Message {
+  int64_t utime = 0;
+  std::string channel;
+  std::vector<uint8_t> data;
+};
+
+class Outbox {
+ public:
+  template <class T>
+  void publish(const std::string& channel, int64_t utime, const T& msg) {
+    Message m;
+    m.utime = utime;
+    m.channel = channel;
+    m.data.resize(static_cast<size_t>(msg.getEncodedSize()));
+    msg.encode(m.data.data(), 0, static_cast<int>(m.data.size()));
+    messages_.push_back(std::move(m));
+  }
+  void push(Message m) { messages_.push_back(std::move(m)); }
+  std::vector<Message> take() {
+    std::vector<Message> out;
+    out.swap(messages_);
+    return out;
+  }
+  bool empty() const { return messages_.empty(); }
+
+ private:
+  std::vector<Message> messages_;
+};
+
+// Decodes an lcm-gen type; false when the bytes are not exactly one valid message.
+template <class T>
+bool decodeMessage(const Message& m, T* out) {
+  if (m.data.size() > (1u << 26)) return false;
+  const int n = out->decode(m.data.data(), 0, static_cast<int>(m.data.size()));
+  return n == static_cast<int>(m.data.size());
+}
+
+class Node {
+ public:
+  explicit Node(std::string name);
+  virtual ~Node() = default;
+  const std::string& name() const { return name_; }
+  std::string statusChannel() const;
+
+  virtual std::vector<std::string> subscriptions() const = 0;
+
+  // Handles one message. Never throws: bad input is counted and reported.
+  void receive(const Message& msg, Outbox& out);
+  // Lets time pass (device polling, timers); publishes the status at 1 Hz.
+  void tick(int64_t now_utime, Outbox& out);
+  // End of input: flush what is pending.
+  virtual void finish(int64_t now_utime, Outbox& out) {}
+
+  int64_t counter(const std::string& name) const;
+  void publishStatus(int64_t now_utime, Outbox& out);
+  bool failed() const { return failed_; }
+
+ protected:
+  virtual void handle(const Message& msg, Outbox& out) = 0;
+  virtual void advance(int64_t now_utime, Outbox& out) {}
+  void count(const std::string& name, int64_t n = 1) { counters_[name] += n; }
+  // Reports bad input: counted under `counter`, printed rate-limited, kept as the status detail.
+  void reportError(const std::string& counter, const std::string& what);
+  void setFailed(const std::string& what);
+
+ private:
+  std::string name_;
+  std::map<std::string, int64_t> counters_;
+  std::string detail_;
+  bool failed_ = false;
+  int64_t next_status_utime_ = 0;
+  int64_t errors_printed_ = 0;
+};
+
+}  // namespace sweepmap

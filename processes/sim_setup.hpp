@@ -1,0 +1,24 @@
+// Pieces of the simulated rig shared by `sweepmap sim` and the live processes in --sim mode.
+#pragma once
+
+#include <cstdint>
+
+#include "core/rig_config.hpp"
+#include "drivers/scene.hpp"
+#include "sweepmap/truth_rig_t.hpp"
+
+namespace sweepmap {
+
+// The shaft's angle when the simulated rig powers up (unknown to the controller).
+constexpr double kSimInitialShaftAngleRad = 0.8;
+// Time origin of offline simulation (virtual clock) [us]: 2023-11-14T22:13:20Z.
+constexpr int64_t kSimEpochUtime = 1700000000000000LL;
+
+// Independent random streams of the simulated devices, derived from one seed.
+inline uint64_t stepperSeed(uint64_t seed) { return seed * 2 + 1; }
+inline uint64_t lidarSeed(uint64_t seed) { return seed * 2 + 2; }
+
+truth_rig_t makeTruthRig(const RigConfig& rig, const SceneConfig& scene_config, const Scene& scene,
+                         int64_t utime);
+
+}  // namespace sweepmap

@@ -1,0 +1,136 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/event_log.hpp"
+
+namespace sweepmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+class EventLogTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() /
+           ("sweepmap_eventlog_" + std::to_string(::testing::UnitTest::GetInstance()->random_seed()) +
+            "_" + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+  // Writes three events and returns the file size after each one.
+  std::vector<uint64_t> writeThree(const std::string& p) {
+    EventLogWriter w(p);
+    std::vector<uint64_t> ends;
+    w.write(100, "A", std::vector<uint8_t>{1, 2, 3});
+    w.flush();
+    ends.push_back(fs::file_size(p));
+    w.write(200, "BB", std::vector<uint8_t>(1000, 7));
+    w.flush();
+    ends.push_back(fs::file_size(p));
+    w.write(300, "C", std::vector<uint8_t>{});
+    w.close();
+    ends.push_back(fs::file_size(p));
+    return ends;
+  }
+
+  fs::path dir_;
+};
+
+TEST_F(EventLogTest, RoundTrip) {
+  writeThree(path("a.lcmlog"));
+  EventLogReader r(path("a.lcmlog"));
+  LogEvent e;
+  ASSERT_TRUE(r.next(&e));
+  EXPECT_EQ(e.eventnum, 0);
+  EXPECT_EQ(e.utime, 100);
+  EXPECT_EQ(e.channel, "A");
+  EXPECT_EQ(e.data, (std::vector<uint8_t>{1, 2, 3}));
+  ASSERT_TRUE(r.next(&e));
+  EXPECT_EQ(e.channel, "BB");
+  EXPECT_EQ(e.data.size(), 1000u);
+  ASSERT_TRUE(r.next(&e));
+  EXPECT_EQ(e.utime, 300);
+  EXPECT_TRUE(e.data.empty());
+  EXPECT_FALSE(r.next(&e));
+}
+
+TEST_F(EventLogTest, TruncatedLogReportsOffsetOfBrokenEvent) {
+  const auto ends = writeThree(path("t.lcmlog"));
+  fs::resize_file(path("t.lcmlog"), ends[1] - 10);  // cut inside the second event
+  EventLogReader r(path("t.lcmlog"));
+  LogEvent e;
+  ASSERT_TRUE(r.next(&e));
+  try {
+    r.next(&e);
+    FAIL() << "truncation not detected";
+  } catch (const LogError& err) {
+    EXPECT_EQ(err.offset(), ends[0]);
+    EXPECT_NE(std::string(err.what()).find("byte " + std::to_string(ends[0])), std::string::npos);
+  }
+}
+
+TEST_F(EventLogTest, CorruptSyncReported) {
+  const auto ends = writeThree(path("c.lcmlog"));
+  {
+    std::fstream f(path("c.lcmlog"), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(ends[1]));
+    f.put('\x00');
+  }
+  EventLogReader r(path("c.lcmlog"));
+  LogEvent e;
+  ASSERT_TRUE(r.next(&e));
+  ASSERT_TRUE(r.next(&e));
+  try {
+    r.next(&e);
+    FAIL() << "corruption not detected";
+  } catch (const LogError& err) {
+    EXPECT_EQ(err.offset(), ends[1]);
+  }
+}
+
+TEST_F(EventLogTest, CorruptLengthReported) {
+  writeThree(path("l.lcmlog"));
+  {
+    std::fstream f(path("l.lcmlog"), std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(24);  // data length of the first event
+    const char huge[4] = {'\x7f', '\x00', '\x00', '\x00'};
+    f.write(huge, 4);
+  }
+  EventLogReader r(path("l.lcmlog"));
+  LogEvent e;
+  EXPECT_THROW(r.next(&e), LogError);
+}
+
+TEST_F(EventLogTest, MissingFileNamed) {
+  try {
+    EventLogReader r(path("nope.lcmlog"));
+    FAIL();
+  } catch (const LogError& err) {
+    EXPECT_NE(std::string(err.what()).find("nope.lcmlog"), std::string::npos);
+  }
+}
+
+// A log written by LCM's own tools (lcm-proj/lcm test/python/example.lcmlog).
+TEST(EventLogReal, ReadsLcmExampleLog) {
+  const std::string p = std::string(SWEEPMAP_SHARED_DIR) + "/data/real/lcm_example.lcmlog";
+  if (!fs::exists(p)) GTEST_SKIP() << p << " not present (../shared is not beside this checkout)";
+  EventLogReader r(p);
+  LogEvent e;
+  int n = 0;
+  int64_t last = 0;
+  while (r.next(&e)) {
+    EXPECT_EQ(e.channel, "JOINT_TEST");
+    EXPECT_GE(e.utime, last);
+    last = e.utime;
+    ++n;
+  }
+  EXPECT_EQ(n, 10);
+  EXPECT_EQ(r.offset(), r.size());
+}
+
+}  // namespace
+}  // namespace sweepmap

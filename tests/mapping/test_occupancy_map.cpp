@@ -1,0 +1,172 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "mapping/occupancy_map.hpp"
+#include "mapping/synthetic_room.hpp"
+#include "mapping_test_util.hpp"
+
+namespace sweepmap {
+namespace {
+
+using testing_util::fileBytes;
+using testing_util::filesIn;
+using testing_util::freshTestDir;
+
+// A 4 x 3 x 2.5 m room whose walls lie on the centres of 10 cm voxels (so no wall point sits
+// on a voxel boundary), seen by a coarse sweep from a sensor near its centre.
+class BoxRoomTest : public ::testing::Test {
+ protected:
+  BoxRoomTest() {
+    config_.resolution_m = 0.1;
+    config_.max_range_m = 10.0;
+    spec_.room_min_m = {0.05f, 0.05f, 0.05f};
+    spec_.room_max_m = {4.05f, 3.05f, 2.55f};
+    spec_.sensor_m = {2.05f, 1.55f, 1.35f};
+    spec_.scans = 180;
+    spec_.beams = 541;  // 0.5 deg steps: a few points per wall voxel even in the corners
+  }
+
+  OccupancyMap buildMap(InsertMode mode = InsertMode::kDiscretized) const {
+    OccupancyMap map(config_);
+    map.insertCloud(syntheticRoomSweep(spec_), spec_.sensor_m, mode);
+    return map;
+  }
+
+  MapperConfig config_;
+  RoomSweepSpec spec_;
+};
+
+TEST_F(BoxRoomTest, WallsOccupiedInteriorFree) {
+  for (InsertMode mode : {InsertMode::kDiscretized, InsertMode::kEveryRay}) {
+    SCOPED_TRACE(mode == InsertMode::kDiscretized ? "discretized" : "every ray");
+    const OccupancyMap map = buildMap(mode);
+    // Walls, ceiling and the floor away from the blind cone below the sensor.
+    for (const Eigen::Vector3d& p :
+         {Eigen::Vector3d(0.05, 1.55, 1.35), Eigen::Vector3d(4.05, 1.05, 0.85),
+          Eigen::Vector3d(2.05, 0.05, 2.05), Eigen::Vector3d(1.05, 3.05, 1.35),
+          Eigen::Vector3d(2.05, 1.55, 2.55), Eigen::Vector3d(0.55, 0.55, 0.05),
+          Eigen::Vector3d(3.55, 2.55, 0.05)}) {
+      EXPECT_EQ(map.occupancyAt(p), Occupancy::kOccupied) << p.transpose();
+    }
+    // Inside, on the way to the walls.
+    for (const Eigen::Vector3d& p :
+         {Eigen::Vector3d(1.05, 1.55, 1.35), Eigen::Vector3d(3.05, 2.05, 1.85),
+          Eigen::Vector3d(0.55, 0.55, 0.55), Eigen::Vector3d(2.05, 1.55, 2.25),
+          Eigen::Vector3d(3.75, 2.75, 2.25)}) {
+      EXPECT_EQ(map.occupancyAt(p), Occupancy::kFree) << p.transpose();
+    }
+    // Never seen: outside the room, and the cone straight below the sensor (270 deg fan).
+    EXPECT_EQ(map.occupancyAt({5.05, 1.55, 1.35}), Occupancy::kUnknown);
+    EXPECT_EQ(map.occupancyAt({2.05, 1.55, 0.35}), Occupancy::kUnknown);
+    EXPECT_FALSE(map.occupiedAt({std::nan(""), 0.0, 0.0}));
+  }
+}
+
+TEST_F(BoxRoomTest, StatsAreSane) {
+  const OccupancyMap map = buildMap();
+  const MapStats s = map.stats();
+  EXPECT_EQ(s.sweeps_inserted, 1);
+  EXPECT_EQ(s.points_inserted, int64_t{spec_.scans} * spec_.beams);
+  EXPECT_DOUBLE_EQ(s.resolution_m, 0.1);
+  // Surface 2 (4*3 + 4*2.5 + 3*2.5) = 59 m^2 = 5900 voxels of 10 cm, less the unseen floor.
+  EXPECT_GT(s.occupied_voxels, 4000);
+  EXPECT_LT(s.occupied_voxels, 7000);
+  // Volume 30 m^3 = 30000 voxels, less the walls and the blind cone.
+  EXPECT_GT(s.free_voxels, 20000);
+  EXPECT_LT(s.free_voxels, 30000);
+  EXPECT_GT(s.memory_bytes, 0);
+  EXPECT_EQ(map.skippedPoints(), 0);
+}
+
+TEST(OccupancyMap, PointsBeyondMaxRangeOnlyClearSpace) {
+  MapperConfig config;
+  config.resolution_m = 0.1;
+  config.max_range_m = 2.0;
+  OccupancyMap map(config);
+  const Eigen::Vector3f origin(0.05f, 0.05f, 0.05f);
+  map.insertCloud({{5.05f, 0.05f, 0.05f}, {0.05f, 1.55f, 0.05f}}, origin);
+  EXPECT_EQ(map.occupancyAt({5.05, 0.05, 0.05}), Occupancy::kUnknown);  // beyond: no hit
+  EXPECT_EQ(map.occupancyAt({1.05, 0.05, 0.05}), Occupancy::kFree);     // the ray, cut at 2 m
+  EXPECT_EQ(map.occupancyAt({3.05, 0.05, 0.05}), Occupancy::kUnknown);
+  EXPECT_EQ(map.occupancyAt({0.05, 1.55, 0.05}), Occupancy::kOccupied);  // within range
+  EXPECT_EQ(map.stats().occupied_voxels, 1);
+}
+
+TEST(OccupancyMap, NonFinitePointsAreSkippedAndCounted) {
+  MapperConfig config;
+  config.resolution_m = 0.1;
+  OccupancyMap map(config);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const float inf = std::numeric_limits<float>::infinity();
+  map.insertCloud({{1.05f, 0.05f, 0.05f},
+                   {nan, 0.0f, 0.0f},
+                   {0.0f, inf, 0.0f},
+                   {0.05f, 0.05f, -inf},
+                   {0.05f, 1.05f, 0.05f}},
+                  {0.05f, 0.05f, 0.05f});
+  EXPECT_EQ(map.skippedPoints(), 3);
+  EXPECT_EQ(map.stats().points_inserted, 2);
+  EXPECT_TRUE(map.occupiedAt({1.05, 0.05, 0.05}));
+  EXPECT_TRUE(map.occupiedAt({0.05, 1.05, 0.05}));
+  EXPECT_THROW(map.insertCloud({{1.0f, 0.0f, 0.0f}}, {nan, 0.0f, 0.0f}), std::invalid_argument);
+}
+
+TEST(OccupancyMap, RejectsBadConfig) {
+  MapperConfig c;
+  c.resolution_m = 0.0;
+  EXPECT_THROW(OccupancyMap{c}, std::invalid_argument);
+  c = MapperConfig{};
+  c.prob_hit = 0.4;
+  EXPECT_THROW(OccupancyMap{c}, std::invalid_argument);
+  c = MapperConfig{};
+  c.clamp_min = 0.98;
+  EXPECT_THROW(OccupancyMap{c}, std::invalid_argument);
+}
+
+TEST_F(BoxRoomTest, SameInputGivesIdenticalBtFiles) {
+  const auto dir = freshTestDir();
+  spec_.range_noise_sigma_m = 0.012;
+  const auto a = dir / "a.bt";
+  const auto b = dir / "b.bt";
+  for (const auto& path : {a, b}) {
+    OccupancyMap map(config_);
+    for (uint32_t seed : {1u, 2u, 3u}) {
+      spec_.seed = seed;
+      map.insertCloud(syntheticRoomSweep(spec_), spec_.sensor_m);
+    }
+    map.saveBinaryAtomic(path.string());
+  }
+  const std::string bytes_a = fileBytes(a);
+  ASSERT_GT(bytes_a.size(), 1000u);
+  EXPECT_EQ(bytes_a, fileBytes(b));
+  EXPECT_EQ(filesIn(dir), (std::vector<std::string>{"a.bt", "b.bt"}));  // no .tmp left
+
+  const OccupancyMap loaded = OccupancyMap::loadBinary(a.string());
+  EXPECT_DOUBLE_EQ(loaded.config().resolution_m, 0.1);
+  EXPECT_TRUE(loaded.occupiedAt({0.05, 1.55, 1.35}));
+  EXPECT_EQ(loaded.occupancyAt({1.05, 1.55, 1.35}), Occupancy::kFree);
+  EXPECT_EQ(loaded.occupancyAt({5.05, 1.55, 1.35}), Occupancy::kUnknown);
+}
+
+TEST_F(BoxRoomTest, SaveReplacesAndReportsFailures) {
+  const auto dir = freshTestDir();
+  const auto path = dir / "map.bt";
+  const OccupancyMap map = buildMap();
+  map.saveBinaryAtomic(path.string());
+  map.saveBinaryAtomic(path.string());  // replacing an existing file
+  EXPECT_EQ(filesIn(dir), std::vector<std::string>{"map.bt"});
+
+  const std::string bad = (dir / "no_such_dir" / "map.bt").string();
+  try {
+    map.saveBinaryAtomic(bad);
+    FAIL() << "saving into a missing folder must throw";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(OccupancyMap::loadBinary((dir / "missing.bt").string()), std::runtime_error);
+}
+
+}  // namespace
+}  // namespace sweepmap

@@ -1,0 +1,150 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "processes/assembler_node.hpp"
+#include "processes/channels.hpp"
+#include "processes/convert.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/scan_window_t.hpp"
+#include "sweepmap/sweep_status_t.hpp"
+
+namespace sweepmap {
+namespace {
+
+class AssemblerNodeTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    rig_.lidar.beam_count = 9;
+    rig_.assembler.chunk_points = 50;
+  }
+  Message scanMsg(int j, float range = 2.0f) const {
+    Scan2D s;
+    s.utime = 1000000 + 25000 * j;
+    s.seq = j;
+    s.angle_min_rad = -1.0;
+    s.angle_increment_rad = 0.25;
+    s.time_increment_ns = 17361;
+    s.range_min_m = 0.06;
+    s.range_max_m = 10.0;
+    s.ranges_m.assign(9, range);
+    return encode(channels::kLidarScan, s.utime, toLcm(s));
+  }
+  Message windowMsg(int64_t id, int64_t start, int64_t end) const {
+    scan_window_t w;
+    w.utime = end;
+    w.sweep_id = id;
+    w.mode = 1;
+    w.start_utime = start;
+    w.end_utime = end;
+    w.angular_velocity_rad_s = M_PI;
+    w.sweep_angle_rad = M_PI;
+    w.action_sequence = scan_window_t::IMPROVED;
+    w.accel_overlap = false;
+    return encode(channels::kScanWindow, end, w);
+  }
+  template <class T>
+  static Message encode(const std::string& ch, int64_t utime, const T& msg) {
+    Outbox o;
+    o.publish(ch, utime, msg);
+    return o.take().front();
+  }
+  // Feeds messages in order; returns the decoded chunks.
+  std::vector<cloud_chunk_t> feed(const std::vector<Message>& msgs, AssemblerNode* node) {
+    std::vector<cloud_chunk_t> chunks;
+    for (const auto& m : msgs) {
+      Outbox out;
+      node->receive(m, out);
+      for (const auto& o : out.take()) {
+        if (o.channel != channels::kSweepCloud) continue;
+        cloud_chunk_t c;
+        EXPECT_TRUE(decodeMessage(o, &c));
+        chunks.push_back(c);
+      }
+    }
+    return chunks;
+  }
+  RigConfig rig_;
+};
+
+TEST_F(AssemblerNodeTest, WindowAssembledOnceAScanPassesItsEnd) {
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs;
+  for (int j = 0; j < 10; ++j) msgs.push_back(scanMsg(j));
+  msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 8));
+  auto chunks = feed(msgs, &node);
+  EXPECT_TRUE(chunks.empty()) << "assembled before a scan at or after the window end";
+  chunks = feed({scanMsg(10)}, &node);
+  ASSERT_EQ(chunks.size(), 2u);  // 8 scans x 9 rays = 72 points in chunks of 50
+  EXPECT_EQ(chunks[0].total_points, 72);
+  EXPECT_EQ(chunks[0].npoints + chunks[1].npoints, 72);
+  EXPECT_EQ(chunks[1].chunk_index, 1);
+  EXPECT_EQ(chunks[1].chunk_count, 2);
+  EXPECT_EQ(chunks[0].frame, "O'");  // no plate in this data
+  EXPECT_FALSE(chunks[0].corrected);
+}
+
+// Live, the window message may arrive before or after the scans it covers.
+TEST_F(AssemblerNodeTest, OutputIndependentOfChannelInterleaving) {
+  std::vector<Message> scans;
+  for (int j = 0; j < 12; ++j) scans.push_back(scanMsg(j));
+  const Message w = windowMsg(4, 1000000 + 25000 * 2, 1000000 + 25000 * 9);
+  AssemblerNode a(rig_), b(rig_);
+  std::vector<Message> early = {w};
+  early.insert(early.end(), scans.begin(), scans.end());
+  std::vector<Message> late = scans;
+  late.push_back(w);
+  const auto ca = feed(early, &a);
+  const auto cb = feed(late, &b);
+  ASSERT_EQ(ca.size(), cb.size());
+  ASSERT_FALSE(ca.empty());
+  for (size_t i = 0; i < ca.size(); ++i) EXPECT_EQ(ca[i].xyz_m, cb[i].xyz_m);
+}
+
+TEST_F(AssemblerNodeTest, BadInputIsCountedNotFatal) {
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs;
+  msgs.push_back(scanMsg(0));
+  Message garbage{0, channels::kLidarScan, {1, 2, 3, 4, 5}};
+  msgs.push_back(garbage);                                       // malformed bytes
+  Message truncated = scanMsg(1);
+  truncated.data.resize(truncated.data.size() / 2);
+  msgs.push_back(truncated);                                     // truncated message
+  msgs.push_back(scanMsg(2, std::numeric_limits<float>::quiet_NaN()));  // NaN ranges
+  msgs.push_back(scanMsg(3, std::numeric_limits<float>::infinity()));
+  msgs.push_back(scanMsg(4, 1e9f));                              // absurd range
+  {
+    Scan2D s;
+    s.utime = 1000000 + 25000 * 5;
+    s.range_max_m = 10;
+    s.ranges_m.assign(3, 1.0f);                                  // wrong length
+    msgs.push_back(encode(channels::kLidarScan, s.utime, toLcm(s)));
+  }
+  msgs.push_back(scanMsg(0));                                    // repeated: out of order
+  msgs.push_back(windowMsg(0, 2000000, 1000000));                // ends before it starts
+  Message bad_window{0, channels::kScanWindow, {0xff, 0xfe}};
+  msgs.push_back(bad_window);
+  msgs.push_back(scanMsg(6));
+  EXPECT_NO_THROW(feed(msgs, &node));
+  EXPECT_EQ(node.counter("scans"), 2);
+  EXPECT_EQ(node.counter("invalid"), 8);
+  EXPECT_EQ(node.counter("dropped"), 1);
+  EXPECT_EQ(node.counter("errors"), 0);
+}
+
+TEST_F(AssemblerNodeTest, FinishFlushesIncompleteWindow) {
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs;
+  for (int j = 0; j < 4; ++j) msgs.push_back(scanMsg(j));
+  msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 8));
+  EXPECT_TRUE(feed(msgs, &node).empty());
+  Outbox out;
+  node.finish(0, out);
+  int chunks = 0;
+  for (const auto& m : out.take()) chunks += m.channel == channels::kSweepCloud;
+  EXPECT_EQ(chunks, 1);
+}
+
+}  // namespace
+}  // namespace sweepmap

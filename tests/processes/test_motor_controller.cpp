@@ -1,0 +1,156 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "drivers/sim_stepper.hpp"
+#include "processes/channels.hpp"
+#include "processes/motor_controller.hpp"
+#include "processes/offline_bus.hpp"
+#include "processes/sim_setup.hpp"
+#include "sweepmap/motor_state_t.hpp"
+#include "sweepmap/scan_window_t.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+struct Run {
+  std::vector<scan_window_t> windows;
+  std::vector<int8_t> states;
+  bool fault = false;
+  int sweeps = 0;
+};
+
+SimRigConfig exactDevice() {
+  SimRigConfig s;
+  s.accel_jitter = 0.0;
+  s.start_delay_max_ms = 0.0;
+  s.switch_response_ms = 0.0;
+  s.switch_response_jitter_ms = 0.0;
+  s.switch_hysteresis_deg = 0.0;
+  return s;
+}
+
+// Runs the controller against a simulated stepper on a 1 ms virtual clock.
+Run runController(const RigConfig& rig, int sweeps, uint64_t seed, SimStepper** keep = nullptr,
+                  std::unique_ptr<SimStepper>* owner = nullptr) {
+  const int64_t t0 = kSimEpochUtime;
+  auto stepper = std::make_unique<SimStepper>(rig.motor, rig.sim, seed, 0.8, t0, nullptr);
+  MotorController motor(rig, stepper.get(), sweeps, t0);
+  OfflineBus bus;
+  bus.attach(&motor);
+  Run run;
+  bus.setSink([&](const Message& m) {
+    if (m.channel == channels::kScanWindow) {
+      scan_window_t w;
+      EXPECT_TRUE(decodeMessage(m, &w));
+      run.windows.push_back(w);
+    } else if (m.channel == channels::kMotorState) {
+      motor_state_t s;
+      EXPECT_TRUE(decodeMessage(m, &s));
+      if (run.states.empty() || run.states.back() != s.state) run.states.push_back(s.state);
+    }
+  });
+  const int64_t limit = t0 + static_cast<int64_t>(sweeps * 60e6);
+  for (int64_t t = t0; t < limit && !motor.done(); t += 1000) bus.tick(t);
+  run.fault = motor.phase() == MotorController::Phase::kFault;
+  run.sweeps = motor.sweepsDone();
+  if (owner) *owner = std::move(stepper);
+  return run;
+}
+
+class ActionSequenceTiming : public ::testing::TestWithParam<int> {};
+
+// Improved sequence, every mode: the window lasts T of Table 1, the commanded speed is
+// 180 deg / T, and the TRUE shaft turns at exactly that constant speed through the whole
+// window, even with the section-2 errors of the default error model.
+TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
+  const int mode = GetParam();
+  for (const bool errors : {false, true}) {
+    RigConfig rig;
+    rig.motor.mode = mode;
+    if (!errors) rig.sim = exactDevice();
+    std::unique_ptr<SimStepper> stepper;
+    const Run run = runController(rig, 2, 42 + mode, nullptr, &stepper);
+    ASSERT_FALSE(run.fault);
+    ASSERT_EQ(run.windows.size(), 2u);
+    const ScanMode m = scanMode(mode);
+    for (const auto& w : run.windows) {
+      EXPECT_EQ(w.end_utime - w.start_utime, static_cast<int64_t>(m.period_s * 1e6));
+      EXPECT_NEAR(w.angular_velocity_rad_s, M_PI / m.period_s, 1e-12);
+      EXPECT_FALSE(w.accel_overlap);
+      EXPECT_EQ(w.mode, mode);
+      const auto& truth = stepper->trajectory();
+      for (int64_t t = w.start_utime; t <= w.end_utime; t += 5000) {
+        ASSERT_NEAR(truth.velocityAt(t), w.angular_velocity_rad_s, 1e-9)
+            << "mode " << mode << " errors " << errors << " at +" << (t - w.start_utime) << " us";
+      }
+      // The window opens near the home angle (shaft angle 0); with an exact device exactly.
+      const double start_angle = truth.angleAt(w.start_utime);
+      if (!errors) {
+        EXPECT_NEAR(start_angle, 0.0, 1e-6) << "mode " << mode;
+      } else {
+        // Start delay (<= 30 ms at omega), ramp jitter (+-10 % of the ramp distance, with
+        // slack) and the homing error (switch response, hysteresis, stop jitter).
+        const double omega = M_PI / m.period_s;
+        const double bound =
+            0.030 * omega + 0.12 * omega * omega / (2 * 720 * kDeg) + 0.5 * kDeg;
+        EXPECT_LT(std::abs(start_angle), bound) << "mode " << mode;
+      }
+    }
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(AllModes, ActionSequenceTiming, ::testing::Range(1, 8));
+
+TEST(MotorController, NaiveSequenceOverlapsRamp) {
+  RigConfig rig;
+  rig.motor.mode = 1;
+  rig.motor.action_sequence = "naive";
+  rig.sim = exactDevice();
+  std::unique_ptr<SimStepper> stepper;
+  const Run run = runController(rig, 1, 3, nullptr, &stepper);
+  ASSERT_EQ(run.windows.size(), 1u);
+  const auto& w = run.windows[0];
+  EXPECT_TRUE(w.accel_overlap);
+  EXPECT_EQ(w.action_sequence, scan_window_t::NAIVE);
+  // The shaft is still accelerating when the window opens.
+  EXPECT_LT(stepper->trajectory().velocityAt(w.start_utime + 10000), 0.5 * w.angular_velocity_rad_s);
+}
+
+TEST(MotorController, GoesThroughHomingScanningAndDone) {
+  RigConfig rig;
+  rig.motor.mode = 1;
+  const Run run = runController(rig, 1, 9);
+  ASSERT_GE(run.states.size(), 5u);
+  EXPECT_EQ(run.states.front(), motor_state_t::HOMING);
+  EXPECT_EQ(run.states.back(), motor_state_t::DONE);
+  EXPECT_NE(std::find(run.states.begin(), run.states.end(), motor_state_t::SCANNING),
+            run.states.end());
+  EXPECT_EQ(run.sweeps, 1);
+}
+
+// A switch that never triggers: homing gives up with a fault instead of turning forever.
+class DeadSwitchStepper : public StepperDevice {
+ public:
+  void command(int64_t, const StepperCommand&) override { ++commands; }
+  std::vector<SwitchEdge> poll(int64_t) override { return {}; }
+  bool switchBlocked() const override { return false; }
+  int commands = 0;
+};
+
+TEST(MotorController, FaultsWhenHomeSwitchNeverSeen) {
+  RigConfig rig;
+  DeadSwitchStepper dead;
+  MotorController motor(rig, &dead, 1, 0);
+  OfflineBus bus;
+  bus.attach(&motor);
+  for (int64_t t = 0; t < 60000000 && !motor.done(); t += 1000) bus.tick(t);
+  EXPECT_EQ(motor.phase(), MotorController::Phase::kFault);
+  EXPECT_TRUE(motor.failed());
+  EXPECT_GE(dead.commands, 2);  // seek, then stop
+}
+
+}  // namespace
+}  // namespace sweepmap

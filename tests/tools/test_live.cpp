@@ -1,0 +1,134 @@
+// The live processes over LCM, in a private network namespace that this test creates:
+// the clouds they publish equal those of the offline replay of their own log, and a
+// `sweepmap sim` log played by lcm-logplayer gives the clouds `sweepmap replay` gives.
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "processes/channels.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "test_support.hpp"
+#include "tools/netns.hpp"
+#include "tools/process_group.hpp"
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+const std::string kRig = sourcePath("config/rig_a.yaml");
+const std::string kScene = sourcePath("config/scene_conference_room.yaml");
+const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
+
+class LiveTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::string why;
+    netns_ok_ = enterPrivateNetwork(&why);
+    netns_why_ = why;
+  }
+  void SetUp() override {
+    if (!netns_ok_) GTEST_SKIP() << "no private network namespace: " << netns_why_;
+  }
+  static std::vector<std::string> proc(const std::string& name, std::vector<std::string> args) {
+    args.insert(args.begin(), binPath("sweepmap-" + name));
+    args.insert(args.end(), {"--rig", kRig, "--set", "motor.mode=1", "--lcm-url", kUrl});
+    return args;
+  }
+  // Chunk payloads of SWEEP_CLOUD keyed by (sweep, chunk).
+  static std::map<std::pair<int64_t, int>, std::vector<uint8_t>> chunks(const std::string& log) {
+    std::map<std::pair<int64_t, int>, std::vector<uint8_t>> out;
+    for (const auto& m : readChannel(log, channels::kSweepCloud)) {
+      cloud_chunk_t c;
+      EXPECT_TRUE(decodeMessage(m, &c));
+      out[{c.sweep_id, c.chunk_index}] = m.data;
+    }
+    return out;
+  }
+  static bool netns_ok_;
+  static std::string netns_why_;
+};
+
+bool LiveTest::netns_ok_ = false;
+std::string LiveTest::netns_why_;
+
+TEST_F(LiveTest, LiveCloudsEqualOfflineReplayOfTheirLog) {
+  const auto dir = scratchDir("live_vs_offline");
+  const std::string log = (dir / "live.lcmlog").string();
+  ProcessGroup procs;
+  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", log},
+                                   (dir / "logger.txt").string());
+  const pid_t assembler = procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t lidar = procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}),
+                                  (dir / "lidar.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t motor = procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}),
+                                  (dir / "motor.txt").string());
+  ASSERT_EQ(procs.wait(motor, 90.0), 0) << readFile(dir / "motor.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(lidar, 5.0), 0);
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+
+  const auto live = chunks(log);
+  ASSERT_FALSE(live.empty()) << "the live assembler published nothing";
+  ASSERT_EQ(sweepmap({"replay", log, "--rig", kRig, "--set", "motor.mode=1", "--out",
+                      (dir / "offline").string(), "--no-plots"},
+                     dir / "replay.txt"),
+            0)
+      << readFile(dir / "replay.txt");
+  const auto offline = chunks((dir / "offline" / "derived.lcmlog").string());
+  EXPECT_EQ(live.size(), offline.size());
+  int sweeps = 0;
+  for (const auto& [key, bytes] : live) {
+    ASSERT_TRUE(offline.count(key)) << "sweep " << key.first << " chunk " << key.second;
+    EXPECT_TRUE(bytes == offline.at(key)) << "sweep " << key.first << " chunk " << key.second
+                                          << " differs between live and offline";
+    sweeps += key.second == 0;
+  }
+  EXPECT_EQ(sweeps, 2);
+}
+
+TEST_F(LiveTest, LogplayerIntoLiveProcessesMatchesReplay) {
+  const auto dir = scratchDir("logplayer");
+  const std::string sim_log = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(sweepmap({"sim", "--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "2",
+                      "--seed", "8", "--out", sim_log}),
+            0);
+  const std::string rec = (dir / "recorded.lcmlog").string();
+  ProcessGroup procs;
+  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
+                                              "SWEEP_.*|MAP_STATS", rec},
+                                   (dir / "logger.txt").string());
+  const pid_t assembler = procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper = procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}),
+                                   (dir / "mapper.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
+                                   (dir / "logplayer.txt").string());
+  ASSERT_EQ(procs.wait(player, 120.0), 0) << readFile(dir / "logplayer.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0);
+  EXPECT_EQ(procs.stop(mapper, 60.0), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+  EXPECT_TRUE(fs::exists(dir / "live_map.bt"));
+
+  ASSERT_EQ(sweepmap({"replay", sim_log, "--rig", kRig, "--set", "motor.mode=1", "--out",
+                      (dir / "offline").string(), "--no-plots"}),
+            0);
+  const auto live = chunks(rec);
+  const auto offline = chunks((dir / "offline" / "derived.lcmlog").string());
+  ASSERT_FALSE(live.empty());
+  EXPECT_EQ(live.size(), offline.size());
+  for (const auto& [key, bytes] : offline) {
+    ASSERT_TRUE(live.count(key)) << "sweep " << key.first << " chunk " << key.second;
+    EXPECT_TRUE(bytes == live.at(key));
+  }
+  // The live mapper's map equals the replayed one (same sweeps, same order).
+  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(dir / "offline" / "map.bt"));
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace sweepmap

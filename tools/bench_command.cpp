@@ -1,0 +1,84 @@
+#include <sys/resource.h>
+
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+
+#include "core/event_log.hpp"
+#include "tools/commands.hpp"
+#include "tools/replay.hpp"
+#include "tools/simulation.hpp"
+
+namespace sweepmap {
+namespace {
+
+double peakRssMiB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+}  // namespace
+
+Runner addBenchCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "bench",
+      "Measure simulation and offline replay speed (assembly + plate correction + OctoMap) as "
+      "real-time factors for modes 1 and 7, points per second and peak memory. Prints "
+      "figures; run on an idle machine, compare ratios within one run");
+  struct Opts {
+    std::string rig = "config/rig_a.yaml";
+    std::string scene = "config/scene_conference_room.yaml";
+    std::string work = "build/bench";
+    int sweeps = 2;
+  };
+  auto o = std::make_shared<Opts>();
+  cmd->add_option("--rig", o->rig, "rig config")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--scene", o->scene, "scene")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--work", o->work, "scratch directory")->capture_default_str();
+  cmd->add_option("--sweeps", o->sweeps, "sweeps per mode")->capture_default_str();
+  return [o]() {
+    namespace fs = std::filesystem;
+    using clock = std::chrono::steady_clock;
+    fs::create_directories(o->work);
+    std::cout << std::fixed << std::setprecision(2);
+    std::cout << "sweepmap bench (one thread; real-time factor = simulated or logged time / "
+                 "wall time)\n";
+    for (int mode : {1, 7}) {
+      SimOptions so;
+      loadSimConfig(o->rig, o->scene, {"motor.mode=" + std::to_string(mode)}, &so.rig, &so.scene);
+      so.sweeps = o->sweeps;
+      const std::string log = o->work + "/bench_mode" + std::to_string(mode) + ".lcmlog";
+      auto t0 = clock::now();
+      SimResult sr;
+      {
+        EventLogWriter w(log);
+        sr = simulate(so, [&](const Message& m) { w.write(m.utime, m.channel, m.data); });
+        w.close();
+      }
+      const double sim_s = std::chrono::duration<double>(clock::now() - t0).count();
+
+      ReplayOptions ro;
+      ro.log_path = log;
+      ro.out_dir = o->work + "/replay_mode" + std::to_string(mode);
+      ro.plots = false;
+      t0 = clock::now();
+      const ReplayResult rr = replayLog(ro, so.rig);
+      const double replay_s = std::chrono::duration<double>(clock::now() - t0).count();
+      const double scan_time_s = o->sweeps * scanMode(mode).period_s;
+      std::cout << "mode " << mode << ": " << o->sweeps << " sweeps, "
+                << sr.simulated_us / 1e6 << " s simulated\n"
+                << "  simulation  " << sim_s << " s wall, real-time factor "
+                << sr.simulated_us / 1e6 / sim_s << "\n"
+                << "  replay      " << replay_s << " s wall, real-time factor "
+                << rr.log_duration_s / replay_s << " (log time), "
+                << scan_time_s / replay_s << " (scan-window time), "
+                << static_cast<int64_t>(rr.points / replay_s) << " points/s\n";
+    }
+    std::cout << "peak RSS " << peakRssMiB() << " MiB\n";
+    return 0;
+  };
+}
+
+}  // namespace sweepmap
