@@ -48,4 +48,35 @@ PlateEstimate estimateBetaCentroid(const std::vector<Eigen::Vector3f>& cloud_Op,
   return e;
 }
 
+std::optional<double> plateRayRange(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                    const PlateRegion& region) {
+  if (dir.z() >= -1e-9) return std::nullopt;  // does not go down to the plate
+  const double t = (region.z_center_m - origin.z()) / dir.z();
+  if (t <= 0.0) return std::nullopt;
+  const Eigen::Vector3d p = origin + t * dir;
+  if (!region.contains(p.cast<float>())) return std::nullopt;
+  return t;
+}
+
+PlateEstimate estimateBetaRayPlane(const std::vector<PlateRay>& rays, const PlateRegion& region,
+                                   double range_gate_m, int min_points) {
+  PlateEstimate e;
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const auto& ray : rays) {
+    const auto t = plateRayRange(ray.origin, ray.direction, region);
+    if (!t || std::abs(ray.range_m - *t) > range_gate_m) continue;
+    const Eigen::Vector3d p = ray.origin + *t * ray.direction;
+    sum += p.head<2>();
+    ++e.points;
+  }
+  if (e.points < min_points) {
+    e.reason = "plate not found: " + std::to_string(e.points) +
+               " rays meet the plate plane in the region, need " + std::to_string(min_points);
+    return e;
+  }
+  e.found = true;
+  e.beta_rad = std::atan2(sum.y(), sum.x());
+  return e;
+}
+
 }  // namespace sweepmap

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -36,5 +37,24 @@ std::vector<size_t> extractPlatePoints(const std::vector<Eigen::Vector3f>& cloud
 // Not found when fewer than `min_points` lie in the region.
 PlateEstimate estimateBetaCentroid(const std::vector<Eigen::Vector3f>& cloud_Op,
                                    const PlateRegion& region, int min_points);
+
+// One lidar ray in frame O' with its measured range.
+struct PlateRay {
+  Eigen::Vector3d origin;     // lidar centre at the ray's time
+  Eigen::Vector3d direction;  // unit
+  double range_m;             // measured
+};
+
+// The ray that meets the plate's plane z = region.z_center_m at a point of the semi-ring,
+// or nothing. Returns the range to that point.
+std::optional<double> plateRayRange(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                    const PlateRegion& region);
+
+// Ray-plane estimator: every ray whose nominal intersection with the plate plane lies in
+// the region and whose measured range is within `range_gate_m` of it contributes that
+// intersection point, which carries no range noise. Selection depends on the noise only
+// symmetrically (the gate), so the centroid's boundary bias of noisy points is avoided.
+PlateEstimate estimateBetaRayPlane(const std::vector<PlateRay>& rays, const PlateRegion& region,
+                                   double range_gate_m, int min_points);
 
 }  // namespace sweepmap

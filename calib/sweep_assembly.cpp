@@ -19,6 +19,9 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   out.first_ray_utime = scans.front().utime;
   const double offset_x_m = rig.geometry.lidar_offset_x_mm * 1e-3;
 
+  const PlateRegion region = PlateRegion::fromConfig(rig.plate);
+  const bool ray_plane = rig.plate.beta_method == "ray_plane";
+  std::vector<PlateRay> plate_rays;
   size_t total = 0;
   for (const auto& s : scans) total += s.ranges_m.size();
   out.points_Op.reserve(total);
@@ -32,12 +35,20 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
       // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
       const double phi = phi0 + window.omega_rad_s * t_ray_s * static_cast<double>(i);
       const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
-      out.points_Op.push_back(rotating::lidarToOPrime(p_L, phi, offset_x_m).cast<float>());
+      const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, phi, offset_x_m);
+      out.points_Op.push_back(p_Op.cast<float>());
+      if (ray_plane) {
+        const Eigen::Vector3d origin = rotating::lidarToOPrime(Eigen::Vector3d::Zero(), phi, offset_x_m);
+        const Eigen::Vector3d dir = (p_Op - origin) / r;
+        if (plateRayRange(origin, dir, region)) plate_rays.push_back({origin, dir, r});
+      }
     }
   }
 
-  out.plate = estimateBetaCentroid(out.points_Op, PlateRegion::fromConfig(rig.plate),
-                                   rig.plate.min_points);
+  out.plate = ray_plane ? estimateBetaRayPlane(plate_rays, region,
+                                               rig.plate.range_gate_mm * 1e-3,
+                                               rig.plate.min_points)
+                        : estimateBetaCentroid(out.points_Op, region, rig.plate.min_points);
   if (!rig.assembler.correct_attitude) {
     out.reason = "correction disabled (assembler.correct_attitude=false)";
   } else if (window.accel_overlap) {

@@ -161,22 +161,37 @@ void ConfigSchema::print(std::ostream& out) const {
   }
 }
 
-std::string ConfigSchema::toYaml() const {
-  YAML::Node root;
-  for (const auto& e : entries_) {
-    std::vector<std::string> parts;
-    std::stringstream ss(e.key);
-    for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
-    // yaml-cpp nodes are reference-like: walk down creating maps.
-    YAML::Node node = root;
-    for (size_t i = 0; i + 1 < parts.size(); ++i) {
-      YAML::Node child = node[parts[i]];
-      node.reset(child);
+namespace {
+
+// Emits `items` (dotted key -> value, declaration order) as nested maps.
+void emitNested(YAML::Emitter& em, const std::vector<std::pair<std::string, std::string>>& items) {
+  em << YAML::BeginMap;
+  std::vector<std::string> order;
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> children;
+  for (const auto& [key, value] : items) {
+    const auto dot = key.find('.');
+    if (dot == std::string::npos) {
+      em << YAML::Key << key << YAML::Value << value;
+      continue;
     }
-    node[parts.back()] = e.format();
+    const std::string head = key.substr(0, dot);
+    if (!children.count(head)) order.push_back(head);
+    children[head].emplace_back(key.substr(dot + 1), value);
   }
+  for (const auto& head : order) {
+    em << YAML::Key << head << YAML::Value;
+    emitNested(em, children[head]);
+  }
+  em << YAML::EndMap;
+}
+
+}  // namespace
+
+std::string ConfigSchema::toYaml() const {
+  std::vector<std::pair<std::string, std::string>> items;
+  for (const auto& e : entries_) items.emplace_back(e.key, e.format());
   YAML::Emitter em;
-  em << root;
+  emitNested(em, items);
   return std::string(em.c_str()) + "\n";
 }
 

@@ -47,6 +47,10 @@ void PlateConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "hypotenuse_mm", &hypotenuse_mm, "mm", "plate hypotenuse (isosceles right triangle)");
   s.add(p + "base_distance_mm", &base_distance_mm, "mm", "hypotenuse to rotation axis");
   s.add(p + "min_points", &min_points, "", "fewest plate points for a correction");
+  s.add(p + "beta_method", &beta_method, "",
+        "centroid (Yuan 2021) or ray_plane (rays meeting the plate plane in the region)");
+  s.add(p + "range_gate_mm", &range_gate_mm, "mm",
+        "ray_plane: largest |measured - plane range| of a plate ray");
 }
 
 void AssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
@@ -104,7 +108,12 @@ RigConfig loadRig(const std::string& path, const std::vector<std::string>& overr
   rig.declare(schema);
   schema.loadFile(path);
   for (const auto& o : overrides) schema.set(o);
-  scanMode(rig.motor.mode);  // validates
+  if (rig.motor.mode < 1 || rig.motor.mode > 7) {
+    throw ConfigError(path + ": key 'motor.mode' must be 1..7");
+  }
+  if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane") {
+    throw ConfigError(path + ": key 'plate.beta_method' must be centroid or ray_plane");
+  }
   if (rig.motor.action_sequence != "improved" && rig.motor.action_sequence != "naive") {
     throw ConfigError(path + ": key 'motor.action_sequence' must be improved or naive");
   }

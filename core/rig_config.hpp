@@ -53,6 +53,11 @@ struct PlateConfig {
   double hypotenuse_mm = 112.0;        // isosceles right triangle: legs 79.2 mm
   double base_distance_mm = 54.75;     // hypotenuse to rotation axis
   int min_points = 30;                 // fewer points: the sweep is left uncorrected
+  // How beta is estimated: "centroid" (Yuan 2021: mean of the points in the region) or
+  // "ray_plane" (each ray that meets the plate plane inside the region and whose range
+  // agrees within range_gate_mm contributes its noise-free intersection point).
+  std::string beta_method = "ray_plane";
+  double range_gate_mm = 30.0;
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 

@@ -1,84 +1,102 @@
 #include "drivers/motion_profile.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 namespace sweepmap {
 namespace {
 
-int64_t toUs(double seconds) { return static_cast<int64_t>(std::llround(seconds * 1e6)); }
+// Builds the contiguous segments of one command, boundaries on whole microseconds.
+class Planner {
+ public:
+  Planner(int64_t utime, double angle_rad, double velocity_rad_s)
+      : utime_(utime), angle_rad_(angle_rad), velocity_rad_s_(velocity_rad_s) {}
 
-// Appends a ramp from the last segment's state to `v_target`; returns its end time.
-int64_t appendRamp(std::vector<ShaftSegment>* segs, int64_t t0, double angle0, double v0,
-                   double v_target, double accel, double* angle_end) {
-  const double dv = v_target - v0;
-  if (dv == 0.0) {
-    segs->push_back({t0, angle0, v0, 0.0});
-    *angle_end = angle0;
-    return t0;
+  // Ramps to `target_rad_s` at about `accel_rad_s2` (> 0).
+  void rampTo(double target_rad_s, double accel_rad_s2) {
+    if (target_rad_s == velocity_rad_s_) return;
+    const double dv = target_rad_s - velocity_rad_s_;
+    const int64_t duration_us =
+        std::max<int64_t>(1, std::llround(std::abs(dv) / accel_rad_s2 * 1e6));
+    add(duration_us, dv / (double(duration_us) * 1e-6));
+    velocity_rad_s_ = target_rad_s;
   }
-  const double a = std::copysign(accel, dv);
-  const int64_t dt_us = toUs(std::abs(dv) / accel);
-  const double dt = 1e-6 * static_cast<double>(dt_us);
-  segs->push_back({t0, angle0, v0, a});
-  *angle_end = angle0 + v0 * dt + 0.5 * a * dt * dt;
-  segs->push_back({t0 + dt_us, *angle_end, v_target, 0.0});
-  return t0 + dt_us;
-}
+
+  // From standstill, turns exactly `delta_rad`: trapezoid (or triangle) at about
+  // `max_speed_rad_s` and `accel_rad_s2`, ending at standstill.
+  void moveBy(double delta_rad, double max_speed_rad_s, double accel_rad_s2) {
+    const double distance = std::abs(delta_rad);
+    if (distance == 0.0) return;
+    double ramp_s = max_speed_rad_s / accel_rad_s2;
+    double cruise_s = distance / max_speed_rad_s - ramp_s;
+    if (cruise_s < 0.0) {  // never reaches max speed: triangle
+      ramp_s = std::sqrt(distance / accel_rad_s2);
+      cruise_s = 0.0;
+    }
+    const int64_t ramp_us = std::max<int64_t>(1, std::llround(ramp_s * 1e6));
+    const int64_t cruise_us = std::llround(cruise_s * 1e6);
+    // Peak speed that covers `distance` exactly with the rounded durations.
+    const double peak_rad_s = distance / (double(ramp_us + cruise_us) * 1e-6);
+    const double accel = std::copysign(peak_rad_s / (double(ramp_us) * 1e-6), delta_rad);
+    const double start_rad = angle_rad_;
+    add(ramp_us, accel);
+    velocity_rad_s_ = std::copysign(peak_rad_s, delta_rad);
+    if (cruise_us > 0) add(cruise_us, 0.0);
+    add(ramp_us, -accel);
+    velocity_rad_s_ = 0.0;
+    angle_rad_ = start_rad + delta_rad;
+  }
+
+  // Closes the plan: constant velocity from here on.
+  std::vector<ShaftSegment> finish() {
+    segments_.push_back({utime_, angle_rad_, velocity_rad_s_, 0.0});
+    return std::move(segments_);
+  }
+
+ private:
+  void add(int64_t duration_us, double accel_rad_s2) {
+    segments_.push_back({utime_, angle_rad_, velocity_rad_s_, accel_rad_s2});
+    const double dt_s = double(duration_us) * 1e-6;
+    angle_rad_ += dt_s * (velocity_rad_s_ + 0.5 * accel_rad_s2 * dt_s);
+    velocity_rad_s_ += accel_rad_s2 * dt_s;
+    utime_ += duration_us;
+  }
+
+  int64_t utime_;
+  double angle_rad_;
+  double velocity_rad_s_;
+  std::vector<ShaftSegment> segments_;
+};
 
 }  // namespace
 
-PlannedMotion planMotion(const ShaftTrajectory& current, int64_t t0, const StepperCommand& cmd,
-                         double accel) {
+PlannedMotion planMotion(const ShaftTrajectory& current, int64_t start_utime,
+                         const StepperCommand& cmd, double accel) {
   if (!(accel > 0.0) || !std::isfinite(accel)) throw std::invalid_argument("accel must be > 0");
-  PlannedMotion plan;
-  const double angle0 = current.empty() ? 0.0 : current.angleAt(t0);
-  const double v0 = current.empty() ? 0.0 : current.velocityAt(t0);
-  double angle = angle0;
+  if (!std::isfinite(cmd.velocity_rad_s) || !std::isfinite(cmd.delta_rad)) {
+    throw std::invalid_argument("velocity and delta must be finite");
+  }
+  const double angle0 = current.empty() ? 0.0 : current.angleAt(start_utime);
+  const double v0 = current.empty() ? 0.0 : current.velocityAt(start_utime);
+  Planner plan(start_utime, angle0, v0);
   switch (cmd.kind) {
     case StepperCommand::Kind::kRun:
-    case StepperCommand::Kind::kStop: {
-      const double v = cmd.kind == StepperCommand::Kind::kRun ? cmd.velocity_rad_s : 0.0;
-      if (!std::isfinite(v)) throw std::invalid_argument("velocity must be finite");
-      plan.end_utime = appendRamp(&plan.segments, t0, angle0, v0, v, accel, &angle);
+      plan.rampTo(cmd.velocity_rad_s, accel);
       break;
-    }
-    case StepperCommand::Kind::kMoveBy: {
-      const double vmax = cmd.velocity_rad_s;
-      if (!(vmax > 0.0) || !std::isfinite(cmd.delta_rad)) {
-        throw std::invalid_argument("move needs a positive speed and a finite delta");
-      }
-      // Come to rest first, then a trapezoid (triangle when short) over exactly delta.
-      int64_t t = t0;
-      if (v0 != 0.0) {
-        t = appendRamp(&plan.segments, t0, angle0, v0, 0.0, accel, &angle);
-        plan.segments.pop_back();  // the hold at rest is replaced by the move
-      }
-      const double start = angle;
-      const double d = std::abs(cmd.delta_rad);
-      const double s = cmd.delta_rad >= 0 ? 1.0 : -1.0;
-      const double v_peak = std::min(vmax, std::sqrt(d * accel));
-      const int64_t ramp_us = toUs(v_peak / accel);
-      const double ramp = 1e-6 * static_cast<double>(ramp_us);
-      const double ramp_dist = 0.5 * accel * ramp * ramp;
-      const int64_t cruise_us = v_peak > 0 ? toUs(std::max(0.0, d - 2.0 * ramp_dist) / v_peak) : 0;
-      const double cruise = 1e-6 * static_cast<double>(cruise_us);
-      if (ramp_us > 0) {
-        plan.segments.push_back({t, start, 0.0, s * accel});
-        plan.segments.push_back({t + ramp_us, start + s * ramp_dist, s * v_peak, 0.0});
-        plan.segments.push_back({t + ramp_us + cruise_us,
-                                 start + s * (ramp_dist + v_peak * cruise), s * v_peak,
-                                 -s * accel});
-      }
-      // Steps are exact: the move ends at start + delta (microsecond rounding of the
-      // phase times leaves a sub-microradian step here).
-      const int64_t end = t + 2 * ramp_us + cruise_us;
-      plan.segments.push_back({end, start + cmd.delta_rad, 0.0, 0.0});
-      plan.end_utime = end;
+    case StepperCommand::Kind::kStop:
+      plan.rampTo(0.0, accel);
       break;
-    }
+    case StepperCommand::Kind::kMoveBy:
+      if (!(cmd.velocity_rad_s > 0.0)) throw std::invalid_argument("move needs a speed > 0");
+      plan.rampTo(0.0, accel);
+      plan.moveBy(cmd.delta_rad, cmd.velocity_rad_s, accel);
+      break;
   }
-  return plan;
+  PlannedMotion out;
+  out.segments = plan.finish();
+  out.end_utime = out.segments.back().start_utime;
+  return out;
 }
 
 }  // namespace sweepmap

@@ -16,8 +16,10 @@ struct PlannedMotion {
   int64_t end_utime = 0;               // when the commanded state is reached
 };
 
-// Plans `cmd` from the state of `current` at `start_utime`, ramping at `accel_rad_s2`
-// (which overrides cmd.accel_rad_s2, so a simulation can perturb it).
+// Plans `cmd` from the state of `current` at `start_utime`, ramping at about `accel_rad_s2`
+// (which overrides cmd.accel_rad_s2, so a simulation can perturb it). Segment boundaries
+// fall on whole microseconds; ramp accelerations (and a move's peak speed) absorb the
+// rounding so angle and velocity stay continuous and a kMoveBy turns exactly delta_rad.
 PlannedMotion planMotion(const ShaftTrajectory& current, int64_t start_utime,
                          const StepperCommand& cmd, double accel_rad_s2);
 

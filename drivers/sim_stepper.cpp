@@ -1,5 +1,7 @@
 #include "drivers/sim_stepper.hpp"
 
+#include "drivers/motion_profile.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -18,68 +20,6 @@ constexpr double kRootSlackS = 1e-9;
 
 // Uniform in [0, 1), the same on every platform.
 double uniform01(std::mt19937_64& g) { return double(g() >> 11) * 0x1.0p-53; }
-
-// Builds the contiguous segments of one command, boundaries on whole microseconds.
-class Planner {
- public:
-  Planner(int64_t utime, double angle_rad, double velocity_rad_s)
-      : utime_(utime), angle_rad_(angle_rad), velocity_rad_s_(velocity_rad_s) {}
-
-  // Ramps to `target_rad_s` at about `accel_rad_s2` (> 0).
-  void rampTo(double target_rad_s, double accel_rad_s2) {
-    if (target_rad_s == velocity_rad_s_) return;
-    const double dv = target_rad_s - velocity_rad_s_;
-    const int64_t duration_us =
-        std::max<int64_t>(1, std::llround(std::abs(dv) / accel_rad_s2 * 1e6));
-    add(duration_us, dv / (double(duration_us) * 1e-6));
-    velocity_rad_s_ = target_rad_s;
-  }
-
-  // From standstill, turns exactly `delta_rad`: trapezoid (or triangle) at about
-  // `max_speed_rad_s` and `accel_rad_s2`, ending at standstill.
-  void moveBy(double delta_rad, double max_speed_rad_s, double accel_rad_s2) {
-    const double distance = std::abs(delta_rad);
-    if (distance == 0.0) return;
-    double ramp_s = max_speed_rad_s / accel_rad_s2;
-    double cruise_s = distance / max_speed_rad_s - ramp_s;
-    if (cruise_s < 0.0) {  // never reaches max speed: triangle
-      ramp_s = std::sqrt(distance / accel_rad_s2);
-      cruise_s = 0.0;
-    }
-    const int64_t ramp_us = std::max<int64_t>(1, std::llround(ramp_s * 1e6));
-    const int64_t cruise_us = std::llround(cruise_s * 1e6);
-    // Peak speed that covers `distance` exactly with the rounded durations.
-    const double peak_rad_s = distance / (double(ramp_us + cruise_us) * 1e-6);
-    const double accel = std::copysign(peak_rad_s / (double(ramp_us) * 1e-6), delta_rad);
-    const double start_rad = angle_rad_;
-    add(ramp_us, accel);
-    velocity_rad_s_ = std::copysign(peak_rad_s, delta_rad);
-    if (cruise_us > 0) add(cruise_us, 0.0);
-    add(ramp_us, -accel);
-    velocity_rad_s_ = 0.0;
-    angle_rad_ = start_rad + delta_rad;
-  }
-
-  // Closes the plan: constant velocity from here on.
-  std::vector<ShaftSegment> finish() {
-    segments_.push_back({utime_, angle_rad_, velocity_rad_s_, 0.0});
-    return std::move(segments_);
-  }
-
- private:
-  void add(int64_t duration_us, double accel_rad_s2) {
-    segments_.push_back({utime_, angle_rad_, velocity_rad_s_, accel_rad_s2});
-    const double dt_s = double(duration_us) * 1e-6;
-    angle_rad_ += dt_s * (velocity_rad_s_ + 0.5 * accel_rad_s2 * dt_s);
-    velocity_rad_s_ += accel_rad_s2 * dt_s;
-    utime_ += duration_us;
-  }
-
-  int64_t utime_;
-  double angle_rad_;
-  double velocity_rad_s_;
-  std::vector<ShaftSegment> segments_;
-};
 
 // Earliest tau in [from_s, to_s] (give or take kRootSlackS) at which
 // angle0 + v*tau + a*tau^2/2 crosses `level` upward (up = true) or downward.
@@ -191,21 +131,9 @@ void SimStepper::command(int64_t now_utime, const StepperCommand& cmd) {
   const int64_t effective_utime = std::max(now_utime + delay_us, earliest_command_utime_);
   earliest_command_utime_ = effective_utime;
 
-  Planner plan(effective_utime, trajectory_.angleAt(effective_utime),
-               trajectory_.velocityAt(effective_utime));
-  switch (cmd.kind) {
-    case StepperCommand::Kind::kRun:
-      plan.rampTo(cmd.velocity_rad_s, accel);
-      break;
-    case StepperCommand::Kind::kStop:
-      plan.rampTo(0.0, accel);
-      break;
-    case StepperCommand::Kind::kMoveBy:
-      plan.rampTo(0.0, accel);
-      plan.moveBy(cmd.delta_rad, cmd.velocity_rad_s, accel);
-      break;
+  for (const ShaftSegment& s : planMotion(trajectory_, effective_utime, cmd, accel).segments) {
+    emit(s);
   }
-  for (const ShaftSegment& s : plan.finish()) emit(s);
 }
 
 std::vector<SwitchEdge> SimStepper::poll(int64_t now_utime) {

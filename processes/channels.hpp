@@ -2,6 +2,11 @@
 #pragma once
 
 namespace sweepmap {
+// LCM's default multicast group with ttl=0 (this host only) and a 2 MiB receive buffer, so a
+// burst of cloud chunks is not dropped by the kernel (LCM 1.3.1 leaves the system default,
+// ~208 kB). Reaching another host (Pi -> laptop) needs ttl=1 and a multicast route.
+constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
+
 namespace channels {
 
 constexpr const char* kLidarScan = "LIDAR_SCAN";      // lidar_scan_t, raw

@@ -9,14 +9,14 @@
 
 #include "core/config.hpp"
 #include "core/rig_config.hpp"
+#include "processes/channels.hpp"
 
 namespace sweepmap {
 
 struct CommonOptions {
   std::string rig_path;
   std::vector<std::string> overrides;
-  // LCM's default: multicast on this host only (ttl=0). Use ttl=1 to reach other hosts.
-  std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  std::string lcm_url = kDefaultLcmUrl;
 };
 
 inline void addCommonOptions(CLI::App& app, CommonOptions& o) {

@@ -85,8 +85,15 @@ void installStopSignals() {
 bool stopRequested() { return g_stop; }
 
 void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages) {
-  for (const auto& m : messages) {
+  // A sweep leaves as a burst of ~48 kB chunks; back to back they overflow a receiver's
+  // default socket buffer (~208 kB) and whole chunks are lost. Pace large messages.
+  constexpr size_t kLargeMessageBytes = 16 * 1024;
+  for (size_t i = 0; i < messages.size(); ++i) {
+    const auto& m = messages[i];
     lcm.publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+    if (m.data.size() >= kLargeMessageBytes && i + 1 < messages.size()) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
   }
 }
 

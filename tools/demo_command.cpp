@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "core/rig_config.hpp"
+#include "processes/channels.hpp"
 #include "tools/commands.hpp"
 #include "tools/netns.hpp"
 #include "tools/process_group.hpp"
@@ -54,7 +55,7 @@ Runner addDemoCommand(CLI::App& app, const std::string& argv0) {
       std::cout << "demo: network namespaces unavailable (" << why
                 << "); using LCM's default URL with ttl=0 (this host only)\n";
     }
-    const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+    const std::string url = kDefaultLcmUrl;
     const std::string log = (out / "demo.lcmlog").string();
     fs::remove(log);
 

@@ -71,11 +71,11 @@ class AssemblerNodeTest : public ::testing::Test {
 TEST_F(AssemblerNodeTest, WindowAssembledOnceAScanPassesItsEnd) {
   AssemblerNode node(rig_);
   std::vector<Message> msgs;
-  for (int j = 0; j < 10; ++j) msgs.push_back(scanMsg(j));
+  for (int j = 0; j < 8; ++j) msgs.push_back(scanMsg(j));
   msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 8));
   auto chunks = feed(msgs, &node);
   EXPECT_TRUE(chunks.empty()) << "assembled before a scan at or after the window end";
-  chunks = feed({scanMsg(10)}, &node);
+  chunks = feed({scanMsg(8)}, &node);
   ASSERT_EQ(chunks.size(), 2u);  // 8 scans x 9 rays = 72 points in chunks of 50
   EXPECT_EQ(chunks[0].total_points, 72);
   EXPECT_EQ(chunks[0].npoints + chunks[1].npoints, 72);

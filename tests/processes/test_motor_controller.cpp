@@ -15,7 +15,7 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-struct Run {
+struct ControllerRun {
   std::vector<scan_window_t> windows;
   std::vector<int8_t> states;
   bool fault = false;
@@ -33,14 +33,14 @@ SimRigConfig exactDevice() {
 }
 
 // Runs the controller against a simulated stepper on a 1 ms virtual clock.
-Run runController(const RigConfig& rig, int sweeps, uint64_t seed, SimStepper** keep = nullptr,
+ControllerRun runController(const RigConfig& rig, int sweeps, uint64_t seed, SimStepper** keep = nullptr,
                   std::unique_ptr<SimStepper>* owner = nullptr) {
   const int64_t t0 = kSimEpochUtime;
   auto stepper = std::make_unique<SimStepper>(rig.motor, rig.sim, seed, 0.8, t0, nullptr);
   MotorController motor(rig, stepper.get(), sweeps, t0);
   OfflineBus bus;
   bus.attach(&motor);
-  Run run;
+  ControllerRun run;
   bus.setSink([&](const Message& m) {
     if (m.channel == channels::kScanWindow) {
       scan_window_t w;
@@ -72,7 +72,7 @@ TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
     rig.motor.mode = mode;
     if (!errors) rig.sim = exactDevice();
     std::unique_ptr<SimStepper> stepper;
-    const Run run = runController(rig, 2, 42 + mode, nullptr, &stepper);
+    const ControllerRun run = runController(rig, 2, 42 + mode, nullptr, &stepper);
     ASSERT_FALSE(run.fault);
     ASSERT_EQ(run.windows.size(), 2u);
     const ScanMode m = scanMode(mode);
@@ -91,11 +91,17 @@ TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
       if (!errors) {
         EXPECT_NEAR(start_angle, 0.0, 1e-6) << "mode " << mode;
       } else {
-        // Start delay (<= 30 ms at omega), ramp jitter (+-10 % of the ramp distance, with
-        // slack) and the homing error (switch response, hysteresis, stop jitter).
+        // Every command starts up to 30 ms late: the stop at the homing edge overshoots by
+        // up to 30 ms at homing speed, the sweep's run starts up to 30 ms late at omega.
+        // Ramps vary by +-10 % of their distance; the switch answers 2 +- 1 ms late and
+        // its edge sits half the hysteresis off.
         const double omega = M_PI / m.period_s;
-        const double bound =
-            0.030 * omega + 0.12 * omega * omega / (2 * 720 * kDeg) + 0.5 * kDeg;
+        const double v_home = rig.motor.homing_speed_deg_s * kDeg;
+        const double a = rig.motor.accel_deg_s2 * kDeg;
+        const double bound = 0.030 * (omega + v_home) +
+                             0.11 * (omega * omega + v_home * v_home) / (2 * a) +
+                             0.003 * v_home + 0.5 * rig.sim.switch_hysteresis_deg * kDeg +
+                             0.1 * kDeg;
         EXPECT_LT(std::abs(start_angle), bound) << "mode " << mode;
       }
     }
@@ -110,11 +116,11 @@ TEST(MotorController, NaiveSequenceOverlapsRamp) {
   rig.motor.action_sequence = "naive";
   rig.sim = exactDevice();
   std::unique_ptr<SimStepper> stepper;
-  const Run run = runController(rig, 1, 3, nullptr, &stepper);
+  const ControllerRun run = runController(rig, 1, 3, nullptr, &stepper);
   ASSERT_EQ(run.windows.size(), 1u);
   const auto& w = run.windows[0];
   EXPECT_TRUE(w.accel_overlap);
-  EXPECT_EQ(w.action_sequence, scan_window_t::NAIVE);
+  EXPECT_EQ(w.action_sequence, int8_t{scan_window_t::NAIVE});
   // The shaft is still accelerating when the window opens.
   EXPECT_LT(stepper->trajectory().velocityAt(w.start_utime + 10000), 0.5 * w.angular_velocity_rad_s);
 }
@@ -122,11 +128,11 @@ TEST(MotorController, NaiveSequenceOverlapsRamp) {
 TEST(MotorController, GoesThroughHomingScanningAndDone) {
   RigConfig rig;
   rig.motor.mode = 1;
-  const Run run = runController(rig, 1, 9);
+  const ControllerRun run = runController(rig, 1, 9);
   ASSERT_GE(run.states.size(), 5u);
-  EXPECT_EQ(run.states.front(), motor_state_t::HOMING);
-  EXPECT_EQ(run.states.back(), motor_state_t::DONE);
-  EXPECT_NE(std::find(run.states.begin(), run.states.end(), motor_state_t::SCANNING),
+  EXPECT_EQ(run.states.front(), int8_t{motor_state_t::HOMING});
+  EXPECT_EQ(run.states.back(), int8_t{motor_state_t::DONE});
+  EXPECT_NE(std::find(run.states.begin(), run.states.end(), int8_t{motor_state_t::SCANNING}),
             run.states.end());
   EXPECT_EQ(run.sweeps, 1);
 }

@@ -17,7 +17,7 @@ namespace {
 
 const std::string kRig = sourcePath("config/rig_a.yaml");
 const std::string kScene = sourcePath("config/scene_conference_room.yaml");
-const std::string kUrl = "udpm://239.255.76.67:7667?ttl=0";
+const std::string kUrl = kDefaultLcmUrl;
 
 class LiveTest : public ::testing::Test {
  protected:

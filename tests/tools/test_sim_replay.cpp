@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 
 #include "core/event_log.hpp"
 #include "test_support.hpp"
@@ -39,7 +40,7 @@ void expectPhiErrorWithin(const nlohmann::json& summary, int sweeps, double boun
     worst = std::max(worst, std::abs(s["phi_error_deg"].get<double>()));
     EXPECT_LE(std::abs(s["phi_error_deg"].get<double>()), bound_deg) << s.dump();
   }
-  RecordProperty("worst_abs_phi_error_deg", std::to_string(worst));
+  ::testing::Test::RecordProperty("worst_abs_phi_error_deg", std::to_string(worst));
   std::cout << "worst |phi_error| = " << worst << " deg over " << sweeps << " sweeps\n";
 }
 
