@@ -94,6 +94,8 @@ int main(int argc, char** argv) {
               sweep_count, sweeps[0].size(), resolution_m, sweepmap::MapperConfig{}.max_range_m);
   std::printf("baseline RSS peak (clouds generated): %.1f MiB\n", peakRssMiB());
   runMode("discretized", InsertMode::kDiscretized, sweeps, spec.sensor_m, resolution_m);
+  runMode("octomap-discretized", InsertMode::kOctomapDiscretized, sweeps, spec.sensor_m,
+          resolution_m);
   runMode("every-ray", InsertMode::kEveryRay, sweeps, spec.sensor_m, resolution_m);
   return 0;
 }

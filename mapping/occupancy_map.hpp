@@ -31,6 +31,7 @@ struct MapStats {
 enum class InsertMode {
   kDiscretized,  // one ray per distinct endpoint voxel, to its centre (default; see .cpp)
   kEveryRay,     // one ray per point, to the exact point
+  kOctomapDiscretized,  // octomap's own discretized insertion (reference for kDiscretized)
 };
 
 enum class Occupancy { kUnknown, kFree, kOccupied };

@@ -38,6 +38,30 @@ class BoxRoomTest : public ::testing::Test {
   RoomSweepSpec spec_;
 };
 
+// kDiscretized re-implements octomap's discretized insertion with a bitmap instead of a
+// hash set: the same voxels must be occupied, and free space must agree to a fraction of a
+// percent (ray-voxel ties may break differently).
+TEST_F(BoxRoomTest, DiscretizedMatchesOctomapDiscretized) {
+  spec_.range_noise_sigma_m = 0.01;
+  const OccupancyMap ours = buildMap(InsertMode::kDiscretized);
+  const OccupancyMap reference = buildMap(InsertMode::kOctomapDiscretized);
+  const MapStats a = ours.stats(), b = reference.stats();
+  EXPECT_EQ(a.occupied_voxels, b.occupied_voxels);
+  EXPECT_NEAR(static_cast<double>(a.free_voxels), static_cast<double>(b.free_voxels),
+              0.005 * static_cast<double>(b.free_voxels));
+  int checked = 0;
+  for (double x = 0.0; x <= 4.1; x += 0.1) {
+    for (double y = 0.0; y <= 3.1; y += 0.1) {
+      for (double z = 0.0; z <= 2.6; z += 0.1) {
+        const Eigen::Vector3d p(x + 0.05, y + 0.05, z + 0.05);
+        EXPECT_EQ(ours.occupiedAt(p), reference.occupiedAt(p)) << p.transpose();
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 30000);
+}
+
 TEST_F(BoxRoomTest, WallsOccupiedInteriorFree) {
   for (InsertMode mode : {InsertMode::kDiscretized, InsertMode::kEveryRay}) {
     SCOPED_TRACE(mode == InsertMode::kDiscretized ? "discretized" : "every ray");

@@ -221,6 +221,15 @@ TEST(Tool, PrintConfigListsEveryKeyWithUnits) {
   EXPECT_NE(text.find("[mm]"), std::string::npos);
 }
 
+TEST(Tool, SpyPutsTheTypesJarOnItsClassPath) {
+  const auto dir = scratchDir("spy");
+  ASSERT_EQ(sweepmap({"spy", "--print-command"}, dir / "cmd.txt"), 0) << readFile(dir / "cmd.txt");
+  const std::string cmd = readFile(dir / "cmd.txt");
+  EXPECT_NE(cmd.find("sweepmap_lcmtypes.jar"), std::string::npos) << cmd;
+  EXPECT_NE(cmd.find("lcm.spy.Spy"), std::string::npos) << cmd;
+  EXPECT_EQ(cmd.find("Xincgc"), std::string::npos) << cmd;
+}
+
 }  // namespace
 }  // namespace test
 }  // namespace sweepmap

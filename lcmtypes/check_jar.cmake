@@ -1,0 +1,13 @@
+# Fails unless JAR holds sweepmap/<type>.class for every name in TYPES.
+execute_process(COMMAND ${JAR_TOOL} tf ${JAR} OUTPUT_VARIABLE listing RESULT_VARIABLE rc)
+if(NOT rc EQUAL 0)
+  message(FATAL_ERROR "cannot list ${JAR}")
+endif()
+foreach(t ${TYPES})
+  string(FIND "${listing}" "sweepmap/${t}.class" pos)
+  if(pos EQUAL -1)
+    message(FATAL_ERROR "${JAR} lacks sweepmap/${t}.class: lcm-spy could not decode it")
+  endif()
+endforeach()
+list(LENGTH TYPES n)
+message(STATUS "${JAR}: all ${n} message types present")
