@@ -1,6 +1,9 @@
 #include "core/rig_config.hpp"
 
+#include <filesystem>
 #include <stdexcept>
+
+#include "core/calibration_file.hpp"
 
 namespace sweepmap {
 
@@ -40,6 +43,9 @@ void GeometryConfig::declare(ConfigSchema& s, const std::string& p) {
 
 void PlateConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "alpha_deg", &alpha_deg, "deg", "plate middle line from the front (X) axis");
+  s.add(p + "calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) whose plate.alpha_deg replaces alpha_deg; "
+        "empty: none");
   s.add(p + "height_mm", &height_mm, "mm", "z of the plate surface in frame O");
   s.add(p + "region_inner_radius_mm", &region_inner_radius_mm, "mm", "semi-ring inner radius");
   s.add(p + "region_outer_radius_mm", &region_outer_radius_mm, "mm", "semi-ring outer radius");
@@ -110,6 +116,11 @@ RigConfig loadRig(const std::string& path, const std::vector<std::string>& overr
   for (const auto& o : overrides) schema.set(o);
   if (rig.motor.mode < 1 || rig.motor.mode > 7) {
     throw ConfigError(path + ": key 'motor.mode' must be 1..7");
+  }
+  if (!rig.plate.calibration_file.empty()) {
+    std::filesystem::path calib(rig.plate.calibration_file);
+    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
+    rig.plate.alpha_deg = loadPlateCalibration(calib.string()).alpha_deg;
   }
   if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane") {
     throw ConfigError(path + ": key 'plate.beta_method' must be centroid or ray_plane");

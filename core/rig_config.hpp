@@ -46,6 +46,9 @@ struct GeometryConfig {
 
 struct PlateConfig {
   double alpha_deg = 30.0;             // angle of the plate's middle line from X (front)
+  // Calibration file (relative to the rig file) whose plate.alpha_deg replaces alpha_deg;
+  // empty: use alpha_deg.
+  std::string calibration_file;
   double height_mm = -45.0;            // z of the plate's upper surface in frame O
   double region_inner_radius_mm = 62.5;
   double region_outer_radius_mm = 115.5;

@@ -112,6 +112,16 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     }
   }
 
+  const auto dispatch = [&](const Message& m) {
+    const auto it = subscribers.find(m.channel);
+    if (it == subscribers.end()) return;
+    for (Node* n : it->second) {
+      Outbox out;
+      n->receive(m, out);
+      publishAll(lcm, out.take());
+    }
+  };
+
   std::atomic<bool> receiving{true};
   std::thread receiver([&] {
     while (receiving) lcm.handleTimeout(50);
@@ -121,15 +131,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
   auto next_tick = std::chrono::steady_clock::now();
   int64_t dropped_total = 0;
   while (!g_stop) {
-    for (Message& m : inbox.popUntil(next_tick)) {
-      const auto it = subscribers.find(m.channel);
-      if (it == subscribers.end()) continue;
-      for (Node* n : it->second) {
-        Outbox out;
-        n->receive(m, out);
-        publishAll(lcm, out.take());
-      }
-    }
+    for (const Message& m : inbox.popUntil(next_tick)) dispatch(m);
     if (std::chrono::steady_clock::now() >= next_tick) {
       const int64_t now = wallUtime();
       for (Node* n : nodes) {
@@ -144,20 +146,16 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
       const int64_t d = inbox.takeDropped();
       if (d > 0) {
         dropped_total += d;
+        for (Node* n : nodes) n->countLostInput(d);
         std::cerr << "receive queue full: " << dropped_total << " messages dropped so far\n";
       }
       if (options.should_stop && options.should_stop()) break;
     }
   }
   // Drain what arrived before the stop, then let the nodes flush.
-  for (Message& m : inbox.popUntil(std::chrono::steady_clock::now() + std::chrono::milliseconds(200))) {
-    const auto it = subscribers.find(m.channel);
-    if (it == subscribers.end()) continue;
-    for (Node* n : it->second) {
-      Outbox out;
-      n->receive(m, out);
-      publishAll(lcm, out.take());
-    }
+  for (const Message& m :
+       inbox.popUntil(std::chrono::steady_clock::now() + std::chrono::milliseconds(200))) {
+    dispatch(m);
   }
   const int64_t now = wallUtime();
   for (Node* n : nodes) {

@@ -68,6 +68,8 @@ class Node {
   virtual void finish(int64_t now_utime, Outbox& out) {}
 
   int64_t counter(const std::string& name) const;
+  // Input lost before it reached the node (e.g. the live receive queue was full).
+  void countLostInput(int64_t n) { counters_["dropped"] += n; }
   void publishStatus(int64_t now_utime, Outbox& out);
   bool failed() const { return failed_; }
 

@@ -1,0 +1,32 @@
+// Calibration results are config files too: a small YAML file that a rig file points to
+// (plate.calibration_file), written atomically by the calibration tools.
+//
+//   plate:
+//     alpha_deg: 29.3598          # the calibrated value the assembler uses
+//   source:                        # provenance, free-form
+//     tool: sweepmap calib plate-angle
+//     date: 2026-11-22T04:00:00Z
+//     logs: [a.lcmlog, b.lcmlog]
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace sweepmap {
+
+struct PlateCalibration {
+  double alpha_deg = 0.0;
+  // Provenance written under `source:` (scalars and the list of logs).
+  std::map<std::string, std::string> source;
+  std::vector<std::string> logs;
+};
+
+// Throws ConfigError naming the file and key when `plate.alpha_deg` is missing or bad, or
+// a key other than `plate` and `source` is present.
+PlateCalibration loadPlateCalibration(const std::string& path);
+
+// Writes to `path.tmp`, then renames over `path`. Throws std::runtime_error on failure.
+void writePlateCalibration(const std::string& path, const PlateCalibration& calibration);
+
+}  // namespace sweepmap
