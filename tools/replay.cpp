@@ -15,16 +15,11 @@
 
 #include "calib/rotating_geometry.hpp"
 #include "core/event_log.hpp"
-#include "drivers/shaft_trajectory.hpp"
 #include "mapping/cloud_io.hpp"
 #include "mapping/occupancy_map.hpp"
 #include "mapping/plot.hpp"
-#include "processes/assembler_node.hpp"
-#include "processes/channels.hpp"
-#include "processes/convert.hpp"
 #include "processes/mapper_node.hpp"
-#include "processes/offline_bus.hpp"
-#include "sweepmap/truth_rig_t.hpp"
+#include "tools/log_sweeps.hpp"
 
 namespace sweepmap {
 namespace {
@@ -63,117 +58,74 @@ class ProgressBar {
 
 ReplayResult replayLog(const ReplayOptions& options, const RigConfig& rig) {
   ReplayResult result;
-  EventLogReader reader(options.log_path);  // throws when it cannot be opened
   const fs::path out(options.out_dir);
+  if (!fs::exists(options.log_path)) throw std::runtime_error(options.log_path + ": no such log");
   fs::create_directories(out / "sweeps");
 
   EventLogWriter derived((out / "derived.lcmlog").string());
-  OfflineBus bus;
-  AssemblerNode assembler(rig);
   MapperNode mapper(rig.mapper, (out / "map.bt").string());
-  bus.attach(&assembler);
-  bus.attach(&mapper);
-  bus.setSink([&](const Message& m) { derived.write(m.utime, m.channel, m.data); });
-
-  ShaftTrajectory truth;
-  bool have_truth_rig = false;
-  truth_rig_t truth_rig;
   nlohmann::json sweeps = nlohmann::json::array();
   std::vector<Eigen::Vector3f> first_Op, first_O;
+  ProgressBar bar(options.progress, fs::file_size(options.log_path));
 
-  assembler.setSweepObserver([&](const AssembledSweep& s) {
-    std::ostringstream name;
-    name << "sweep_" << std::setw(6) << std::setfill('0') << s.window.sweep_id;
-    writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
-    writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
-    nlohmann::json j;
-    j["id"] = s.window.sweep_id;
-    j["mode"] = s.window.mode;
-    j["scans"] = s.scans;
-    j["points"] = s.points.size();
-    j["plate_points"] = s.plate.points;
-    j["beta_deg"] = s.plate.found ? nlohmann::json(round6(s.plate.beta_rad * kRadToDeg))
-                                  : nlohmann::json(nullptr);
-    j["phi_offset_deg"] = round6(s.phi_offset_rad * kRadToDeg);
-    j["corrected"] = s.corrected;
-    j["reason"] = s.reason;
-    if (truth.covers(s.first_ray_utime)) {
-      // Frame O' is the lidar frame at the window's first ray: the true phi_offset is the
-      // true shaft angle then (0 = X_L along the rig's front).
-      const double phi_true = rotating::wrapAngle(truth.angleAt(s.first_ray_utime));
-      j["phi_true_deg"] = round6(phi_true * kRadToDeg);
-      j["phi_error_deg"] =
-          round6(rotating::wrapAngle(s.phi_offset_rad - phi_true) * kRadToDeg);
-    }
-    sweeps.push_back(j);
-    result.points += static_cast<int64_t>(s.points.size());
-    ++result.sweeps;
-    if (result.sweeps == 1) {
-      first_Op = s.points_Op;
-      first_O = s.points;
-    }
-  });
-
-  std::map<std::string, int64_t> skipped;
-  const std::set<std::string> known = {channels::kLidarScan, channels::kScanWindow,
-                                       channels::kTruthShaft, channels::kTruthRig};
-  ProgressBar bar(options.progress, reader.size());
-  LogEvent ev;
-  int64_t first_utime = 0, last_utime = 0;
-  int64_t now = 0;
-  try {
-    while (reader.next(&ev)) {
-      ++result.events;
-      if (result.events == 1) first_utime = ev.utime;
-      last_utime = ev.utime;
-      now = std::max(now, ev.utime);
-      bar.update(reader.offset());
-      if (!known.count(ev.channel)) {
-        ++skipped[ev.channel];
-        continue;
-      }
-      Message m{ev.utime, ev.channel, std::move(ev.data)};
-      if (m.channel == channels::kTruthShaft) {
-        truth_shaft_t t;
-        if (decodeMessage(m, &t)) truth.apply(fromLcm(t));
-        continue;
-      }
-      if (m.channel == channels::kTruthRig) {
-        have_truth_rig = decodeMessage(m, &truth_rig) || have_truth_rig;
-        continue;
-      }
-      bus.tick(now);
-      bus.deliver(m);
-    }
-  } catch (const LogError& e) {
-    result.log_error = true;
-    result.error = e.what();
-  }
-  // Keep what was produced: a sweep whose window closed is assembled, the map saved.
-  if (!result.log_error) bus.finish(now);
-  else {
-    Outbox o;
-    mapper.finish(now, o);
-    for (auto& m : o.take()) derived.write(m.utime, m.channel, m.data);
-  }
+  LogSweepOptions lo;
+  lo.extra_nodes = {&mapper};
+  lo.sink = [&](const Message& m) { derived.write(m.utime, m.channel, m.data); };
+  lo.progress = [&](uint64_t offset, uint64_t) { bar.update(offset); };
+  const LogReadResult read = forEachSweep(
+      options.log_path, rig,
+      [&](const AssembledSweep& s, const SweepTruth& truth) {
+        std::ostringstream name;
+        name << "sweep_" << std::setw(6) << std::setfill('0') << s.window.sweep_id;
+        writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
+        writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
+        nlohmann::json j;
+        j["id"] = s.window.sweep_id;
+        j["mode"] = s.window.mode;
+        j["scans"] = s.scans;
+        j["points"] = s.points.size();
+        j["plate_points"] = s.plate.points;
+        j["beta_deg"] = s.plate.found ? nlohmann::json(round6(s.plate.beta_rad * kRadToDeg))
+                                      : nlohmann::json(nullptr);
+        j["phi_offset_deg"] = round6(s.phi_offset_rad * kRadToDeg);
+        j["corrected"] = s.corrected;
+        j["reason"] = s.reason;
+        if (truth.phi_true_rad) {
+          // Frame O' is the lidar frame at the window's first ray: the true phi_offset is
+          // the true shaft angle then (0 = X_L along the rig's front).
+          j["phi_true_deg"] = round6(*truth.phi_true_rad * kRadToDeg);
+          j["phi_error_deg"] = round6(
+              rotating::wrapAngle(s.phi_offset_rad - *truth.phi_true_rad) * kRadToDeg);
+        }
+        sweeps.push_back(j);
+        result.points += static_cast<int64_t>(s.points.size());
+        ++result.sweeps;
+        if (result.sweeps == 1) {
+          first_Op = s.points_Op;
+          first_O = s.points;
+        }
+      },
+      lo);
   derived.close();
+  result.events = read.events;
+  result.log_error = read.log_error;
+  result.error = read.error;
 
   nlohmann::json summary;
   summary["log"] = fs::path(options.log_path).filename().string();
-  summary["events"] = result.events;
+  summary["events"] = read.events;
   summary["sweeps"] = sweeps;
   const MapStats st = mapper.map().stats();
   summary["map"] = {{"resolution_m", st.resolution_m},
                     {"occupied_voxels", st.occupied_voxels},
                     {"free_voxels", st.free_voxels},
-                    {"sweeps_inserted", assembler.counter("sweeps")}};
-  summary["skipped_channels"] = skipped;
-  summary["assembler"] = {{"scans", assembler.counter("scans")},
-                          {"invalid", assembler.counter("invalid")},
-                          {"dropped", assembler.counter("dropped")}};
-  if (have_truth_rig) {
-    summary["truth"] = {{"alpha_true_deg", round6(truth_rig.alpha_true_rad * kRadToDeg)},
-                        {"scene", truth_rig.scene}};
+                    {"sweeps_inserted", st.sweeps_inserted}};
+  summary["skipped_channels"] = read.skipped_channels;
+  summary["assembler"] = {
+      {"scans", read.scans}, {"invalid", read.invalid}, {"dropped", read.dropped}};
+  if (read.alpha_true_rad) {
+    summary["truth"] = {{"alpha_true_deg", round6(*read.alpha_true_rad * kRadToDeg)},
+                        {"scene", read.scene}};
   }
   if (result.log_error) summary["error"] = result.error;
   {
@@ -183,7 +135,7 @@ ReplayResult replayLog(const ReplayOptions& options, const RigConfig& rig) {
     f.close();
     fs::rename(tmp, out / "summary.json");
   }
-  result.log_duration_s = 1e-6 * static_cast<double>(last_utime - first_utime);
+  result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
 
   if (options.plots && !first_O.empty()) {
     PlotOptions po;
