@@ -79,4 +79,42 @@ PlateEstimate estimateBetaRayPlane(const std::vector<PlateRay>& rays, const Plat
   return e;
 }
 
+PlateCheck checkPlate(const std::vector<PlateRay>& rays, const PlateRegion& region, double beta,
+                      double hypotenuse_m, double base_distance_m, double gate_m) {
+  PlateCheck c;
+  const double half = 0.5 * hypotenuse_m;
+  const double cb = std::cos(beta), sb = std::sin(beta);
+  for (const auto& ray : rays) {
+    const auto t = plateRayRange(ray.origin, ray.direction, region);
+    if (!t) continue;
+    const Eigen::Vector3d p = ray.origin + *t * ray.direction;
+    // Plate frame: u along the middle line, v across it.
+    const double u = cb * p.x() + sb * p.y();
+    const double v = -sb * p.x() + cb * p.y();
+    const bool on_shape = u >= base_distance_m && std::abs(v) <= half - (u - base_distance_m);
+    const bool agrees = std::abs(ray.range_m - *t) <= gate_m;
+    if (on_shape) {
+      ++c.expected;
+      if (agrees) ++c.on_plate;
+      if (ray.range_m < *t - gate_m) ++c.in_front;
+    } else if (agrees) {
+      ++c.off_plate;
+    }
+  }
+  const auto ratio = [](int a, int b) { return std::to_string(a) + " of " + std::to_string(b); };
+  if (c.expected == 0) {
+    c.problem = "plate not where beta puts it";
+  } else if (c.in_front > c.expected / 10) {
+    c.problem = "plate mixed with another object: " + ratio(c.in_front, c.expected) +
+                " plate rays end in front of it";
+  } else if (c.on_plate < (6 * c.expected) / 10) {
+    c.problem = "plate partial or occluded: " + ratio(c.on_plate, c.expected) +
+                " expected rays hit it";
+  } else if (c.off_plate > (15 * c.on_plate) / 100) {
+    c.problem = "plate points outside its expected extent: " + std::to_string(c.off_plate) +
+                " besides " + std::to_string(c.on_plate) + " on it";
+  }
+  return c;
+}
+
 }  // namespace sweepmap

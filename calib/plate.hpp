@@ -57,4 +57,22 @@ std::optional<double> plateRayRange(const Eigen::Vector3d& origin, const Eigen::
 PlateEstimate estimateBetaRayPlane(const std::vector<PlateRay>& rays, const PlateRegion& region,
                                    double range_gate_m, int min_points);
 
+// Consistency of a plate estimate with the plate's known shape (isosceles right triangle,
+// hypotenuse `hypotenuse_m` at `base_distance_m` from the axis, middle line at beta), from
+// every ray that meets the plate plane inside the region:
+//  - expected: rays whose plane point lies on the plate at beta;
+//  - on_plate: those whose range agrees with the plane (within the gate);
+//  - in_front: those that end well before the plane (another object over the plate);
+//  - off_plate: rays that agree with the plane but whose point is not on the plate at beta
+//    (beta is off, or something flat lies in the region).
+struct PlateCheck {
+  int expected = 0;
+  int on_plate = 0;
+  int in_front = 0;
+  int off_plate = 0;
+  std::string problem;  // empty when the estimate is trustworthy
+};
+PlateCheck checkPlate(const std::vector<PlateRay>& rays, const PlateRegion& region, double beta_rad,
+                      double hypotenuse_m, double base_distance_m, double range_gate_m);
+
 }  // namespace sweepmap

@@ -21,6 +21,8 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
 
   const PlateRegion region = PlateRegion::fromConfig(rig.plate);
   const bool ray_plane = rig.plate.beta_method == "ray_plane";
+  // Every ray meeting the plate plane in the region: for the ray-plane estimate and for
+  // checking either estimate against the plate's shape.
   std::vector<PlateRay> plate_rays;
   size_t total = 0;
   for (const auto& s : scans) total += s.ranges_m.size();
@@ -37,7 +39,7 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
       const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
       const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, phi, offset_x_m);
       out.points_Op.push_back(p_Op.cast<float>());
-      if (ray_plane) {
+      {
         const Eigen::Vector3d origin = rotating::lidarToOPrime(Eigen::Vector3d::Zero(), phi, offset_x_m);
         const Eigen::Vector3d dir = (p_Op - origin) / r;
         if (plateRayRange(origin, dir, region)) plate_rays.push_back({origin, dir, r});
@@ -49,12 +51,19 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
                                                rig.plate.range_gate_mm * 1e-3,
                                                rig.plate.min_points)
                         : estimateBetaCentroid(out.points_Op, region, rig.plate.min_points);
+  if (out.plate.found) {
+    out.plate_check =
+        checkPlate(plate_rays, region, out.plate.beta_rad, rig.plate.hypotenuse_mm * 1e-3,
+                   rig.plate.base_distance_mm * 1e-3, rig.plate.range_gate_mm * 1e-3);
+  }
   if (!rig.assembler.correct_attitude) {
     out.reason = "correction disabled (assembler.correct_attitude=false)";
   } else if (window.accel_overlap) {
     out.reason = "motor ramp overlapped the lidar window";
   } else if (!out.plate.found) {
     out.reason = out.plate.reason;
+  } else if (!out.plate_check.problem.empty()) {
+    out.reason = out.plate_check.problem;
   } else {
     out.corrected = true;
     out.phi_offset_rad = rotating::phiOffset(out.alpha_rad, out.plate.beta_rad);

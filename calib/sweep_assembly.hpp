@@ -29,6 +29,7 @@ struct AssembledSweep {
   std::vector<Eigen::Vector3f> points_Op;   // C_O'
   std::vector<Eigen::Vector3f> points;      // C_O when corrected, else C_O'
   PlateEstimate plate;
+  PlateCheck plate_check;                   // the estimate against the plate's shape
   double alpha_rad = 0.0;
   double phi_offset_rad = 0.0;  // applied rotation (0 when not corrected)
   bool corrected = false;

@@ -161,5 +161,59 @@ TEST(RayPlane, GateRejectsRaysThatHitSomethingElse) {
   EXPECT_FALSE(estimateBetaRayPlane({}, paperRegion(), 0.03, 30).found);
 }
 
+class PlateCheckTest : public ::testing::Test {
+ protected:
+  PlateCheck check(const RayScan& s, double beta) const {
+    return checkPlate(s.rays, paperRegion(), beta, 0.112, 0.05475, 0.03);
+  }
+  // Every ray that meets the plate plane in the region (not only those on the plate).
+  RayScan regionRays(double beta, double noise_m) const {
+    RayScan out;
+    std::mt19937 rng(5);
+    std::normal_distribution<double> n(0.0, noise_m);
+    for (double phi = 0; phi < 180; phi += 0.5625) {
+      const Eigen::Matrix3d R = rotating::rotZ(phi * kDeg);
+      for (double theta = -135; theta <= 135; theta += 0.25) {
+        const Eigen::Vector3d origin = R * Eigen::Vector3d(0.0139, 0, 0);
+        const Eigen::Vector3d dir =
+            R * Eigen::Vector3d(0, std::sin(theta * kDeg), std::cos(theta * kDeg));
+        const auto t = plateRayRange(origin, dir, paperRegion());
+        if (!t) continue;
+        // Off the plate the ray goes on to the floor, a metre further.
+        const bool on = insidePlate((origin + *t * dir).head<2>(), beta);
+        out.rays.push_back({origin, dir, (on ? *t : *t + 1.0) + n(rng)});
+      }
+    }
+    return out;
+  }
+};
+
+TEST_F(PlateCheckTest, CleanPlatePasses) {
+  const RayScan s = regionRays(20 * kDeg, 0.012);
+  const PlateCheck c = check(s, 20 * kDeg);
+  EXPECT_EQ(c.problem, "") << c.expected << " " << c.on_plate << " " << c.off_plate;
+  EXPECT_GT(c.expected, 100);
+}
+
+TEST_F(PlateCheckTest, ObjectOverThePlateIsMixed) {
+  RayScan s = regionRays(20 * kDeg, 0.0);
+  for (size_t i = 0; i < s.rays.size(); i += 4) s.rays[i].range_m -= 0.04;  // a cable above
+  EXPECT_NE(check(s, 20 * kDeg).problem.find("mixed"), std::string::npos);
+}
+
+TEST_F(PlateCheckTest, MissingHalfIsPartial) {
+  RayScan s = regionRays(20 * kDeg, 0.0);
+  for (auto& r : s.rays) {
+    const Eigen::Vector3d p = r.origin + r.range_m * r.direction;
+    if (std::atan2(p.y(), p.x()) > 20 * kDeg) r.range_m += 1.0;  // that half is gone
+  }
+  EXPECT_NE(check(s, 20 * kDeg).problem.find("partial"), std::string::npos);
+}
+
+TEST_F(PlateCheckTest, WrongBetaDisagreesWithExtent) {
+  const RayScan s = regionRays(20 * kDeg, 0.0);
+  EXPECT_NE(check(s, 35 * kDeg).problem, "");
+}
+
 }  // namespace
 }  // namespace sweepmap
