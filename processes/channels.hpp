@@ -19,6 +19,7 @@ constexpr const char* kMapStats = "MAP_STATS";        // map_stats_t
 constexpr const char* kMapSave = "MAP_SAVE";          // map_save_t
 constexpr const char* kTruthShaft = "TRUTH_SHAFT";    // truth_shaft_t, simulation only
 constexpr const char* kTruthRig = "TRUTH_RIG";        // truth_rig_t, simulation only
+constexpr const char* kTruthSweep = "TRUTH_SWEEP";    // truth_sweep_t, simulation only
 // Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
 
 }  // namespace channels

@@ -8,6 +8,7 @@
 #include "processes/lidar_node.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/sim_setup.hpp"
+#include "processes/truth_sweep_node.hpp"
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
@@ -45,8 +46,9 @@ int main(int argc, char** argv) {
   SimLidar device(rig.lidar, rig.sim, rig.plate, scene, &truth, lidarSeed(seed), wallUtime());
   TruthFollowerNode follower(&truth);
   LidarNode node(rig.lidar, &device);
+  TruthSweepNode truth_sweep(&truth, rig.sim.alpha_true_deg * M_PI / 180.0);
   const truth_rig_t truth_rig = makeTruthRig(rig, scene_config, scene, wallUtime());
   lcm.publish(channels::kTruthRig, &truth_rig);
   installStopSignals();
-  return runLive(lcm, {&follower, &node}, LiveOptions{});
+  return runLive(lcm, {&follower, &node, &truth_sweep}, LiveOptions{});
 }

@@ -8,6 +8,7 @@
 #include "processes/motor_controller.hpp"
 #include "processes/offline_bus.hpp"
 #include "processes/sim_setup.hpp"
+#include "processes/truth_sweep_node.hpp"
 
 namespace sweepmap {
 
@@ -44,8 +45,10 @@ SimResult simulate(const SimOptions& options, const std::function<void(const Mes
                  lidarSeed(options.seed), t0);
   MotorController motor(rig, &stepper, options.sweeps, t0);
   LidarNode lidar_node(rig.lidar, &lidar);
+  TruthSweepNode truth_sweep(&stepper.trajectory(), rig.sim.alpha_true_deg * M_PI / 180.0);
   bus.attach(&motor);
   bus.attach(&lidar_node);
+  bus.attach(&truth_sweep);
 
   const auto flushTruth = [&] {
     for (const auto& s : truth_pending) {

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "core/event_log.hpp"
+#include "sweepmap/truth_sweep_t.hpp"
 #include "test_support.hpp"
 
 namespace sweepmap {
@@ -122,6 +123,24 @@ TEST(Determinism, ReplayTwiceIsByteIdentical) {
                             "phi_error_deg"}) {
       EXPECT_TRUE(s.contains(key)) << key;
     }
+  }
+}
+
+// TRUTH_SWEEP carries the true phi_offset of each sweep; replay derives the same value
+// from TRUTH_SHAFT at the window's first ray.
+TEST(Truth, SweepTruthAgreesWithShaftTruth) {
+  const std::string log = cachedSimLog("mode1x2", simArgs(1, 2, 21));
+  const auto out = cachedReplay("mode1x2_replay", log, kFastReplay);
+  const auto summary = readJson(out / "summary.json");
+  const auto truths = readChannel(log, "TRUTH_SWEEP");
+  ASSERT_EQ(truths.size(), 2u);
+  for (size_t i = 0; i < truths.size(); ++i) {
+    truth_sweep_t t{};
+    ASSERT_TRUE(decodeMessage(truths[i], &t));
+    EXPECT_EQ(t.sweep_id, static_cast<int64_t>(i));
+    EXPECT_NEAR(t.phi_offset_true_rad * 180.0 / M_PI,
+                summary["sweeps"][i]["phi_true_deg"].get<double>(), 1e-5);
+    EXPECT_NEAR(t.alpha_true_rad * 180.0 / M_PI, 29.3598, 1e-9);
   }
 }
 
