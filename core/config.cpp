@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -12,16 +13,11 @@
 namespace sweepmap {
 namespace {
 
+// Shortest text that reads back as the same double ("40", "0.25", "29.3598").
 std::string formatDouble(double v) {
-  std::ostringstream s;
-  s << std::setprecision(17) << v;
-  // Shortest representation that round-trips: try fewer digits first.
-  for (int p = 1; p <= 17; ++p) {
-    std::ostringstream t;
-    t << std::setprecision(p) << v;
-    if (std::stod(t.str()) == v) return t.str();
-  }
-  return s.str();
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
 }
 
 double parseDouble(const std::string& text) {
@@ -54,6 +50,7 @@ void flatten(const YAML::Node& node, const std::string& prefix,
 
 void ConfigSchema::addEntry(Entry entry) {
   if (index_.count(entry.key)) throw std::logic_error("config key declared twice: " + entry.key);
+  entry.default_text = entry.format();
   index_[entry.key] = entries_.size();
   entries_.push_back(std::move(entry));
 }
@@ -151,13 +148,15 @@ void ConfigSchema::set(const std::string& assignment) {
   assign(assignment.substr(0, eq), assignment.substr(eq + 1), "--set");
 }
 
-void ConfigSchema::print(std::ostream& out) const {
+void ConfigSchema::print(std::ostream& out, const ConfigSchema* defaults) const {
   size_t width = 0;
   for (const auto& e : entries_) width = std::max(width, e.key.size());
   for (const auto& e : entries_) {
     out << std::left << std::setw(static_cast<int>(width)) << e.key << " = " << e.format();
     if (!e.unit.empty()) out << " [" << e.unit << "]";
-    out << "  # " << e.help << "\n";
+    std::string def = e.default_text;
+    if (defaults && defaults->has(e.key)) def = defaults->entries_[defaults->index_.at(e.key)].default_text;
+    out << "  # " << e.help << " (default: " << (def.empty() ? "\"\"" : def) << ")\n";
   }
 }
 

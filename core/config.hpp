@@ -37,8 +37,10 @@ class ConfigSchema {
   // Applies "dotted.key=value"; throws ConfigError for unknown keys or bad values.
   void set(const std::string& assignment);
 
-  // One line per key: key = value [unit]  # help
-  void print(std::ostream& out) const;
+  // One line per key: key = value [unit]  # help (default: D). D is the key's value when
+  // it was declared here, or in `defaults` (a schema declared over default-constructed
+  // structs) when given.
+  void print(std::ostream& out, const ConfigSchema* defaults = nullptr) const;
 
   // Writes the current values as a YAML document (nested maps), keys in declaration order.
   std::string toYaml() const;
@@ -53,6 +55,7 @@ class ConfigSchema {
     std::string help;
     std::function<void(const std::string& text)> parse;  // throws std::invalid_argument
     std::function<std::string()> format;
+    std::string default_text;  // value when declared
   };
   void addEntry(Entry entry);
   void assign(const std::string& key, const std::string& text, const std::string& source);

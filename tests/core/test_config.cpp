@@ -89,6 +89,7 @@ TEST(ConfigSchema, YamlRoundTrip) {
   s.print(printed);
   EXPECT_NE(printed.str().find("grp.a"), std::string::npos);
   EXPECT_NE(printed.str().find("[m]"), std::string::npos);
+  EXPECT_NE(printed.str().find("(default: 1.5)"), std::string::npos) << printed.str();
 }
 
 TEST(RigConfig, ShippedRigFilesLoad) {
