@@ -1,0 +1,168 @@
+#include "odometry/ekf.hpp"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+
+namespace sweepmap {
+
+OdometryEkf::OdometryEkf(const EkfConfig& config, int64_t start_utime)
+    : config_(config), utime_(start_utime) {
+  cov_.diagonal() << 0.0, 0.0, 0.0, 1.0, 1.0,
+      config.initial_bias_sigma_rad_s * config.initial_bias_sigma_rad_s;
+  base_state_ = state_;
+  base_cov_ = cov_;
+  base_utime_ = utime_;
+}
+
+bool OdometryEkf::trusted() const {
+  return state_.allFinite() && cov_.allFinite() &&
+         cov_(kTheta, kTheta) <= config_.trusted_theta_sigma_rad * config_.trusted_theta_sigma_rad;
+}
+
+bool OdometryEkf::addWheels(int64_t utime, double v_left, double v_right) {
+  if (!std::isfinite(v_left) || !std::isfinite(v_right) ||
+      std::abs(v_left) > config_.max_speed_m_s || std::abs(v_right) > config_.max_speed_m_s) {
+    ++counters_.invalid;
+    return false;
+  }
+  return add({utime, Kind::kWheels, v_left, v_right});
+}
+
+bool OdometryEkf::addGyro(int64_t utime, double w) {
+  if (!std::isfinite(w) || std::abs(w) > config_.max_turn_rate_rad_s) {
+    ++counters_.invalid;
+    return false;
+  }
+  return add({utime, Kind::kGyro, w, 0.0});
+}
+
+bool OdometryEkf::add(const Measurement& m) {
+  if (m.utime < base_utime_) {
+    ++counters_.too_old;
+    return false;
+  }
+  const auto count = [&](const Snapshot& s, int sign) {
+    int64_t& fused = s.m.kind == Kind::kWheels ? counters_.wheels : counters_.gyro;
+    int64_t& gated = s.m.kind == Kind::kWheels ? counters_.gated_wheels : counters_.gated_gyro;
+    (s.accepted ? fused : gated) += sign;
+  };
+  // Later measurements to re-apply after this one (late arrival).
+  std::vector<Snapshot> later;
+  // Measurements apply in (time, kind) order, gyro before wheels at equal times, so the
+  // result does not depend on arrival order.
+  const auto after = [](const Measurement& a, const Measurement& b) {
+    return a.utime > b.utime || (a.utime == b.utime && a.kind == Kind::kWheels && b.kind == Kind::kGyro);
+  };
+  while (!history_.empty() && after(history_.back().m, m)) {
+    count(history_.back(), -1);
+    later.push_back(history_.back());
+    history_.pop_back();
+  }
+  if (!later.empty()) {
+    ++counters_.reordered;
+    if (history_.empty()) {
+      state_ = base_state_;
+      cov_ = base_cov_;
+      utime_ = base_utime_;
+    } else {
+      state_ = history_.back().state;
+      cov_ = history_.back().cov;
+      utime_ = history_.back().utime;
+    }
+  }
+  const auto applyAndKeep = [&](const Measurement& x) {
+    Snapshot s{x, apply(x), state_, cov_, utime_};
+    count(s, +1);
+    history_.push_back(s);
+    return s.accepted;
+  };
+  const bool accepted = applyAndKeep(m);
+  for (auto it = later.rbegin(); it != later.rend(); ++it) applyAndKeep(it->m);
+  // Forget what is older than the history window.
+  const int64_t keep_us = static_cast<int64_t>(config_.history_s * 1e6);
+  while (!history_.empty() && history_.front().m.utime < utime_ - keep_us) {
+    base_state_ = history_.front().state;
+    base_cov_ = history_.front().cov;
+    base_utime_ = history_.front().utime;
+    history_.pop_front();
+  }
+  return accepted;
+}
+
+void OdometryEkf::predict(int64_t utime) {
+  const double dt = 1e-6 * static_cast<double>(utime - utime_);
+  if (dt <= 0.0) return;
+  // Heading at the middle of the step: second-order accurate on arcs, so the result does
+  // not depend on the measurement rate.
+  const double v = state_[kV], w = state_[kW];
+  const double th = state_[kTheta] + 0.5 * w * dt;
+  const double c = std::cos(th), s = std::sin(th);
+  EkfCov F = EkfCov::Identity();
+  F(kX, kTheta) = -v * dt * s;
+  F(kX, kV) = dt * c;
+  F(kY, kTheta) = v * dt * c;
+  F(kY, kV) = dt * s;
+  F(kX, kW) = -0.5 * v * dt * dt * s;
+  F(kY, kW) = 0.5 * v * dt * dt * c;
+  F(kTheta, kW) = dt;
+  state_[kX] += v * dt * c;
+  state_[kY] += v * dt * s;
+  state_[kTheta] += w * dt;
+  EkfCov Q = EkfCov::Zero();
+  const double dt3 = dt * dt * dt / 3.0;
+  Q(kX, kX) = Q(kY, kY) = config_.accel_psd * dt3;
+  Q(kTheta, kTheta) = config_.turn_accel_psd * dt3;
+  Q(kV, kV) = config_.accel_psd * dt;
+  Q(kW, kW) = config_.turn_accel_psd * dt;
+  Q(kBias, kBias) = config_.bias_psd * dt;
+  cov_ = F * cov_ * F.transpose() + Q;
+  utime_ = utime;
+}
+
+bool OdometryEkf::update(const Eigen::VectorXd& y, const Eigen::MatrixXd& H,
+                         const Eigen::MatrixXd& R, double gate) {
+  const Eigen::MatrixXd S = H * cov_ * H.transpose() + R;
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  const double d2 = y.dot(ldlt.solve(y));
+  if (!std::isfinite(d2) || d2 > gate) return false;
+  const Eigen::MatrixXd K = cov_ * H.transpose() * ldlt.solve(Eigen::MatrixXd::Identity(S.rows(), S.cols()));
+  const EkfState next = state_ + K * y;
+  const EkfCov I_KH = EkfCov::Identity() - K * H;
+  const EkfCov next_cov = I_KH * cov_ * I_KH.transpose() + K * R * K.transpose();  // Joseph form
+  if (!next.allFinite() || !next_cov.allFinite()) return false;
+  state_ = next;
+  cov_ = 0.5 * (next_cov + next_cov.transpose());
+  return true;
+}
+
+bool OdometryEkf::apply(const Measurement& m) {
+  predict(m.utime);
+  if (m.kind == Kind::kWheels) {
+    const BodyTwist t = twistFromWheels(m.a, m.b, config_.wheel_distance_m);
+    const auto sigma = [&](double v) {
+      return std::max(config_.wheel_speed_sigma_min_m_s, config_.wheel_speed_sigma_fraction * std::abs(v));
+    };
+    const double sl = sigma(m.a), sr = sigma(m.b);
+    const double wd = config_.wheel_distance_m;
+    Eigen::Matrix2d R;  // (v, w) = A (v_l, v_r): R = A diag(sl^2, sr^2) A^T
+    R << 0.25 * (sl * sl + sr * sr), 0.5 * (sr * sr - sl * sl) / wd,
+        0.5 * (sr * sr - sl * sl) / wd, (sl * sl + sr * sr) / (wd * wd);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, 6);
+    H(0, kV) = 1.0;
+    H(1, kW) = 1.0;
+    Eigen::Vector2d y(t.v_m_s - state_[kV], t.w_rad_s - state_[kW]);
+    return update(y, H, R, config_.gate_chi2_wheels);
+  }
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(1, 6);
+  H(0, kW) = 1.0;
+  H(0, kBias) = 1.0;
+  Eigen::VectorXd y(1);
+  y[0] = m.a - (state_[kW] + state_[kBias]);
+  Eigen::MatrixXd R(1, 1);
+  R(0, 0) = config_.gyro_sigma_rad_s * config_.gyro_sigma_rad_s;
+  return update(y, H, R, config_.gate_chi2_gyro);
+}
+
+}  // namespace sweepmap

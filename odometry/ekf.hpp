@@ -1,0 +1,101 @@
+// Planar EKF fusing wheel odometry and a gyro (Miao 2022 Eq. 6-10, extended):
+//  - state s = [x, y, theta, v, w, b_g]: pose in the world, forward speed, turn rate, gyro bias;
+//    a constant-velocity model predicts it (random-walk acceleration, turn acceleration, bias);
+//  - wheel speeds measure (v, w); the gyro measures w + b_g, so its bias is estimated;
+//  - every measurement is gated by its Mahalanobis distance: a slipping wheel disagrees
+//    with the gyro about w and is rejected (counted), not fused;
+//  - measurements are applied in timestamp order: one that arrives late is inserted into a
+//    short history and everything after it is re-applied, so the estimate equals the one from
+//    ordered input; older than the history -> dropped and counted;
+//  - non-finite or absurd input is rejected and counted; the state never becomes NaN, and
+//    `trusted()` says when the covariance has grown past use (e.g. wheels alone for long).
+// 2D mode is explicit: this filter estimates the planar pose only (z, roll, pitch = 0).
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <deque>
+#include <string>
+
+#include "odometry/wheel_odometry.hpp"
+
+namespace sweepmap {
+
+struct EkfConfig {
+  double wheel_distance_m = 0.2;
+  double wheel_speed_sigma_fraction = 0.01;  // encoder speed accuracy (1 %)
+  double wheel_speed_sigma_min_m_s = 0.002;  // floor near standstill
+  double gyro_sigma_rad_s = 0.005;           // gyro white noise
+  double accel_psd = 0.5;                    // (m/s^2)^2/Hz, random-walk acceleration
+  double turn_accel_psd = 1.0;               // (rad/s^2)^2/Hz
+  double bias_psd = 1e-7;                    // (rad/s)^2/s, gyro bias random walk
+  double initial_bias_sigma_rad_s = 0.02;
+  double gate_chi2_wheels = 13.82;           // 2 dof, p = 0.999
+  double gate_chi2_gyro = 10.83;             // 1 dof, p = 0.999
+  double history_s = 1.0;                    // late measurements within this are re-ordered
+  double max_speed_m_s = 5.0;                // beyond: absurd input
+  double max_turn_rate_rad_s = 20.0;
+  double trusted_theta_sigma_rad = 0.2;      // beyond: not trusted
+};
+
+using EkfState = Eigen::Matrix<double, 6, 1>;
+using EkfCov = Eigen::Matrix<double, 6, 6>;
+
+class OdometryEkf {
+ public:
+  enum Index { kX = 0, kY, kTheta, kV, kW, kBias };
+
+  explicit OdometryEkf(const EkfConfig& config, int64_t start_utime = 0);
+
+  // Each returns false when the input was rejected (bad, gated out, or too old).
+  bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s);
+  bool addGyro(int64_t utime, double w_rad_s);
+
+  const EkfState& state() const { return state_; }
+  const EkfCov& covariance() const { return cov_; }
+  int64_t utime() const { return utime_; }
+  Pose2 pose() const { return {state_[kX], state_[kY], state_[kTheta]}; }
+  bool trusted() const;
+
+  struct Counters {
+    int64_t wheels = 0, gyro = 0;       // fused
+    int64_t gated_wheels = 0, gated_gyro = 0;
+    int64_t invalid = 0;                 // non-finite or absurd
+    int64_t reordered = 0;               // late, re-applied in order
+    int64_t too_old = 0;                 // older than the history
+  };
+  const Counters& counters() const { return counters_; }
+
+ private:
+  enum class Kind { kWheels, kGyro };
+  struct Measurement {
+    int64_t utime;
+    Kind kind;
+    double a, b;  // wheels: v_left, v_right; gyro: w, unused
+  };
+  struct Snapshot {
+    Measurement m;
+    bool accepted;
+    EkfState state;  // after the measurement
+    EkfCov cov;
+    int64_t utime;
+  };
+
+  bool add(const Measurement& m);
+  bool apply(const Measurement& m);  // predict to m.utime, update; false if gated out
+  void predict(int64_t utime);
+  bool update(const Eigen::VectorXd& innovation, const Eigen::MatrixXd& H, const Eigen::MatrixXd& R,
+              double gate);
+
+  EkfConfig config_;
+  EkfState state_ = EkfState::Zero();
+  EkfCov cov_ = EkfCov::Zero();
+  int64_t utime_;
+  EkfState base_state_;  // state before the oldest snapshot
+  EkfCov base_cov_;
+  int64_t base_utime_;
+  std::deque<Snapshot> history_;
+  Counters counters_;
+};
+
+}  // namespace sweepmap
