@@ -1,0 +1,58 @@
+// Encoding and decoding of the message types, including into value-initialised structs:
+// LCM 1.3.1 decodes doubles through int64_t pointers, which needs -fno-strict-aliasing
+// (lcmtypes/CMakeLists.txt); without it this test reads back zeros at -O2.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "processes/node.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/scan_window_t.hpp"
+#include "sweepmap/truth_sweep_t.hpp"
+
+namespace sweepmap {
+namespace {
+
+template <class T>
+T roundTrip(const T& in) {
+  Outbox o;
+  o.publish("X", 0, in);
+  T out{};
+  EXPECT_TRUE(decodeMessage(o.take().front(), &out));
+  return out;
+}
+
+TEST(Messages, DoublesAndFloatsSurviveDecodingIntoFreshStructs) {
+  truth_sweep_t t{};
+  t.sweep_id = 3;
+  t.phi_offset_true_rad = -0.0450773;
+  t.alpha_true_rad = 0.512425;
+  const truth_sweep_t r = roundTrip(t);
+  EXPECT_EQ(r.sweep_id, 3);
+  EXPECT_EQ(r.phi_offset_true_rad, -0.0450773);
+  EXPECT_EQ(r.alpha_true_rad, 0.512425);
+
+  scan_window_t w{};
+  w.angular_velocity_rad_s = M_PI / 16;
+  w.sweep_angle_rad = M_PI;
+  EXPECT_EQ(roundTrip(w).angular_velocity_rad_s, M_PI / 16);
+
+  lidar_scan_t s{};
+  s.angle_increment_rad = 0.0043633f;
+  s.ranges_m = {1.5f, 0.0f, 2.25f};
+  s.nranges = 3;
+  const lidar_scan_t rs = roundTrip(s);
+  EXPECT_EQ(rs.angle_increment_rad, 0.0043633f);
+  EXPECT_EQ(rs.ranges_m, s.ranges_m);
+
+  cloud_chunk_t c{};
+  c.xyz_m = {{1.0f, 2.0f, 3.0f}};
+  c.npoints = 1;
+  c.phi_offset_rad = 0.01;
+  EXPECT_EQ(roundTrip(c).xyz_m, c.xyz_m);
+  EXPECT_EQ(roundTrip(c).phi_offset_rad, 0.01);
+}
+
+}  // namespace
+}  // namespace sweepmap
