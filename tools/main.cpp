@@ -1,4 +1,4 @@
-// sweepmap: one tool, several subcommands (sim, replay, demo, spy, bench).
+// sweepmap: one tool, several subcommands (sim, replay, demo, spy, bench, calib, eval, import).
 #include <iostream>
 #include <map>
 
@@ -14,6 +14,9 @@ int main(int argc, char** argv) {
   add(sweepmap::addDemoCommand(app, argv[0]));
   add(sweepmap::addSpyCommand(app, argv[0]));
   add(sweepmap::addBenchCommand(app));
+  add(sweepmap::addCalibCommand(app));
+  add(sweepmap::addEvalCommand(app));
+  add(sweepmap::addImportCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

@@ -1,0 +1,74 @@
+#include "calib/world_assembly.hpp"
+
+#include <cmath>
+
+#include "calib/rotating_geometry.hpp"
+
+namespace sweepmap {
+
+Eigen::Matrix3d rotationXYZ(double gamma, double beta, double alpha) {
+  return (Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()) *
+          Eigen::AngleAxisd(beta, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(gamma, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Isometry3d LidarMounting::T_BL() const {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = rotationXYZ(gamma_rad, beta_rad, alpha_rad) *
+               rotationXYZ(nominal_rpy_rad.x(), nominal_rpy_rad.y(), nominal_rpy_rad.z());
+  T.translation() = t_BL_m;
+  return T;
+}
+
+void PoseTrack::add(int64_t utime, const Pose2& pose) { poses_[utime] = pose; }
+
+std::optional<Pose2> PoseTrack::at(int64_t utime) const {
+  if (poses_.empty()) return std::nullopt;
+  auto hi = poses_.lower_bound(utime);
+  if (hi == poses_.end()) return std::nullopt;
+  if (hi->first == utime) return hi->second;
+  if (hi == poses_.begin()) return std::nullopt;
+  auto lo = std::prev(hi);
+  const double f = static_cast<double>(utime - lo->first) / static_cast<double>(hi->first - lo->first);
+  const Pose2& a = lo->second;
+  const Pose2& b = hi->second;
+  return Pose2{a.x_m + f * (b.x_m - a.x_m), a.y_m + f * (b.y_m - a.y_m),
+               a.theta_rad + f * rotating::wrapAngle(b.theta_rad - a.theta_rad)};
+}
+
+void PoseTrack::pruneBefore(int64_t utime) {
+  auto it = poses_.upper_bound(utime);
+  if (it == poses_.begin()) return;
+  --it;  // the last pose at or before utime stays
+  poses_.erase(poses_.begin(), it);
+}
+
+Eigen::Isometry3d planarToIsometry(const Pose2& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = rotating::rotZ(p.theta_rad);
+  T.translation() = Eigen::Vector3d(p.x_m, p.y_m, 0.0);
+  return T;
+}
+
+std::vector<Eigen::Vector3f> scanToWorld(const Scan2D& scan, const PoseTrack& track,
+                                         const Eigen::Isometry3d& T_BL, int* uncovered) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(scan.ranges_m.size());
+  int missing = 0;
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const double r = scan.ranges_m[i];
+    if (!(r >= scan.range_min_m && r <= scan.range_max_m)) continue;
+    const auto pose = track.at(scan.rayUtime(i));
+    if (!pose) {
+      ++missing;
+      continue;
+    }
+    const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
+    out.push_back((planarToIsometry(*pose) * (T_BL * p_L)).cast<float>());
+  }
+  if (uncovered) *uncovered = missing;
+  return out;
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,96 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "calib/world_assembly.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr double kDeg = M_PI / 180.0;
+
+TEST(WorldAssembly, RotationOrderIsZYX) {
+  const Eigen::Matrix3d R = rotationXYZ(0.1, 0.2, 0.3);
+  const Eigen::Matrix3d want = (Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitZ()) *
+                                Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitY()) *
+                                Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitX()))
+                                   .toRotationMatrix();
+  EXPECT_TRUE(R.isApprox(want, 1e-15));
+  EXPECT_TRUE(rotationXYZ(0, 0, 0).isIdentity(0));
+}
+
+// A horizontal lidar: nominal pitch +90 deg maps the sector's middle Z_L to body x.
+TEST(WorldAssembly, HorizontalMountingLooksForward) {
+  LidarMounting m;
+  m.nominal_rpy_rad = Eigen::Vector3d(0, 90 * kDeg, 0);
+  m.t_BL_m = Eigen::Vector3d(0.145, 0, 0.3);
+  const Eigen::Isometry3d T = m.T_BL();
+  EXPECT_TRUE((T * Eigen::Vector3d(0, 0, 2)).isApprox(Eigen::Vector3d(2.145, 0, 0.3), 1e-12));
+  EXPECT_TRUE((T * Eigen::Vector3d(0, 1, 0)).isApprox(Eigen::Vector3d(0.145, 1, 0.3), 1e-12));
+}
+
+TEST(PoseTrack, InterpolatesAndWrapsHeading) {
+  PoseTrack t;
+  t.add(0, {0, 0, 170 * kDeg});
+  t.add(1000, {1, 2, -170 * kDeg});
+  const auto mid = t.at(500);
+  ASSERT_TRUE(mid);
+  EXPECT_DOUBLE_EQ(mid->x_m, 0.5);
+  EXPECT_DOUBLE_EQ(mid->y_m, 1.0);
+  EXPECT_NEAR(std::remainder(mid->theta_rad - M_PI, 2 * M_PI), 0.0, 1e-12);  // through 180 deg
+  EXPECT_FALSE(t.at(-1));
+  EXPECT_FALSE(t.at(1001));
+  EXPECT_TRUE(t.at(1000));
+  t.pruneBefore(700);
+  EXPECT_EQ(t.size(), 2u);  // the pose before 700 stays for interpolation
+  EXPECT_TRUE(t.at(700));
+}
+
+// The robot drives at 1 m/s toward a wall 5 m ahead while a 10 Hz scan sweeps: with each
+// ray's own pose the wall is straight at x = 5; with the scan's start pose it smears.
+TEST(WorldAssembly, DeskewsWithEachRaysPose) {
+  LidarMounting m;
+  m.nominal_rpy_rad = Eigen::Vector3d(0, 90 * kDeg, 0);
+  PoseTrack track;
+  for (int64_t t = 0; t <= 200000; t += 10000) track.add(t, {1e-6 * double(t), 0, 0});
+  Scan2D s;
+  s.utime = 0;
+  s.angle_min_rad = -30 * kDeg;
+  s.angle_increment_rad = 1 * kDeg;
+  s.time_increment_ns = 1000000;  // 1 ms per ray: 61 ms for the scan
+  s.range_min_m = 0.02;
+  s.range_max_m = 10;
+  for (int i = 0; i <= 60; ++i) {
+    const double a = s.rayAngle(static_cast<size_t>(i));
+    const double x_robot = 1e-3 * i;  // where the robot is at this ray
+    s.ranges_m.push_back(static_cast<float>((5.0 - x_robot) / std::cos(a)));
+  }
+  int uncovered = -1;
+  const auto pts = scanToWorld(s, track, m.T_BL(), &uncovered);
+  ASSERT_EQ(pts.size(), 61u);
+  EXPECT_EQ(uncovered, 0);
+  for (const auto& p : pts) EXPECT_NEAR(p.x(), 5.0, 1e-5);
+  // Without deskewing (every ray at the scan's start pose) the last ray is 6 cm short.
+  PoseTrack frozen;
+  frozen.add(0, {0, 0, 0});
+  frozen.add(1000000, {0, 0, 0});
+  EXPECT_NEAR(scanToWorld(s, frozen, m.T_BL()).back().x(), 5.0 - 0.06, 1e-4);
+}
+
+TEST(WorldAssembly, RaysOutsideTheTrackAreSkippedAndCounted) {
+  PoseTrack track;
+  track.add(0, {0, 0, 0});
+  track.add(5000, {0, 0, 0});
+  Scan2D s;
+  s.time_increment_ns = 1000000;
+  s.range_min_m = 0.02;
+  s.range_max_m = 10;
+  s.angle_increment_rad = 0.01;
+  s.ranges_m.assign(10, 1.0f);
+  int uncovered = 0;
+  EXPECT_EQ(scanToWorld(s, track, Eigen::Isometry3d::Identity(), &uncovered).size(), 6u);
+  EXPECT_EQ(uncovered, 4);
+}
+
+}  // namespace
+}  // namespace sweepmap

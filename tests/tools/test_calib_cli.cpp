@@ -1,0 +1,150 @@
+// End to end through `sweepmap calib plate-angle`: 50 simulated mode-7 sweeps of the
+// conference room (the paper's protocol) with the plate's installation error on
+// (sim.alpha_true_deg 29.3598 vs plate.alpha_deg 30), calibrated, written, loaded back.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+
+#include "core/calibration_file.hpp"
+#include "core/rig_config.hpp"
+#include "test_support.hpp"
+
+extern char** environ;
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+const std::string kRig = sourcePath("config/rig_a.yaml");
+const std::string kScene = sourcePath("config/scene_conference_room.yaml");
+
+// Runs build/bin/sweepmap with stdout and stderr in separate files (--json goes to stdout).
+int runSplit(const std::vector<std::string>& args, const fs::path& out, const fs::path& err) {
+  std::vector<std::string> argv = {binPath("sweepmap")};
+  argv.insert(argv.end(), args.begin(), args.end());
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&fa, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<char*> cargs;
+  for (auto& a : argv) cargs.push_back(a.data());
+  cargs.push_back(nullptr);
+  pid_t pid;
+  const int spawned = posix_spawn(&pid, cargs[0], &fa, nullptr, cargs.data(), environ);
+  posix_spawn_file_actions_destroy(&fa);
+  if (spawned != 0) return -1;
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// 50 mode-7 sweeps, seed 31, default error model: ~1000 s simulated, shared by the tests.
+std::string calibLog() {
+  return cachedSimLog("mode7x50_calib", {"--rig", kRig, "--scene", kScene, "--mode", "7",
+                                         "--sweeps", "50", "--seed", "31"});
+}
+
+TEST(CalibCli, PlateAngleFromFiftyMode7Sweeps) {
+  const std::string log = calibLog();
+  const fs::path dir = scratchDir("calib_cli_plate_angle");
+  const fs::path out = dir / "plate_calibration.yaml";
+  const auto t0 = std::chrono::steady_clock::now();
+  const int rc = runSplit(
+      {"calib", "plate-angle", "--logs", log, "--rig", kRig, "--out", out.string(), "--json"},
+      dir / "stdout.json", dir / "stderr.txt");
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
+  const nlohmann::json j = readJson(dir / "stdout.json");
+
+  const double alpha = j.at("alpha_deg").get<double>();
+  ASSERT_TRUE(j.contains("alpha_true_deg")) << "the simulated log carries the true alpha";
+  const double alpha_true = j.at("alpha_true_deg").get<double>();
+  EXPECT_NEAR(alpha_true, 29.3598, 1e-9);
+  std::cout << "calib plate-angle: alpha " << alpha << " deg, true " << alpha_true << " deg, error "
+            << alpha - alpha_true << " deg, " << j.at("sweeps_used") << " sweeps used, "
+            << j.at("iterations") << " LM iterations, wall time " << wall_s
+            << " s (tool: " << j.at("timing_s").dump() << ")\n";
+  EXPECT_LE(std::abs(alpha - alpha_true), 0.05);
+  EXPECT_TRUE(j.at("converged").get<bool>()) << j.at("stop_reason");
+  EXPECT_GE(j.at("sweeps_used").get<int>(), 45) << j.at("sweeps_rejected").dump(2);
+  EXPECT_EQ(j.at("sweeps_used").get<size_t>() + j.at("sweeps_rejected").size(), 50u);
+  EXPECT_LT(j.at("e_atti_mean_after").get<double>(), j.at("e_atti_mean_before").get<double>());
+
+  // History: starts at alpha_0 = 30 deg, cost never increases, ends at the result.
+  const auto& h = j.at("history");
+  ASSERT_EQ(h.size(), j.at("iterations").get<size_t>() + 1);
+  EXPECT_DOUBLE_EQ(h.front().at("alpha_deg").get<double>(), 30.0);
+  for (size_t i = 1; i < h.size(); ++i) {
+    EXPECT_LE(h[i].at("cost").get<double>(), h[i - 1].at("cost").get<double>());
+  }
+  EXPECT_DOUBLE_EQ(h.back().at("alpha_deg").get<double>(), alpha);
+
+  // The calibration file loads, and a rig pointing to it uses its alpha.
+  const PlateCalibration c = loadPlateCalibration(out.string());
+  EXPECT_NEAR(c.alpha_deg, alpha, 1e-9);
+  EXPECT_EQ(c.source.at("tool"), "sweepmap calib plate-angle");
+  EXPECT_EQ(c.source.at("sweeps_used"), std::to_string(j.at("sweeps_used").get<int>()));
+  EXPECT_EQ(c.source.at("iterations"), std::to_string(j.at("iterations").get<int>()));
+  EXPECT_EQ(c.source.count("date"), 1u);
+  EXPECT_EQ(c.source.count("final_cost"), 1u);
+  EXPECT_EQ(c.logs, std::vector<std::string>{log});
+
+  std::string rig_text = readFile(kRig);
+  const std::string key = "calibration_file: \"\"";
+  ASSERT_NE(rig_text.find(key), std::string::npos);
+  rig_text.replace(rig_text.find(key), key.size(), "calibration_file: plate_calibration.yaml");
+  std::ofstream(dir / "rig.yaml") << rig_text;
+  const RigConfig rig = loadRig((dir / "rig.yaml").string());
+  EXPECT_NEAR(rig.plate.alpha_deg, alpha, 1e-9);
+}
+
+TEST(CalibCli, BadInputsFailWithAClearMessage) {
+  const fs::path dir = scratchDir("calib_cli_bad");
+  const fs::path out = dir / "c.yaml";
+  // A log that is not an LCM log: no usable sweep, exit 1, nothing written.
+  std::ofstream(dir / "garbage.lcmlog") << "this is not an lcm log, just some bytes";
+  int rc = runSplit({"calib", "plate-angle", "--logs", (dir / "garbage.lcmlog").string(), "--rig",
+                     kRig, "--out", out.string()},
+                    dir / "o1.txt", dir / "e1.txt");
+  EXPECT_NE(rc, 0);
+  std::string err = readFile(dir / "e1.txt");
+  EXPECT_NE(err.find("garbage.lcmlog"), std::string::npos) << err;
+  EXPECT_FALSE(fs::exists(out));
+
+  // A log that does not exist: exit 2, named.
+  rc = runSplit({"calib", "plate-angle", "--logs", (dir / "missing.lcmlog").string(), "--rig", kRig,
+                 "--out", out.string()},
+                dir / "o2.txt", dir / "e2.txt");
+  EXPECT_EQ(rc, 2);
+  err = readFile(dir / "e2.txt");
+  EXPECT_NE(err.find("missing.lcmlog"), std::string::npos) << err;
+
+  // A bad rig key: exit 2, naming the key.
+  rc = runSplit({"calib", "plate-angle", "--logs", (dir / "garbage.lcmlog").string(), "--rig", kRig,
+                 "--out", out.string(), "--set", "plate.no_such_key=1"},
+                dir / "o3.txt", dir / "e3.txt");
+  EXPECT_EQ(rc, 2);
+  EXPECT_NE(readFile(dir / "e3.txt").find("no_such_key"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(CalibCli, HelpDescribesTheGroupAndTheCommand) {
+  const fs::path dir = scratchDir("calib_cli_help");
+  ASSERT_EQ(runSplit({"calib", "--help"}, dir / "o1.txt", dir / "e1.txt"), 0);
+  EXPECT_NE(readFile(dir / "o1.txt").find("plate-angle"), std::string::npos);
+  ASSERT_EQ(runSplit({"calib", "plate-angle", "--help"}, dir / "o2.txt", dir / "e2.txt"), 0);
+  const std::string help = readFile(dir / "o2.txt");
+  for (const char* s : {"--logs", "--rig", "--out", "--json", "--set", "Algorithm A1"}) {
+    EXPECT_NE(help.find(s), std::string::npos) << s << " missing in:\n" << help;
+  }
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace sweepmap
