@@ -20,7 +20,6 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   const double offset_x_m = rig.geometry.lidar_offset_x_mm * 1e-3;
 
   const PlateRegion region = PlateRegion::fromConfig(rig.plate);
-  const bool ray_plane = rig.plate.beta_method == "ray_plane";
   // Every ray meeting the plate plane in the region: for the ray-plane estimate and for
   // checking either estimate against the plate's shape.
   std::vector<PlateRay> plate_rays;
@@ -39,26 +38,38 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
       const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
       const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, phi, offset_x_m);
       out.points_Op.push_back(p_Op.cast<float>());
-      {
-        const Eigen::Vector3d origin = rotating::lidarToOPrime(Eigen::Vector3d::Zero(), phi, offset_x_m);
-        const Eigen::Vector3d dir = (p_Op - origin) / r;
-        if (plateRayRange(origin, dir, region)) plate_rays.push_back({origin, dir, r});
-      }
+      const Eigen::Vector3d origin =
+          rotating::lidarToOPrime(Eigen::Vector3d::Zero(), phi, offset_x_m);
+      const Eigen::Vector3d dir = (p_Op - origin) / r;
+      if (plateRayRange(origin, dir, region)) plate_rays.push_back({origin, dir, r});
     }
   }
 
-  out.plate = ray_plane ? estimateBetaRayPlane(plate_rays, region,
-                                               rig.plate.range_gate_mm * 1e-3,
-                                               rig.plate.min_points)
-                        : estimateBetaCentroid(out.points_Op, region, rig.plate.min_points);
+  out.plate_rays = std::move(plate_rays);
+  correctSweep(rig, &out);
+  return out;
+}
+
+void correctSweep(const RigConfig& rig, AssembledSweep* sweep) {
+  AssembledSweep& out = *sweep;
+  const PlateRegion region = PlateRegion::fromConfig(rig.plate);
+  out.alpha_rad = rig.plate.alpha_deg * M_PI / 180.0;
+  out.plate = rig.plate.beta_method == "ray_plane"
+                  ? estimateBetaRayPlane(out.plate_rays, region, rig.plate.range_gate_mm * 1e-3,
+                                         rig.plate.min_points)
+                  : estimateBetaCentroid(out.points_Op, region, rig.plate.min_points);
+  out.plate_check = PlateCheck{};
   if (out.plate.found) {
     out.plate_check =
-        checkPlate(plate_rays, region, out.plate.beta_rad, rig.plate.hypotenuse_mm * 1e-3,
+        checkPlate(out.plate_rays, region, out.plate.beta_rad, rig.plate.hypotenuse_mm * 1e-3,
                    rig.plate.base_distance_mm * 1e-3, rig.plate.range_gate_mm * 1e-3);
   }
+  out.corrected = false;
+  out.phi_offset_rad = 0.0;
+  out.reason.clear();
   if (!rig.assembler.correct_attitude) {
     out.reason = "correction disabled (assembler.correct_attitude=false)";
-  } else if (window.accel_overlap) {
+  } else if (out.window.accel_overlap) {
     out.reason = "motor ramp overlapped the lidar window";
   } else if (!out.plate.found) {
     out.reason = out.plate.reason;
@@ -68,6 +79,7 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
     out.corrected = true;
     out.phi_offset_rad = rotating::phiOffset(out.alpha_rad, out.plate.beta_rad);
   }
+  out.points.clear();
   if (out.corrected) {
     const Eigen::Matrix3f R = rotating::rotZ(out.phi_offset_rad).cast<float>();
     out.points.reserve(out.points_Op.size());
@@ -75,7 +87,6 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   } else {
     out.points = out.points_Op;
   }
-  return out;
 }
 
 }  // namespace sweepmap

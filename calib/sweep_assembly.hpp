@@ -28,6 +28,7 @@ struct AssembledSweep {
   int64_t first_ray_utime = 0;              // phi_motor = 0 here: the instant frame O' is defined
   std::vector<Eigen::Vector3f> points_Op;   // C_O'
   std::vector<Eigen::Vector3f> points;      // C_O when corrected, else C_O'
+  std::vector<PlateRay> plate_rays;         // rays meeting the plate plane in the region
   PlateEstimate plate;
   PlateCheck plate_check;                   // the estimate against the plate's shape
   double alpha_rad = 0.0;
@@ -40,5 +41,10 @@ struct AssembledSweep {
 // outside [range_min, range_max] of their scan are skipped.
 AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow& window,
                              const RigConfig& rig);
+
+// The attitude correction alone (Eq. 8-10): beta by plate.beta_method, the shape check,
+// phi_offset = alpha - beta and C_O, from points_Op and plate_rays. assembleSweep calls it;
+// tools re-run it to compare methods or alphas without re-assembling.
+void correctSweep(const RigConfig& rig, AssembledSweep* sweep);
 
 }  // namespace sweepmap

@@ -4,9 +4,11 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 
 #include "core/event_log.hpp"
 #include "tools/commands.hpp"
+#include "tools/log_sweeps.hpp"
 #include "tools/replay.hpp"
 #include "tools/simulation.hpp"
 
@@ -25,7 +27,8 @@ Runner addBenchCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bench",
       "Measure simulation and offline replay speed (assembly + plate correction + OctoMap) as "
-      "real-time factors for modes 1 and 7, points per second and peak memory. Prints "
+      "real-time factors for modes 1 and 7, points per second, one sweep's plate correction and "
+      "peak memory. Prints "
       "figures; run on an idle machine, compare ratios within one run");
   struct Opts {
     std::string rig = "config/rig_a.yaml";
@@ -75,6 +78,27 @@ Runner addBenchCommand(CLI::App& app) {
                 << rr.log_duration_s / replay_s << " (log time), "
                 << scan_time_s / replay_s << " (scan-window time), "
                 << static_cast<int64_t>(rr.points / replay_s) << " points/s\n";
+
+      // Plate correction of one sweep (beta, shape check, phi_offset, rotation of C_O'),
+      // for both beta methods, on the first sweep of the log.
+      std::optional<AssembledSweep> first;
+      forEachSweep(log, so.rig, [&](const AssembledSweep& s, const SweepTruth&) {
+        if (!first) first = s;
+      });
+      if (first) {
+        for (const char* method : {"ray_plane", "centroid"}) {
+          RigConfig rig = so.rig;
+          rig.plate.beta_method = method;
+          const int reps = 20;
+          AssembledSweep work = *first;
+          t0 = clock::now();
+          for (int k = 0; k < reps; ++k) correctSweep(rig, &work);
+          const double ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count() / reps;
+          std::cout << "  plate correction (" << method << ") " << ms << " ms per sweep of "
+                    << first->points_Op.size() << " points, " << first->plate_rays.size()
+                    << " plate-plane rays (C_O rotation included)\n";
+        }
+      }
     }
     std::cout << "peak RSS " << peakRssMiB() << " MiB\n";
     return 0;
