@@ -150,6 +150,26 @@ TEST(RayPlane, UnbiasedUnderRangeNoiseWhereCentroidIsNot) {
   EXPECT_GT(std::abs(mean_centroid), 2 * std::abs(mean_rays));
 }
 
+// Both methods at the angular steps of modes 1, 3, 5 and 7 (4.5 .. 0.28125 deg), noisy.
+class BothMethodsAtDensity : public ::testing::TestWithParam<double> {};
+
+TEST_P(BothMethodsAtDensity, EstimateBeta) {
+  const double step_deg = GetParam();
+  const RayScan s = scanPlate(-12 * kDeg, step_deg, 0.012, 9);
+  const PlateEstimate c = estimateBetaCentroid(s.points, paperRegion(), 30);
+  const PlateEstimate r = estimateBetaRayPlane(s.rays, paperRegion(), 0.03, 30);
+  ASSERT_TRUE(c.found && r.found) << c.reason << r.reason;
+  std::cout << "step " << step_deg << " deg: centroid " << c.beta_rad / kDeg + 12
+            << " deg, ray-plane " << r.beta_rad / kDeg + 12 << " deg off\n";
+  // Sparse scans sample the plate coarsely: both errors grow with the step.
+  const double bound = std::max(0.15, 0.25 * step_deg);
+  EXPECT_NEAR(r.beta_rad / kDeg, -12.0, bound);
+  EXPECT_NEAR(c.beta_rad / kDeg, -12.0, bound + 0.4);
+}
+
+INSTANTIATE_TEST_SUITE_P(Modes1357, BothMethodsAtDensity,
+                         ::testing::Values(4.5, 1.125, 0.5625, 0.28125));
+
 TEST(RayPlane, GateRejectsRaysThatHitSomethingElse) {
   RayScan s = scanPlate(0.0, 1.0, 0.0, 1);
   const size_t n = s.rays.size();
