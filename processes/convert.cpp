@@ -69,6 +69,7 @@ std::vector<cloud_chunk_t> toChunks(const AssembledSweep& sweep, int chunk_point
     m.frame = sweep.corrected ? "O" : "O'";
     m.corrected = sweep.corrected;
     m.phi_offset_rad = sweep.phi_offset_rad;
+    m.sensor_origin_m[0] = m.sensor_origin_m[1] = m.sensor_origin_m[2] = 0.0;  // on the axis
     const size_t begin = static_cast<size_t>(c) * per;
     const size_t end = std::min(n, begin + per);
     m.npoints = static_cast<int32_t>(end > begin ? end - begin : 0);
@@ -105,8 +106,11 @@ std::string validateChunk(const cloud_chunk_t& m) {
            std::to_string(m.chunk_count);
   }
   if (m.total_points < m.npoints) return "chunk has more points than its sweep";
+  for (const double o : m.sensor_origin_m) {
+    if (!std::isfinite(o)) return "non-finite sensor origin";
+  }
   for (const auto& p : m.xyz_m) {
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
+    if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
       return "non-finite point";
     }
   }

@@ -4,6 +4,7 @@
 #include "processes/channels.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/odometry_node.hpp"
+#include "processes/rig_b.hpp"
 
 #include <CLI/CLI.hpp>
 #include <iostream>
@@ -22,7 +23,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   OdometryConfig config;
   try {
-    config = loadOdometryConfig(config_path, sets);
+    config = loadRigB(config_path, sets).odometry;
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";
     return 2;

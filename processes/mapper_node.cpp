@@ -43,6 +43,8 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
     }
     PendingSweep& p = pending_[c.sweep_id];
     p.chunk_count = c.chunk_count;
+    p.origin = Eigen::Vector3d(c.sensor_origin_m[0], c.sensor_origin_m[1], c.sensor_origin_m[2])
+                   .cast<float>();
     std::vector<float>& xyz = p.chunks[c.chunk_index];
     xyz.clear();
     xyz.reserve(c.xyz_m.size() * 3);
@@ -85,9 +87,10 @@ void MapperNode::insert(int64_t now_utime, int64_t sweep_id, Outbox& out) {
                     std::to_string(it->second.chunks.size()) + " of " +
                     std::to_string(it->second.chunk_count) + " chunks");
   }
+  const Eigen::Vector3f it_origin = it->second.origin;
   pending_.erase(it);
   inserted_.insert(sweep_id);
-  map_->insertCloud(points, Eigen::Vector3f::Zero());
+  map_->insertCloud(points, it_origin);
   ++sweeps_inserted_;
   count("sweeps");
 

@@ -9,6 +9,8 @@
 #include <memory>
 #include <set>
 
+#include <Eigen/Core>
+
 #include "core/rig_config.hpp"
 #include "processes/node.hpp"
 
@@ -31,6 +33,7 @@ class MapperNode : public Node {
  private:
   struct PendingSweep {
     int chunk_count = 0;
+    Eigen::Vector3f origin = Eigen::Vector3f::Zero();
     std::map<int, std::vector<float>> chunks;  // chunk index -> xyz triples
   };
   void insert(int64_t now_utime, int64_t sweep_id, Outbox& out);

@@ -33,18 +33,6 @@ void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
         "heading sigma beyond which the pose is not trusted");
 }
 
-OdometryConfig loadOdometryConfig(const std::string& path, const std::vector<std::string>& overrides) {
-  OdometryConfig c;
-  ConfigSchema s;
-  c.declare(s, "odometry.");
-  s.loadFile(path);
-  for (const auto& o : overrides) s.set(o);
-  if (!(c.wheel_radius_m > 0) || !(c.ticks_per_revolution > 0) || !(c.ekf.wheel_distance_m > 0)) {
-    throw ConfigError(path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
-  }
-  return c;
-}
-
 OdometryNode::OdometryNode(const OdometryConfig& config)
     : Node("odometry"), config_(config), ekf_(config.ekf) {}
 

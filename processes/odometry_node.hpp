@@ -21,9 +21,7 @@ struct OdometryConfig {
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 
-// Loads the `odometry.*` keys of a rig B file strictly (see core/config.hpp).
-OdometryConfig loadOdometryConfig(const std::string& path,
-                                  const std::vector<std::string>& overrides = {});
+
 
 class OdometryNode : public Node {
  public:

@@ -18,5 +18,6 @@ Runner addBenchCommand(CLI::App& app);
 Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle
 Runner addEvalCommand(CLI::App& app);   // group: eval rotating
 Runner addImportCommand(CLI::App& app);  // group: import breezyslam
+Runner addReplayMobileCommand(CLI::App& app);
 
 }  // namespace sweepmap

@@ -1,4 +1,5 @@
-// sweepmap: one tool, several subcommands (sim, replay, demo, spy, bench, calib, eval, import).
+// sweepmap: one tool, several subcommands (sim, replay, demo, spy, bench, calib, eval, import,
+// replay-mobile).
 #include <iostream>
 #include <map>
 
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addCalibCommand(app));
   add(sweepmap::addEvalCommand(app));
   add(sweepmap::addImportCommand(app));
+  add(sweepmap::addReplayMobileCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

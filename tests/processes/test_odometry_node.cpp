@@ -5,6 +5,7 @@
 
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
+#include "processes/rig_b.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
@@ -92,7 +93,7 @@ TEST(OdometryNode, BadInputRejectedAndCounted) {
 
 TEST(OdometryNode, ShippedConfigLoads) {
   const OdometryConfig c =
-      loadOdometryConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_breezyslam.yaml");
+      loadRigB(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_breezyslam.yaml").odometry;
   EXPECT_DOUBLE_EQ(c.wheel_radius_m, 0.077);
   EXPECT_FALSE(c.use_imu);
 }

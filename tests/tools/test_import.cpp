@@ -70,3 +70,42 @@ TEST(ImportBreezySlam, MalformedLineNamesFileLineAndToken) {
 }  // namespace
 }  // namespace test
 }  // namespace sweepmap
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+// The imported recording through sweepmap-odometry's EKF (wheels alone: no IMU on this
+// robot), the world-frame assembler and the mapper.
+TEST(ReplayMobile, BreezySlamRecordingBecomesAMap) {
+  if (!fs::exists(kData)) GTEST_SKIP() << kData << " not present (../shared is not beside this checkout)";
+  const auto dir = scratchDir("replay_mobile");
+  const std::string log = (dir / "exp2.lcmlog").string();
+  ASSERT_EQ(sweepmap({"import", "breezyslam", kData, "--out", log}), 0);
+  const std::string rig = sourcePath("config/rig_b_breezyslam.yaml");
+  for (const char* out : {"a", "b"}) {
+    ASSERT_EQ(sweepmap({"replay-mobile", log, "--rig", rig, "--out", (dir / out).string()},
+                       dir / (std::string(out) + ".txt")),
+              0)
+        << readFile(dir / (std::string(out) + ".txt"));
+  }
+  const auto s = readJson(dir / "a" / "summary.json");
+  EXPECT_GE(s["scans"].get<int>(), 630);
+  EXPECT_GT(s["points"].get<int>(), 100000);
+  EXPECT_EQ(s["odometry"]["gyro_fused"].get<int>(), 0);
+  // Wheels alone: the EKF follows the wheel odometry.
+  const double ekf = s["odometry"]["path_length_m_ekf"].get<double>();
+  const double wheels = s["odometry"]["path_length_m_wheels"].get<double>();
+  EXPECT_GT(wheels, 10.0);
+  EXPECT_NEAR(ekf, wheels, 0.02 * wheels);
+  EXPECT_GT(s["map"]["occupied_voxels"].get<int>(), 1000);
+  EXPECT_TRUE(fs::exists(dir / "a" / "top_view.png"));
+  // Deterministic.
+  for (const char* f : {"map.bt", "cloud.pcd", "summary.json", "derived.lcmlog"}) {
+    EXPECT_TRUE(readFile(dir / "a" / f) == readFile(dir / "b" / f)) << f;
+  }
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace sweepmap

@@ -1,0 +1,61 @@
+#include "processes/rig_b.hpp"
+
+#include <cmath>
+
+namespace sweepmap {
+
+void MountingConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "nominal_roll_deg", &nominal_roll_deg, "deg", "nominal lidar roll on the body");
+  s.add(p + "nominal_pitch_deg", &nominal_pitch_deg, "deg",
+        "nominal lidar pitch (90: horizontal scan plane, sector middle forward)");
+  s.add(p + "nominal_yaw_deg", &nominal_yaw_deg, "deg", "nominal lidar yaw");
+  s.add(p + "gamma_rad", &gamma_rad, "rad", "mounting error about body x (calibrated)");
+  s.add(p + "beta_rad", &beta_rad, "rad", "mounting error about body y (calibrated)");
+  s.add(p + "alpha_rad", &alpha_rad, "rad", "mounting error about body z (calibrated)");
+  s.add(p + "x_m", &x_m, "m", "lidar centre along body x (l1)");
+  s.add(p + "y_m", &y_m, "m", "lidar centre along body y");
+  s.add(p + "z_m", &z_m, "m", "lidar centre above the body plane (h)");
+}
+
+LidarMounting MountingConfig::toMounting() const {
+  constexpr double kDeg = M_PI / 180.0;
+  LidarMounting m;
+  m.nominal_rpy_rad = Eigen::Vector3d(nominal_roll_deg, nominal_pitch_deg, nominal_yaw_deg) * kDeg;
+  m.gamma_rad = gamma_rad;
+  m.beta_rad = beta_rad;
+  m.alpha_rad = alpha_rad;
+  m.t_BL_m = Eigen::Vector3d(x_m, y_m, z_m);
+  return m;
+}
+
+void WorldAssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "pose_channel", &pose_channel, "", "pose stream: ODOMETRY_POSE (EKF) or WHEEL_ODOMETRY");
+  s.add(p + "beam_count", &beam_count, "", "expected rays per scan (0: any)");
+  s.add(p + "max_pose_wait_s", &max_pose_wait_s, "s",
+        "assemble a scan with the poses there are after this long");
+}
+
+void RigBConfig::declare(ConfigSchema& s) {
+  odometry.declare(s, "odometry.");
+  mounting.declare(s, "mounting.");
+  assembler.declare(s, "assembler.");
+  mapper.declare(s, "mapper.");
+}
+
+RigBConfig loadRigB(const std::string& path, const std::vector<std::string>& overrides) {
+  RigBConfig c;
+  ConfigSchema s;
+  c.declare(s);
+  s.loadFile(path);
+  for (const auto& o : overrides) s.set(o);
+  if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
+      !(c.odometry.ekf.wheel_distance_m > 0)) {
+    throw ConfigError(path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
+  }
+  if (c.assembler.pose_channel != "ODOMETRY_POSE" && c.assembler.pose_channel != "WHEEL_ODOMETRY") {
+    throw ConfigError(path + ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
+  }
+  return c;
+}
+
+}  // namespace sweepmap

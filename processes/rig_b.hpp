@@ -1,0 +1,47 @@
+// Configuration of rig B (a 2D lidar on a moving differential-drive base, Miao 2022):
+// odometry, the lidar's mounting, the world-frame assembler and the mapper, from one
+// strictly loaded YAML file.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "calib/world_assembly.hpp"
+#include "core/config.hpp"
+#include "core/rig_config.hpp"
+#include "processes/odometry_node.hpp"
+
+namespace sweepmap {
+
+struct MountingConfig {
+  double nominal_roll_deg = 0.0;   // how the lidar is meant to sit (e.g. pitch 90: horizontal,
+  double nominal_pitch_deg = 0.0;  // sector middle looking forward)
+  double nominal_yaw_deg = 0.0;
+  double gamma_rad = 0.0;  // mounting error about x (calibrated)
+  double beta_rad = 0.0;   // about y
+  double alpha_rad = 0.0;  // about z
+  double x_m = 0.0;        // lidar centre in the body frame (l1, 0, h)
+  double y_m = 0.0;
+  double z_m = 0.0;
+  void declare(ConfigSchema& s, const std::string& prefix);
+  LidarMounting toMounting() const;
+};
+
+struct WorldAssemblerConfig {
+  std::string pose_channel = "ODOMETRY_POSE";  // or WHEEL_ODOMETRY
+  int beam_count = 0;                          // expected rays per scan; 0 = any
+  double max_pose_wait_s = 2.0;  // a scan whose pose does not come within this is assembled with what is there
+  void declare(ConfigSchema& s, const std::string& prefix);
+};
+
+struct RigBConfig {
+  OdometryConfig odometry;
+  MountingConfig mounting;
+  WorldAssemblerConfig assembler;
+  MapperConfig mapper;
+  void declare(ConfigSchema& s);
+};
+
+RigBConfig loadRigB(const std::string& path, const std::vector<std::string>& overrides = {});
+
+}  // namespace sweepmap
