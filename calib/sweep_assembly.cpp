@@ -32,7 +32,7 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
                                                      window.omega_rad_s);
     for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
       const double r = scan.ranges_m[i];
-      if (!(r >= scan.range_min_m && r <= scan.range_max_m)) continue;
+      if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none
       // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
       const double phi = phi0 + window.omega_rad_s * t_ray_s * static_cast<double>(i);
       const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));

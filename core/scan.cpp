@@ -11,7 +11,8 @@ std::string validateScan(const Scan2D& scan, int expected_beams) {
   }
   if (!std::isfinite(scan.angle_min_rad) || !std::isfinite(scan.angle_increment_rad) ||
       !std::isfinite(scan.range_min_m) || !std::isfinite(scan.range_max_m) ||
-      scan.range_max_m <= 0.0 || scan.time_increment_ns < 0) {
+      scan.range_min_m < 0.0 || scan.range_max_m <= scan.range_min_m ||
+      scan.time_increment_ns < 0) {
     return "bad scan header";
   }
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {

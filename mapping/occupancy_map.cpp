@@ -33,11 +33,20 @@ class KeyBitmap {
     for (int i = 0; i < 3; ++i) n_[i] = static_cast<size_t>(hi[i] - lo[i]) + 1;
     bits_.assign((n_[0] * n_[1] * n_[2] + 63) / 64, 0);
   }
+  bool inside(const octomap::OcTreeKey& k) const {
+    for (int i = 0; i < 3; ++i) {
+      if (k[i] < lo_[i] || static_cast<size_t>(k[i] - lo_[i]) >= n_[i]) return false;
+    }
+    return true;
+  }
+  // Keys outside the box (a ray's last step at a voxel corner) are ignored.
   void set(const octomap::OcTreeKey& k) {
+    if (!inside(k)) return;
     const size_t i = index(k);
     bits_[i >> 6] |= uint64_t{1} << (i & 63);
   }
   bool test(const octomap::OcTreeKey& k) const {
+    if (!inside(k)) return false;
     const size_t i = index(k);
     return (bits_[i >> 6] >> (i & 63)) & 1u;
   }
@@ -126,27 +135,36 @@ void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::P
                               static_cast<octomap::key_type>((p >> 16) & 0xffff),
                               static_cast<octomap::key_type>(p >> 32));
   };
-  // Key box: the origin and every (range-limited) endpoint.
-  const int reach = static_cast<int>(std::ceil(max_range / tree.getResolution())) + 1;
+  // Ray ends (range-limited) first, then the key box they and the origin span: the bitmaps
+  // cover only what this cloud touches.
+  struct RayEnd {
+    octomap::point3d end;
+    bool occupied;
+    octomap::OcTreeKey key;
+  };
+  std::vector<RayEnd> ends;
+  ends.reserve(packed.size());
   octomap::OcTreeKey lo = origin_key, hi = origin_key;
-  for (int i = 0; i < 3; ++i) {
-    lo[i] = static_cast<octomap::key_type>(std::max(0, int(origin_key[i]) - reach));
-    hi[i] = static_cast<octomap::key_type>(std::min(65535, int(origin_key[i]) + reach));
+  for (const uint64_t p : packed) {
+    const octomap::OcTreeKey k = unpack(p);
+    octomap::point3d end = tree.keyToCoord(k);
+    const double dist = (end - origin).norm();
+    const bool occupied = dist <= max_range;
+    if (!occupied) end = origin + (end - origin) * static_cast<float>(max_range / dist);
+    octomap::OcTreeKey end_key;
+    if (!tree.coordToKeyChecked(end, end_key)) continue;
+    for (int i = 0; i < 3; ++i) {
+      lo[i] = std::min(lo[i], end_key[i]);
+      hi[i] = std::max(hi[i], end_key[i]);
+    }
+    ends.push_back({end, occupied, k});
   }
   KeyBitmap free_bits(lo, hi);
   std::vector<octomap::OcTreeKey> occupied;
-  occupied.reserve(packed.size());
-  for (const uint64_t p : packed) {
-    const octomap::OcTreeKey k = unpack(p);
-    const octomap::point3d end = tree.keyToCoord(k);
-    const double dist = (end - origin).norm();
-    if (dist <= max_range) {
-      markRay(tree, origin, end, &free_bits);
-      occupied.push_back(k);
-    } else {
-      markRay(tree, origin, origin + (end - origin) * static_cast<float>(max_range / dist),
-              &free_bits);
-    }
+  occupied.reserve(ends.size());
+  for (const RayEnd& e : ends) {
+    markRay(tree, origin, e.end, &free_bits);
+    if (e.occupied) occupied.push_back(e.key);
   }
   KeyBitmap occupied_bits(lo, hi);
   for (const auto& k : occupied) occupied_bits.set(k);

@@ -1,11 +1,23 @@
 #include "processes/assembler_node.hpp"
 
 #include <algorithm>
+#include <cstdlib>
 
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 
 namespace sweepmap {
+namespace {
+
+// The difference between a scan's stamp and when it arrived (or was logged) is steady for
+// one source, whatever the clocks (lcm-logplayer plays old logs "now"). A scan whose
+// difference moves by more than this is not trusted -- one far-future stamp would
+// otherwise make every later scan look out of order -- unless a few in a row agree on
+// the new difference: then the source's clock really stepped and assembly starts over.
+constexpr int64_t kMaxClockSkewUs = 10LL * 1000000;
+constexpr int kScansToAcceptClockStep = 3;
+
+}  // namespace
 
 AssemblerNode::AssemblerNode(const RigConfig& rig) : Node("assembler"), rig_(rig) {}
 
@@ -33,6 +45,28 @@ void AssemblerNode::onScan(const Message& msg, Outbox& out) {
     reportError("invalid", "scan " + std::to_string(scan.seq) + " dropped: " + why);
     return;
   }
+  const int64_t skew = msg.utime - scan.utime;
+  if (has_skew_ && std::llabs(skew - skew_) > kMaxClockSkewUs) {
+    if (std::llabs(skew - candidate_skew_) <= kMaxClockSkewUs) {
+      ++candidate_count_;
+    } else {
+      candidate_skew_ = skew;
+      candidate_count_ = 1;
+    }
+    if (candidate_count_ < kScansToAcceptClockStep) {
+      reportError("invalid", "scan " + std::to_string(scan.seq) + " stamped " +
+                                 std::to_string(skew_ - skew) + " us off its stream, dropped");
+      return;
+    }
+    reportError("clock_resets", "the scan clock stepped by " + std::to_string(skew_ - skew) +
+                                    " us: pending scans and windows discarded");
+    scans_.clear();
+    windows_.clear();
+    last_window_end_ = INT64_MIN;
+  }
+  has_skew_ = true;
+  skew_ = skew;
+  candidate_count_ = 0;
   if (!scans_.empty() && scan.utime <= scans_.back().utime) {
     reportError("dropped", "scan " + std::to_string(scan.seq) + " out of order, dropped");
     return;
@@ -55,6 +89,11 @@ void AssemblerNode::onWindow(const Message& msg, Outbox& out) {
   const std::string why = validateWindow(m);
   if (!why.empty()) {
     reportError("invalid", "window of sweep " + std::to_string(m.sweep_id) + " dropped: " + why);
+    return;
+  }
+  if (has_skew_ && std::llabs((msg.utime - m.end_utime) - skew_) > kMaxClockSkewUs) {
+    reportError("invalid", "window of sweep " + std::to_string(m.sweep_id) +
+                               " does not end near the scans' time, dropped");
     return;
   }
   if (m.start_utime < last_window_end_) {

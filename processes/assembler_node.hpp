@@ -37,6 +37,11 @@ class AssemblerNode : public Node {
   std::deque<Scan2D> scans_;      // valid scans, strictly increasing utime
   std::deque<SweepWindow> windows_;  // closed windows, by start time
   int64_t last_window_end_ = INT64_MIN;
+  // Arrival time minus stamp of the scans (see assembler_node.cpp).
+  bool has_skew_ = false;
+  int64_t skew_ = 0;
+  int64_t candidate_skew_ = 0;
+  int candidate_count_ = 0;
   std::function<void(const AssembledSweep&)> observer_;
 };
 

@@ -24,6 +24,7 @@ constexpr const char* kWheelOdometry = "WHEEL_ODOMETRY";  // pose2d_t, wheels al
 constexpr const char* kTruthShaft = "TRUTH_SHAFT";    // truth_shaft_t, simulation only
 constexpr const char* kTruthRig = "TRUTH_RIG";        // truth_rig_t, simulation only
 constexpr const char* kTruthSweep = "TRUTH_SWEEP";    // truth_sweep_t, simulation only
+constexpr const char* kTruthPose = "TRUTH_POSE";      // pose2d_t, true body pose (rig B simulation only)
 // Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
 
 }  // namespace channels

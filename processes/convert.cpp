@@ -107,7 +107,7 @@ std::string validateChunk(const cloud_chunk_t& m) {
   }
   if (m.total_points < m.npoints) return "chunk has more points than its sweep";
   for (const double o : m.sensor_origin_m) {
-    if (!std::isfinite(o)) return "non-finite sensor origin";
+    if (!std::isfinite(o) || std::abs(o) > 1e4) return "sensor origin not finite or beyond 10 km";
   }
   for (const auto& p : m.xyz_m) {
     if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {

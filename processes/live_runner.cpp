@@ -20,13 +20,14 @@ void onSignal(int) { g_stop = true; }
 
 class Inbox {
  public:
-  explicit Inbox(size_t capacity) : capacity_(capacity) {}
+  Inbox(size_t capacity, size_t capacity_bytes) : capacity_(capacity), capacity_bytes_(capacity_bytes) {}
   void push(Message m) {
     std::lock_guard<std::mutex> lock(mutex_);
-    if (queue_.size() >= capacity_) {
-      ++dropped_;
+    if (queue_.size() >= capacity_ || bytes_ + m.data.size() > capacity_bytes_) {
+      ++dropped_[m.channel];
       return;
     }
+    bytes_ += m.data.size();
     queue_.push_back(std::move(m));
     cv_.notify_one();
   }
@@ -36,12 +37,13 @@ class Inbox {
     cv_.wait_until(lock, deadline, [&] { return !queue_.empty(); });
     std::deque<Message> out;
     out.swap(queue_);
+    bytes_ = 0;
     return out;
   }
-  int64_t takeDropped() {
+  std::map<std::string, int64_t> takeDropped() {
     std::lock_guard<std::mutex> lock(mutex_);
-    const int64_t d = dropped_;
-    dropped_ = 0;
+    std::map<std::string, int64_t> d;
+    d.swap(dropped_);
     return d;
   }
 
@@ -50,7 +52,9 @@ class Inbox {
   std::condition_variable cv_;
   std::deque<Message> queue_;
   size_t capacity_;
-  int64_t dropped_ = 0;
+  size_t capacity_bytes_;
+  size_t bytes_ = 0;
+  std::map<std::string, int64_t> dropped_;
 };
 
 class RawHandler {
@@ -72,9 +76,15 @@ class RawHandler {
 }  // namespace
 
 int64_t wallUtime() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
-      .count();
+  // The wall clock read once, then advanced by the monotonic clock: a clock step (NTP at
+  // boot on a Pi without RTC) does not make time jump inside a running process.
+  static const auto steady0 = std::chrono::steady_clock::now();
+  static const int64_t wall0 = std::chrono::duration_cast<std::chrono::microseconds>(
+                                   std::chrono::system_clock::now().time_since_epoch())
+                                   .count();
+  return wall0 + std::chrono::duration_cast<std::chrono::microseconds>(
+                     std::chrono::steady_clock::now() - steady0)
+                     .count();
 }
 
 void installStopSignals() {
@@ -102,7 +112,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     std::cerr << "LCM initialisation failed\n";
     return 2;
   }
-  Inbox inbox(options.queue_capacity);
+  Inbox inbox(options.queue_capacity, options.queue_capacity_bytes);
   RawHandler handler(&inbox);
   std::map<std::string, std::vector<Node*>> subscribers;
   for (Node* n : nodes) {
@@ -123,14 +133,20 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
   };
 
   std::atomic<bool> receiving{true};
+  std::atomic<bool> lcm_failed{false};
   std::thread receiver([&] {
-    while (receiving) lcm.handleTimeout(50);
+    while (receiving) {
+      if (lcm.handleTimeout(50) < 0) {
+        lcm_failed = true;
+        break;
+      }
+    }
   });
 
   const auto period = std::chrono::milliseconds(std::max(1, options.tick_period_ms));
   auto next_tick = std::chrono::steady_clock::now();
   int64_t dropped_total = 0;
-  while (!g_stop) {
+  while (!g_stop && !lcm_failed) {
     for (const Message& m : inbox.popUntil(next_tick)) dispatch(m);
     if (std::chrono::steady_clock::now() >= next_tick) {
       const int64_t now = wallUtime();
@@ -143,10 +159,9 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
       if (std::chrono::steady_clock::now() > next_tick + 100 * period) {
         next_tick = std::chrono::steady_clock::now();  // fell behind: do not burst
       }
-      const int64_t d = inbox.takeDropped();
-      if (d > 0) {
+      for (const auto& [channel, d] : inbox.takeDropped()) {
         dropped_total += d;
-        for (Node* n : nodes) n->countLostInput(d);
+        for (Node* n : subscribers[channel]) n->countLostInput(d);
         std::cerr << "receive queue full: " << dropped_total << " messages dropped so far\n";
       }
       if (options.should_stop && options.should_stop()) break;
@@ -166,6 +181,10 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
   }
   receiving = false;
   receiver.join();
+  if (lcm_failed) {
+    std::cerr << "LCM receive failed: stopped\n";
+    return 2;
+  }
   return 0;
 }
 

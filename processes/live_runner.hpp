@@ -19,12 +19,13 @@ namespace sweepmap {
 
 struct LiveOptions {
   int tick_period_ms = 1;
-  size_t queue_capacity = 10000;
+  size_t queue_capacity = 10000;          // messages
+  size_t queue_capacity_bytes = 64u << 20;  // and bytes (a Pi has little memory)
   // Polled after every tick: return true to stop (e.g. the motor has done its sweeps).
   std::function<bool()> should_stop;
 };
 
-// Wall-clock time [us] (CLOCK_REALTIME, as LCM's utime convention).
+// Wall-clock time [us] (LCM's utime convention), read once and then advanced monotonically.
 int64_t wallUtime();
 
 // Installs SIGINT/SIGTERM handlers that make runLive return after finish().

@@ -1,5 +1,7 @@
 #include "processes/mapper_node.hpp"
 
+#include <filesystem>
+
 #include "mapping/occupancy_map.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
@@ -33,15 +35,16 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
       reportError("invalid", "chunk of sweep " + std::to_string(c.sweep_id) + " dropped: " + why);
       return;
     }
-    if (inserted_.count(c.sweep_id)) {
+    const SweepKey key{c.utime, c.sweep_id};
+    if (inserted_.count(key)) {
       reportError("dropped", "late chunk of already inserted sweep " + std::to_string(c.sweep_id));
       return;
     }
     // A newer sweep begins: older pending sweeps will not complete any more.
-    while (!pending_.empty() && pending_.begin()->first < c.sweep_id) {
+    while (!pending_.empty() && pending_.begin()->first < key) {
       insert(msg.utime, pending_.begin()->first, out);
     }
-    PendingSweep& p = pending_[c.sweep_id];
+    PendingSweep& p = pending_[key];
     p.chunk_count = c.chunk_count;
     p.origin = Eigen::Vector3d(c.sensor_origin_m[0], c.sensor_origin_m[1], c.sensor_origin_m[2])
                    .cast<float>();
@@ -57,24 +60,32 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
       reportError("invalid", "malformed sweep_status_t");
       return;
     }
-    if (pending_.count(s.sweep_id)) insert(msg.utime, s.sweep_id, out);
+    const SweepKey key{s.utime, s.sweep_id};
+    if (pending_.count(key)) insert(msg.utime, key, out);
   } else if (msg.channel == channels::kMapSave) {
     map_save_t r;
     if (!decodeMessage(msg, &r)) {
       reportError("invalid", "malformed map_save_t");
       return;
     }
-    const std::string path = r.path.empty() ? save_path_ : r.path;
-    if (path.empty()) {
-      reportError("errors", "MAP_SAVE without a path and no default path configured");
+    if (save_path_.empty()) {
+      reportError("errors", "MAP_SAVE: this mapper has no --save path");
       return;
     }
-    save(path);
+    // Only a file name is taken from the request: the map stays in save_path's directory.
+    const std::filesystem::path name = std::filesystem::path(r.path).filename();
+    if (!r.path.empty() && (name.empty() || name == "." || name == "..")) {
+      reportError("invalid", "MAP_SAVE: bad file name '" + r.path + "'");
+      return;
+    }
+    save(r.path.empty() ? save_path_
+                        : (std::filesystem::path(save_path_).parent_path() / name).string());
   }
 }
 
-void MapperNode::insert(int64_t now_utime, int64_t sweep_id, Outbox& out) {
-  auto it = pending_.find(sweep_id);
+void MapperNode::insert(int64_t now_utime, const SweepKey& key, Outbox& out) {
+  const int64_t sweep_id = key.second;
+  auto it = pending_.find(key);
   if (it == pending_.end()) return;
   std::vector<Eigen::Vector3f> points;
   for (const auto& [index, xyz] : it->second.chunks) {
@@ -89,8 +100,14 @@ void MapperNode::insert(int64_t now_utime, int64_t sweep_id, Outbox& out) {
   }
   const Eigen::Vector3f it_origin = it->second.origin;
   pending_.erase(it);
-  inserted_.insert(sweep_id);
-  map_->insertCloud(points, it_origin);
+  inserted_.insert(key);
+  while (inserted_.size() > 1000) inserted_.erase(inserted_.begin());
+  try {
+    map_->insertCloud(points, it_origin);
+  } catch (const std::exception& e) {
+    reportError("invalid", "sweep " + std::to_string(sweep_id) + " not inserted: " + e.what());
+    return;
+  }
   ++sweeps_inserted_;
   count("sweeps");
 

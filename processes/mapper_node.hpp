@@ -20,7 +20,8 @@ class OccupancyMap;
 
 class MapperNode : public Node {
  public:
-  // `save_path`: where the map goes at finish() and on an empty MAP_SAVE request ("" = none).
+  // `save_path`: where the map goes at finish() and on a MAP_SAVE request ("" = none). A
+  // request may name another file, but only inside save_path's directory.
   MapperNode(const MapperConfig& config, std::string save_path);
   ~MapperNode() override;
   std::vector<std::string> subscriptions() const override;
@@ -31,19 +32,22 @@ class MapperNode : public Node {
   void handle(const Message& msg, Outbox& out) override;
 
  private:
+  // A sweep is identified by (window start, sweep id): ids start again at 0 when the motor
+  // process restarts.
+  using SweepKey = std::pair<int64_t, int64_t>;
   struct PendingSweep {
     int chunk_count = 0;
     Eigen::Vector3f origin = Eigen::Vector3f::Zero();
     std::map<int, std::vector<float>> chunks;  // chunk index -> xyz triples
   };
-  void insert(int64_t now_utime, int64_t sweep_id, Outbox& out);
+  void insert(int64_t now_utime, const SweepKey& key, Outbox& out);
   void save(const std::string& path);
 
   MapperConfig config_;
   std::string save_path_;
   std::unique_ptr<OccupancyMap> map_;
-  std::map<int64_t, PendingSweep> pending_;
-  std::set<int64_t> inserted_;
+  std::map<SweepKey, PendingSweep> pending_;
+  std::set<SweepKey> inserted_;
   int64_t sweeps_inserted_ = 0;
   int64_t incomplete_ = 0;
   int64_t last_sweep_utime_ = 0;

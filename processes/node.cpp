@@ -4,9 +4,39 @@
 #include <cctype>
 #include <iostream>
 
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/process_status_t.hpp"
 
 namespace sweepmap {
+namespace {
+
+int64_t readInt32BE(const std::vector<uint8_t>& d, size_t at) {
+  if (at + 4 > d.size()) return -1;
+  const uint32_t u = (uint32_t{d[at]} << 24) | (uint32_t{d[at + 1]} << 16) |
+                     (uint32_t{d[at + 2]} << 8) | d[at + 3];
+  return static_cast<int32_t>(u);
+}
+
+}  // namespace
+
+// lidar_scan_t: hash 8, utime 8, seq 8, five 4-byte fields, then nranges.
+template <>
+bool plausibleCounts<lidar_scan_t>(const Message& m) {
+  const int64_t n = readInt32BE(m.data, 44);
+  return n >= 0 && 48 + 4 * static_cast<uint64_t>(n) <= m.data.size();
+}
+
+// cloud_chunk_t: hash 8, utime 8, sweep_id 8, four int32, frame string (length incl. NUL),
+// corrected 1, phi_offset 8, sensor_origin 24, then npoints of 3 floats.
+template <>
+bool plausibleCounts<cloud_chunk_t>(const Message& m) {
+  const int64_t len = readInt32BE(m.data, 40);
+  if (len < 0 || 44 + static_cast<uint64_t>(len) > m.data.size()) return false;
+  const size_t at = 44 + static_cast<size_t>(len) + 1 + 8 + 24;
+  const int64_t n = readInt32BE(m.data, at);
+  return n >= 0 && at + 4 + 12 * static_cast<uint64_t>(n) <= m.data.size();
+}
 
 Node::Node(std::string name) : name_(std::move(name)) {}
 

@@ -43,10 +43,24 @@ class Outbox {
   std::vector<Message> messages_;
 };
 
+// lcm-gen's decoders size arrays from the count in the message before checking that the
+// bytes are there: a few malformed bytes could ask for gigabytes. Types with variable
+// arrays get their counts checked against the message size first (node.cpp).
+template <class T>
+bool plausibleCounts(const Message&) {
+  return true;
+}
+class lidar_scan_t;
+class cloud_chunk_t;
+template <>
+bool plausibleCounts<lidar_scan_t>(const Message& m);
+template <>
+bool plausibleCounts<cloud_chunk_t>(const Message& m);
+
 // Decodes an lcm-gen type; false when the bytes are not exactly one valid message.
 template <class T>
 bool decodeMessage(const Message& m, T* out) {
-  if (m.data.size() > (1u << 26)) return false;
+  if (m.data.size() > (1u << 26) || !plausibleCounts<T>(m)) return false;
   const int n = out->decode(m.data.data(), 0, static_cast<int>(m.data.size()));
   return n == static_cast<int>(m.data.size());
 }

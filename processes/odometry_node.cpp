@@ -56,7 +56,10 @@ void OdometryNode::onTicks(const Message& msg, Outbox& out) {
   }
   if (!last_ticks_) {
     last_ticks_ = Ticks{m.utime, m.left_ticks, m.right_ticks};
-    if (ekf_.utime() == 0) ekf_ = OdometryEkf(config_.ekf, m.utime);
+    if (!ekf_started_) {
+      ekf_ = OdometryEkf(config_.ekf, m.utime);
+      ekf_started_ = true;
+    }
     return;
   }
   if (m.utime <= last_ticks_->utime) {
@@ -91,6 +94,10 @@ void OdometryNode::onImu(const Message& msg) {
   if (!decodeMessage(msg, &m)) {
     reportError("invalid", "malformed imu_t");
     return;
+  }
+  if (!ekf_started_) {
+    ekf_ = OdometryEkf(config_.ekf, m.utime);
+    ekf_started_ = true;
   }
   if (!ekf_.addGyro(m.utime, m.gyro_rad_s[2])) count("gyro_rejected");
 }

@@ -46,6 +46,7 @@ class OdometryNode : public Node {
     int64_t utime, left, right;
   };
   std::optional<Ticks> last_ticks_;
+  bool ekf_started_ = false;  // the EKF starts at the first message of either kind
 };
 
 }  // namespace sweepmap

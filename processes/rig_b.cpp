@@ -40,6 +40,7 @@ void RigBConfig::declare(ConfigSchema& s) {
   mounting.declare(s, "mounting.");
   assembler.declare(s, "assembler.");
   mapper.declare(s, "mapper.");
+  sim.declare(s, "sim.");
 }
 
 RigBConfig loadRigB(const std::string& path, const std::vector<std::string>& overrides) {

@@ -9,6 +9,7 @@
 #include "calib/world_assembly.hpp"
 #include "core/config.hpp"
 #include "core/rig_config.hpp"
+#include "drivers/sim_mobile.hpp"
 #include "processes/odometry_node.hpp"
 
 namespace sweepmap {
@@ -39,6 +40,7 @@ struct RigBConfig {
   MountingConfig mounting;
   WorldAssemblerConfig assembler;
   MapperConfig mapper;
+  SimMobileConfig sim;  // `sweepmap sim-mobile` only: the simulated car's truth and noise
   void declare(ConfigSchema& s);
 };
 

@@ -55,11 +55,13 @@ void WorldAssemblerNode::assembleReady(int64_t now_utime, bool flush, Outbox& ou
     const int64_t last_ray = s.rayUtime(s.ranges_m.empty() ? 0 : s.ranges_m.size() - 1);
     const bool covered = track_.lastUtime() >= last_ray;
     const bool waited_out = pending_.back().utime - s.utime > wait_us;
-    if (!covered && !waited_out && !flush) return;
+    if (!covered && !waited_out && !flush) break;
     publishScan(now_utime, s, out);
+    last_assembled_utime_ = s.utime;
     pending_.pop_front();
   }
-  if (!pending_.empty()) track_.pruneBefore(pending_.front().utime);
+  // Poses before the next scan (or the last assembled one) are no longer needed.
+  track_.pruneBefore(pending_.empty() ? last_assembled_utime_ : pending_.front().utime);
 }
 
 void WorldAssemblerNode::publishScan(int64_t now_utime, const Scan2D& scan, Outbox& out) {

@@ -38,6 +38,7 @@ class WorldAssemblerNode : public Node {
   PoseTrack track_;
   std::deque<Scan2D> pending_;
   int64_t next_id_ = 0;
+  int64_t last_assembled_utime_ = INT64_MIN;
   Observer observer_;
 };
 

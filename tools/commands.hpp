@@ -19,5 +19,6 @@ Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle
 Runner addEvalCommand(CLI::App& app);   // group: eval rotating
 Runner addImportCommand(CLI::App& app);  // group: import breezyslam
 Runner addReplayMobileCommand(CLI::App& app);
+Runner addSimMobileCommand(CLI::App& app);
 
 }  // namespace sweepmap

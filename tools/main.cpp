@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addEvalCommand(app));
   add(sweepmap::addImportCommand(app));
   add(sweepmap::addReplayMobileCommand(app));
+  add(sweepmap::addSimMobileCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

@@ -76,11 +76,14 @@ ReplayResult replayLog(const ReplayOptions& options, const RigConfig& rig) {
       options.log_path, rig,
       [&](const AssembledSweep& s, const SweepTruth& truth) {
         std::ostringstream name;
-        name << "sweep_" << std::setw(6) << std::setfill('0') << s.window.sweep_id;
+        // Numbered in log order: sweep ids start again when the motor process restarts.
+        name << "sweep_" << std::setw(6) << std::setfill('0') << result.sweeps;
         writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
         writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
         nlohmann::json j;
         j["id"] = s.window.sweep_id;
+        j["file"] = name.str();
+        j["window_start_utime"] = s.window.start_utime;
         j["mode"] = s.window.mode;
         j["scans"] = s.scans;
         j["points"] = s.points.size();

@@ -133,6 +133,38 @@ TEST_F(AssemblerNodeTest, BadInputIsCountedNotFatal) {
   EXPECT_EQ(node.counter("errors"), 0);
 }
 
+// One far-future stamp is dropped and does not block later scans; a real clock step
+// (several scans agreeing) restarts assembly.
+TEST_F(AssemblerNodeTest, FarFutureStampDoesNotBlockTheStream) {
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs = {scanMsg(0), scanMsg(1)};
+  Message future = scanMsg(2);
+  {
+    lidar_scan_t s;
+    ASSERT_TRUE(decodeMessage(future, &s));
+    s.utime += 1000LL * 1000000 * 3600;  // an hour ahead, arriving on time
+    future = encode(channels::kLidarScan, scanMsg(2).utime, s);
+  }
+  msgs.push_back(future);
+  for (int j = 3; j < 8; ++j) msgs.push_back(scanMsg(j));
+  feed(msgs, &node);
+  EXPECT_EQ(node.counter("scans"), 7);
+  EXPECT_EQ(node.counter("invalid"), 1);
+  EXPECT_EQ(node.counter("clock_resets"), 0);
+  // The source restarts with a clock a day behind: after 3 scans it is believed.
+  std::vector<Message> later;
+  for (int j = 0; j < 5; ++j) {
+    Message m = scanMsg(100 + j);
+    lidar_scan_t s;
+    ASSERT_TRUE(decodeMessage(m, &s));
+    s.utime -= 86400LL * 1000000;
+    later.push_back(encode(channels::kLidarScan, m.utime, s));
+  }
+  feed(later, &node);
+  EXPECT_EQ(node.counter("clock_resets"), 1);
+  EXPECT_EQ(node.counter("scans"), 7 + 3);
+}
+
 TEST_F(AssemblerNodeTest, FinishFlushesIncompleteWindow) {
   AssemblerNode node(rig_);
   std::vector<Message> msgs;

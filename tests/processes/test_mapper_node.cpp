@@ -26,7 +26,8 @@ Message encode(const std::string& ch, const T& msg) {
 std::vector<Message> wallChunks(int64_t sweep, int count) {
   std::vector<Message> out;
   for (int c = 0; c < count; ++c) {
-    cloud_chunk_t m;
+    cloud_chunk_t m{};
+    m.utime = 1000000 * (sweep + 1);  // window start
     m.sweep_id = sweep;
     m.chunk_index = c;
     m.chunk_count = count;
@@ -60,7 +61,8 @@ TEST(MapperNode, InsertsOnStatusAndCountsMissingChunks) {
   MapperNode node(c, "");
   auto msgs = wallChunks(0, 3);
   msgs.erase(msgs.begin() + 1);  // chunk 1 lost
-  sweep_status_t st;
+  sweep_status_t st{};
+  st.utime = 1000000;
   st.sweep_id = 0;
   msgs.push_back(encode(channels::kSweepStatus, st));
   const auto stats = deliver(node, msgs);
@@ -87,14 +89,14 @@ TEST(MapperNode, BadChunksRejectedAndSaveIsAtomic) {
   fs::create_directories(dir);
   MapperConfig c;
   MapperNode node(c, (dir / "default.bt").string());
-  cloud_chunk_t bad;
+  cloud_chunk_t bad{};
   bad.chunk_index = 5;
   bad.chunk_count = 2;
   std::vector<Message> msgs = {encode(channels::kSweepCloud, bad),
                                Message{0, channels::kSweepCloud, {9, 9, 9}}};
   auto good = wallChunks(0, 1);
   msgs.insert(msgs.end(), good.begin(), good.end());
-  map_save_t save;
+  map_save_t save{};
   save.path = (dir / "asked.bt").string();
   msgs.push_back(encode(channels::kMapSave, save));
   deliver(node, msgs);

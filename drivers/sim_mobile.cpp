@@ -1,0 +1,367 @@
+#include "drivers/sim_mobile.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace sweepmap {
+namespace {
+
+constexpr double kGravity = 9.80665;
+constexpr double kDeg = M_PI / 180.0;
+
+double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
+
+Eigen::Matrix3d rotXYZ(double g, double b, double a) {
+  return (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(b, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(g, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
+Eigen::Isometry3d planar(const Pose2& p) {
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = Eigen::AngleAxisd(p.theta_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  T.translation() = Eigen::Vector3d(p.x_m, p.y_m, 0.0);
+  return T;
+}
+
+}  // namespace
+
+void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "path", &path, "", "driven path: circle (calibration drive) or loop (rounded rectangle)");
+  s.add(p + "circle_radius_m", &circle_radius_m, "m", "circle path radius (Miao 2022: 0.83)");
+  s.add(p + "circle_center_x_m", &circle_center_x_m, "m", "circle centre X in the room");
+  s.add(p + "circle_center_y_m", &circle_center_y_m, "m", "circle centre Y in the room");
+  s.add(p + "loop_wall_clearance_m", &loop_wall_clearance_m, "m",
+        "loop path: distance of the rounded rectangle from the walls");
+  s.add(p + "loop_corner_radius_m", &loop_corner_radius_m, "m", "loop path: corner radius");
+  s.add(p + "speed_m_s", &speed_m_s, "m/s", "cruise speed");
+  s.add(p + "accel_m_s2", &accel_m_s2, "m/s^2", "ramp acceleration at start and stop");
+  s.add(p + "duration_s", &duration_s, "s", "length of the run (the car stops at its end)");
+  s.add(p + "wheel_ticks_rate_hz", &wheel_ticks_rate_hz, "Hz", "encoder reading rate");
+  s.add(p + "encoder_speed_sigma_fraction", &encoder_speed_sigma_fraction, "",
+        "white wheel speed error per reading, fraction of the speed");
+  s.add(p + "slip_mean_interval_s", &slip_mean_interval_s, "s",
+        "mean time between wheel slip events (exponential; <= 0: none)");
+  s.add(p + "slip_min_duration_s", &slip_min_duration_s, "s", "shortest slip event");
+  s.add(p + "slip_max_duration_s", &slip_max_duration_s, "s", "longest slip event");
+  s.add(p + "slip_min_fraction", &slip_min_fraction, "",
+        "least excess turning of the slipping wheel (fraction of its ground speed)");
+  s.add(p + "slip_max_fraction", &slip_max_fraction, "", "most excess turning of the slipping wheel");
+  s.add(p + "imu_rate_hz", &imu_rate_hz, "Hz", "IMU sample rate");
+  s.add(p + "gyro_sigma_rad_s", &gyro_sigma_rad_s, "rad/s", "gyro white noise, each axis");
+  s.add(p + "gyro_bias_z_rad_s", &gyro_bias_z_rad_s, "rad/s", "constant z gyro bias (x, y unbiased)");
+  s.add(p + "accel_sigma_m_s2", &accel_sigma_m_s2, "m/s^2", "accelerometer white noise");
+  s.add(p + "roll_error_deg", &roll_error_deg, "deg", "static roll error of the IMU attitude");
+  s.add(p + "pitch_error_deg", &pitch_error_deg, "deg", "static pitch error of the IMU attitude");
+  s.add(p + "yaw_error_deg", &yaw_error_deg, "deg", "static yaw error of the IMU attitude");
+  s.add(p + "attitude_sigma_deg", &attitude_sigma_deg, "deg", "white noise of the IMU attitude");
+  s.add(p + "scan_rate_hz", &scan_rate_hz, "Hz", "lidar turns per second (X4: 7)");
+  s.add(p + "sample_rate_hz", &sample_rate_hz, "Hz", "lidar rays per second (X4: 5000)");
+  s.add(p + "range_min_m", &range_min_m, "m", "shortest valid range (X4: 0.12)");
+  s.add(p + "range_max_m", &range_max_m, "m", "longest valid range (X4: 10)");
+  s.add(p + "range_sigma_fraction", &range_sigma_fraction, "", "range noise sigma, fraction of the range");
+  s.add(p + "lidar_latency_ms", &lidar_latency_ms, "ms", "scan delivered this long after its last ray");
+  s.add(p + "gamma_true_rad", &gamma_true_rad, "rad", "true mounting error about body x");
+  s.add(p + "beta_true_rad", &beta_true_rad, "rad", "true mounting error about body y");
+  s.add(p + "alpha_true_rad", &alpha_true_rad, "rad", "true mounting error about body z");
+  s.add(p + "truth_rate_hz", &truth_rate_hz, "Hz", "TRUTH_POSE rate");
+}
+
+void SimMobileConfig::validate(const std::string& source) const {
+  const auto require = [&](bool ok, const std::string& key, const std::string& why) {
+    if (!ok) throw ConfigError(source + ": key 'sim." + key + "' " + why);
+  };
+  require(path == "circle" || path == "loop", "path", "must be circle or loop");
+  require(circle_radius_m > 0, "circle_radius_m", "must be positive");
+  require(loop_wall_clearance_m > 0, "loop_wall_clearance_m", "must be positive");
+  require(loop_corner_radius_m > 0, "loop_corner_radius_m", "must be positive");
+  require(speed_m_s > 0 && speed_m_s < 5, "speed_m_s", "must be in (0, 5)");
+  require(accel_m_s2 > 0, "accel_m_s2", "must be positive");
+  require(duration_s > 0 && duration_s <= 36000, "duration_s", "must be in (0, 36000]");
+  require(wheel_ticks_rate_hz > 0 && wheel_ticks_rate_hz <= 10000, "wheel_ticks_rate_hz", "must be in (0, 10000]");
+  require(encoder_speed_sigma_fraction >= 0, "encoder_speed_sigma_fraction", "must be >= 0");
+  require(slip_min_duration_s > 0 && slip_min_duration_s <= slip_max_duration_s,
+          "slip_min_duration_s", "must be positive and <= slip_max_duration_s");
+  require(slip_min_fraction >= 0 && slip_min_fraction <= slip_max_fraction, "slip_min_fraction",
+          "must be >= 0 and <= slip_max_fraction");
+  require(imu_rate_hz > 0 && imu_rate_hz <= 10000, "imu_rate_hz", "must be in (0, 10000]");
+  require(gyro_sigma_rad_s >= 0, "gyro_sigma_rad_s", "must be >= 0");
+  require(accel_sigma_m_s2 >= 0, "accel_sigma_m_s2", "must be >= 0");
+  require(attitude_sigma_deg >= 0, "attitude_sigma_deg", "must be >= 0");
+  require(scan_rate_hz > 0 && scan_rate_hz <= 100, "scan_rate_hz", "must be in (0, 100]");
+  require(sample_rate_hz >= 10 * scan_rate_hz && sample_rate_hz <= 1e6, "sample_rate_hz",
+          "must give at least 10 rays per scan and at most 1e6 rays/s");
+  require(range_min_m > 0 && range_min_m < range_max_m, "range_min_m", "must be in (0, range_max_m)");
+  require(range_sigma_fraction >= 0 && range_sigma_fraction < 0.5, "range_sigma_fraction", "must be in [0, 0.5)");
+  require(lidar_latency_ms >= 0, "lidar_latency_ms", "must be >= 0");
+  require(truth_rate_hz > 0 && truth_rate_hz <= 10000, "truth_rate_hz", "must be in (0, 10000]");
+}
+
+// ---------------------------------------------------------------- path
+
+MobilePath::MobilePath(std::vector<Segment> segments) : segments_(std::move(segments)) {
+  for (const Segment& s : segments_) {
+    starts_.push_back(length_);
+    length_ += s.length;
+    turn_per_lap_ += s.curvature * s.length;
+  }
+}
+
+MobilePath MobilePath::circle(double cx, double cy, double r) {
+  return MobilePath({{cx, cy - r, 0.0, 2.0 * M_PI * r, 1.0 / r}});
+}
+
+MobilePath MobilePath::roundedRectangle(double x0, double x1, double y0, double y1, double rc) {
+  const double lx = x1 - x0 - 2 * rc, ly = y1 - y0 - 2 * rc, arc = 0.5 * M_PI * rc;
+  return MobilePath({{x0 + rc, y0, 0.0, lx, 0.0},
+                     {x1 - rc, y0, 0.0, arc, 1.0 / rc},
+                     {x1, y0 + rc, 0.5 * M_PI, ly, 0.0},
+                     {x1, y1 - rc, 0.5 * M_PI, arc, 1.0 / rc},
+                     {x1 - rc, y1, M_PI, lx, 0.0},
+                     {x0 + rc, y1, M_PI, arc, 1.0 / rc},
+                     {x0, y1 - rc, 1.5 * M_PI, ly, 0.0},
+                     {x0, y0 + rc, 1.5 * M_PI, arc, 1.0 / rc}});
+}
+
+const MobilePath::Segment& MobilePath::find(double s, double* local, int* lap) const {
+  const double laps = std::floor(s / length_);
+  *lap = static_cast<int>(laps);
+  double r = s - laps * length_;
+  size_t i = static_cast<size_t>(std::upper_bound(starts_.begin(), starts_.end(), r) - starts_.begin());
+  i = i == 0 ? 0 : i - 1;
+  *local = std::min(r - starts_[i], segments_[i].length);
+  return segments_[i];
+}
+
+Pose2 MobilePath::poseAt(double s) const {
+  double l;
+  int lap;
+  const Segment& g = find(s, &l, &lap);
+  Pose2 p;
+  const double th = g.theta0 + g.curvature * l;
+  if (g.curvature == 0.0) {
+    p.x_m = g.x0 + l * std::cos(g.theta0);
+    p.y_m = g.y0 + l * std::sin(g.theta0);
+  } else {
+    p.x_m = g.x0 + (std::sin(th) - std::sin(g.theta0)) / g.curvature;
+    p.y_m = g.y0 - (std::cos(th) - std::cos(g.theta0)) / g.curvature;
+  }
+  p.theta_rad = th + lap * turn_per_lap_;
+  return p;
+}
+
+double MobilePath::curvatureAt(double s) const {
+  double l;
+  int lap;
+  return find(s, &l, &lap).curvature;
+}
+
+// ---------------------------------------------------------------- car
+
+SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
+                     const Eigen::Vector3d& nominal_rpy_rad, const Eigen::Vector3d& t_BL_m,
+                     const Scene& scene, uint64_t seed, int64_t start_utime)
+    : c_(config), wheels_(wheels), scene_(&scene), path_({{0, 0, 0, 1, 0}}), seed_(seed),
+      start_utime_(start_utime) {
+  c_.validate("sim");
+  if (!(wheels.radius_m > 0) || !(wheels.ticks_per_revolution > 0) || !(wheels.wheel_distance_m > 0)) {
+    throw ConfigError("sim: wheel radius, ticks per revolution and wheel distance must be > 0");
+  }
+  const SceneConfig& sc = scene.config();
+  const double hl = sc.room_length_m / 2, hw = sc.room_width_m / 2;
+  if (c_.path == "circle") {
+    const double r = c_.circle_radius_m;
+    if (std::abs(c_.circle_center_x_m) + r >= hl || std::abs(c_.circle_center_y_m) + r >= hw) {
+      throw ConfigError("sim: key 'sim.circle_center_x_m' puts the circle outside the room");
+    }
+    path_ = MobilePath::circle(c_.circle_center_x_m, c_.circle_center_y_m, r);
+    s0_ = 0.0;
+  } else {
+    const double m = c_.loop_wall_clearance_m, rc = c_.loop_corner_radius_m;
+    if (2 * (m + rc) >= std::min(sc.room_length_m, sc.room_width_m)) {
+      throw ConfigError("sim: key 'sim.loop_wall_clearance_m' leaves no loop inside the room");
+    }
+    path_ = MobilePath::roundedRectangle(-hl + m, hl - m, -hw + m, hw - m, rc);
+    s0_ = 0.5 * (sc.room_length_m - 2 * m - 2 * rc);  // middle of the -Y straight
+  }
+  start_room_ = path_.poseAt(s0_);
+  T_BL_ = Eigen::Isometry3d::Identity();
+  T_BL_.linear() = rotXYZ(c_.gamma_true_rad, c_.beta_true_rad, c_.alpha_true_rad) *
+                   rotXYZ(nominal_rpy_rad.x(), nominal_rpy_rad.y(), nominal_rpy_rad.z());
+  T_BL_.translation() = t_BL_m;
+  rays_ = static_cast<int>(std::lround(c_.sample_rate_hz / c_.scan_rate_hz));
+
+  // Slip schedule: exponential gaps after each event's end.
+  if (c_.slip_mean_interval_s > 0) {
+    std::mt19937_64 rng(seed * 8 + 4);
+    std::exponential_distribution<double> gap(1.0 / c_.slip_mean_interval_s);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    double t = 0.0;
+    for (;;) {
+      t += gap(rng);
+      if (t >= c_.duration_s) break;
+      SlipEvent e;
+      e.start_s = t;
+      e.end_s = t + c_.slip_min_duration_s + u(rng) * (c_.slip_max_duration_s - c_.slip_min_duration_s);
+      e.right = u(rng) < 0.5;
+      e.fraction = c_.slip_min_fraction + u(rng) * (c_.slip_max_fraction - c_.slip_min_fraction);
+      slips_.push_back(e);
+      t = e.end_s;
+    }
+  }
+}
+
+double SimMobile::speedAt(double t) const {
+  const double T = c_.duration_s;
+  const double ta = std::min(c_.speed_m_s / c_.accel_m_s2, T / 2);
+  if (t <= 0 || t >= T) return 0.0;
+  if (t < ta) return c_.accel_m_s2 * t;
+  if (t > T - ta) return c_.accel_m_s2 * (T - t);
+  return c_.accel_m_s2 * ta;
+}
+
+double SimMobile::distanceAt(double t) const {
+  const double T = c_.duration_s, a = c_.accel_m_s2;
+  const double ta = std::min(c_.speed_m_s / a, T / 2), vp = a * ta;
+  const double total = a * ta * ta + vp * (T - 2 * ta);
+  t = std::clamp(t, 0.0, T);
+  if (t < ta) return 0.5 * a * t * t;
+  if (t <= T - ta) return 0.5 * a * ta * ta + vp * (t - ta);
+  return total - 0.5 * a * (T - t) * (T - t);
+}
+
+Pose2 SimMobile::roomPoseAt(double t) const { return path_.poseAt(s0_ + distanceAt(t)); }
+
+Pose2 SimMobile::worldPoseAt(double t) const {
+  const Pose2 r = roomPoseAt(t);
+  const double c = std::cos(start_room_.theta_rad), s = std::sin(start_room_.theta_rad);
+  const double dx = r.x_m - start_room_.x_m, dy = r.y_m - start_room_.y_m;
+  return {c * dx + s * dy, -s * dx + c * dy, r.theta_rad - start_room_.theta_rad};
+}
+
+double SimMobile::turnRateAt(double t) const {
+  return speedAt(t) * path_.curvatureAt(s0_ + distanceAt(t));
+}
+
+double SimMobile::wheelTurnedAt(double t, bool right) const {
+  const auto ground = [&](double tt) {
+    const double dtheta = roomPoseAt(tt).theta_rad - start_room_.theta_rad;
+    return distanceAt(tt) + (right ? 0.5 : -0.5) * wheels_.wheel_distance_m * dtheta;
+  };
+  double d = ground(t);
+  for (const SlipEvent& e : slips_) {
+    if (e.right != right || t <= e.start_s) continue;
+    d += e.fraction * (ground(std::min(t, e.end_s)) - ground(e.start_s));
+  }
+  return d;
+}
+
+Eigen::Isometry3d SimMobile::T_room_world() const { return planar(start_room_); }
+
+std::vector<WheelTicks> SimMobile::wheelTicks() {
+  std::mt19937_64 rng(seed_ * 8 + 1);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<WheelTicks> out;
+  const double per_m = wheels_.ticks_per_revolution / (2.0 * M_PI * wheels_.radius_m);
+  double meas[2] = {0, 0}, prev[2] = {0, 0};
+  for (int64_t k = 0;; ++k) {
+    const double t = static_cast<double>(k) / c_.wheel_ticks_rate_hz;
+    if (t > c_.duration_s + 1e-9) break;
+    WheelTicks w{utimeAt(t), 0, 0};
+    for (int side = 0; side < 2; ++side) {
+      const double turned = wheelTurnedAt(t, side == 1);
+      const double noise = 1.0 + c_.encoder_speed_sigma_fraction * n(rng);
+      meas[side] += (turned - prev[side]) * noise;
+      prev[side] = turned;
+      const int64_t ticks = static_cast<int64_t>(std::floor(meas[side] * per_m + 1e-9));
+      (side == 0 ? w.left : w.right) = ticks;
+    }
+    out.push_back(w);
+  }
+  return out;
+}
+
+std::vector<ImuSample> SimMobile::imu() {
+  std::mt19937_64 rng(seed_ * 8 + 2);
+  std::normal_distribution<double> n(0.0, 1.0);
+  std::vector<ImuSample> out;
+  const double T = c_.duration_s, a = c_.accel_m_s2;
+  const double ta = std::min(c_.speed_m_s / a, T / 2);
+  for (int64_t k = 0;; ++k) {
+    const double t = static_cast<double>(k) / c_.imu_rate_hz;
+    if (t > T + 1e-9) break;
+    ImuSample m{};
+    m.utime = utimeAt(t);
+    const double v = speedAt(t), w = turnRateAt(t);
+    const double dv = (t > 0 && t < ta) ? a : (t > T - ta && t < T) ? -a : 0.0;
+    m.gyro[0] = c_.gyro_sigma_rad_s * n(rng);
+    m.gyro[1] = c_.gyro_sigma_rad_s * n(rng);
+    m.gyro[2] = w + c_.gyro_bias_z_rad_s + c_.gyro_sigma_rad_s * n(rng);
+    m.accel[0] = dv + c_.accel_sigma_m_s2 * n(rng);
+    m.accel[1] = v * w + c_.accel_sigma_m_s2 * n(rng);
+    m.accel[2] = kGravity + c_.accel_sigma_m_s2 * n(rng);
+    const double sa = c_.attitude_sigma_deg * kDeg;
+    m.rpy[0] = c_.roll_error_deg * kDeg + sa * n(rng);
+    m.rpy[1] = c_.pitch_error_deg * kDeg + sa * n(rng);
+    m.rpy[2] = wrap(worldPoseAt(t).theta_rad + c_.yaw_error_deg * kDeg + sa * n(rng));
+    out.push_back(m);
+  }
+  return out;
+}
+
+Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng) const {
+  std::normal_distribution<double> n(0.0, 1.0);
+  Scan2D scan;
+  scan.seq = j;
+  scan.utime = utimeAt(static_cast<double>(j) / c_.scan_rate_hz);
+  scan.angle_min_rad = -M_PI;
+  scan.angle_increment_rad = 2.0 * M_PI / rays_;
+  scan.time_increment_ns = std::llround(1e9 / c_.sample_rate_hz);
+  scan.range_min_m = c_.range_min_m;
+  scan.range_max_m = c_.range_max_m;
+  scan.ranges_m.resize(static_cast<size_t>(rays_));
+  for (int i = 0; i < rays_; ++i) {
+    const double t = 1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - start_utime_);
+    const Eigen::Isometry3d T_room_L = planar(roomPoseAt(t)) * T_BL_;
+    const double ang = scan.rayAngle(static_cast<size_t>(i));
+    const Eigen::Vector3d dir = T_room_L.linear() * Eigen::Vector3d(0.0, std::sin(ang), std::cos(ang));
+    const auto hit = scene_->raycast(T_room_L.translation(), dir, c_.range_max_m);
+    const double noise = n(*rng);
+    double r = 0.0;
+    if (hit) {
+      r = *hit * (1.0 + c_.range_sigma_fraction * noise);
+      if (r < c_.range_min_m || r > c_.range_max_m) r = 0.0;
+    }
+    scan.ranges_m[static_cast<size_t>(i)] = static_cast<float>(r);
+  }
+  return scan;
+}
+
+std::vector<Scan2D> SimMobile::scans() {
+  std::mt19937_64 rng(seed_ * 8 + 3);
+  std::vector<Scan2D> out;
+  const double scan_span = (rays_ - 1) / c_.sample_rate_hz;
+  for (int64_t j = 0;; ++j) {
+    const double t = static_cast<double>(j) / c_.scan_rate_hz;
+    if (t + scan_span > c_.duration_s + 1e-9) break;
+    out.push_back(makeScan(j, &rng));
+  }
+  return out;
+}
+
+int64_t SimMobile::scanDeliveryUtime(const Scan2D& scan) const {
+  return scan.rayUtime(scan.ranges_m.empty() ? 0 : scan.ranges_m.size() - 1) +
+         static_cast<int64_t>(std::llround(c_.lidar_latency_ms * 1000.0));
+}
+
+std::vector<TruthPose> SimMobile::truth() const {
+  std::vector<TruthPose> out;
+  for (int64_t k = 0;; ++k) {
+    const double t = static_cast<double>(k) / c_.truth_rate_hz;
+    if (t > c_.duration_s + 1e-9) break;
+    out.push_back({utimeAt(t), worldPoseAt(t), speedAt(t), turnRateAt(t), c_.gyro_bias_z_rad_s});
+  }
+  return out;
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,177 @@
+// Simulated rig B (Miao 2022): a differential-drive car with wheel encoders, an HI219-like
+// IMU and a vertical YDLIDAR X4-like 2D lidar, driving a known path through a Scene.
+// Transport-free: it produces plain structs; tools/sim_mobile.cpp turns them into messages.
+//
+// Frames.
+//  - Room frame (drivers/scene.hpp): origin on the floor at the room's centre, Z up.
+//  - Body frame B: origin on the floor under the axle's midpoint, x forward, y left, z up;
+//    the body's xOy plane is the floor, so the lidar's height h is mounting z_m.
+//  - World frame W (the odometry's): the body frame at the start of the run. TRUTH_POSE is
+//    the true body pose in W, the same frame as ODOMETRY_POSE / WHEEL_ODOMETRY.
+//  - Lidar frame L: rays along (0, sin a, cos a), a measured from Z_L toward Y_L. With the
+//    nominal mounting rpy = (0, 0, 0), Z_L is up (angle from the vertical, as the X4 on the
+//    car) and the scan plane is the body's y-z plane: vertical and perpendicular to the
+//    driving direction. The true T_BL is R(sim gamma, beta, alpha) R_nominal with the
+//    position (l1 = x_m, y_m, h = z_m), nominal and position from the rig's mounting.*.
+//
+// Motion: speed ramps up at sim.accel_m_s2 to sim.speed_m_s, holds, and ramps down to stop
+// at sim.duration_s; the pose follows the path by arc length (exact, no integration).
+//
+// Randomness: independent std::mt19937_64 streams per device derived from the seed, so a
+// device's draws do not depend on the others' settings. Same seed -> same output.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/config.hpp"
+#include "core/scan.hpp"
+#include "drivers/scene.hpp"
+#include "odometry/wheel_odometry.hpp"
+
+namespace sweepmap {
+
+struct SimMobileConfig {
+  std::string path = "circle";         // "circle" or "loop"
+  double circle_radius_m = 0.83;       // Miao 2022 calibration drive
+  double circle_center_x_m = -3.0;     // room frame
+  double circle_center_y_m = 0.0;
+  double loop_wall_clearance_m = 0.5;  // loop: rounded rectangle this far from the walls
+  double loop_corner_radius_m = 0.5;
+  double speed_m_s = 0.2;
+  double accel_m_s2 = 0.5;
+  double duration_s = 60.0;
+  // Wheels and encoders (radius, ticks per turn, wheel distance: the rig's odometry.*).
+  double wheel_ticks_rate_hz = 50.0;
+  double encoder_speed_sigma_fraction = 0.01;  // white, per reading
+  double slip_mean_interval_s = 10.0;          // exponential; <= 0: no slip
+  double slip_min_duration_s = 0.2;
+  double slip_max_duration_s = 0.5;
+  double slip_min_fraction = 0.1;   // the slipping wheel turns this much faster
+  double slip_max_fraction = 0.3;
+  // IMU (HI219-like).
+  double imu_rate_hz = 200.0;
+  double gyro_sigma_rad_s = 0.005;
+  double gyro_bias_z_rad_s = 0.01;  // constant; x and y are unbiased
+  double accel_sigma_m_s2 = 0.05;
+  double roll_error_deg = 0.3;      // static attitude errors of the IMU's own estimate
+  double pitch_error_deg = -0.2;
+  double yaw_error_deg = 0.5;
+  double attitude_sigma_deg = 0.05;
+  // Lidar (YDLIDAR X4-like).
+  double scan_rate_hz = 7.0;
+  double sample_rate_hz = 5000.0;  // rays per second; rays per scan = round(sample / scan)
+  double range_min_m = 0.12;
+  double range_max_m = 10.0;
+  double range_sigma_fraction = 0.01;  // sigma of the range noise, fraction of the range
+  double lidar_latency_ms = 10.0;      // delivery after the last ray
+  // True mounting error (the rig's mounting.* gamma/beta/alpha is what processes believe).
+  double gamma_true_rad = 0.0355;
+  double beta_true_rad = 0.0126;
+  double alpha_true_rad = -0.0058;
+  double truth_rate_hz = 100.0;
+
+  void declare(ConfigSchema& s, const std::string& prefix);
+  void validate(const std::string& source) const;  // throws ConfigError
+};
+
+// A planar path of straight lines and arcs, parametrised by arc length, closed (periodic).
+class MobilePath {
+ public:
+  struct Segment {
+    double x0, y0, theta0;  // start pose
+    double length;
+    double curvature;  // 1/m, + = left turn
+  };
+  explicit MobilePath(std::vector<Segment> segments);
+  static MobilePath circle(double cx, double cy, double radius);
+  static MobilePath roundedRectangle(double x_min, double x_max, double y_min, double y_max,
+                                     double corner_radius);
+  // Pose at arc length s (any s >= 0; wraps), heading unwrapped (grows by 2 pi per lap).
+  Pose2 poseAt(double s) const;
+  double curvatureAt(double s) const;
+  double length() const { return length_; }
+
+ private:
+  const Segment& find(double s, double* local, int* lap) const;
+  std::vector<Segment> segments_;
+  std::vector<double> starts_;
+  double length_ = 0.0;
+  double turn_per_lap_ = 0.0;
+};
+
+struct WheelTicks {
+  int64_t utime;
+  int64_t left, right;
+};
+struct ImuSample {
+  int64_t utime;
+  double gyro[3], accel[3], rpy[3];
+};
+struct TruthPose {
+  int64_t utime;
+  Pose2 pose;  // body in W
+  double v_m_s, w_rad_s, gyro_bias_rad_s;
+};
+struct SlipEvent {
+  double start_s, end_s;
+  bool right;       // which wheel
+  double fraction;  // reads this much fast
+};
+
+struct WheelGeometry {
+  double radius_m = 0.0325;
+  double ticks_per_revolution = 2000;
+  double wheel_distance_m = 0.2;
+};
+
+class SimMobile {
+ public:
+  // Throws ConfigError for an invalid configuration. The lidar sits at `t_BL_m` with the
+  // nominal rotation (roll, pitch, yaw) `nominal_rpy_rad`, times the true error of `config`:
+  // R = R(gamma, beta, alpha) R(nominal), R(g, b, a) = Rz(a) Ry(b) Rx(g) (calib/world_assembly.hpp).
+  SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
+            const Eigen::Vector3d& nominal_rpy_rad, const Eigen::Vector3d& t_BL_m,
+            const Scene& scene, uint64_t seed, int64_t start_utime);
+
+  // Truth at time t [s since start].
+  double speedAt(double t) const;
+  double distanceAt(double t) const;  // arc length driven
+  Pose2 roomPoseAt(double t) const;   // body in the room
+  Pose2 worldPoseAt(double t) const;  // body in W
+  double turnRateAt(double t) const;
+  // Distance the wheel's rim has turned through (ground distance plus slip).
+  double wheelTurnedAt(double t, bool right) const;
+  Eigen::Isometry3d T_room_world() const;
+  Eigen::Isometry3d trueT_BL() const { return T_BL_; }
+
+  // Each device's whole output for the run, in time order.
+  std::vector<WheelTicks> wheelTicks();
+  std::vector<ImuSample> imu();
+  std::vector<Scan2D> scans();  // Scan2D::utime = first ray
+  std::vector<TruthPose> truth() const;
+  const std::vector<SlipEvent>& slips() const { return slips_; }
+  int64_t scanDeliveryUtime(const Scan2D& scan) const;
+  // One scan (index j) with the given noise generator; exposed for tests.
+  Scan2D makeScan(int64_t j, std::mt19937_64* rng) const;
+  int raysPerScan() const { return rays_; }
+  int64_t utimeAt(double t) const { return start_utime_ + static_cast<int64_t>(std::llround(t * 1e6)); }
+
+ private:
+  SimMobileConfig c_;
+  WheelGeometry wheels_;
+  const Scene* scene_;
+  MobilePath path_;
+  double s0_ = 0.0;  // arc length of the start pose on the path
+  Pose2 start_room_;
+  Eigen::Isometry3d T_BL_;
+  std::vector<SlipEvent> slips_;
+  uint64_t seed_;
+  int64_t start_utime_;
+  int rays_;
+};
+
+}  // namespace sweepmap

@@ -1,0 +1,239 @@
+// The simulated rig-B car (drivers/sim_mobile.hpp) on hand cases: encoder counts of a straight
+// drive, wheel slip, IMU bias and noise statistics, lidar ranges to known surfaces.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+
+#include "drivers/sim_mobile.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr int64_t kStart = 1'000'000;
+
+SceneConfig labScene() { return loadScene(std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml"); }
+
+PlateConfig plate() { return PlateConfig{}; }
+
+// Lidar 0.1 m ahead of the axle, 0.3 m above the floor, vertical (nominal rpy 0).
+const Eigen::Vector3d kRpy0 = Eigen::Vector3d::Zero();
+const Eigen::Vector3d kLidarPos(0.1, 0.0, 0.3);
+
+SimMobileConfig quiet() {
+  SimMobileConfig c;
+  c.encoder_speed_sigma_fraction = 0.0;
+  c.slip_mean_interval_s = 0.0;
+  c.gyro_sigma_rad_s = 0.0;
+  c.accel_sigma_m_s2 = 0.0;
+  c.attitude_sigma_deg = 0.0;
+  c.range_sigma_fraction = 0.0;
+  c.gamma_true_rad = c.beta_true_rad = c.alpha_true_rad = 0.0;
+  return c;
+}
+
+TEST(MobilePath, CircleAndRoundedRectangleAreClosedAndContinuous) {
+  const MobilePath c = MobilePath::circle(-3.0, 0.0, 0.83);
+  EXPECT_NEAR(c.length(), 2 * M_PI * 0.83, 1e-12);
+  const Pose2 p0 = c.poseAt(0.0), p1 = c.poseAt(c.length());
+  EXPECT_NEAR(p1.x_m, p0.x_m, 1e-9);
+  EXPECT_NEAR(p1.y_m, p0.y_m, 1e-9);
+  EXPECT_NEAR(p1.theta_rad - p0.theta_rad, 2 * M_PI, 1e-9);  // unwrapped
+  const Pose2 q = c.poseAt(c.length() / 4);                   // quarter turn: rightmost point
+  EXPECT_NEAR(q.x_m, -3.0 + 0.83, 1e-9);
+  EXPECT_NEAR(q.y_m, 0.0, 1e-9);
+
+  const MobilePath r = MobilePath::roundedRectangle(-4.5, 4.5, -2.0, 2.0, 0.5);
+  EXPECT_NEAR(r.length(), 2 * 8.0 + 2 * 3.0 + M_PI, 1e-9);
+  // Continuity: small steps move by about the step everywhere.
+  Pose2 prev = r.poseAt(0.0);
+  for (double s = 0.01; s <= r.length() + 1e-9; s += 0.01) {
+    const Pose2 p = r.poseAt(s);
+    EXPECT_NEAR(std::hypot(p.x_m - prev.x_m, p.y_m - prev.y_m), 0.01, 1e-4) << s;
+    prev = p;
+  }
+  EXPECT_NEAR(r.poseAt(r.length()).theta_rad, 2 * M_PI, 1e-9);  // one lap: one turn
+}
+
+TEST(SimMobile, StraightDriveTicksAreDistanceOverCircumference) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c = quiet();
+  c.path = "loop";  // starts in the middle of a 8 m straight
+  c.duration_s = 15.0;
+  WheelGeometry w;
+  SimMobile car(c, w, kRpy0, kLidarPos, scene, 1, kStart);
+  const auto ticks = car.wheelTicks();
+  ASSERT_EQ(ticks.size(), 751u);  // 50 Hz, both ends
+  EXPECT_EQ(ticks.front().utime, kStart);
+  EXPECT_EQ(ticks.back().utime, kStart + 15'000'000);
+  const double d = car.distanceAt(15.0);
+  EXPECT_NEAR(d, 0.2 * (15.0 - 0.4), 1e-9);  // ramps of 0.4 s at 0.5 m/s^2
+  const double expected = d / (2 * M_PI * w.radius_m) * w.ticks_per_revolution;
+  EXPECT_NEAR(double(ticks.back().left), expected, 1.0);
+  EXPECT_NEAR(double(ticks.back().right), expected, 1.0);
+  for (const auto& t : ticks) {
+    const double e = car.distanceAt(1e-6 * double(t.utime - kStart)) / (2 * M_PI * w.radius_m) *
+                     w.ticks_per_revolution;
+    EXPECT_NEAR(double(t.left), e, 1.0);
+    EXPECT_EQ(t.left, t.right);
+  }
+  // Truth: straight along W's x.
+  const Pose2 end = car.worldPoseAt(15.0);
+  EXPECT_NEAR(end.x_m, d, 1e-9);
+  EXPECT_NEAR(end.y_m, 0.0, 1e-9);
+  EXPECT_NEAR(end.theta_rad, 0.0, 1e-12);
+}
+
+TEST(SimMobile, SlipMakesOneWheelRunFastOnlyDuringTheEvent) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c = quiet();
+  c.path = "loop";
+  c.duration_s = 18.0;
+  c.slip_mean_interval_s = 3.0;
+  WheelGeometry w;
+  SimMobile car(c, w, kRpy0, kLidarPos, scene, 7, kStart);
+  ASSERT_GE(car.slips().size(), 2u);
+  const auto ticks = car.wheelTicks();
+  int inside = 0, outside = 0;
+  for (size_t k = 1; k < ticks.size(); ++k) {
+    const double t0 = 1e-6 * double(ticks[k - 1].utime - kStart);
+    const double t1 = 1e-6 * double(ticks[k].utime - kStart);
+    const int64_t dl = ticks[k].left - ticks[k - 1].left, dr = ticks[k].right - ticks[k - 1].right;
+    const SlipEvent* in = nullptr;
+    bool touches = false;
+    for (const auto& e : car.slips()) {
+      if (t1 > e.start_s && t0 < e.end_s) touches = true;
+      if (t0 >= e.start_s && t1 <= e.end_s) in = &e;
+    }
+    if (!touches) {
+      EXPECT_LE(std::abs(dl - dr), 1) << "at " << t0 << " s";
+      ++outside;
+    } else if (in && t0 > 0.5 && t1 < c.duration_s - 0.5) {
+      const int64_t fast = in->right ? dr : dl, slow = in->right ? dl : dr;
+      EXPECT_NEAR(double(fast - slow), in->fraction * double(slow), 2.0) << "at " << t0 << " s";
+      EXPECT_GT(fast, slow);
+      ++inside;
+    }
+  }
+  EXPECT_GT(inside, 5);
+  EXPECT_GT(outside, 500);
+  for (const auto& e : car.slips()) {
+    EXPECT_GE(e.end_s - e.start_s, 0.2 - 1e-12);
+    EXPECT_LE(e.end_s - e.start_s, 0.5 + 1e-12);
+    EXPECT_GE(e.fraction, 0.1);
+    EXPECT_LE(e.fraction, 0.3);
+  }
+  // Slip does not move the car: the truth is still a straight line.
+  EXPECT_NEAR(car.worldPoseAt(18.0).y_m, 0.0, 1e-9);
+}
+
+TEST(SimMobile, ImuBiasAndNoiseStatistics) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c;  // defaults: gyro 0.005 rad/s noise, 0.01 rad/s z bias
+  c.duration_s = 60.0;
+  SimMobile car(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 3, kStart);
+  const auto imu = car.imu();
+  ASSERT_EQ(imu.size(), 12001u);
+  std::vector<double> ez, ex, roll, pitch, yaw;
+  for (const auto& m : imu) {
+    const double t = 1e-6 * double(m.utime - kStart);
+    ez.push_back(m.gyro[2] - car.turnRateAt(t));
+    ex.push_back(m.gyro[0]);
+    roll.push_back(m.rpy[0]);
+    pitch.push_back(m.rpy[1]);
+    yaw.push_back(std::remainder(m.rpy[2] - car.worldPoseAt(t).theta_rad, 2 * M_PI));
+  }
+  const auto mean = [](const std::vector<double>& v) {
+    return std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
+  };
+  const auto sd = [&](const std::vector<double>& v) {
+    const double m = mean(v);
+    double s = 0;
+    for (double x : v) s += (x - m) * (x - m);
+    return std::sqrt(s / double(v.size() - 1));
+  };
+  const double n = double(imu.size());
+  EXPECT_NEAR(mean(ez), 0.01, 4 * 0.005 / std::sqrt(n));
+  EXPECT_NEAR(sd(ez), 0.005, 0.005 * 0.05);
+  EXPECT_NEAR(mean(ex), 0.0, 4 * 0.005 / std::sqrt(n));
+  EXPECT_NEAR(sd(ex), 0.005, 0.005 * 0.05);
+  const double deg = M_PI / 180;
+  EXPECT_NEAR(mean(roll), 0.3 * deg, 0.01 * deg);
+  EXPECT_NEAR(mean(pitch), -0.2 * deg, 0.01 * deg);
+  EXPECT_NEAR(mean(yaw), 0.5 * deg, 0.01 * deg);
+  EXPECT_NEAR(sd(roll), 0.05 * deg, 0.005 * deg);
+  // Circle at 0.2 m/s, radius 0.83 m: turn rate 0.241 rad/s while cruising.
+  EXPECT_NEAR(car.turnRateAt(30.0), 0.2 / 0.83, 1e-12);
+}
+
+TEST(SimMobile, LidarSeesKnownSurfacesAtTheirAnalyticRange) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c = quiet();
+  c.speed_m_s = 1e-9;  // standing at the circle's start: (-3, -0.83), facing +x
+  const auto check = [&](double gamma, double expected_up) {
+    c.gamma_true_rad = gamma;
+    SimMobile car(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart);
+    ASSERT_EQ(car.raysPerScan(), 714);
+    std::mt19937_64 rng(1);
+    const Scan2D s = car.makeScan(0, &rng);
+    ASSERT_EQ(s.ranges_m.size(), 714u);
+    EXPECT_EQ(s.time_increment_ns, 200'000);
+    EXPECT_EQ(s.utime, kStart);
+    // Ray 357 points up (angle 0): the ceiling at 2.5 m, lidar at 0.3 m.
+    EXPECT_NEAR(s.rayAngle(357), 0.0, 1e-12);
+    EXPECT_NEAR(s.ranges_m[357], expected_up, 1e-5);
+    if (gamma != 0.0) return;
+    // Ray 0 points down (angle -pi): the floor 0.3 m below.
+    EXPECT_NEAR(s.ranges_m[0], 0.3, 1e-5);
+    // Rays near -90 deg look right (-y): the -Y wall, 2.5 - 0.83 = 1.67 m away sideways.
+    for (size_t i : {178u, 179u, 200u}) {
+      const double a = s.rayAngle(i);
+      EXPECT_NEAR(s.ranges_m[i], 1.67 / std::abs(std::sin(a)), 1e-5) << i;
+    }
+    // Rays near +90 deg look left (+y): the +Y wall, 3.33 m away.
+    for (size_t i : {535u, 536u}) {
+      const double a = s.rayAngle(i);
+      EXPECT_NEAR(s.ranges_m[i], 3.33 / std::abs(std::sin(a)), 1e-5) << i;
+    }
+  };
+  check(0.0, 2.2);
+  // Mounting error about body x tilts the scan plane sideways: the up ray meets the ceiling
+  // at 2.2 / cos(gamma).
+  check(0.1, 2.2 / std::cos(0.1));
+}
+
+TEST(SimMobile, RangeNoiseIsOnePercentAndSeedDeterministic) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c = quiet();
+  c.speed_m_s = 1e-9;
+  c.range_sigma_fraction = 0.01;
+  c.duration_s = 30.0;
+  SimMobile car(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 5, kStart);
+  const auto scans = car.scans();
+  EXPECT_EQ(scans.size(), 210u);  // 7 Hz for 30 s
+  std::vector<double> rel;
+  for (const auto& s : scans) rel.push_back(s.ranges_m[357] / 2.2 - 1.0);
+  double m = 0, v = 0;
+  for (double x : rel) m += x / double(rel.size());
+  for (double x : rel) v += (x - m) * (x - m) / double(rel.size() - 1);
+  EXPECT_NEAR(std::sqrt(v), 0.01, 0.0015);
+  SimMobile again(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 5, kStart);
+  const auto scans2 = again.scans();
+  ASSERT_EQ(scans2.size(), scans.size());
+  EXPECT_EQ(scans2[17].ranges_m, scans[17].ranges_m);
+  SimMobile other(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 6, kStart);
+  EXPECT_NE(other.scans()[17].ranges_m, scans[17].ranges_m);
+}
+
+TEST(SimMobile, RejectsBadConfiguration) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c;
+  c.path = "figure8";
+  EXPECT_THROW(SimMobile(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart), ConfigError);
+  c = SimMobileConfig{};
+  c.circle_center_x_m = 4.5;  // circle through the wall
+  EXPECT_THROW(SimMobile(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart), ConfigError);
+}
+
+}  // namespace
+}  // namespace sweepmap
