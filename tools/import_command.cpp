@@ -1,7 +1,7 @@
 #include <iostream>
 
 #include "tools/commands.hpp"
-#include "tools/import_breezyslam.hpp"
+#include "tools/import_mines.hpp"
 
 namespace sweepmap {
 

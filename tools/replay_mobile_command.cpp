@@ -18,7 +18,7 @@ Runner addReplayMobileCommand(CLI::App& app) {
   auto sets = std::make_shared<std::vector<std::string>>();
   auto no_plots = std::make_shared<bool>(false);
   cmd->add_option("LOG", *log, "LCM log (e.g. from sweepmap import breezyslam)")->required();
-  cmd->add_option("--rig", *rig, "rig B config (e.g. config/rig_b_breezyslam.yaml)")->required()
+  cmd->add_option("--rig", *rig, "rig B config (e.g. config/rig_b_mines_rover.yaml)")->required()
       ->check(CLI::ExistingFile);
   cmd->add_option("--out", *out, "output directory")->required();
   cmd->add_option("--set", *sets, "override a config key: key=value (repeatable)");

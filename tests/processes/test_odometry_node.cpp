@@ -93,7 +93,7 @@ TEST(OdometryNode, BadInputRejectedAndCounted) {
 
 TEST(OdometryNode, ShippedConfigLoads) {
   const OdometryConfig c =
-      loadRigB(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_breezyslam.yaml").odometry;
+      loadRigB(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml").odometry;
   EXPECT_DOUBLE_EQ(c.wheel_radius_m, 0.077);
   EXPECT_FALSE(c.use_imu);
 }

@@ -7,7 +7,7 @@
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 #include "test_support.hpp"
-#include "tools/import_breezyslam.hpp"
+#include "tools/import_mines.hpp"
 
 namespace sweepmap {
 namespace test {
@@ -82,7 +82,7 @@ TEST(ReplayMobile, BreezySlamRecordingBecomesAMap) {
   const auto dir = scratchDir("replay_mobile");
   const std::string log = (dir / "exp2.lcmlog").string();
   ASSERT_EQ(sweepmap({"import", "breezyslam", kData, "--out", log}), 0);
-  const std::string rig = sourcePath("config/rig_b_breezyslam.yaml");
+  const std::string rig = sourcePath("config/rig_b_mines_rover.yaml");
   for (const char* out : {"a", "b"}) {
     ASSERT_EQ(sweepmap({"replay-mobile", log, "--rig", rig, "--out", (dir / out).string()},
                        dir / (std::string(out) + ".txt")),

@@ -1,4 +1,4 @@
-#include "tools/import_breezyslam.hpp"
+#include "tools/import_mines.hpp"
 
 #include <fstream>
 #include <sstream>
