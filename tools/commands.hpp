@@ -5,8 +5,30 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <ostream>
+#include <string>
+
+#include "core/config.hpp"
 
 namespace sweepmap {
+
+// `--print-config` of the simulators: every rig and scene key with its value, unit, meaning
+// and the default in code. Rig is RigConfig or RigBConfig; Scene is SceneConfig.
+template <class Rig, class Scene>
+void printSimConfig(std::ostream& out, Rig rig, const std::string& rig_path, Scene scene,
+                    const std::string& scene_path) {
+  Rig rig_defaults{};
+  Scene scene_defaults{};
+  ConfigSchema rs, ss, rds, sds;
+  rig.declare(rs);
+  scene.declare(ss, "scene.");
+  rig_defaults.declare(rds);
+  scene_defaults.declare(sds, "scene.");
+  out << "# rig (" << rig_path << ")\n";
+  rs.print(out, &rds);
+  out << "# scene (" << scene_path << "), keys prefixed scene. for --set\n";
+  ss.print(out, &sds);
+}
 
 using Runner = std::function<int()>;
 

@@ -39,17 +39,7 @@ Runner addSimMobileCommand(CLI::App& app) {
       return 2;
     }
     if (o->print_config) {
-      RigBConfig rig_defaults;
-      SceneConfig scene_defaults;
-      ConfigSchema rs, ss, rds, sds;
-      options.rig.declare(rs);
-      options.scene.declare(ss, "scene.");
-      rig_defaults.declare(rds);
-      scene_defaults.declare(sds, "scene.");
-      std::cout << "# rig (" << o->rig << ")\n";
-      rs.print(std::cout, &rds);
-      std::cout << "# scene (" << o->scene << "), keys prefixed scene. for --set\n";
-      ss.print(std::cout, &sds);
+      printSimConfig(std::cout, options.rig, o->rig, options.scene, o->scene);
       return 0;
     }
     if (o->out.empty()) {
