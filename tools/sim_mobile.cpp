@@ -1,4 +1,5 @@
 #include "tools/sim_mobile.hpp"
+#include "tools/simulation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -18,13 +19,7 @@ void loadSimMobileConfig(const std::string& rig_path, const std::string& scene_p
                          const std::vector<std::string>& overrides, RigBConfig* rig,
                          SceneConfig* scene) {
   std::vector<std::string> rig_sets, scene_sets;
-  for (const auto& o : overrides) {
-    if (o.rfind("scene.", 0) == 0) {
-      scene_sets.push_back(o.substr(6));
-    } else {
-      rig_sets.push_back(o);
-    }
-  }
+  splitSimOverrides(overrides, &rig_sets, &scene_sets);
   *rig = loadRigB(rig_path, rig_sets);
   rig->sim.validate(rig_path);
   *scene = loadScene(scene_path, scene_sets);

@@ -12,16 +12,21 @@
 
 namespace sweepmap {
 
+void splitSimOverrides(const std::vector<std::string>& overrides,
+                       std::vector<std::string>* rig_sets, std::vector<std::string>* scene_sets) {
+  for (const auto& o : overrides) {
+    if (o.rfind("scene.", 0) == 0) {
+      scene_sets->push_back(o.substr(6));
+    } else {
+      rig_sets->push_back(o);
+    }
+  }
+}
+
 void loadSimConfig(const std::string& rig_path, const std::string& scene_path,
                    const std::vector<std::string>& overrides, RigConfig* rig, SceneConfig* scene) {
   std::vector<std::string> rig_sets, scene_sets;
-  for (const auto& o : overrides) {
-    if (o.rfind("scene.", 0) == 0) {
-      scene_sets.push_back(o.substr(6));
-    } else {
-      rig_sets.push_back(o);
-    }
-  }
+  splitSimOverrides(overrides, &rig_sets, &scene_sets);
   *rig = loadRig(rig_path, rig_sets);
   *scene = loadScene(scene_path, scene_sets);
 }

@@ -33,6 +33,11 @@ SimResult simulate(const SimOptions& options, const std::function<void(const Mes
 
 // Loads rig and scene and applies `key=value` overrides: keys starting with "scene."
 // go to the scene, all others to the rig. Throws ConfigError naming file/key.
+// Splits `key=value` overrides: those starting with "scene." (prefix removed) go to the
+// scene, the others to the rig.
+void splitSimOverrides(const std::vector<std::string>& overrides,
+                       std::vector<std::string>* rig_sets, std::vector<std::string>* scene_sets);
+
 void loadSimConfig(const std::string& rig_path, const std::string& scene_path,
                    const std::vector<std::string>& overrides, RigConfig* rig, SceneConfig* scene);
 
