@@ -25,6 +25,7 @@ constexpr const char* kTruthShaft = "TRUTH_SHAFT";    // truth_shaft_t, simulati
 constexpr const char* kTruthRig = "TRUTH_RIG";        // truth_rig_t, simulation only
 constexpr const char* kTruthSweep = "TRUTH_SWEEP";    // truth_sweep_t, simulation only
 constexpr const char* kTruthPose = "TRUTH_POSE";      // pose2d_t, true body pose (rig B simulation only)
+constexpr const char* kTruthMounting = "TRUTH_MOUNTING";  // truth_mounting_t (rig B simulation only)
 // Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
 
 }  // namespace channels

@@ -11,6 +11,7 @@
 #include "processes/sim_setup.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/truth_mounting_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 
 namespace sweepmap {
@@ -45,6 +46,11 @@ SimMobileResult simulateMobile(const SimMobileOptions& options,
   };
   std::vector<Stamped> events;
   const auto truth = car.truth();
+  // TRUTH_MOUNTING at start and at 1 Hz (order -1: before anything else at the same time).
+  const int64_t truth_mounting_count = static_cast<int64_t>(std::floor(rig.sim.duration_s)) + 1;
+  for (int64_t i = 0; i < truth_mounting_count; ++i) {
+    events.push_back({t0 + i * 1000000, -1, static_cast<size_t>(i)});
+  }
   const auto ticks = car.wheelTicks();
   const auto imu = car.imu();
   const auto scans = car.scans();
@@ -60,6 +66,27 @@ SimMobileResult simulateMobile(const SimMobileOptions& options,
   for (const Stamped& e : events) {
     Outbox out;
     switch (e.order) {
+      case -1: {
+        truth_mounting_t m{};
+        m.utime = e.utime;
+        m.gamma_true_rad = rig.sim.gamma_true_rad;
+        m.beta_true_rad = rig.sim.beta_true_rad;
+        m.alpha_true_rad = rig.sim.alpha_true_rad;
+        const Eigen::Isometry3d W = car.T_room_world();
+        for (int k = 0; k < 3; ++k) {
+          m.nominal_rpy_rad[k] = nominal.nominal_rpy_rad[k];
+          m.t_BL_m[k] = nominal.t_BL_m[k];
+        }
+        m.world_in_room[0] = W.translation().x();
+        m.world_in_room[1] = W.translation().y();
+        m.world_in_room[2] = std::atan2(W.linear()(1, 0), W.linear()(0, 0));
+        m.room_size_m[0] = options.scene.room_length_m;
+        m.room_size_m[1] = options.scene.room_width_m;
+        m.room_size_m[2] = options.scene.room_height_m;
+        m.scene = options.scene.name;
+        out.publish(channels::kTruthMounting, e.utime, m);
+        break;
+      }
       case 0: {
         const TruthPose& t = truth[e.index];
         pose2d_t m{};

@@ -11,7 +11,7 @@ Runner addSimMobileCommand(CLI::App& app) {
       "sim-mobile",
       "Simulate rig B (a differential-drive car with wheel encoders, an IMU and a vertical 2D "
       "lidar driving a circle or a loop) and write an LCM log of WHEEL_TICKS, IMU, LIDAR_SCAN "
-      "and the ground truth TRUTH_POSE");
+      "and the ground truth TRUTH_POSE and TRUTH_MOUNTING");
   struct Opts {
     std::string rig, scene, out;
     uint64_t seed = 1;

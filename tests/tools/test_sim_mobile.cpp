@@ -11,6 +11,7 @@
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/truth_mounting_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 #include "test_support.hpp"
 
@@ -86,6 +87,16 @@ TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
       EXPECT_GE(ev.utime, last);
       last = ev.utime;
       ++n[ev.channel];
+      if (ev.channel == channels::kTruthMounting) {
+        truth_mounting_t t;
+        ASSERT_TRUE(decodeMessage(Message{ev.utime, ev.channel, ev.data}, &t));
+        EXPECT_DOUBLE_EQ(t.gamma_true_rad, 0.0355);
+        EXPECT_DOUBLE_EQ(t.beta_true_rad, 0.0126);
+        EXPECT_DOUBLE_EQ(t.alpha_true_rad, -0.0058);
+        EXPECT_DOUBLE_EQ(t.t_BL_m[2], 0.30);
+        EXPECT_DOUBLE_EQ(t.room_size_m[0], 10.0);
+        EXPECT_EQ(t.scene, "lab");
+      }
       if (ev.channel == channels::kLidarScan) {
         lidar_scan_t s;
         ASSERT_TRUE(decodeMessage(Message{ev.utime, ev.channel, ev.data}, &s));
@@ -95,6 +106,7 @@ TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
       }
     }
     EXPECT_EQ(n[channels::kTruthPose], 6001);
+    EXPECT_EQ(n[channels::kTruthMounting], 61);  // start and 1 Hz
     EXPECT_EQ(n[channels::kWheelTicks], 3001);
     EXPECT_EQ(n[channels::kImu], 12001);
     EXPECT_EQ(n[channels::kLidarScan], 420);
