@@ -7,18 +7,20 @@
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
-  CLI::App app{"sweepmap-mapper: inserts assembled sweeps into an OctoMap OcTree, publishes "
-               "MAP_STATS, saves the map (.bt, atomically) on MAP_SAVE and on shutdown"};
+  CLI::App app{"sweepmap-mapper: inserts assembled sweeps (rig A) or world-frame scans (rig B) "
+               "into an OctoMap OcTree, publishes MAP_STATS, saves the map (.bt, atomically) on "
+               "MAP_SAVE and on shutdown"};
   CommonOptions common;
   std::string save_path = "map.bt";
-  addCommonOptions(app, common);
+  addRigAOrBOptions(app, common);
   app.add_option("--save", save_path, "map file written at shutdown and on empty MAP_SAVE")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  const RigConfig rig = loadRigOrExit(common);
+  const MapperConfig config =
+      common.rig_b_path.empty() ? loadRigOrExit(common).mapper : loadRigBOrExit(common).mapper;
 
   lcm::LCM lcm(common.lcm_url);
-  MapperNode node(rig.mapper, save_path);
+  MapperNode node(config, save_path);
   installStopSignals();
   return runLive(lcm, {&node}, LiveOptions{});
 }

@@ -1,6 +1,8 @@
 // The live processes over LCM, in a private network namespace that this test creates:
 // the clouds they publish equal those of the offline replay of their own log, and a
-// `sweepmap sim` log played by lcm-logplayer gives the clouds `sweepmap replay` gives.
+// `sweepmap sim` log played by lcm-logplayer gives the clouds `sweepmap replay` gives; for
+// rig B, a `sweepmap sim-mobile` log played into sweepmap-odometry, sweepmap-assembler
+// --rig-b and sweepmap-mapper --rig-b gives the poses, clouds and map of `replay-mobile`.
 #include <gtest/gtest.h>
 
 #include <thread>
@@ -127,6 +129,61 @@ TEST_F(LiveTest, LogplayerIntoLiveProcessesMatchesReplay) {
   }
   // The live mapper's map equals the replayed one (same sweeps, same order).
   EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(dir / "offline" / "map.bt"));
+}
+
+TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
+  const auto dir = scratchDir("live_rig_b");
+  const std::string rig_b = sourcePath("config/rig_b.yaml");
+  const std::string sim_log = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(sweepmap({"sim-mobile", "--rig", rig_b, "--scene", sourcePath("config/scene_lab.yaml"),
+                      "--set", "sim.duration_s=12", "--seed", "5", "--out", sim_log}),
+            0);
+  const std::string rec = (dir / "recorded.lcmlog").string();
+  const auto procB = [&](const std::string& name, std::vector<std::string> args) {
+    args.insert(args.begin(), binPath("sweepmap-" + name));
+    args.insert(args.end(), {name == "odometry" ? "--rig" : "--rig-b", rig_b, "--lcm-url", kUrl});
+    return args;
+  };
+  ProcessGroup procs;
+  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
+                                              "ODOMETRY_POSE|WHEEL_ODOMETRY|SWEEP_CLOUD", rec},
+                                   (dir / "logger.txt").string());
+  const pid_t odometry = procs.start("odometry", procB("odometry", {}), (dir / "odometry.txt").string());
+  const pid_t assembler = procs.start("assembler", procB("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper = procs.start("mapper", procB("mapper", {"--save", (dir / "live_map.bt").string()}),
+                                   (dir / "mapper.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
+                                   (dir / "logplayer.txt").string());
+  ASSERT_EQ(procs.wait(player, 120.0), 0) << readFile(dir / "logplayer.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(odometry, 10.0), 0) << readFile(dir / "odometry.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0) << readFile(dir / "assembler.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(mapper, 60.0), 0) << readFile(dir / "mapper.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+
+  const auto offline_dir = dir / "offline";
+  ASSERT_EQ(sweepmap({"replay-mobile", sim_log, "--rig", rig_b, "--out", offline_dir.string(),
+                      "--no-plots"},
+                     dir / "replay.txt"),
+            0)
+      << readFile(dir / "replay.txt");
+  const std::string derived = (offline_dir / "derived.lcmlog").string();
+  for (const char* channel : {channels::kOdometryPose, channels::kWheelOdometry, channels::kSweepCloud}) {
+    const auto live = readChannel(rec, channel);
+    const auto offline = readChannel(derived, channel);
+    ASSERT_FALSE(offline.empty()) << channel;
+    ASSERT_EQ(live.size(), offline.size()) << channel;
+    size_t differ = 0;
+    for (size_t i = 0; i < live.size(); ++i) differ += live[i].data != offline[i].data;
+    EXPECT_EQ(differ, 0u) << channel << ": " << differ << " of " << live.size()
+                          << " messages differ between live and offline";
+  }
+  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(offline_dir / "map.bt"))
+      << "the live mapper's map differs from replay-mobile's";
 }
 
 }  // namespace

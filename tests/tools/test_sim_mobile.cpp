@@ -59,6 +59,26 @@ TEST(SimMobile, SameSeedGivesByteIdenticalLogs) {
   EXPECT_FALSE(la == readFile(c)) << "different seeds, same bytes";
 }
 
+TEST(SimMobile, ReplayMobileTwiceIsByteIdentical) {
+  const auto dir = scratchDir("replay_mobile_determinism");
+  const std::string log = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(sweepmap(simArgs(log, "3", {"sim.duration_s=8", "sim.path=loop"}), dir / "sim.txt"), 0)
+      << readFile(dir / "sim.txt");
+  for (const char* name : {"a", "b"}) {
+    ASSERT_EQ(sweepmap({"replay-mobile", log, "--rig", sourcePath("config/rig_b.yaml"), "--out",
+                        (dir / name).string()},
+                       dir / (std::string(name) + ".txt")),
+              0)
+        << readFile(dir / (std::string(name) + ".txt"));
+  }
+  for (const char* f : {"map.bt", "cloud.pcd", "summary.json", "derived.lcmlog"}) {
+    const std::string a = readFile(dir / "a" / f);
+    EXPECT_FALSE(a.empty()) << f;
+    EXPECT_TRUE(a == readFile(dir / "b" / f)) << f << " differs between two replays";
+  }
+  EXPECT_TRUE(fs::exists(dir / "a" / "top_view.png"));
+}
+
 TEST(SimMobile, BadConfigurationIsAConfigError) {
   const auto dir = scratchDir("sim_mobile_bad");
   EXPECT_EQ(sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.path=figure8"}), dir / "o.txt"), 2);
