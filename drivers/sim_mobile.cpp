@@ -1,5 +1,7 @@
 #include "drivers/sim_mobile.hpp"
 
+#include <yaml-cpp/yaml.h>
+
 #include <algorithm>
 #include <cmath>
 
@@ -27,7 +29,10 @@ Eigen::Isometry3d planar(const Pose2& p) {
 }  // namespace
 
 void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
-  s.add(p + "path", &path, "", "driven path: circle (calibration drive) or loop (rounded rectangle)");
+  s.add(p + "path", &path, "",
+        "driven path: circle (calibration drive), loop (rounded rectangle) or file (path_file)");
+  s.add(p + "path_file", &path_file, "",
+        "path: file — YAML of start pose and segments in the room frame (relative to the rig file)");
   s.add(p + "circle_radius_m", &circle_radius_m, "m", "circle path radius (Miao 2022: 0.83)");
   s.add(p + "circle_center_x_m", &circle_center_x_m, "m", "circle centre X in the room");
   s.add(p + "circle_center_y_m", &circle_center_y_m, "m", "circle centre Y in the room");
@@ -71,7 +76,8 @@ void SimMobileConfig::validate(const std::string& source) const {
   const auto require = [&](bool ok, const std::string& key, const std::string& why) {
     if (!ok) throw ConfigError(source + ": key 'sim." + key + "' " + why);
   };
-  require(path == "circle" || path == "loop", "path", "must be circle or loop");
+  require(path == "circle" || path == "loop" || path == "file", "path", "must be circle, loop or file");
+  require(path != "file" || !path_file.empty(), "path_file", "must name a file when sim.path is file");
   require(circle_radius_m > 0, "circle_radius_m", "must be positive");
   require(loop_wall_clearance_m > 0, "loop_wall_clearance_m", "must be positive");
   require(loop_corner_radius_m > 0, "loop_corner_radius_m", "must be positive");
@@ -121,6 +127,63 @@ MobilePath MobilePath::roundedRectangle(double x0, double x1, double y0, double 
                      {x0 + rc, y1, M_PI, arc, 1.0 / rc},
                      {x0, y1 - rc, 1.5 * M_PI, ly, 0.0},
                      {x0, y0 + rc, 1.5 * M_PI, arc, 1.0 / rc}});
+}
+
+MobilePath MobilePath::fromFile(const std::string& file) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(file);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError("path file " + file + ": " + e.what());
+  }
+  const auto number = [&](const YAML::Node& n, const char* key, const std::string& where) {
+    if (!n[key]) throw ConfigError("path file " + file + ": " + where + " has no '" + key + "'");
+    double v = 0.0;
+    try {
+      v = n[key].as<double>();
+    } catch (const YAML::Exception&) {
+      throw ConfigError("path file " + file + ": " + where + " '" + key + "' is not a number");
+    }
+    if (!std::isfinite(v)) throw ConfigError("path file " + file + ": " + where + " '" + key + "' is not finite");
+    return v;
+  };
+  if (!root.IsMap() || !root["start"] || !root["segments"] || !root["segments"].IsSequence() ||
+      root["segments"].size() == 0) {
+    throw ConfigError("path file " + file + ": needs 'start' and a non-empty list 'segments'");
+  }
+  for (const auto& kv : root) {
+    const std::string key = kv.first.as<std::string>();
+    if (key != "start" && key != "segments") throw ConfigError("path file " + file + ": unknown key '" + key + "'");
+  }
+  double x = number(root["start"], "x_m", "start"), y = number(root["start"], "y_m", "start");
+  double theta = number(root["start"], "heading_deg", "start") * kDeg;
+  std::vector<Segment> segments;
+  for (size_t i = 0; i < root["segments"].size(); ++i) {
+    const YAML::Node n = root["segments"][i];
+    const std::string where = "segment " + std::to_string(i);
+    const double length = number(n, "length_m", where);
+    if (!(length > 0)) throw ConfigError("path file " + file + ": " + where + " 'length_m' must be > 0");
+    double curvature = 0.0;
+    if (n["radius_m"]) {
+      const double r = number(n, "radius_m", where);
+      if (std::abs(r) < 0.05) throw ConfigError("path file " + file + ": " + where + " '|radius_m|' must be >= 0.05");
+      curvature = 1.0 / r;
+    }
+    segments.push_back({x, y, theta, length, curvature});
+    const MobilePath one({segments.back()});
+    const Pose2 end = one.poseAt(length * (1.0 - 1e-12));
+    x = end.x_m;
+    y = end.y_m;
+    theta = theta + curvature * length;
+  }
+  return MobilePath(std::move(segments));
+}
+
+bool MobilePath::closed() const {
+  const Segment& first = segments_.front();
+  const Pose2 end = poseAt(length_ * (1.0 - 1e-12));
+  return std::hypot(end.x_m - first.x0, end.y_m - first.y0) < 0.01 &&
+         std::abs(wrap(end.theta_rad - first.theta0)) < 0.01;
 }
 
 const MobilePath::Segment& MobilePath::find(double s, double* local, int* lap) const {
@@ -176,6 +239,21 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
     }
     path_ = MobilePath::circle(c_.circle_center_x_m, c_.circle_center_y_m, r);
     s0_ = 0.0;
+  } else if (c_.path == "file") {
+    path_ = MobilePath::fromFile(c_.path_file);
+    s0_ = 0.0;
+    const double driven = distanceAt(c_.duration_s);
+    if (!path_.closed() && driven > path_.length()) {
+      throw ConfigError("sim: path file " + c_.path_file + " is open and " + std::to_string(path_.length()) +
+                        " m long, but the drive covers " + std::to_string(driven) + " m");
+    }
+    for (double s = 0.0; s <= std::min(driven, path_.length()); s += 0.05) {
+      const Pose2 p = path_.poseAt(s);
+      if (std::abs(p.x_m) >= hl || std::abs(p.y_m) >= hw) {
+        throw ConfigError("sim: path file " + c_.path_file + " leaves the room at arc length " +
+                          std::to_string(s) + " m");
+      }
+    }
   } else {
     const double m = c_.loop_wall_clearance_m, rc = c_.loop_corner_radius_m;
     if (2 * (m + rc) >= std::min(sc.room_length_m, sc.room_width_m)) {

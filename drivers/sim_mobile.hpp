@@ -35,7 +35,8 @@
 namespace sweepmap {
 
 struct SimMobileConfig {
-  std::string path = "circle";         // "circle" or "loop"
+  std::string path = "circle";         // "circle", "loop" or "file"
+  std::string path_file;               // path: file — YAML of segments (MobilePath::fromFile)
   double circle_radius_m = 0.83;       // Miao 2022 calibration drive
   double circle_center_x_m = -3.0;     // room frame
   double circle_center_y_m = 0.0;
@@ -90,6 +91,15 @@ class MobilePath {
   static MobilePath circle(double cx, double cy, double radius);
   static MobilePath roundedRectangle(double x_min, double x_max, double y_min, double y_max,
                                      double corner_radius);
+  // A path from a YAML file, in the room frame:
+  //   start: {x_m: -4.0, y_m: -2.0, heading_deg: 0}
+  //   segments:
+  //     - {length_m: 8.0}                  # straight
+  //     - {length_m: 0.785, radius_m: 0.5} # arc; radius > 0 turns left, < 0 right
+  // Throws ConfigError naming the file and the segment for a missing or bad value.
+  static MobilePath fromFile(const std::string& file);
+  // Whether the end pose meets the start (a loop the car may drive round more than once).
+  bool closed() const;
   // Pose at arc length s (any s >= 0; wraps), heading unwrapped (grows by 2 pi per lap).
   Pose2 poseAt(double s) const;
   double curvatureAt(double s) const;

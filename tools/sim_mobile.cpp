@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "core/rig_config.hpp"
 #include "drivers/sim_mobile.hpp"
@@ -22,6 +23,9 @@ void loadSimMobileConfig(const std::string& rig_path, const std::string& scene_p
   std::vector<std::string> rig_sets, scene_sets;
   splitSimOverrides(overrides, &rig_sets, &scene_sets);
   *rig = loadRigB(rig_path, rig_sets);
+  if (!rig->sim.path_file.empty() && std::filesystem::path(rig->sim.path_file).is_relative()) {
+    rig->sim.path_file = (std::filesystem::path(rig_path).parent_path() / rig->sim.path_file).string();
+  }
   rig->sim.validate(rig_path);
   *scene = loadScene(scene_path, scene_sets);
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <fstream>
 #include <iostream>
 #include <regex>
 
@@ -77,6 +78,38 @@ TEST(SimMobile, ReplayMobileTwiceIsByteIdentical) {
     EXPECT_TRUE(a == readFile(dir / "b" / f)) << f << " differs between two replays";
   }
   EXPECT_TRUE(fs::exists(dir / "a" / "top_view.png"));
+}
+
+TEST(SimMobile, DrivesAPathFromAFile) {
+  const auto dir = scratchDir("sim_mobile_path_file");
+  const std::string log = (dir / "file.lcmlog").string();
+  ASSERT_EQ(sweepmap(simArgs(log, "2", {"sim.duration_s=20", "sim.path=file",
+                                        "sim.path_file=path_lab_table.yaml"}),
+                     dir / "o.txt"),
+            0)
+      << readFile(dir / "o.txt");
+  // The truth follows the file: start heading +X, a left turn of 0.5 m radius after 3 m.
+  const auto truth = poses(log, channels::kTruthPose);
+  ASSERT_GT(truth.size(), 1000u);
+  double max_y = -1e9;
+  for (const auto& p : truth) max_y = std::max(max_y, p.y_m);  // world = start pose
+  EXPECT_GT(max_y, 0.3);  // it turned left
+  EXPECT_NEAR(pathLength(truth), 0.2 * (20 - 0.4), 1e-3);
+  // A path that leaves the room, an open path shorter than the drive, a bad segment.
+  const auto write = [&](const std::string& name, const std::string& text) {
+    std::ofstream(dir / name) << text;
+    return (dir / name).string();
+  };
+  const std::string out = (dir / "x.lcmlog").string();
+  const std::string wall = write("wall.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: 20}\n");
+  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + wall}), dir / "w.txt"), 2);
+  EXPECT_NE(readFile(dir / "w.txt").find("leaves the room"), std::string::npos) << readFile(dir / "w.txt");
+  const std::string open_path = write("open.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: 2}\n");
+  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + open_path}), dir / "o2.txt"), 2);
+  EXPECT_NE(readFile(dir / "o2.txt").find("is open"), std::string::npos) << readFile(dir / "o2.txt");
+  const std::string bad = write("bad.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: -1}\n");
+  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + bad}), dir / "b.txt"), 2);
+  EXPECT_NE(readFile(dir / "b.txt").find("segment 0 'length_m'"), std::string::npos) << readFile(dir / "b.txt");
 }
 
 TEST(SimMobile, BadConfigurationIsAConfigError) {
