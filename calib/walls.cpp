@@ -115,51 +115,47 @@ std::vector<WallPlaneFit> refitWalls(const std::vector<Eigen::Vector3f>& cloud,
   return out;
 }
 
-WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
-                            const WallExtractionOptions& options) {
-  WallExtraction result;
-  if (cloud_O.empty()) {
-    result.reason = "empty cloud";
-    return result;
-  }
+namespace {
+
+pcl::PointCloud<pcl::PointXYZ>::Ptr downsampled(const std::vector<Eigen::Vector3f>& cloud, double voxel_m) {
   auto full = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  full->reserve(cloud_O.size());
-  for (const auto& p : cloud_O) {
+  full->reserve(cloud.size());
+  for (const auto& p : cloud) {
     if (p.allFinite()) full->push_back(pcl::PointXYZ(p.x(), p.y(), p.z()));
   }
+  if (voxel_m <= 0) return full;
   auto down = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
-  if (options.voxel_m > 0) {
-    pcl::VoxelGrid<pcl::PointXYZ> grid;
-    grid.setInputCloud(full);
-    const float v = static_cast<float>(options.voxel_m);
-    grid.setLeafSize(v, v, v);
-    grid.filter(*down);
-  } else {
-    down = full;
-  }
-  auto remaining = withoutHorizontalSlabs(*down, options.voxel_m > 0 ? options.voxel_m : 0.05,
-                                          options.horizontal_peak_factor);
+  pcl::VoxelGrid<pcl::PointXYZ> grid;
+  grid.setInputCloud(full);
+  const float v = static_cast<float>(voxel_m);
+  grid.setLeafSize(v, v, v);
+  grid.filter(*down);
+  return down;
+}
 
-  // Vertical planes, largest first.
-  std::vector<WallPlaneFit> candidates;
+// Up to `max_planes` RANSAC planes of `model` (PLANE, or PARALLEL_/PERPENDICULAR_PLANE to
+// Z within `eps_angle_rad`), largest first, each removed before the next; oriented toward
+// the origin. Stops at the first plane with fewer than `min_inliers` points.
+std::vector<WallPlaneFit> ransacPlanes(pcl::PointCloud<pcl::PointXYZ>::Ptr remaining,
+                                       pcl::SacModel model, double eps_angle_rad,
+                                       double distance_m, int max_planes, int min_inliers,
+                                       int max_iterations) {
+  std::vector<WallPlaneFit> planes;
   pcl::SACSegmentation<pcl::PointXYZ> seg;
   seg.setOptimizeCoefficients(true);
-  // PARALLEL_PLANE: the plane is parallel to the axis, i.e. its normal is perpendicular to
-  // Z (PERPENDICULAR_PLANE would find floors and ceilings).
-  seg.setModelType(pcl::SACMODEL_PARALLEL_PLANE);
+  seg.setModelType(model);
   seg.setMethodType(pcl::SAC_RANSAC);
   seg.setAxis(Eigen::Vector3f::UnitZ());
-  seg.setEpsAngle(std::asin(std::clamp(options.max_normal_z, 0.0, 1.0)));
-  seg.setDistanceThreshold(options.distance_threshold_m);
-  seg.setMaxIterations(options.ransac_max_iterations);
-  for (int k = 0; k < options.max_planes; ++k) {
-    if (static_cast<int>(remaining->size()) < std::max(options.min_inliers, 3)) break;
+  seg.setEpsAngle(eps_angle_rad);
+  seg.setDistanceThreshold(distance_m);
+  seg.setMaxIterations(max_iterations);
+  for (int k = 0; k < max_planes; ++k) {
+    if (static_cast<int>(remaining->size()) < std::max(min_inliers, 3)) break;
     pcl::ModelCoefficients coeff;
     pcl::PointIndices inliers;
     seg.setInputCloud(remaining);
     seg.segment(inliers, coeff);
-    if (static_cast<int>(inliers.indices.size()) < options.min_inliers || coeff.values.size() != 4)
-      break;
+    if (static_cast<int>(inliers.indices.size()) < min_inliers || coeff.values.size() != 4) break;
     WallPlaneFit w;
     w.normal = Eigen::Vector3d(coeff.values[0], coeff.values[1], coeff.values[2]);
     const double norm = w.normal.norm();
@@ -167,7 +163,7 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
     w.offset = coeff.values[3] / norm;
     w.inliers = static_cast<int>(inliers.indices.size());
     orientTowardOrigin(&w);
-    if (std::abs(w.normal.z()) <= options.max_normal_z) candidates.push_back(w);
+    planes.push_back(w);
     // Remove the plane's points and look for the next one.
     std::vector<char> drop(remaining->size(), 0);
     for (int i : inliers.indices) drop[i] = 1;
@@ -177,6 +173,50 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
       if (!drop[i]) next->push_back((*remaining)[i]);
     }
     remaining = next;
+  }
+  return planes;
+}
+
+}  // namespace
+
+std::vector<WallPlaneFit> extractPlanes(const std::vector<Eigen::Vector3f>& cloud,
+                                        const PlaneExtractionOptions& options) {
+  using O = PlaneExtractionOptions::Orientation;
+  // PARALLEL_PLANE: parallel to the axis (vertical walls); PERPENDICULAR_PLANE: normal
+  // along the axis (floors, ceilings).
+  const pcl::SacModel model = options.orientation == O::kAny        ? pcl::SACMODEL_PLANE
+                              : options.orientation == O::kVertical ? pcl::SACMODEL_PARALLEL_PLANE
+                                                                    : pcl::SACMODEL_PERPENDICULAR_PLANE;
+  std::vector<WallPlaneFit> planes =
+      ransacPlanes(downsampled(cloud, options.voxel_m), model, options.max_tilt_deg * kDegToRad,
+                   options.distance_threshold_m, options.max_planes, options.min_inliers,
+                   options.ransac_max_iterations);
+  std::vector<WallPlaneFit> out;
+  for (const WallPlaneFit& p : refitWalls(cloud, planes, options.distance_threshold_m)) {
+    if (p.inliers >= 3) out.push_back(p);
+  }
+  return out;
+}
+
+WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
+                            const WallExtractionOptions& options) {
+  WallExtraction result;
+  if (cloud_O.empty()) {
+    result.reason = "empty cloud";
+    return result;
+  }
+  auto down = downsampled(cloud_O, options.voxel_m);
+  auto remaining = withoutHorizontalSlabs(*down, options.voxel_m > 0 ? options.voxel_m : 0.05,
+                                          options.horizontal_peak_factor);
+
+  // Vertical planes, largest first.
+  std::vector<WallPlaneFit> candidates;
+  for (const WallPlaneFit& w :
+       ransacPlanes(remaining, pcl::SACMODEL_PARALLEL_PLANE,
+                    std::asin(std::clamp(options.max_normal_z, 0.0, 1.0)),
+                    options.distance_threshold_m, options.max_planes, options.min_inliers,
+                    options.ransac_max_iterations)) {
+    if (std::abs(w.normal.z()) <= options.max_normal_z) candidates.push_back(w);
   }
   result.candidate_planes = static_cast<int>(candidates.size());
   if (candidates.size() < 4) {

@@ -66,4 +66,22 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
 std::vector<WallPlaneFit> refitWalls(const std::vector<Eigen::Vector3f>& cloud,
                                      const std::vector<WallPlaneFit>& walls, double distance_m);
 
+// Planes of any orientation, or horizontal ones (floor, ceiling, table tops), for rig B's
+// evaluation: voxel downsampling, then up to `max_planes` RANSAC planes (PCL's fixed seed:
+// deterministic), largest first, each removed before the next; each refit by least squares
+// on the full-resolution points within `distance_threshold_m` (indices into `cloud`).
+// Normals point toward the cloud's origin (offset >= 0).
+struct PlaneExtractionOptions {
+  enum class Orientation { kAny, kHorizontal, kVertical };
+  Orientation orientation = Orientation::kAny;
+  double max_tilt_deg = 10.0;  // kHorizontal / kVertical: allowed deviation
+  double voxel_m = 0.05;
+  double distance_threshold_m = 0.03;
+  int max_planes = 6;
+  int min_inliers = 300;  // after downsampling
+  int ransac_max_iterations = 1000;
+};
+std::vector<WallPlaneFit> extractPlanes(const std::vector<Eigen::Vector3f>& cloud,
+                                        const PlaneExtractionOptions& options);
+
 }  // namespace sweepmap
