@@ -38,6 +38,7 @@ class PoseTrack {
   int64_t lastUtime() const { return poses_.empty() ? INT64_MIN : poses_.rbegin()->first; }
   void pruneBefore(int64_t utime);  // keeps one pose at or before utime
   size_t size() const { return poses_.size(); }
+  const std::map<int64_t, Pose2>& poses() const { return poses_; }
 
  private:
   std::map<int64_t, Pose2> poses_;

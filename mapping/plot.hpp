@@ -35,6 +35,8 @@ struct PlotOptions {
   std::optional<PlotRange> y_range_m;
   std::optional<PlotRange> z_band_m;  // set: draw only points with min <= z <= max
   double point_size = 0.3;            // gnuplot pointsize of a filled circle
+  std::string x_label = "x [m]";      // side views pass their own axes
+  std::string y_label = "y [m]";
   int width_px = 1200;
   int height_px = 900;
   size_t max_points_per_layer = 200000;  // larger layers are subsampled with a fixed stride

@@ -37,22 +37,35 @@ bool OdometryEkf::addGyro(int64_t utime, double w) {
   return add({utime, Kind::kGyro, w, 0.0});
 }
 
+bool OdometryEkf::addYaw(int64_t utime, double yaw) {
+  if (!(config_.yaw_sigma_rad > 0.0)) return false;
+  if (!std::isfinite(yaw) || std::abs(yaw) > 100.0) {
+    ++counters_.invalid;
+    return false;
+  }
+  return add({utime, Kind::kYaw, yaw, 0.0});
+}
+
 bool OdometryEkf::add(const Measurement& m) {
   if (m.utime < base_utime_) {
     ++counters_.too_old;
     return false;
   }
   const auto count = [&](const Snapshot& s, int sign) {
-    int64_t& fused = s.m.kind == Kind::kWheels ? counters_.wheels : counters_.gyro;
-    int64_t& gated = s.m.kind == Kind::kWheels ? counters_.gated_wheels : counters_.gated_gyro;
+    int64_t& fused = s.m.kind == Kind::kWheels ? counters_.wheels
+                     : s.m.kind == Kind::kGyro ? counters_.gyro
+                                               : counters_.yaw;
+    int64_t& gated = s.m.kind == Kind::kWheels ? counters_.gated_wheels
+                     : s.m.kind == Kind::kGyro ? counters_.gated_gyro
+                                               : counters_.gated_yaw;
     (s.accepted ? fused : gated) += sign;
   };
   // Later measurements to re-apply after this one (late arrival).
   std::vector<Snapshot> later;
-  // Measurements apply in (time, kind) order, gyro before wheels at equal times, so the
-  // result does not depend on arrival order.
+  // Measurements apply in (time, kind) order, wheels after gyro and yaw at equal times,
+  // yaw after gyro, so the result does not depend on arrival order.
   const auto after = [](const Measurement& a, const Measurement& b) {
-    return a.utime > b.utime || (a.utime == b.utime && a.kind == Kind::kWheels && b.kind == Kind::kGyro);
+    return a.utime > b.utime || (a.utime == b.utime && static_cast<int>(a.kind) > static_cast<int>(b.kind));
   };
   while (!history_.empty() && after(history_.back().m, m)) {
     count(history_.back(), -1);
@@ -156,11 +169,22 @@ bool OdometryEkf::apply(const Measurement& m) {
     return update(y, H, R, config_.gate_chi2_wheels);
   }
   Eigen::MatrixXd H = Eigen::MatrixXd::Zero(1, 6);
+  Eigen::VectorXd y(1);
+  Eigen::MatrixXd R(1, 1);
+  if (m.kind == Kind::kYaw) {
+    if (!have_yaw_offset_) {  // the first reading ties the IMU's yaw to the world frame
+      yaw_offset_ = m.a - state_[kTheta];
+      have_yaw_offset_ = true;
+      return true;
+    }
+    H(0, kTheta) = 1.0;
+    y[0] = std::remainder(m.a - yaw_offset_ - state_[kTheta], 2.0 * M_PI);
+    R(0, 0) = config_.yaw_sigma_rad * config_.yaw_sigma_rad;
+    return update(y, H, R, config_.gate_chi2_yaw);
+  }
   H(0, kW) = 1.0;
   H(0, kBias) = 1.0;
-  Eigen::VectorXd y(1);
   y[0] = m.a - (state_[kW] + state_[kBias]);
-  Eigen::MatrixXd R(1, 1);
   R(0, 0) = config_.gyro_sigma_rad_s * config_.gyro_sigma_rad_s;
   return update(y, H, R, config_.gate_chi2_gyro);
 }

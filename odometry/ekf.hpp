@@ -2,6 +2,9 @@
 //  - state s = [x, y, theta, v, w, b_g]: pose in the world, forward speed, turn rate, gyro bias;
 //    a constant-velocity model predicts it (random-walk acceleration, turn acceleration, bias);
 //  - wheel speeds measure (v, w); the gyro measures w + b_g, so its bias is estimated;
+//  - the IMU's own yaw (HI219: static error, white noise), relative to its value at the
+//    filter's first yaw reading, measures theta (optional: yaw_sigma_rad > 0): it stops
+//    the heading drift that gyro noise and an imperfect bias estimate would integrate;
 //  - every measurement is gated by its Mahalanobis distance: a slipping wheel disagrees
 //    with the gyro about w and is rejected (counted), not fused;
 //  - measurements are applied in timestamp order: one that arrives late is inserted into a
@@ -32,6 +35,8 @@ struct EkfConfig {
   double initial_bias_sigma_rad_s = 0.02;
   double gate_chi2_wheels = 13.82;           // 2 dof, p = 0.999
   double gate_chi2_gyro = 10.83;             // 1 dof, p = 0.999
+  double yaw_sigma_rad = 0.0;                // IMU yaw noise; 0: yaw not fused
+  double gate_chi2_yaw = 10.83;              // 1 dof, p = 0.999
   double history_s = 1.0;                    // late measurements within this are re-ordered
   double max_speed_m_s = 5.0;                // beyond: absurd input
   double max_turn_rate_rad_s = 20.0;
@@ -50,6 +55,8 @@ class OdometryEkf {
   // Each returns false when the input was rejected (bad, gated out, or too old).
   bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s);
   bool addGyro(int64_t utime, double w_rad_s);
+  // The IMU's yaw; the first one fused sets the offset between its frame and the world.
+  bool addYaw(int64_t utime, double yaw_rad);
 
   const EkfState& state() const { return state_; }
   const EkfCov& covariance() const { return cov_; }
@@ -58,8 +65,8 @@ class OdometryEkf {
   bool trusted() const;
 
   struct Counters {
-    int64_t wheels = 0, gyro = 0;       // fused
-    int64_t gated_wheels = 0, gated_gyro = 0;
+    int64_t wheels = 0, gyro = 0, yaw = 0;  // fused
+    int64_t gated_wheels = 0, gated_gyro = 0, gated_yaw = 0;
     int64_t invalid = 0;                 // non-finite or absurd
     int64_t reordered = 0;               // late, re-applied in order
     int64_t too_old = 0;                 // older than the history
@@ -67,11 +74,11 @@ class OdometryEkf {
   const Counters& counters() const { return counters_; }
 
  private:
-  enum class Kind { kWheels, kGyro };
+  enum class Kind { kGyro, kYaw, kWheels };  // application order at equal times
   struct Measurement {
     int64_t utime;
     Kind kind;
-    double a, b;  // wheels: v_left, v_right; gyro: w, unused
+    double a, b;  // wheels: v_left, v_right; gyro: w, unused; yaw: yaw, unused
   };
   struct Snapshot {
     Measurement m;
@@ -95,6 +102,8 @@ class OdometryEkf {
   EkfCov base_cov_;
   int64_t base_utime_;
   std::deque<Snapshot> history_;
+  bool have_yaw_offset_ = false;
+  double yaw_offset_ = 0.0;  // IMU yaw minus theta at the first yaw reading
   Counters counters_;
 };
 

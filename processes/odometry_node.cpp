@@ -26,6 +26,10 @@ void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
         "prior on the gyro bias");
   s.add(p + "gate_chi2_wheels", &ekf.gate_chi2_wheels, "", "Mahalanobis gate, wheels (2 dof)");
   s.add(p + "gate_chi2_gyro", &ekf.gate_chi2_gyro, "", "Mahalanobis gate, gyro (1 dof)");
+  s.add(p + "yaw_sigma_rad", &ekf.yaw_sigma_rad, "rad",
+        "noise of the IMU's own yaw, fused relative to its first reading (0: not fused; a 6-axis "
+        "IMU whose yaw drifts needs 0 or a large value)");
+  s.add(p + "gate_chi2_yaw", &ekf.gate_chi2_yaw, "", "Mahalanobis gate, IMU yaw (1 dof)");
   s.add(p + "history_s", &ekf.history_s, "s", "late messages within this are re-ordered");
   s.add(p + "max_speed_m_s", &ekf.max_speed_m_s, "m/s", "faster wheel speeds are absurd");
   s.add(p + "max_turn_rate_rad_s", &ekf.max_turn_rate_rad_s, "rad/s", "faster rates are absurd");
@@ -100,6 +104,7 @@ void OdometryNode::onImu(const Message& msg) {
     ekf_started_ = true;
   }
   if (!ekf_.addGyro(m.utime, m.gyro_rad_s[2])) count("gyro_rejected");
+  if (config_.ekf.yaw_sigma_rad > 0.0 && !ekf_.addYaw(m.utime, m.rpy_rad[2])) count("yaw_rejected");
 }
 
 void OdometryNode::publish(int64_t utime, int64_t now, Outbox& out) {

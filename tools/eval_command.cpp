@@ -2,9 +2,100 @@
 
 #include "processes/cli_common.hpp"
 #include "tools/commands.hpp"
+#include "tools/eval_mobile.hpp"
 #include "tools/eval_rotating.hpp"
 
 namespace sweepmap {
+
+namespace {
+
+Runner addEvalMobile(CLI::App* eval) {
+  auto* cmd = eval->add_subcommand(
+      "mobile",
+      "Rig B (Miao 2022 section 5): trajectory RMSE of wheel odometry alone and of the EKF "
+      "against the truth, top and side views, RANSAC planes of walls, floor and ceiling (ceiling "
+      "normal, deviation histograms), the density D (Eq. 18-19), room dimensions L1-L3 from "
+      "plane-to-plane distances against the scene's truth, and the double wall (ghost) where the "
+      "drive returns to its start. Writes DIR/report.json, DIR/report.md, DIR/cloud.pcd and PNG "
+      "figures. Either --log LOG (truth-based figures need the simulator's TRUTH_POSE and "
+      "TRUTH_MOUNTING) or --experiment paper (simulates the calibration circle and the lab loop "
+      "into DIR/logs/, calibrates the mounting from the circle, evaluates the loop with it). "
+      "Exit 1 when the log is corrupt or holds no scans or poses");
+  struct Opts {
+    std::string log, experiment, rig = "config/rig_b.yaml", scene = "config/scene_lab.yaml", out;
+    std::vector<std::string> sets;
+    uint64_t seed = 1;
+    bool compare_uncalibrated = false, no_plots = false, quiet = false;
+  };
+  auto o = std::make_shared<Opts>();
+  auto* log = cmd->add_option("--log", o->log, "LCM log of a rig-B drive (sweepmap sim-mobile, lcm-logger)")
+                  ->check(CLI::ExistingFile);
+  auto* exp = cmd->add_option("--experiment", o->experiment,
+                              "simulate and evaluate an experiment: paper (Miao 2022 section 5)")
+                  ->check(CLI::IsMember({"paper"}));
+  log->excludes(exp);
+  cmd->add_option("--rig", o->rig, "rig B config file")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--scene", o->scene, "scene file (--experiment)")->capture_default_str()
+      ->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--set", o->sets,
+                  "override a config key: key=value; scene keys as scene.<key> with --experiment "
+                  "(repeatable)");
+  cmd->add_option("--seed", o->seed, "base seed (--experiment): the circle uses seed, the loop seed+1")
+      ->capture_default_str();
+  cmd->add_flag("--compare-uncalibrated", o->compare_uncalibrated,
+                "also assemble with no mounting error (gamma = beta = alpha = 0) and compare "
+                "(--log; --experiment always does)");
+  cmd->add_flag("--no-plots", o->no_plots, "skip the PNG figures");
+  cmd->add_flag("--quiet", o->quiet, "no progress lines on stderr");
+  return [o, cmd]() {
+    if (!cmd->parsed()) return 1;
+    EvalMobileResult r;
+    if (!o->experiment.empty()) {
+      MobileExperimentOptions mo;
+      mo.rig_path = o->rig;
+      mo.scene_path = o->scene;
+      mo.overrides = o->sets;
+      mo.out_dir = o->out;
+      mo.seed = o->seed;
+      mo.plots = !o->no_plots;
+      mo.progress = !o->quiet;
+      try {
+        r = runMobilePaperExperiment(mo);
+      } catch (const ConfigError& e) {
+        std::cerr << "config error: " << e.what() << "\n";
+        return 2;
+      }
+    } else if (!o->log.empty()) {
+      CommonOptions common;
+      common.rig_b_path = o->rig;
+      common.overrides = o->sets;
+      EvalMobileOptions eo;
+      eo.rig = loadRigBOrExit(common);
+      eo.log_path = o->log;
+      eo.out_dir = o->out;
+      eo.plots = !o->no_plots;
+      eo.progress = !o->quiet;
+      if (o->compare_uncalibrated) {
+        LidarMounting before = eo.rig.mounting.toMounting();
+        before.gamma_rad = before.beta_rad = before.alpha_rad = 0.0;
+        eo.before = before;
+      }
+      r = evalMobileLog(eo);
+    } else {
+      std::cerr << "eval mobile: give --log LOG or --experiment paper\n";
+      return 2;
+    }
+    std::cerr << "eval mobile: -> " << o->out << "/report.json\n";
+    if (r.failed) {
+      std::cerr << "eval mobile: " << r.message << "\n";
+      return 1;
+    }
+    return 0;
+  };
+}
+
+}  // namespace
 
 Runner addEvalCommand(CLI::App& app) {
   auto* eval = app.add_subcommand("eval", "Evaluate a rig with its paper's measures");
@@ -62,8 +153,9 @@ Runner addEvalCommand(CLI::App& app) {
   cmd->add_flag("--no-plots", o->no_plots, "skip the PNG figures");
   cmd->add_flag("--quiet", o->quiet, "no progress lines on stderr");
 
-  return [o, cmd]() {
-    if (!cmd->parsed()) return 1;
+  Runner mobile = addEvalMobile(eval);
+  return [o, cmd, mobile]() {
+    if (!cmd->parsed()) return mobile();
     EvalSettings settings;
     settings.plots = !o->no_plots;
     settings.progress = !o->quiet;

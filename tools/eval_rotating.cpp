@@ -19,6 +19,7 @@
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
 #include "mapping/plot.hpp"
+#include "tools/figures.hpp"
 #include "tools/log_sweeps.hpp"
 #include "tools/simulation.hpp"
 
@@ -510,34 +511,6 @@ struct ReportInput {
 
 // --- figures ----------------------------------------------------------------------------
 
-class Figures {
- public:
-  Figures(fs::path dir, const EvalSettings& s) : dir_(std::move(dir)), s_(s) {}
-  // Draws with `draw(path)`; on success records the figure for report.md.
-  void add(const std::string& file, const std::string& caption,
-           const std::function<void(const std::string&)>& draw) {
-    if (!s_.plots) return;
-    try {
-      draw((dir_ / file).string());
-      files_.push_back({file, caption});
-    } catch (const std::exception& e) {
-      errors_.push_back(file + ": " + e.what());
-      std::cerr << "eval: figure " << file << " not drawn: " << e.what() << "\n";
-    }
-  }
-  struct Entry {
-    std::string file, caption;
-  };
-  const std::vector<Entry>& files() const { return files_; }
-  const std::vector<std::string>& errors() const { return errors_; }
-
- private:
-  fs::path dir_;
-  const EvalSettings& s_;
-  std::vector<Entry> files_;
-  std::vector<std::string> errors_;
-};
-
 const char* methodColor(Method m) {
   switch (m) {
     case Method::kRayPlane: return "#1f4fd8";
@@ -878,7 +851,7 @@ EvalRotatingResult writeReport(const fs::path& out, const ReportInput& in, const
     result.sweeps += static_cast<int>(g.sweeps.size());
     for (const auto& r : g.sweeps) has_truth = has_truth || r.phi_true_rad.has_value();
   }
-  Figures figures(out, s);
+  Figures figures(out, s.plots);
   drawFigures(in, s, has_truth, &figures);
 
   json j;

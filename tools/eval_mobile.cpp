@@ -1,0 +1,526 @@
+#include "tools/eval_mobile.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "calib/cloud_density.hpp"
+#include "calib/rotating_geometry.hpp"
+#include "calib/walls.hpp"
+#include "core/event_log.hpp"
+#include "mapping/atomic_file.hpp"
+#include "mapping/cloud_io.hpp"
+#include "mapping/plot.hpp"
+#include "tools/eval_rotating.hpp"
+#include "tools/figures.hpp"
+#include "tools/mobile_log.hpp"
+
+namespace sweepmap {
+namespace {
+
+namespace fs = std::filesystem;
+using json = nlohmann::json;
+
+double round6(double v) { return std::round(v * 1e6) / 1e6; }
+
+std::string fixed(double v, int digits) {
+  std::ostringstream s;
+  s << std::fixed << std::setprecision(digits) << v;
+  return s.str();
+}
+
+json nullable(const std::optional<double>& v) { return v ? json(round6(*v)) : json(nullptr); }
+
+// Position error of `estimate` against `truth` at each estimate's time.
+struct TrajectoryErrors {
+  std::vector<double> t_s, error_m, heading_error_rad;
+  std::optional<double> rmse_m, final_m, max_m, heading_rmse_rad, heading_max_rad;
+};
+
+TrajectoryErrors trajectoryErrors(const PoseTrack& estimate, const PoseTrack& truth) {
+  TrajectoryErrors e;
+  if (estimate.size() == 0 || truth.size() == 0) return e;
+  const int64_t t0 = truth.poses().begin()->first;
+  double ss = 0, mx = 0, hs = 0, hm = 0;
+  for (const auto& [utime, p] : estimate.poses()) {
+    const auto t = truth.at(utime);
+    if (!t) continue;
+    const double d = std::hypot(p.x_m - t->x_m, p.y_m - t->y_m);
+    const double h = rotating::wrapAngle(p.theta_rad - t->theta_rad);
+    e.t_s.push_back(1e-6 * static_cast<double>(utime - t0));
+    e.error_m.push_back(d);
+    e.heading_error_rad.push_back(h);
+    ss += d * d;
+    mx = std::max(mx, d);
+    hs += h * h;
+    hm = std::max(hm, std::abs(h));
+  }
+  if (e.error_m.empty()) return e;
+  e.rmse_m = std::sqrt(ss / static_cast<double>(e.error_m.size()));
+  e.heading_rmse_rad = std::sqrt(hs / static_cast<double>(e.error_m.size()));
+  e.heading_max_rad = hm;
+  e.final_m = e.error_m.back();
+  e.max_m = mx;
+  return e;
+}
+
+std::vector<Eigen::Vector3f> pathPoints(const PoseTrack& track) {
+  std::vector<Eigen::Vector3f> out;
+  for (const auto& [utime, p] : track.poses()) {
+    out.emplace_back(static_cast<float>(p.x_m), static_cast<float>(p.y_m), 0.0f);
+  }
+  return out;
+}
+
+Eigen::Vector3d centroid(const std::vector<Eigen::Vector3f>& cloud, const std::vector<int>& idx) {
+  Eigen::Vector3d c = Eigen::Vector3d::Zero();
+  for (int i : idx) c += cloud[static_cast<size_t>(i)].cast<double>();
+  return idx.empty() ? c : Eigen::Vector3d(c / static_cast<double>(idx.size()));
+}
+
+double signedDistance(const WallPlaneFit& p, const Eigen::Vector3d& x) { return p.normal.dot(x) + p.offset; }
+
+// Distance of two near-parallel planes: the mean of each one's distance from the other's
+// inlier centroid (symmetric; exact for parallel planes).
+double planeDistance(const WallPlaneFit& a, const std::vector<Eigen::Vector3f>& cloud_a,
+                     const WallPlaneFit& b, const std::vector<Eigen::Vector3f>& cloud_b) {
+  return 0.5 * (std::abs(signedDistance(a, centroid(cloud_b, b.inlier_indices))) +
+                std::abs(signedDistance(b, centroid(cloud_a, a.inlier_indices))));
+}
+
+json planeJson(const WallPlaneFit& p, const std::vector<Eigen::Vector3f>& cloud) {
+  const Eigen::Vector3d c = centroid(cloud, p.inlier_indices);
+  return {{"normal", {round6(p.normal.x()), round6(p.normal.y()), round6(p.normal.z())}},
+          {"offset_m", round6(p.offset)},
+          {"centroid_m", {round6(c.x()), round6(c.y()), round6(c.z())}},
+          {"inliers", p.inliers},
+          {"rms_mm", round6(1000.0 * p.rms_m)}};
+}
+
+// The room's planes found by RANSAC in a world-frame cloud.
+struct RoomPlanes {
+  std::vector<WallPlaneFit> walls;  // extractWalls' order: normals ~ +Y, +X, -Y, -X
+  std::optional<WallPlaneFit> floor, ceiling;
+  std::string reason;  // what is missing
+};
+
+RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud) {
+  RoomPlanes r;
+  WallExtractionOptions wo;
+  const WallExtraction walls = extractWalls(cloud, wo);
+  r.walls = walls.walls;
+  if (r.walls.empty()) r.reason = "walls: " + walls.reason;
+  PlaneExtractionOptions ho;
+  ho.orientation = PlaneExtractionOptions::Orientation::kHorizontal;
+  ho.max_planes = 4;
+  const auto horizontal = extractPlanes(cloud, ho);
+  // Height of a horizontal plane: z where it crosses the vertical through its centroid.
+  const auto height = [&](const WallPlaneFit& p) { return centroid(cloud, p.inlier_indices).z(); };
+  for (const WallPlaneFit& p : horizontal) {
+    if (!r.floor || height(p) < height(*r.floor)) r.floor = p;
+    if (!r.ceiling || height(p) > height(*r.ceiling)) r.ceiling = p;
+  }
+  if (horizontal.size() < 2) {
+    r.floor.reset();
+    r.ceiling.reset();
+    r.reason += (r.reason.empty() ? "" : "; ") + std::string("fewer than two horizontal planes");
+  }
+  return r;
+}
+
+struct RoomDims {
+  std::optional<double> L1, L2, L3;  // length, width (the longer and shorter wall spacing), height
+};
+
+RoomDims roomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud) {
+  RoomDims d;
+  if (p.walls.size() == 4) {
+    const double y = planeDistance(p.walls[0], cloud, p.walls[2], cloud);
+    const double x = planeDistance(p.walls[1], cloud, p.walls[3], cloud);
+    d.L1 = std::max(x, y);
+    d.L2 = std::min(x, y);
+  }
+  if (p.floor && p.ceiling) d.L3 = planeDistance(*p.floor, cloud, *p.ceiling, cloud);
+  return d;
+}
+
+// Deviations (mm) of the points near each plane, for the histograms of Fig. 9.
+DeviationStats deviations(const std::vector<Eigen::Vector3f>& cloud, const std::vector<WallPlaneFit>& planes,
+                          double edge_trim_m) {
+  std::vector<PlaneForDeviation> pd;
+  for (const auto& p : planes) pd.push_back({p.normal, p.offset});
+  DeviationStats stats(1.0, 50.0);
+  for (const auto& v : wallDeviationsMm(cloud, pd, 0.05, edge_trim_m)) {
+    for (double d : v) stats.add(d, 10.0);
+  }
+  return stats;
+}
+
+json deviationJson(const DeviationStats& d) {
+  return {{"points", d.count},
+          {"rms_mm", round6(d.rmsMm())},
+          {"share_within_10mm", round6(d.shareWithin())},
+          {"histogram", {{"bin_mm", d.bin_mm}, {"range_mm", d.range_mm}, {"counts", d.bins}}}};
+}
+
+// Where the drive comes back to a place it passed at least `min_gap_s` earlier (pose within
+// `radius_m` and heading within `heading_rad`): the scans of both passes, and the distance
+// between the planes each pass sees there. A double wall is the ghost of Miao 2022 Fig. 11.
+struct LoopClosure {
+  std::vector<int> early, late;  // scan indices
+  struct Plane {
+    WallPlaneFit early, late;
+    double distance_m = 0;
+  };
+  std::vector<Plane> planes;
+  std::optional<double> ghost_m;  // the largest distance among vertical planes
+  std::string reason;
+};
+
+LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track, const std::vector<Eigen::Vector3f>& cloud,
+                        const std::vector<int>& scan_of_point) {
+  constexpr double kMinGapS = 30.0, kRadiusM = 0.3, kHeadingRad = 0.35;
+  LoopClosure lc;
+  std::vector<std::optional<Pose2>> pose(log.scans.size());
+  for (size_t j = 0; j < log.scans.size(); ++j) {
+    const Scan2D& s = log.scans[j];
+    pose[j] = track.at(s.rayUtime(s.ranges_m.size() / 2));
+  }
+  std::vector<char> is_early(log.scans.size(), 0), is_late(log.scans.size(), 0);
+  for (size_t j = 0; j < log.scans.size(); ++j) {
+    if (!pose[j]) continue;
+    for (size_t i = 0; i < j; ++i) {
+      if (!pose[i] || 1e-6 * static_cast<double>(log.scans[j].utime - log.scans[i].utime) < kMinGapS) continue;
+      if (std::hypot(pose[j]->x_m - pose[i]->x_m, pose[j]->y_m - pose[i]->y_m) > kRadiusM) continue;
+      if (std::abs(rotating::wrapAngle(pose[j]->theta_rad - pose[i]->theta_rad)) > kHeadingRad) continue;
+      is_early[i] = 1;
+      is_late[j] = 1;
+    }
+  }
+  std::vector<Eigen::Vector3f> early_pts, late_pts;
+  for (size_t k = 0; k < cloud.size(); ++k) {
+    const auto j = static_cast<size_t>(scan_of_point[k]);
+    if (is_late[j]) {
+      late_pts.push_back(cloud[k]);
+    } else if (is_early[j]) {
+      early_pts.push_back(cloud[k]);
+    }
+  }
+  for (size_t j = 0; j < log.scans.size(); ++j) {
+    if (is_early[j] && !is_late[j]) lc.early.push_back(static_cast<int>(j));
+    if (is_late[j]) lc.late.push_back(static_cast<int>(j));
+  }
+  if (lc.early.size() < 5 || lc.late.size() < 5) {
+    lc.reason = "the drive does not come back to a place it passed " + fixed(kMinGapS, 0) + " s earlier";
+    return lc;
+  }
+  PlaneExtractionOptions po;
+  po.orientation = PlaneExtractionOptions::Orientation::kVertical;
+  po.voxel_m = 0.03;
+  po.max_planes = 4;
+  po.min_inliers = 100;
+  po.distance_threshold_m = 0.03;
+  for (const WallPlaneFit& e : extractPlanes(early_pts, po)) {
+    const auto refit = refitWalls(late_pts, {e}, 0.1);
+    if (refit.empty() || refit[0].inliers < 100) continue;
+    // The late pass's plane through its points near the early plane, then its own inliers.
+    const auto late = refitWalls(late_pts, refit, po.distance_threshold_m);
+    if (late.empty() || late[0].inliers < 100) continue;
+    LoopClosure::Plane p{e, late[0], planeDistance(e, early_pts, late[0], late_pts)};
+    lc.planes.push_back(p);
+    lc.ghost_m = std::max(lc.ghost_m.value_or(0.0), p.distance_m);
+  }
+  if (!lc.ghost_m) lc.reason = "no wall seen by both passes";
+  return lc;
+}
+
+std::vector<Eigen::Vector3f> sideView(const std::vector<Eigen::Vector3f>& cloud, int horizontal_axis) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(cloud.size());
+  for (const auto& p : cloud) out.emplace_back(p[horizontal_axis], p.z(), 0.0f);
+  return out;
+}
+
+Series histogramSeries(const DeviationStats& d, const std::string& title, const std::string& color,
+                       const std::string& style) {
+  Series s;
+  s.title = title + ": RMS " + fixed(d.rmsMm(), 1) + " mm";
+  s.color = color;
+  s.style = style;
+  for (size_t i = 0; i < d.bins.size(); ++i) {
+    s.x.push_back(d.binCenterMm(i));
+    s.y.push_back(static_cast<double>(d.bins[i]));
+  }
+  return s;
+}
+
+json mountingJson(const LidarMounting& m) {
+  return {{"gamma_rad", round6(m.gamma_rad)}, {"beta_rad", round6(m.beta_rad)}, {"alpha_rad", round6(m.alpha_rad)}};
+}
+
+}  // namespace
+
+EvalMobileResult evalMobileLog(const EvalMobileOptions& o) {
+  EvalMobileResult result;
+  const fs::path out(o.out_dir);
+  fs::create_directories(out);
+  const auto progress = [&](const std::string& what) {
+    if (o.progress) std::cerr << "eval mobile: " << what << "\n";
+  };
+  json& r = result.report;
+  r["log"] = fs::path(o.log_path).filename().string();
+
+  progress("replaying the odometry over " + o.log_path);
+  MobileLog log;
+  try {
+    log = loadMobileLog(o.log_path, o.rig);
+  } catch (const std::exception& e) {
+    result.failed = true;
+    result.message = e.what();
+  }
+  if (log.log_error) {
+    result.failed = true;
+    result.message = log.error;
+    r["log_error"] = log.error;
+  }
+  r["scans"] = log.scans.size();
+  r["invalid_scans"] = log.invalid_scans;
+  if (log.scans.empty() || log.ekf.size() == 0) {
+    result.failed = true;
+    if (result.message.empty()) result.message = o.log_path + ": no valid scans or no odometry poses";
+  }
+  const PoseTrack& track = o.rig.assembler.pose_channel == "WHEEL_ODOMETRY" ? log.wheels : log.ekf;
+  const LidarMounting mounting = o.rig.mounting.toMounting();
+  r["mounting"] = mountingJson(mounting);
+  r["pose_channel"] = o.rig.assembler.pose_channel;
+  for (auto it = o.extra.begin(); it != o.extra.end(); ++it) r[it.key()] = it.value();
+  Figures figures(out, o.plots);
+
+  // Trajectory.
+  const bool has_truth = log.truth.size() > 0;
+  const TrajectoryErrors e_odo = trajectoryErrors(log.wheels, log.truth);
+  const TrajectoryErrors e_ekf = trajectoryErrors(log.ekf, log.truth);
+  r["trajectory_rmse_m"] = {{"odometry", nullable(e_odo.rmse_m)}, {"ekf", nullable(e_ekf.rmse_m)}};
+  r["trajectory"] = {{"final_error_m", {{"odometry", nullable(e_odo.final_m)}, {"ekf", nullable(e_ekf.final_m)}}},
+                     {"max_error_m", {{"odometry", nullable(e_odo.max_m)}, {"ekf", nullable(e_ekf.max_m)}}},
+                     {"heading_rmse_mrad",
+                      {{"odometry", nullable(e_odo.heading_rmse_rad ? std::optional<double>(1000.0 * *e_odo.heading_rmse_rad) : std::nullopt)},
+                       {"ekf", nullable(e_ekf.heading_rmse_rad ? std::optional<double>(1000.0 * *e_ekf.heading_rmse_rad) : std::nullopt)}}},
+                     {"wheel_readings_gated", log.gated_wheel_readings},
+                     {"truth", has_truth}};
+  if (e_odo.rmse_m && e_ekf.rmse_m && *e_ekf.rmse_m > 0) {
+    r["trajectory"]["rmse_ratio_odometry_over_ekf"] = round6(*e_odo.rmse_m / *e_ekf.rmse_m);
+  }
+  {
+    std::vector<Layer> layers;
+    if (has_truth) layers.push_back({"truth", "black", pathPoints(log.truth)});
+    layers.push_back({"wheel odometry", "red", pathPoints(log.wheels)});
+    layers.push_back({"EKF", "blue", pathPoints(log.ekf)});
+    PlotOptions po;
+    po.title = "Trajectory: wheel odometry alone, EKF" + std::string(has_truth ? " and truth" : "");
+    po.point_size = 0.15;
+    figures.add("trajectory.png", "The car's path in the world frame (its start pose).",
+                [&](const std::string& png) { plotTopView(png, layers, po); });
+  }
+  if (has_truth) {
+    SeriesPlotOptions so;
+    so.title = "Position error against the truth";
+    so.x_label = "time [s]";
+    so.y_label = "error [m]";
+    const std::vector<Series> s = {{"wheel odometry", e_odo.t_s, e_odo.error_m, "lines", "red"},
+                                   {"EKF", e_ekf.t_s, e_ekf.error_m, "lines", "blue"}};
+    figures.add("trajectory_error.png",
+                "Position error of wheel odometry alone and of the EKF; slip makes odometry drift.",
+                [&](const std::string& png) { plotSeries(png, s, so); });
+  }
+
+  // The cloud.
+  progress("assembling " + std::to_string(log.scans.size()) + " scans in the world frame");
+  std::vector<int> scan_of_point;
+  const auto cloud = assembleWorld(log, track, mounting, &scan_of_point);
+  r["points"] = cloud.size();
+  writePcdBinary((out / "cloud.pcd").string(), cloud);
+  {
+    PlotOptions po;
+    po.point_size = 0.12;
+    po.title = "Top view of the cloud (below 2 m) with the EKF path";
+    po.z_band_m = PlotRange{0.05, 2.0};
+    figures.add("top_view.png", "Top view (Fig. 11B): the cloud without floor and ceiling.",
+                [&](const std::string& png) {
+                  plotTopView(png, {{"cloud", "gray40", cloud}, {"EKF", "blue", pathPoints(track)}}, po);
+                });
+    for (int axis : {0, 1}) {
+      PlotOptions so;
+      so.point_size = 0.12;
+      so.x_label = axis == 0 ? "x [m]" : "y [m]";
+      so.y_label = "z [m]";
+      so.title = std::string("Side view of the cloud (") + (axis == 0 ? "x" : "y") + "-z)";
+      const std::string file = std::string("side_view_") + (axis == 0 ? "xz" : "yz") + ".png";
+      figures.add(file, "Side view: walls should stand vertical, floor and ceiling flat.",
+                  [&](const std::string& png) { plotTopView(png, {{"cloud", "gray40", sideView(cloud, axis)}}, so); });
+    }
+  }
+
+  // Planes, room dimensions, deviations.
+  progress("RANSAC planes");
+  const RoomPlanes planes = findRoomPlanes(cloud);
+  json jp;
+  jp["walls"] = json::array();
+  for (const auto& w : planes.walls) jp["walls"].push_back(planeJson(w, cloud));
+  jp["floor"] = planes.floor ? planeJson(*planes.floor, cloud) : json(nullptr);
+  jp["ceiling"] = planes.ceiling ? planeJson(*planes.ceiling, cloud) : json(nullptr);
+  if (!planes.reason.empty()) jp["reason"] = planes.reason;
+  r["planes"] = jp;
+  if (planes.ceiling) {
+    Eigen::Vector3d n = planes.ceiling->normal;
+    if (n.z() < 0) n = -n;
+    r["ceiling_normal"] = {round6(n.x()), round6(n.y()), round6(n.z())};
+    r["ceiling_tilt_mrad"] = round6(1000.0 * std::acos(std::clamp(n.z(), -1.0, 1.0)));
+  } else {
+    r["ceiling_normal"] = nullptr;
+  }
+  const RoomDims dims = roomDims(planes, cloud);
+  r["room_dims_m"] = {{"L1", nullable(dims.L1)}, {"L2", nullable(dims.L2)}, {"L3", nullable(dims.L3)}};
+  if (log.truth_mounting) {
+    const double* s = log.truth_mounting->room_size_m;
+    const double t1 = std::max(s[0], s[1]), t2 = std::min(s[0], s[1]), t3 = s[2];
+    r["room_dims_truth_m"] = {{"L1", t1}, {"L2", t2}, {"L3", t3}};
+    const auto err = [](const std::optional<double>& v, double t) {
+      return v ? json(round6(1000.0 * (*v - t))) : json(nullptr);
+    };
+    r["room_dims_error_mm"] = {{"L1", err(dims.L1, t1)}, {"L2", err(dims.L2, t2)}, {"L3", err(dims.L3, t3)}};
+    const LidarMounting truth = trueMounting(*log.truth_mounting);
+    r["mounting_truth"] = mountingJson(truth);
+    r["mounting_used_error_mrad"] = {{"gamma", round6(1000.0 * (mounting.gamma_rad - truth.gamma_rad))},
+                                     {"beta", round6(1000.0 * (mounting.beta_rad - truth.beta_rad))},
+                                     {"alpha", round6(1000.0 * (mounting.alpha_rad - truth.alpha_rad))}};
+  } else {
+    r["room_dims_error_mm"] = {{"L1", nullptr}, {"L2", nullptr}, {"L3", nullptr}};
+  }
+  const std::vector<WallPlaneFit> ceiling = planes.ceiling ? std::vector<WallPlaneFit>{*planes.ceiling}
+                                                           : std::vector<WallPlaneFit>{};
+  const DeviationStats dev_ceiling = deviations(cloud, ceiling, 0.0);
+  const DeviationStats dev_walls = deviations(cloud, planes.walls, 0.2);
+  r["deviations"] = {{"ceiling", deviationJson(dev_ceiling)}, {"walls", deviationJson(dev_walls)}};
+  if (o.before) {
+    progress("the same with the mounting before calibration");
+    const auto cloud_b = assembleWorld(log, track, *o.before);
+    const RoomPlanes planes_b = findRoomPlanes(cloud_b);
+    const RoomDims dims_b = roomDims(planes_b, cloud_b);
+    const std::vector<WallPlaneFit> ceiling_b = planes_b.ceiling ? std::vector<WallPlaneFit>{*planes_b.ceiling}
+                                                                 : std::vector<WallPlaneFit>{};
+    const DeviationStats dc = deviations(cloud_b, ceiling_b, 0.0);
+    const DeviationStats dw = deviations(cloud_b, planes_b.walls, 0.2);
+    json b;
+    b["mounting"] = mountingJson(*o.before);
+    b["room_dims_m"] = {{"L1", nullable(dims_b.L1)}, {"L2", nullable(dims_b.L2)}, {"L3", nullable(dims_b.L3)}};
+    b["deviations"] = {{"ceiling", deviationJson(dc)}, {"walls", deviationJson(dw)}};
+    if (planes_b.ceiling) {
+      Eigen::Vector3d n = planes_b.ceiling->normal;
+      if (n.z() < 0) n = -n;
+      b["ceiling_normal"] = {round6(n.x()), round6(n.y()), round6(n.z())};
+    }
+    r["before_calibration"] = b;
+    for (const auto& [name, before, after] :
+         {std::tuple<std::string, const DeviationStats*, const DeviationStats*>{"ceiling", &dc, &dev_ceiling},
+          {"walls", &dw, &dev_walls}}) {
+      SeriesPlotOptions so;
+      so.title = "Fig. 9: deviations of the " + name + " points from their RANSAC plane";
+      so.x_label = "deviation [mm]";
+      so.y_label = "points";
+      const std::vector<Series> s = {histogramSeries(*before, "uncalibrated", "#cc3311", "boxes"),
+                                     histogramSeries(*after, "calibrated", "#1f4fd8", "lines")};
+      figures.add("deviation_" + name + ".png",
+                  "Fig. 9: histogram of the " + name +
+                      " deviations before (red) and after (blue) the mounting calibration; the "
+                      "calibrated one should be narrower.",
+                  [&, s, so](const std::string& png) { plotSeries(png, s, so); });
+    }
+  } else {
+    SeriesPlotOptions so;
+    so.title = "Deviations of the ceiling and wall points from their RANSAC planes";
+    so.x_label = "deviation [mm]";
+    so.y_label = "points";
+    const std::vector<Series> s = {histogramSeries(dev_ceiling, "ceiling", "#1f4fd8", "lines"),
+                                   histogramSeries(dev_walls, "walls", "#228833", "lines")};
+    figures.add("deviations.png", "Fig. 9: histograms of the plane deviations.",
+                [&](const std::string& png) { plotSeries(png, s, so); });
+  }
+
+  // Density (Eq. 18-19).
+  progress("density D over " + std::to_string(cloud.size()) + " points");
+  r["density_D_m"] = round6(meanNearestNeighbourDistance(cloud));
+
+  // The ghost where the drive closes its loop.
+  progress("loop closure");
+  const LoopClosure lc = loopClosure(log, track, cloud, scan_of_point);
+  r["ghost_mm"] = lc.ghost_m ? json(round6(1000.0 * *lc.ghost_m)) : json(nullptr);
+  json jl;
+  jl["early_scans"] = lc.early.size();
+  jl["late_scans"] = lc.late.size();
+  jl["planes"] = json::array();
+  for (const auto& p : lc.planes) {
+    jl["planes"].push_back({{"normal", {round6(p.early.normal.x()), round6(p.early.normal.y()), round6(p.early.normal.z())}},
+                            {"early_points", p.early.inliers},
+                            {"late_points", p.late.inliers},
+                            {"distance_mm", round6(1000.0 * p.distance_m)}});
+  }
+  if (!lc.reason.empty()) jl["reason"] = lc.reason;
+  r["loop_closure"] = jl;
+  if (!lc.late.empty()) {
+    std::vector<char> early(log.scans.size(), 0), late(log.scans.size(), 0);
+    for (int j : lc.early) early[static_cast<size_t>(j)] = 1;
+    for (int j : lc.late) late[static_cast<size_t>(j)] = 1;
+    std::vector<Eigen::Vector3f> pe, pl;
+    for (size_t k = 0; k < cloud.size(); ++k) {
+      const auto j = static_cast<size_t>(scan_of_point[k]);
+      if (late[j]) pl.push_back(cloud[k]);
+      if (early[j]) pe.push_back(cloud[k]);
+    }
+    PlotOptions po;
+    po.point_size = 0.2;
+    po.z_band_m = PlotRange{0.9, 1.1};
+    po.title = "Where the loop closes: first pass (blue) and last pass (red), z 0.9-1.1 m; ghost " +
+               (lc.ghost_m ? fixed(1000.0 * *lc.ghost_m, 1) + " mm" : std::string("n/a"));
+    figures.add("loop_closure.png",
+                "Fig. 11C-D: the walls seen where the drive comes back to its start, first pass "
+                "against last pass; a double wall is the ghost.",
+                [&](const std::string& png) { plotTopView(png, {{"first pass", "blue", pe}, {"last pass", "red", pl}}, po); });
+  }
+
+  // Figures list and the report files.
+  r["figures"] = json::array();
+  for (const auto& f : figures.files()) r["figures"].push_back(f.file);
+  if (!figures.errors().empty()) r["figure_errors"] = figures.errors();
+  writeFileAtomic((out / "report.json").string(), r.dump(2) + "\n");
+
+  std::ostringstream md;
+  md << "# Rig B evaluation: " << r["log"].get<std::string>() << "\n\n";
+  md << "- scans " << log.scans.size() << ", points " << cloud.size() << ", poses from "
+     << o.rig.assembler.pose_channel << "\n";
+  md << "- trajectory RMSE: odometry " << r["trajectory_rmse_m"]["odometry"].dump() << " m, EKF "
+     << r["trajectory_rmse_m"]["ekf"].dump() << " m\n";
+  md << "- room dimensions L1, L2, L3: " << r["room_dims_m"].dump() << " m; error "
+     << r["room_dims_error_mm"].dump() << " mm\n";
+  md << "- ceiling normal " << r["ceiling_normal"].dump() << "; density D " << r["density_D_m"].dump()
+     << " m; ghost where the loop closes " << r["ghost_mm"].dump() << " mm\n\n";
+  for (const auto& f : figures.files()) md << "![" << f.caption << "](" << f.file << ")\n\n" << f.caption << "\n\n";
+  writeFileAtomic((out / "report.md").string(), md.str());
+  return result;
+}
+
+}  // namespace sweepmap
+namespace sweepmap {
+
+EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions&) {
+  EvalMobileResult r;
+  r.failed = true;
+  r.message = "--experiment paper: the mounting calibration is not built yet";
+  return r;
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,57 @@
+// Rig B's evaluation (Miao 2022 section 5): trajectory of odometry alone and of the EKF
+// against the truth, top and side views of the world-frame cloud, RANSAC planes of the
+// walls, floor and ceiling (ceiling normal, deviation histograms, Fig. 9), the density D of
+// Eq. 18-19, the room's dimensions L1-L3 from plane-to-plane distances (Table 3) and the
+// double wall ("ghost") where the drive comes back to its start. Writes DIR/report.json,
+// DIR/report.md and PNG figures.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/world_assembly.hpp"
+#include "processes/rig_b.hpp"
+
+namespace sweepmap {
+
+struct EvalMobileOptions {
+  std::string log_path;
+  RigBConfig rig;  // mounting.* is the mounting evaluated ("calibrated")
+  std::string out_dir;
+  bool plots = true;
+  bool progress = true;
+  // A mounting to compare with (before calibration: the nominal rotation without error):
+  // its planes' deviations beside the evaluated mounting's. Unset: no comparison.
+  std::optional<LidarMounting> before;
+  nlohmann::json extra = nlohmann::json::object();  // merged into report.json
+};
+
+struct EvalMobileResult {
+  nlohmann::json report;
+  bool failed = false;  // corrupt log, no scans, no poses
+  std::string message;
+};
+
+EvalMobileResult evalMobileLog(const EvalMobileOptions& options);
+
+// --experiment paper: simulates the calibration circle and the lab loop into DIR/logs/,
+// calibrates the mounting from the circle into DIR/mounting_calibration.yaml, evaluates
+// the loop with it (and without, for comparison) and reports the calibration's error.
+struct MobileExperimentOptions {
+  std::string rig_path = "config/rig_b.yaml";
+  std::string scene_path = "config/scene_lab.yaml";
+  std::vector<std::string> overrides;  // scene.<key> to the scene, the rest to the rig
+  std::string out_dir;
+  uint64_t seed = 1;
+  double circle_duration_s = 60.0;
+  double loop_duration_s = 140.0;  // one lap of the default loop (~126 s) and the closing overlap
+  bool plots = true;
+  bool progress = true;
+};
+
+// Throws ConfigError for a bad configuration.
+EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions& options);
+
+}  // namespace sweepmap
