@@ -156,5 +156,45 @@ TEST(OdometryEkf, WheelsAloneWorkButLoseTrustOverTime) {
   EXPECT_FALSE(ekf.trusted()) << "heading sigma " << std::sqrt(ekf.covariance()(2, 2));
 }
 
+TEST(OdometryEkf, ImuYawBoundsTheHeadingDriftOfABiasedNoisyGyro) {
+  // 10 minutes on the circle: gyro noise and an imperfectly learned bias integrate into
+  // heading drift; the IMU's own yaw (a constant offset plus white noise) bounds it.
+  const Drive d = simulateDrive(11, 600.0, false, 0.02);
+  EkfConfig with_yaw;
+  with_yaw.yaw_sigma_rad = 0.002;
+  OdometryEkf gyro_only(EkfConfig{}), fused(with_yaw);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n(0.0, 0.002);
+  const double offset = 0.4;  // the IMU's yaw zero is not the world's
+  size_t k = 0;
+  double max_err_gyro = 0, max_err_fused = 0;
+  for (const auto& s : d.samples) {
+    feed(gyro_only, s);
+    feed(fused, s);
+    if (s.wheels) {
+      const Pose2& t = d.truth[k++].second;
+      // An IMU reports its yaw wrapped to (-pi, pi]; the gate (p = 0.999) rejects a few.
+      fused.addYaw(s.utime + 1000, std::remainder(t.theta_rad + offset + n(rng), 2 * M_PI));
+      max_err_gyro = std::max(max_err_gyro, std::abs(std::remainder(gyro_only.pose().theta_rad - t.theta_rad, 2 * M_PI)));
+      max_err_fused = std::max(max_err_fused, std::abs(std::remainder(fused.pose().theta_rad - t.theta_rad, 2 * M_PI)));
+    }
+  }
+  EXPECT_GT(fused.counters().yaw, 29900) << "gated " << fused.counters().gated_yaw;
+  EXPECT_LT(fused.counters().gated_yaw, 100);
+  EXPECT_LT(max_err_fused, 0.01) << "gyro only: " << max_err_gyro;
+  EXPECT_LT(max_err_fused, max_err_gyro);
+  EXPECT_FALSE(fused.addYaw(700000000, std::nan("")));
+  EXPECT_EQ(fused.counters().invalid, 1);
+  EXPECT_TRUE(fused.state().allFinite());
+}
+
+TEST(OdometryEkf, YawIsIgnoredWhenNotConfigured) {
+  OdometryEkf ekf(EkfConfig{});
+  EXPECT_TRUE(ekf.addWheels(10000, 0.2, 0.2));
+  EXPECT_FALSE(ekf.addYaw(20000, 0.3));
+  EXPECT_EQ(ekf.counters().yaw, 0);
+  EXPECT_EQ(ekf.counters().invalid, 0);
+}
+
 }  // namespace
 }  // namespace sweepmap
