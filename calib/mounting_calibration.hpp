@@ -6,8 +6,9 @@
 //
 // Two methods on the same data:
 //  - kPaperPoints (the paper's): corresponding points of the two passes, found
-//    automatically (corners and edges of the calibration target, not hand picks), and
-//    Levenberg-Marquardt on the sum of their squared distances (Eq. 15-17);
+//    automatically (the edge points of the calibration target, a board in front of a
+//    farther background, in every scan; paired mutually nearest across the passes, not
+//    hand picks), and Levenberg-Marquardt on the sum of their squared distances (Eq. 15-17);
 //  - kPointToPlane (ours): Ceres over all overlapping points of the two passes, each
 //    point against the local plane the other pass sees there, with a robust loss;
 //    optionally the lidar-to-odometry time offset as a fourth parameter.
@@ -34,6 +35,42 @@ struct MountingCalibrationOptions {
   double min_pass_gap_s = 5.0;
   bool estimate_time_offset = false;  // kPointToPlane only: pose time = ray time + offset
   double max_time_offset_s = 0.1;     // bound of the time offset
+  double initial_time_offset_s = 0.0;  // start of the time offset's search
+
+  // Shared by both methods.
+  bool opposite_sides_only = true;  // the other pass = the other half of the scan (left/right)
+  double min_range_m = 0.3;         // closer rays are not used as query/edge points
+  int max_outer_iterations = 8;     // correspondence searches (ICP-like outer loop)
+  int max_solver_iterations = 50;   // Ceres iterations per outer iteration
+  double convergence_rad = 1e-9;    // stop when no angle moves more than this
+
+  // kPointToPlane.
+  int ray_stride = 2;           // every n-th ray of a scan enters the overlap cloud
+  int query_stride = 4;         // every n-th of those is a query point
+  double neighbour_radius_m = 0.15;  // the residual's neighbours (the nearest, up to max_neighbours)
+  double plane_radius_m = 0.2;       // the patch tested for flatness and giving the normal
+  double range_noise_fraction = 0.01;  // the lidar's range noise (X4: < 1 %), for the flatness test
+  int min_neighbours = 6;       // of the other pass, for a local plane
+  int max_neighbours = 12;
+  double max_planarity_ratio = 0.2;  // smallest / middle eigenvalue of the neighbours
+  bool check_own_plane = true;       // the query's own pass must see the same plane there
+  double max_normal_angle_rad = 0.26;  // between the two passes' local planes (15 deg)
+  double loss_scale_m = 0.03;        // Cauchy loss scale
+  double min_trim_m = 1e-4;          // residuals beyond max(this, 3 robust sigmas) are dropped
+  int min_correspondences = 200;
+  double max_range_m = 100.0;        // farther rays are not used as query points
+  bool range_weighting = false;      // residual / (range noise ~ range): far points weigh less
+
+  // kPaperPoints: the target is a board in front of a farther background (the lab's board
+  // in front of its window recess); in a scan it is a run of rays with a range jump to
+  // something farther at both ends, this long between its ends.
+  double edge_jump_m = 0.15;        // range discontinuity at the board's edges
+  double target_min_extent_m = 0.3;
+  double target_max_extent_m = 0.8;
+  double max_edge_range_m = 4.0;
+  double edge_match_m = 0.2;        // first search radius for the same edge point in the other pass
+  double edge_match_min_m = 0.05;   // halved each outer iteration down to this
+  int min_point_pairs = 4;          // the paper used 4 hand-picked pairs
 };
 
 struct MountingCalibrationResult {

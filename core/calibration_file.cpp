@@ -2,6 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -12,7 +13,18 @@
 
 namespace sweepmap {
 
-PlateCalibration loadPlateCalibration(const std::string& path) {
+namespace {
+
+// A calibration file: one section of named finite numbers (all required, no others) and
+// the free-form provenance under `source`.
+struct CalibrationFileContent {
+  std::map<std::string, double> values;  // key (without the section) -> value
+  std::map<std::string, std::string> source;
+  std::vector<std::string> logs;
+};
+
+CalibrationFileContent loadCalibrationFile(const std::string& path, const std::string& section,
+                                           const std::vector<std::string>& keys) {
   YAML::Node root;
   try {
     root = YAML::LoadFile(path);
@@ -24,24 +36,31 @@ PlateCalibration loadPlateCalibration(const std::string& path) {
   if (!root.IsMap()) throw ConfigError(path + ": top level must be a map");
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
-    if (key != "plate" && key != "source") throw ConfigError(path + ": unknown key '" + key + "'");
+    if (key != section && key != "source") throw ConfigError(path + ": unknown key '" + key + "'");
   }
-  const YAML::Node plate = root["plate"];
-  if (!plate || !plate.IsMap() || !plate["alpha_deg"]) {
-    throw ConfigError(path + ": missing key 'plate.alpha_deg'");
-  }
-  for (const auto& kv : plate) {
-    if (kv.first.as<std::string>() != "alpha_deg") {
-      throw ConfigError(path + ": unknown key 'plate." + kv.first.as<std::string>() + "'");
+  const YAML::Node node = root[section];
+  for (const std::string& k : keys) {
+    if (!node || !node.IsMap() || !node[k]) {
+      throw ConfigError(path + ": missing key '" + section + "." + k + "'");
     }
   }
-  PlateCalibration c;
-  try {
-    c.alpha_deg = plate["alpha_deg"].as<double>();
-  } catch (const YAML::Exception&) {
-    throw ConfigError(path + ": key 'plate.alpha_deg' is not a number");
+  for (const auto& kv : node) {
+    const std::string key = kv.first.as<std::string>();
+    if (std::find(keys.begin(), keys.end(), key) == keys.end()) {
+      throw ConfigError(path + ": unknown key '" + section + "." + key + "'");
+    }
   }
-  if (!std::isfinite(c.alpha_deg)) throw ConfigError(path + ": key 'plate.alpha_deg' not finite");
+  CalibrationFileContent c;
+  for (const std::string& k : keys) {
+    double v = 0.0;
+    try {
+      v = node[k].as<double>();
+    } catch (const YAML::Exception&) {
+      throw ConfigError(path + ": key '" + section + "." + k + "' is not a number");
+    }
+    if (!std::isfinite(v)) throw ConfigError(path + ": key '" + section + "." + k + "' not finite");
+    c.values[k] = v;
+  }
   if (const YAML::Node src = root["source"]; src && src.IsMap()) {
     for (const auto& kv : src) {
       const std::string key = kv.first.as<std::string>();
@@ -55,32 +74,77 @@ PlateCalibration loadPlateCalibration(const std::string& path) {
   return c;
 }
 
-void writePlateCalibration(const std::string& path, const PlateCalibration& c) {
+// Writes `header` (a comment) and the content to `path.tmp`, then renames over `path`.
+void writeCalibrationFile(const std::string& path, const std::string& header, const std::string& section,
+                          const std::vector<std::pair<std::string, double>>& values,
+                          const std::map<std::string, std::string>& source,
+                          const std::vector<std::string>& logs) {
   YAML::Emitter em;
   em << YAML::BeginMap;
-  em << YAML::Key << "plate" << YAML::Value << YAML::BeginMap;
-  std::ostringstream alpha;
-  alpha << std::setprecision(12) << c.alpha_deg;
-  em << YAML::Key << "alpha_deg" << YAML::Value << alpha.str();
+  em << YAML::Key << section << YAML::Value << YAML::BeginMap;
+  for (const auto& [k, v] : values) {
+    std::ostringstream text;
+    text << std::setprecision(12) << v;
+    em << YAML::Key << k << YAML::Value << text.str();
+  }
   em << YAML::EndMap;
   em << YAML::Key << "source" << YAML::Value << YAML::BeginMap;
-  for (const auto& [k, v] : c.source) em << YAML::Key << k << YAML::Value << v;
+  for (const auto& [k, v] : source) em << YAML::Key << k << YAML::Value << v;
   em << YAML::Key << "logs" << YAML::Value << YAML::BeginSeq;
-  for (const auto& l : c.logs) em << l;
+  for (const auto& l : logs) em << l;
   em << YAML::EndSeq << YAML::EndMap << YAML::EndMap;
 
   const std::string tmp = path + ".tmp";
   {
     std::ofstream f(tmp, std::ios::trunc);
-    f << "# Plate-angle calibration (Yuan 2021 Algorithm A1); read via plate.calibration_file\n"
-      << em.c_str() << "\n";
+    f << "# " << header << "\n" << em.c_str() << "\n";
     f.flush();
-    if (!f) throw std::runtime_error(tmp + ": write failed");
+    if (!f) {
+      f.close();
+      std::remove(tmp.c_str());
+      throw std::runtime_error(tmp + ": write failed");
+    }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     std::remove(tmp.c_str());
     throw std::runtime_error(path + ": cannot replace (rename failed)");
   }
+}
+
+}  // namespace
+
+PlateCalibration loadPlateCalibration(const std::string& path) {
+  const CalibrationFileContent f = loadCalibrationFile(path, "plate", {"alpha_deg"});
+  PlateCalibration c;
+  c.alpha_deg = f.values.at("alpha_deg");
+  c.source = f.source;
+  c.logs = f.logs;
+  return c;
+}
+
+void writePlateCalibration(const std::string& path, const PlateCalibration& c) {
+  writeCalibrationFile(path,
+                       "Plate-angle calibration (Yuan 2021 Algorithm A1); read via plate.calibration_file",
+                       "plate", {{"alpha_deg", c.alpha_deg}}, c.source, c.logs);
+}
+
+MountingCalibration loadMountingCalibration(const std::string& path) {
+  const CalibrationFileContent f =
+      loadCalibrationFile(path, "mounting", {"gamma_rad", "beta_rad", "alpha_rad"});
+  MountingCalibration c;
+  c.gamma_rad = f.values.at("gamma_rad");
+  c.beta_rad = f.values.at("beta_rad");
+  c.alpha_rad = f.values.at("alpha_rad");
+  c.source = f.source;
+  c.logs = f.logs;
+  return c;
+}
+
+void writeMountingCalibration(const std::string& path, const MountingCalibration& c) {
+  writeCalibrationFile(
+      path, "Lidar mounting calibration (Miao 2022 section 4.2); read via mounting.calibration_file",
+      "mounting", {{"gamma_rad", c.gamma_rad}, {"beta_rad", c.beta_rad}, {"alpha_rad", c.alpha_rad}},
+      c.source, c.logs);
 }
 
 }  // namespace sweepmap

@@ -1,5 +1,6 @@
 // Calibration results are config files too: a small YAML file that a rig file points to
-// (plate.calibration_file), written atomically by the calibration tools.
+// (rig A: plate.calibration_file; rig B: mounting.calibration_file), written atomically by
+// the calibration tools.
 //
 //   plate:
 //     alpha_deg: 29.3598          # the calibrated value the assembler uses
@@ -7,6 +8,12 @@
 //     tool: sweepmap calib plate-angle
 //     date: 2026-11-22T04:00:00Z
 //     logs: [a.lcmlog, b.lcmlog]
+//
+//   mounting:                      # rig B (Miao 2022 section 4.2)
+//     gamma_rad: 0.0355
+//     beta_rad: 0.0126
+//     alpha_rad: -0.0058
+//   source: {...}                  # as above
 #pragma once
 
 #include <map>
@@ -28,5 +35,18 @@ PlateCalibration loadPlateCalibration(const std::string& path);
 
 // Writes to `path.tmp`, then renames over `path`. Throws std::runtime_error on failure.
 void writePlateCalibration(const std::string& path, const PlateCalibration& calibration);
+
+struct MountingCalibration {
+  double gamma_rad = 0.0;  // about body x
+  double beta_rad = 0.0;   // about body y
+  double alpha_rad = 0.0;  // about body z
+  std::map<std::string, std::string> source;
+  std::vector<std::string> logs;
+};
+
+// Same rules as the plate's: `mounting.{gamma,beta,alpha}_rad` required and finite, only
+// `mounting` and `source` at the top.
+MountingCalibration loadMountingCalibration(const std::string& path);
+void writeMountingCalibration(const std::string& path, const MountingCalibration& calibration);
 
 }  // namespace sweepmap

@@ -48,6 +48,19 @@ void SceneConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "rig.y_m", &rig_y_m, "m", "rotation axis Y in the room");
   s.add(p + "rig.z_m", &rig_z_m, "m", "height of the lidar centre (origin of frame O)");
   s.add(p + "rig.yaw_deg", &rig_yaw_deg, "deg", "frame O's X from the room's X, about Z");
+  s.add(p + "target.enabled", &target_enabled, "", "calibration target: a board in front of a window");
+  s.add(p + "target.wall", &target_wall, "", "wall of the window: x_min, x_max or y_min");
+  s.add(p + "target.position_m", &target_position_m, "m",
+        "window centre along the wall (room Y on x walls, room X on y_min)");
+  s.add(p + "target.window_width_m", &target_window_width_m, "m", "window opening along the wall");
+  s.add(p + "target.window_height_m", &target_window_height_m, "m", "window opening height");
+  s.add(p + "target.window_sill_m", &target_window_sill_m, "m", "floor to the window's bottom");
+  s.add(p + "target.window_depth_m", &target_window_depth_m, "m", "wall plane to the recess's back");
+  s.add(p + "target.board_width_m", &target_board_width_m, "m", "board along the wall");
+  s.add(p + "target.board_height_m", &target_board_height_m, "m", "board height (centred on the window)");
+  s.add(p + "target.board_thickness_m", &target_board_thickness_m, "m", "board thickness");
+  s.add(p + "target.board_offset_m", &target_board_offset_m, "m",
+        "wall plane to the board's front face, into the room (negative: inside the recess)");
 }
 
 void SceneConfig::validate(const std::string& source) const {
@@ -93,6 +106,30 @@ void SceneConfig::validate(const std::string& source) const {
           "puts the cabinet outside the room");
   require(cabinet_height_m <= room_height_m, "cabinet.height_m", "must be below the ceiling");
 
+  if (target_enabled) {
+    require(target_wall == "x_min" || target_wall == "x_max" || target_wall == "y_min", "target.wall",
+            "must be x_min, x_max or y_min (y_max holds the door)");
+    positive(target_window_width_m, "target.window_width_m");
+    positive(target_window_height_m, "target.window_height_m");
+    positive(target_window_depth_m, "target.window_depth_m");
+    positive(target_board_width_m, "target.board_width_m");
+    positive(target_board_height_m, "target.board_height_m");
+    positive(target_board_thickness_m, "target.board_thickness_m");
+    require(target_window_sill_m > 0.0, "target.window_sill_m", "must be positive");
+    const double half_wall = target_wall == "y_min" ? half_l : half_w;
+    require(std::abs(target_position_m) + target_window_width_m / 2 < half_wall, "target.position_m",
+            "puts the window outside its wall");
+    require(target_window_sill_m + target_window_height_m < room_height_m, "target.window_height_m",
+            "puts the window's top above the ceiling");
+    require(target_board_width_m <= target_window_width_m, "target.board_width_m",
+            "must not exceed the window's width");
+    require(target_board_height_m <= target_window_height_m, "target.board_height_m",
+            "must not exceed the window's height");
+    require(target_board_thickness_m - target_board_offset_m <= target_window_depth_m,
+            "target.board_offset_m", "puts the board behind the window's back");
+    require(target_board_offset_m < std::min(half_l, half_w), "target.board_offset_m",
+            "puts the board across the room");
+  }
   require(std::abs(rig_x_m) + kPostSideM / 2 < half_l, "rig.x_m", "puts the rig outside the room");
   require(std::abs(rig_y_m) + kPostSideM / 2 < half_w, "rig.y_m", "puts the rig outside the room");
   require(rig_z_m > 0.0 && rig_z_m < room_height_m, "rig.z_m", "must be between floor and ceiling");
@@ -157,6 +194,45 @@ Scene::Scene(const SceneConfig& config, const PlateConfig& plate) : config_(conf
       {"door_leaf", box(door_x0, door_x1, w + c.door_depth_m, y_outer, 0, c.door_height_m)},
   };
 
+  if (c.target_enabled) {
+    // A box in the wall's own coordinates: u along the wall, z up, depth behind the wall
+    // plane (negative: in the room).
+    const auto wallBox = [&](double u0, double u1, double z0, double z1, double d0, double d1) {
+      if (c.target_wall == "x_min") return box(-l - d1, -l - d0, u0, u1, z0, z1);
+      if (c.target_wall == "x_max") return box(l + d0, l + d1, u0, u1, z0, z1);
+      return box(u0, u1, -w - d1, -w - d0, z0, z1);  // y_min
+    };
+    // The wall slab is rebuilt around the window opening.
+    const std::string wall_name = "wall_" + c.target_wall;
+    double u_lo, u_hi;
+    if (c.target_wall == "y_min") {
+      u_lo = -l;
+      u_hi = l;
+    } else {
+      u_lo = -w - t;
+      u_hi = y_outer;
+    }
+    boxes_.erase(std::remove_if(boxes_.begin(), boxes_.end(),
+                                [&](const SceneBox& b) { return b.name == wall_name; }),
+                 boxes_.end());
+    const double wu0 = c.target_position_m - c.target_window_width_m / 2;
+    const double wu1 = c.target_position_m + c.target_window_width_m / 2;
+    const double wz0 = c.target_window_sill_m, wz1 = wz0 + c.target_window_height_m;
+    boxes_.push_back({wall_name + "_below_window", wallBox(u_lo, u_hi, 0, wz0, 0, t)});
+    boxes_.push_back({wall_name + "_above_window", wallBox(u_lo, u_hi, wz1, h, 0, t)});
+    boxes_.push_back({wall_name + "_left_of_window", wallBox(u_lo, wu0, wz0, wz1, 0, t)});
+    boxes_.push_back({wall_name + "_right_of_window", wallBox(wu1, u_hi, wz0, wz1, 0, t)});
+    boxes_.push_back({"window_back", wallBox(wu0, wu1, wz0, wz1, c.target_window_depth_m,
+                                             c.target_window_depth_m + t)});
+    const double bz = 0.5 * (wz0 + wz1);
+    const double d0 = -c.target_board_offset_m;
+    boxes_.push_back({"target_board",
+                      wallBox(c.target_position_m - c.target_board_width_m / 2,
+                              c.target_position_m + c.target_board_width_m / 2,
+                              bz - c.target_board_height_m / 2, bz + c.target_board_height_m / 2, d0,
+                              d0 + c.target_board_thickness_m)});
+  }
+
   const double tx0 = c.table_center_x_m - c.table_length_m / 2;
   const double tx1 = c.table_center_x_m + c.table_length_m / 2;
   const double ty0 = c.table_center_y_m - c.table_width_m / 2;
@@ -184,6 +260,13 @@ Scene::Scene(const SceneConfig& config, const PlateConfig& plate) : config_(conf
     slabs_.push_back({{b.box.min().x(), b.box.min().y(), b.box.min().z()},
                       {b.box.max().x(), b.box.max().y(), b.box.max().z()}});
   }
+}
+
+std::optional<Eigen::AlignedBox3d> Scene::targetBoard() const {
+  for (const SceneBox& b : boxes_) {
+    if (b.name == "target_board") return b.box;
+  }
+  return std::nullopt;
 }
 
 std::optional<double> Scene::raycast(const Eigen::Vector3d& origin_room,

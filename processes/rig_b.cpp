@@ -1,6 +1,9 @@
 #include "processes/rig_b.hpp"
 
 #include <cmath>
+#include <filesystem>
+
+#include "core/calibration_file.hpp"
 
 namespace sweepmap {
 
@@ -15,6 +18,9 @@ void MountingConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "x_m", &x_m, "m", "lidar centre along body x (l1)");
   s.add(p + "y_m", &y_m, "m", "lidar centre along body y");
   s.add(p + "z_m", &z_m, "m", "lidar centre above the body plane (h)");
+  s.add(p + "calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) whose mounting.gamma/beta/alpha_rad replace "
+        "gamma/beta/alpha_rad; \"\" = none (sweepmap calib mounting writes it)");
 }
 
 LidarMounting MountingConfig::toMounting() const {
@@ -55,6 +61,14 @@ RigBConfig loadRigB(const std::string& path, const std::vector<std::string>& ove
   }
   if (c.assembler.pose_channel != "ODOMETRY_POSE" && c.assembler.pose_channel != "WHEEL_ODOMETRY") {
     throw ConfigError(path + ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
+  }
+  if (!c.mounting.calibration_file.empty()) {
+    std::filesystem::path calib(c.mounting.calibration_file);
+    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
+    const MountingCalibration m = loadMountingCalibration(calib.string());
+    c.mounting.gamma_rad = m.gamma_rad;
+    c.mounting.beta_rad = m.beta_rad;
+    c.mounting.alpha_rad = m.alpha_rad;
   }
   return c;
 }

@@ -24,6 +24,9 @@ struct MountingConfig {
   double x_m = 0.0;        // lidar centre in the body frame (l1, 0, h)
   double y_m = 0.0;
   double z_m = 0.0;
+  // A calibration YAML (relative to the rig file; "" = none) whose mounting.{gamma,beta,
+  // alpha}_rad replace the three values above (core/calibration_file.hpp).
+  std::string calibration_file;
   void declare(ConfigSchema& s, const std::string& prefix);
   LidarMounting toMounting() const;
 };

@@ -1,5 +1,5 @@
-// `sweepmap calib <what>`: calibrate the rig from its own logs. Today: `plate-angle`
-// (Yuan 2021 section 4.2, Algorithm A1); the group leaves room for `calib mounting`.
+// `sweepmap calib <what>`: calibrate the rig from its own logs: `plate-angle` (rig A, Yuan
+// 2021 section 4.2, Algorithm A1) and `mounting` (rig B, Miao 2022 section 4.2).
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -11,6 +11,7 @@
 #include <optional>
 #include <sstream>
 
+#include "calib/mounting_calibration.hpp"
 #include "calib/plate_angle.hpp"
 #include "calib/walls.hpp"
 #include "core/calibration_file.hpp"
@@ -18,6 +19,7 @@
 #include "processes/cli_common.hpp"
 #include "tools/commands.hpp"
 #include "tools/log_sweeps.hpp"
+#include "tools/mobile_log.hpp"
 
 namespace sweepmap {
 namespace {
@@ -199,6 +201,174 @@ int runPlateAngle(const PlateAngleOptions& o) {
   return 0;
 }
 
+
+struct MountingOptions {
+  std::string log, rig, out;
+  std::vector<std::string> sets;
+  bool json = false;
+  std::string track = "ekf";  // ekf | wheels | truth
+  bool time_offset = false;
+  bool no_paper = false;  // skip the paper's method (else reported beside ours)
+  double min_pass_gap_s = MountingCalibrationOptions{}.min_pass_gap_s;
+};
+
+nlohmann::json resultJson(const MountingCalibrationResult& r, double seconds_taken) {
+  nlohmann::json j;
+  j["method"] = mountingMethodName(r.method);
+  j["ok"] = r.ok;
+  if (!r.ok) j["reason"] = r.reason;
+  j["gamma_rad"] = r.gamma_rad;
+  j["beta_rad"] = r.beta_rad;
+  j["alpha_rad"] = r.alpha_rad;
+  j["time_offset_s"] = r.time_offset_s;
+  j["residual_before_m"] = r.residual_before_m;
+  j["residual_after_m"] = r.residual_after_m;
+  j["correspondences"] = r.correspondences;
+  j["iterations"] = r.iterations;
+  j["time_s"] = seconds_taken;
+  return j;
+}
+
+int runMounting(const MountingOptions& o) {
+  using clock = std::chrono::steady_clock;
+  const auto t_start = clock::now();
+  RigBConfig rig;
+  try {
+    rig = loadRigB(o.rig, o.sets);
+  } catch (const std::exception& e) {
+    std::cerr << "calib mounting: config error: " << e.what() << "\n";
+    return 2;
+  }
+  if (!std::filesystem::is_regular_file(o.log)) {
+    std::cerr << "calib mounting: log '" << o.log << "' does not exist or is not a file\n";
+    return 2;
+  }
+  const std::filesystem::path out_dir = std::filesystem::absolute(o.out).parent_path();
+  if (!std::filesystem::is_directory(out_dir)) {
+    std::cerr << "calib mounting: output directory '" << out_dir.string() << "' does not exist\n";
+    return 2;
+  }
+  MobileLog log;
+  try {
+    log = loadMobileLog(o.log, rig);
+  } catch (const std::exception& e) {
+    std::cerr << "calib mounting: cannot read log '" << o.log << "': " << e.what() << "\n";
+    return 2;
+  }
+  if (log.log_error) {
+    std::cerr << "calib mounting: " << o.log << ": " << log.error << " (the data before it is used)\n";
+  }
+  const PoseTrack* track = o.track == "wheels" ? &log.wheels : o.track == "truth" ? &log.truth : &log.ekf;
+  if (o.track == "truth" && log.truth.size() == 0) {
+    std::cerr << "calib mounting: --track truth: the log has no TRUTH_POSE (not simulated)\n";
+    return 2;
+  }
+  const double load_s = seconds(clock::now() - t_start);
+  std::cerr << "calib mounting: " << log.scans.size() << " scans, " << track->size() << " " << o.track
+            << " poses from " << o.log << "\n";
+
+  const LidarMounting initial = rig.mounting.toMounting();
+  MountingCalibrationOptions options;
+  options.min_pass_gap_s = o.min_pass_gap_s;
+  options.estimate_time_offset = o.time_offset;
+  options.method = MountingMethod::kPointToPlane;
+  const auto t_ours = clock::now();
+  const MountingCalibrationResult ours = calibrateMounting(log.scans, *track, initial, options);
+  const double ours_s = seconds(clock::now() - t_ours);
+  std::optional<MountingCalibrationResult> paper;
+  double paper_s = 0;
+  if (!o.no_paper) {
+    options.method = MountingMethod::kPaperPoints;
+    options.estimate_time_offset = false;
+    const auto t_paper = clock::now();
+    paper = calibrateMounting(log.scans, *track, initial, options);
+    paper_s = seconds(clock::now() - t_paper);
+  }
+
+  std::optional<LidarMounting> truth;
+  if (log.truth_mounting) truth = trueMounting(*log.truth_mounting);
+  const auto report = [&](const MountingCalibrationResult& r, double secs) {
+    std::cerr << "  " << mountingMethodName(r.method) << ": ";
+    if (!r.ok) {
+      std::cerr << "FAILED: " << r.reason << "\n";
+      return;
+    }
+    std::cerr << std::setprecision(6) << "gamma " << r.gamma_rad << ", beta " << r.beta_rad << ", alpha "
+              << r.alpha_rad << " rad";
+    if (o.time_offset && r.method == MountingMethod::kPointToPlane) {
+      std::cerr << ", time offset " << r.time_offset_s * 1e3 << " ms";
+    }
+    std::cerr << "; residual RMS " << std::setprecision(4) << r.residual_before_m * 1e3 << " -> "
+              << r.residual_after_m * 1e3 << " mm over " << r.correspondences << " correspondences, "
+              << r.iterations << " iterations, " << std::setprecision(3) << secs << " s\n";
+    if (truth) {
+      std::cerr << std::setprecision(3) << "    error vs truth: gamma "
+                << (r.gamma_rad - truth->gamma_rad) * 1e3 << ", beta "
+                << (r.beta_rad - truth->beta_rad) * 1e3 << ", alpha "
+                << (r.alpha_rad - truth->alpha_rad) * 1e3 << " mrad\n";
+    }
+  };
+  report(ours, ours_s);
+  if (paper) report(*paper, paper_s);
+
+  nlohmann::json j = resultJson(ours, ours_s);
+  j["track"] = o.track;
+  j["log"] = o.log;
+  j["scans"] = log.scans.size();
+  if (log.log_error) j["log_error"] = log.error;
+  if (paper) j["paper"] = resultJson(*paper, paper_s);
+  if (truth) {
+    j["truth"] = {{"gamma_rad", truth->gamma_rad}, {"beta_rad", truth->beta_rad}, {"alpha_rad", truth->alpha_rad}};
+    const auto errors = [&](const MountingCalibrationResult& r) {
+      return nlohmann::json{{"gamma", (r.gamma_rad - truth->gamma_rad) * 1e3},
+                            {"beta", (r.beta_rad - truth->beta_rad) * 1e3},
+                            {"alpha", (r.alpha_rad - truth->alpha_rad) * 1e3}};
+    };
+    if (ours.ok) j["error_mrad"] = errors(ours);
+    if (paper && paper->ok) j["paper"]["error_mrad"] = errors(*paper);
+  }
+
+  if (!ours.ok) {
+    std::cerr << "calib mounting: nothing calibrated: " << ours.reason << "\n";
+    if (o.json) std::cout << std::setprecision(12) << j.dump(2) << "\n";
+    return 1;
+  }
+  MountingCalibration c;
+  c.gamma_rad = ours.gamma_rad;
+  c.beta_rad = ours.beta_rad;
+  c.alpha_rad = ours.alpha_rad;
+  c.source["tool"] = "sweepmap calib mounting";
+  c.source["date"] = utcNow();
+  c.source["method"] = mountingMethodName(ours.method);
+  c.source["track"] = o.track;
+  std::ostringstream text;
+  text << std::setprecision(6) << ours.residual_before_m << " -> " << ours.residual_after_m;
+  c.source["residual_rms_m"] = text.str();
+  c.source["correspondences"] = std::to_string(ours.correspondences);
+  if (o.time_offset) {
+    std::ostringstream dt;
+    dt << std::setprecision(6) << ours.time_offset_s;
+    c.source["time_offset_s"] = dt.str();
+  }
+  c.logs = {o.log};
+  try {
+    writeMountingCalibration(o.out, c);
+  } catch (const std::exception& e) {
+    std::cerr << "calib mounting: " << e.what() << "\n";
+    return 2;
+  }
+  const double total_s = seconds(clock::now() - t_start);
+  std::cerr << std::fixed << std::setprecision(2) << "  time: log " << load_s << " s, ours " << ours_s
+            << " s, paper " << paper_s << " s, total " << total_s << " s\n  wrote " << o.out << "\n";
+  std::cerr.unsetf(std::ios::floatfield);
+  if (o.json) {
+    j["timing_s"] = {{"log", load_s}, {"point_to_plane", ours_s}, {"paper_points", paper_s}, {"total", total_s}};
+    j["out"] = o.out;
+    std::cout << std::setprecision(12) << j.dump(2) << "\n";
+  }
+  return 0;
+}
+
 }  // namespace
 
 Runner addCalibCommand(CLI::App& app) {
@@ -238,8 +408,51 @@ Runner addCalibCommand(CLI::App& app) {
   plate->add_option("--voxel", o->voxel_m, "voxel size [m] of the wall extraction's downsampling")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
-  return [plate, o]() {
+
+  auto* mount = calib->add_subcommand(
+      "mounting",
+      "Rig B: calibrate the lidar's 3-axis mounting error (gamma about body x, beta about y, "
+      "alpha about z; Miao 2022 section 4.2) from a drive that sees the same surfaces twice "
+      "(the circle of sweepmap sim-mobile, a calibration target in view)");
+  mount->footer(
+      "The log's wheel and IMU messages are replayed through the odometry node (EKF) for the "
+      "track; every lidar ray is placed in the world with the pose at its own time. On a circle a "
+      "place is seen by one half of the scan and, half a turn later, by the other: the two passes.\n\n"
+      "Ours (the result written): Ceres over all overlapping points, each point of one pass "
+      "against the local plane (PCA of its neighbours) of the other pass, both re-assembled with "
+      "the mounting, Cauchy loss, correspondences found again each outer iteration; with "
+      "--time-offset also the lidar-to-odometry time offset (unobservable on a steady circle: "
+      "needs speed or curvature changes). The paper's (reported beside it): edge points "
+      "(range discontinuities, e.g. the target board in front of its window) matched mutually "
+      "nearest across the passes, Levenberg-Marquardt on their squared distances (Eq. 15-17).\n\n"
+      "Writes OUT atomically (mounting.gamma_rad/beta_rad/alpha_rad + provenance); set "
+      "mounting.calibration_file in the rig file to use it. The search starts from the rig's "
+      "mounting. Human report on stderr; --json prints gamma_rad, beta_rad, alpha_rad, "
+      "time_offset_s, residual_before_m, residual_after_m (RMS), correspondences, method, the "
+      "paper's result under \"paper\" and, for simulated logs, the truth and error_mrad.\n\n"
+      "Exit status: 0 calibrated; 1 not calibrated (too little data, no overlap); 2 bad rig, log "
+      "or output path.\n"
+      "Example: sweepmap sim-mobile --rig config/rig_b.yaml --scene config/scene_lab.yaml --out "
+      "circle.lcmlog && sweepmap calib mounting --log circle.lcmlog --rig config/rig_b.yaml --out "
+      "config/mounting_calibration.yaml");
+  auto m = std::make_shared<MountingOptions>();
+  mount->add_option("--log", m->log, "LCM log of the drive (sweepmap sim-mobile, lcm-logger)")->required();
+  mount->add_option("--rig", m->rig, "rig B config file the log was recorded with")->required();
+  mount->add_option("--out", m->out, "calibration file to write (YAML, atomically)")->required();
+  mount->add_flag("--json", m->json, "print the result as JSON on stdout");
+  mount->add_option("--set", m->sets, "override a rig config key: key=value (repeatable)");
+  mount->add_option("--track", m->track, "poses: ekf (ODOMETRY_POSE replayed), wheels, truth (simulated logs)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"ekf", "wheels", "truth"}));
+  mount->add_flag("--time-offset", m->time_offset, "also estimate the lidar-to-odometry time offset (ours)");
+  mount->add_flag("--no-paper", m->no_paper, "skip the paper's method");
+  mount->add_option("--min-pass-gap", m->min_pass_gap_s,
+                    "seconds between two observations of a place for them to be two passes")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  return [plate, o, mount, m]() {
     if (plate->parsed()) return runPlateAngle(*o);
+    if (mount->parsed()) return runMounting(*m);
     return 2;
   };
 }

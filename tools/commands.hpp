@@ -37,7 +37,7 @@ Runner addReplayCommand(CLI::App& app);
 Runner addDemoCommand(CLI::App& app, const std::string& argv0);
 Runner addSpyCommand(CLI::App& app, const std::string& argv0);
 Runner addBenchCommand(CLI::App& app);
-Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle
+Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle, calib mounting
 Runner addEvalCommand(CLI::App& app);   // group: eval rotating
 Runner addImportCommand(CLI::App& app);  // group: import breezyslam
 Runner addReplayMobileCommand(CLI::App& app);

@@ -75,5 +75,47 @@ TEST_F(CalibrationFileTest, RejectsBadFiles) {
   EXPECT_NO_THROW(loadPlateCalibration(write("plate: {alpha_deg: 30}\n")));
 }
 
+
+TEST_F(CalibrationFileTest, MountingRoundTripAndNoTemporaryLeft) {
+  MountingCalibration c;
+  c.gamma_rad = 0.0355123456789;
+  c.beta_rad = 0.0126;
+  c.alpha_rad = -0.0058;
+  c.source["tool"] = "sweepmap calib mounting";
+  c.logs = {"circle.lcmlog"};
+  const std::string p = (dir_ / "mounting.yaml").string();
+  writeMountingCalibration(p, c);
+  EXPECT_FALSE(fs::exists(p + ".tmp"));
+  const MountingCalibration r = loadMountingCalibration(p);
+  EXPECT_NEAR(r.gamma_rad, c.gamma_rad, 1e-12);
+  EXPECT_DOUBLE_EQ(r.beta_rad, c.beta_rad);
+  EXPECT_DOUBLE_EQ(r.alpha_rad, c.alpha_rad);
+  EXPECT_EQ(r.logs, c.logs);
+  EXPECT_EQ(r.source.at("tool"), "sweepmap calib mounting");
+
+}
+
+TEST_F(CalibrationFileTest, MountingRejectsBadFilesNamingTheKey) {
+  const auto error = [&](const std::string& text) {
+    std::ofstream(dir_ / "m.yaml") << text;
+    try {
+      loadMountingCalibration((dir_ / "m.yaml").string());
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: 0}\n").find("mounting.alpha_rad"), std::string::npos);
+  EXPECT_NE(error("mounting: {gamma_rad: x, beta_rad: 0, alpha_rad: 0}\n").find("mounting.gamma_rad"),
+            std::string::npos);
+  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: .nan, alpha_rad: 0}\n").find("mounting.beta_rad"),
+            std::string::npos);
+  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: 0, alpha_rad: 0, delta_rad: 0}\n").find("mounting.delta_rad"),
+            std::string::npos);
+  EXPECT_NE(error("plate: {alpha_deg: 30}\n").find("'plate'"), std::string::npos);
+  EXPECT_NE(error("mounting: [1\n").find("m.yaml"), std::string::npos);
+  EXPECT_EQ(error("mounting: {gamma_rad: 0.01, beta_rad: 0, alpha_rad: -0.02}\n"), "");
+}
+
 }  // namespace
 }  // namespace sweepmap

@@ -1,6 +1,8 @@
 // End to end through `sweepmap calib plate-angle`: 50 simulated mode-7 sweeps of the
 // conference room (the paper's protocol) with the plate's installation error on
 // (sim.alpha_true_deg 29.3598 vs plate.alpha_deg 30), calibrated, written, loaded back.
+// And `sweepmap calib mounting` (rig B): the simulator's default 60 s circle in the lab,
+// slip and noise on, the EKF track replayed from the log.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <spawn.h>
@@ -12,6 +14,7 @@
 
 #include "core/calibration_file.hpp"
 #include "core/rig_config.hpp"
+#include "processes/rig_b.hpp"
 #include "test_support.hpp"
 
 extern char** environ;
@@ -143,6 +146,87 @@ TEST(CalibCli, HelpDescribesTheGroupAndTheCommand) {
   for (const char* s : {"--logs", "--rig", "--out", "--json", "--set", "Algorithm A1"}) {
     EXPECT_NE(help.find(s), std::string::npos) << s << " missing in:\n" << help;
   }
+}
+
+
+// ---------------------------------------------------------------------------------------
+// calib mounting (rig B).
+
+const std::string kRigB = sourcePath("config/rig_b.yaml");
+
+// The simulator's defaults: the 60 s circle in the lab, slip and noise on, true mounting
+// error (0.0355, 0.0126, -0.0058) rad; the rig file believes (0, 0, 0).
+std::string circleLog() {
+  return cachedSimMobileLog("circle_default", {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml")});
+}
+
+TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
+  const std::string log = circleLog();
+  const fs::path dir = scratchDir("calib_cli_mounting");
+  const fs::path out = dir / "mounting_calibration.yaml";
+  const int rc = runSplit({"calib", "mounting", "--log", log, "--rig", kRigB, "--out", out.string(), "--json"},
+                          dir / "stdout.json", dir / "stderr.txt");
+  ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
+  const nlohmann::json j = readJson(dir / "stdout.json");
+  std::cerr << readFile(dir / "stderr.txt");
+  EXPECT_EQ(j.at("method"), "point_to_plane");
+  EXPECT_EQ(j.at("track"), "ekf");
+  const nlohmann::json truth = j.at("truth");
+  EXPECT_NEAR(truth.at("gamma_rad").get<double>(), 0.0355, 1e-12);
+  for (const char* a : {"gamma_rad", "beta_rad", "alpha_rad"}) {
+    EXPECT_NEAR(j.at(a).get<double>(), truth.at(a).get<double>(), 1e-3) << a;
+  }
+  EXPECT_LT(j.at("residual_after_m").get<double>(), j.at("residual_before_m").get<double>());
+  // The paper's method is reported beside ours.
+  const nlohmann::json paper = j.at("paper");
+  EXPECT_EQ(paper.at("method"), "paper_points");
+  EXPECT_TRUE(paper.contains("gamma_rad") && paper.contains("residual_after_m"));
+
+  // The file goes into a rig file through mounting.calibration_file (relative to the rig).
+  const MountingCalibration c = loadMountingCalibration(out.string());
+  EXPECT_DOUBLE_EQ(c.gamma_rad, j.at("gamma_rad").get<double>());
+  EXPECT_EQ(c.source.at("tool"), "sweepmap calib mounting");
+  std::string rig = readFile(kRigB);
+  const std::string from = "calibration_file: \"\"";
+  ASSERT_NE(rig.find(from), std::string::npos);
+  rig.replace(rig.find(from), from.size(), "calibration_file: mounting_calibration.yaml");
+  std::ofstream(dir / "rig_b.yaml") << rig;
+  const RigBConfig loaded = loadRigB((dir / "rig_b.yaml").string());
+  EXPECT_DOUBLE_EQ(loaded.mounting.gamma_rad, c.gamma_rad);
+  EXPECT_DOUBLE_EQ(loaded.mounting.beta_rad, c.beta_rad);
+  EXPECT_DOUBLE_EQ(loaded.mounting.alpha_rad, c.alpha_rad);
+  EXPECT_DOUBLE_EQ(loaded.mounting.toMounting().alpha_rad, c.alpha_rad);
+}
+
+TEST(CalibCli, MountingBadInputsFailClearly) {
+  const fs::path dir = scratchDir("calib_cli_mounting_bad");
+  const fs::path out = dir / "m.yaml";
+  const auto run = [&](const std::vector<std::string>& args, const std::string& label) {
+    std::vector<std::string> a = {"calib", "mounting"};
+    a.insert(a.end(), args.begin(), args.end());
+    return runSplit(a, dir / (label + ".out"), dir / (label + ".err"));
+  };
+  // Missing log.
+  EXPECT_EQ(run({"--log", (dir / "nope.lcmlog").string(), "--rig", kRigB, "--out", out.string()}, "missing"), 2);
+  EXPECT_NE(readFile(dir / "missing.err").find("nope.lcmlog"), std::string::npos);
+  // Corrupt log: bytes that are no LCM log.
+  std::ofstream(dir / "corrupt.lcmlog") << std::string(4096, 'x');
+  EXPECT_NE(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string()}, "corrupt"), 0);
+  EXPECT_FALSE(readFile(dir / "corrupt.err").empty());
+  // A bad rig key names the key.
+  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(), "--set",
+                 "mounting.gama_rad=1"},
+                "badkey"),
+            2);
+  EXPECT_NE(readFile(dir / "badkey.err").find("mounting.gama_rad"), std::string::npos)
+      << readFile(dir / "badkey.err");
+  // A missing calibration file named by the rig.
+  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(), "--set",
+                 "mounting.calibration_file=absent.yaml"},
+                "badcalib"),
+            2);
+  EXPECT_NE(readFile(dir / "badcalib.err").find("absent.yaml"), std::string::npos);
+  EXPECT_FALSE(fs::exists(out));
 }
 
 }  // namespace

@@ -103,18 +103,31 @@ std::string joined(const std::vector<std::string>& v) {
 
 }  // namespace
 
-std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args) {
+namespace {
+
+std::string cachedLog(const std::string& command, const std::string& name,
+                      const std::vector<std::string>& sim_args) {
   const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_cache" / name;
   const std::string log = (dir / "sim.lcmlog").string();
-  onceUnderLock(dir, joined(sim_args), [&] {
-    std::vector<std::string> args = {"sim"};
+  onceUnderLock(dir, (command == "sim" ? "" : command + " ") + joined(sim_args), [&] {
+    std::vector<std::string> args = {command};
     args.insert(args.end(), sim_args.begin(), sim_args.end());
     args.insert(args.end(), {"--out", log});
     if (sweepmap(args, dir / "sim.txt") != 0) {
-      throw std::runtime_error("sweepmap sim failed: " + readFile(dir / "sim.txt"));
+      throw std::runtime_error("sweepmap " + command + " failed: " + readFile(dir / "sim.txt"));
     }
   });
   return log;
+}
+
+}  // namespace
+
+std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args) {
+  return cachedLog("sim", name, sim_args);
+}
+
+std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args) {
+  return cachedLog("sim-mobile", name, sim_args);
 }
 
 fs::path cachedReplay(const std::string& name, const std::string& log,

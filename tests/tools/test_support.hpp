@@ -37,6 +37,8 @@ namespace test {
 // parallel CTest processes wait for one another) with `sweepmap sim <args> --out LOG`,
 // and remade when the sweepmap binary changes.
 std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args);
+// Same with `sweepmap sim-mobile` (rig B).
+std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args);
 // Same for a replay of a cached log into a directory.
 fs::path cachedReplay(const std::string& name, const std::string& log,
                       const std::vector<std::string>& extra_args);

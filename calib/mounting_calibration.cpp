@@ -1,0 +1,560 @@
+// Mounting calibration of a 2D lidar on a moving base (Miao 2022 section 4.2, Eq. 15-17):
+// the paper's point pairs with LM, and our point-to-plane Ceres refinement over every
+// overlapping point of the two passes. See calib/mounting_calibration.hpp.
+#include "calib/mounting_calibration.hpp"
+
+#include <ceres/ceres.h>
+#include <pcl/kdtree/kdtree_flann.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <memory>
+
+#include "calib/rotating_geometry.hpp"
+
+namespace sweepmap {
+
+const char* mountingMethodName(MountingMethod m) {
+  switch (m) {
+    case MountingMethod::kPaperPoints:
+      return "paper_points";
+    case MountingMethod::kPointToPlane:
+      return "point_to_plane";
+  }
+  return "unknown";
+}
+
+namespace {
+
+// One valid ray: its direction after the nominal rotation (q = R_nominal p_L), time, scan,
+// and on which half of the scan it lies (+Y_L "left" or -Y_L "right").
+struct Ray {
+  Eigen::Vector3d q;
+  int64_t utime;
+  int scan;
+  bool left;
+  double range_m;
+};
+
+// The planar pose at (ray time + dt_lin) and its rate, so the pose at ray time + dt is
+// pose + rate (dt - dt_lin): linear in dt around the current estimate, re-linearised each
+// outer iteration (exact at convergence).
+struct RayPose {
+  double x, y, th, vx, vy, vth;
+};
+
+// Shared, read-only data of one solve.
+struct Model {
+  Eigen::Vector3d t_BL;
+  double dt_lin = 0.0;
+};
+
+template <typename T>
+Eigen::Matrix<T, 3, 1> worldPoint(const Ray& ray, const RayPose& P, const Model& m, const T* ang,
+                                  const T* dt) {
+  using std::cos;
+  using std::sin;
+  // R(g, b, a) q = Rz(a) Ry(b) Rx(g) q, as LidarMounting::T_BL.
+  const T cg = cos(ang[0]), sg = sin(ang[0]);
+  const T cb = cos(ang[1]), sb = sin(ang[1]);
+  const T ca = cos(ang[2]), sa = sin(ang[2]);
+  const T x1 = T(ray.q.x());
+  const T y1 = cg * ray.q.y() - sg * ray.q.z();
+  const T z1 = sg * ray.q.y() + cg * ray.q.z();
+  const T x2 = cb * x1 + sb * z1;
+  const T z2 = -sb * x1 + cb * z1;
+  const T bx = ca * x2 - sa * y1 + m.t_BL.x();
+  const T by = sa * x2 + ca * y1 + m.t_BL.y();
+  const T bz = z2 + m.t_BL.z();
+  const T ddt = dt[0] - m.dt_lin;
+  const T px = P.x + P.vx * ddt;
+  const T py = P.y + P.vy * ddt;
+  const T th = P.th + P.vth * ddt;
+  const T c = cos(th), s = sin(th);
+  return {px + c * bx - s * by, py + s * bx + c * by, bz};
+}
+
+// Ours: the distance of point A from the local plane (normal n, fixed) through the
+// centroid of its neighbours B in the other pass, all re-assembled with the parameters.
+// Residual 1; parameters: (gamma, beta, alpha) [3], time offset [1].
+struct PointToPlaneCost {
+  PointToPlaneCost(const Model* m, Ray a, RayPose pa, std::vector<std::pair<Ray, RayPose>> b,
+                   Eigen::Vector3d n, double weight)
+      : m_(m), a_(a), pa_(pa), b_(std::move(b)), n_(n * weight) {}
+  template <typename T>
+  bool operator()(const T* ang, const T* dt, T* residual) const {
+    Eigen::Matrix<T, 3, 1> c = Eigen::Matrix<T, 3, 1>::Zero();
+    for (const auto& [ray, pose] : b_) c += worldPoint(ray, pose, *m_, ang, dt);
+    c /= T(double(b_.size()));
+    const Eigen::Matrix<T, 3, 1> d = worldPoint(a_, pa_, *m_, ang, dt) - c;
+    residual[0] = n_.x() * d.x() + n_.y() * d.y() + n_.z() * d.z();
+    return true;
+  }
+  static ceres::CostFunction* Create(const Model* m, const Ray& a, const RayPose& pa,
+                                     std::vector<std::pair<Ray, RayPose>> b, const Eigen::Vector3d& n,
+                                     double weight) {
+    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 1>(
+        new PointToPlaneCost(m, a, pa, std::move(b), n, weight));
+  }
+  const Model* m_;
+  Ray a_;
+  RayPose pa_;
+  std::vector<std::pair<Ray, RayPose>> b_;
+  Eigen::Vector3d n_;
+};
+
+// The paper's Eq. 15-17: the difference of a pair of corresponding points of the two
+// passes. Residual 3; parameters: (gamma, beta, alpha) [3], time offset [1] (held constant).
+struct PointPairCost {
+  PointPairCost(const Model* m, Ray a, RayPose pa, Ray b, RayPose pb)
+      : m_(m), a_(a), pa_(pa), b_(b), pb_(pb) {}
+  template <typename T>
+  bool operator()(const T* ang, const T* dt, T* residual) const {
+    const Eigen::Matrix<T, 3, 1> d =
+        worldPoint(a_, pa_, *m_, ang, dt) - worldPoint(b_, pb_, *m_, ang, dt);
+    residual[0] = d.x();
+    residual[1] = d.y();
+    residual[2] = d.z();
+    return true;
+  }
+  static ceres::CostFunction* Create(const Model* m, const Ray& a, const RayPose& pa, const Ray& b,
+                                     const RayPose& pb) {
+    return new ceres::AutoDiffCostFunction<PointPairCost, 3, 3, 1>(new PointPairCost(m, a, pa, b, pb));
+  }
+  const Model* m_;
+  Ray a_;
+  RayPose pa_;
+  Ray b_;
+  RayPose pb_;
+};
+
+std::optional<Pose2> poseAt(const PoseTrack& track, double t_us) {
+  return track.at(static_cast<int64_t>(std::llround(t_us)));
+}
+
+// Poses (and rates) of every ray at ray time + dt; false where the track does not cover it.
+void computePoses(const std::vector<Ray>& rays, const PoseTrack& track, double dt_s,
+                  std::vector<RayPose>* poses, std::vector<char>* covered) {
+  constexpr double kHalfStepUs = 10'000.0;  // central difference over 20 ms
+  poses->assign(rays.size(), RayPose{});
+  covered->assign(rays.size(), 0);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const double t = double(rays[i].utime) + dt_s * 1e6;
+    const auto p = poseAt(track, t);
+    if (!p) continue;
+    auto lo = poseAt(track, t - kHalfStepUs);
+    auto hi = poseAt(track, t + kHalfStepUs);
+    double span_us = 2 * kHalfStepUs;
+    if (!lo) {
+      lo = p;
+      span_us -= kHalfStepUs;
+    }
+    if (!hi) {
+      hi = p;
+      span_us -= kHalfStepUs;
+    }
+    RayPose& r = (*poses)[i];
+    r.x = p->x_m;
+    r.y = p->y_m;
+    r.th = p->theta_rad;
+    if (span_us > 0) {
+      const double s = span_us * 1e-6;
+      r.vx = (hi->x_m - lo->x_m) / s;
+      r.vy = (hi->y_m - lo->y_m) / s;
+      r.vth = rotating::wrapAngle(hi->theta_rad - lo->theta_rad) / s;
+    }
+    (*covered)[i] = 1;
+  }
+}
+
+struct Prepared {
+  std::vector<Ray> rays;
+  std::vector<int> scan_first;  // index of each scan's first ray in `rays`
+};
+
+Prepared prepare(const std::vector<Scan2D>& scans, const LidarMounting& initial, int stride) {
+  Prepared p;
+  const Eigen::Matrix3d R_nom =
+      rotationXYZ(initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
+  for (size_t s = 0; s < scans.size(); ++s) {
+    const Scan2D& scan = scans[s];
+    for (size_t i = 0; i < scan.ranges_m.size(); i += size_t(stride)) {
+      const double r = scan.ranges_m[i];
+      if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;
+      const double a = scan.rayAngle(i);
+      p.rays.push_back({R_nom * rotating::pointInLidar(r, a), scan.rayUtime(i), int(s),
+                        std::sin(a) > 0.0, r});
+    }
+  }
+  return p;
+}
+
+// Rays whose pose is known, re-assembled into the world with the current estimate.
+struct WorldCloud {
+  std::vector<int> ray;  // index into rays
+  std::vector<Eigen::Vector3d> p;
+  pcl::PointCloud<pcl::PointXYZ>::Ptr cloud{new pcl::PointCloud<pcl::PointXYZ>};
+  pcl::KdTreeFLANN<pcl::PointXYZ> tree{false};  // unsorted off below: we sort ourselves
+};
+
+void buildWorld(const std::vector<Ray>& rays, const std::vector<RayPose>& poses,
+                const std::vector<char>& covered, const std::vector<int>& which, const Model& m,
+                const double* ang, double dt, WorldCloud* w) {
+  w->ray.clear();
+  w->p.clear();
+  w->cloud->clear();
+  for (int i : which) {
+    if (!covered[i]) continue;
+    const Eigen::Vector3d p = worldPoint(rays[i], poses[i], m, ang, &dt);
+    w->ray.push_back(i);
+    w->p.push_back(p);
+    w->cloud->push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
+  }
+  if (!w->cloud->empty()) w->tree.setInputCloud(w->cloud);
+}
+
+// Indices (into w) within radius of p, nearest first (ties by index: deterministic).
+std::vector<int> neighbours(const WorldCloud& w, const Eigen::Vector3d& p, double radius) {
+  std::vector<int> idx;
+  std::vector<float> d2;
+  w.tree.radiusSearch(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())), radius, idx, d2);
+  std::vector<std::pair<double, int>> order;
+  order.reserve(idx.size());
+  for (int k : idx) order.emplace_back((w.p[k] - p).squaredNorm(), k);
+  std::sort(order.begin(), order.end());
+  idx.clear();
+  for (const auto& o : order) idx.push_back(o.second);
+  return idx;
+}
+
+bool otherPass(const Ray& a, const Ray& b, const MountingCalibrationOptions& o) {
+  if (o.opposite_sides_only && a.left == b.left) return false;
+  return std::abs(double(a.utime - b.utime)) >= o.min_pass_gap_s * 1e6;
+}
+
+void configureSolver(ceres::Solver::Options* so, int max_iterations) {
+  so->linear_solver_type = ceres::DENSE_QR;
+  so->trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  so->max_num_iterations = max_iterations;
+  so->function_tolerance = 1e-14;
+  so->gradient_tolerance = 1e-16;
+  so->parameter_tolerance = 1e-14;
+  so->num_threads = 1;  // deterministic sums
+  so->logging_type = ceres::SILENT;
+  so->minimizer_progress_to_stdout = false;
+}
+
+// Least-squares plane (PCA) of `pts`: false if they are not planar (smallest eigenvalue
+// above `max_ratio` times the middle one, or above `max_variance`). The normal's sign is fixed (largest component
+// positive) so results do not depend on the eigen solver's choice.
+bool fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_ratio, double max_variance,
+              Eigen::Vector3d* mean, Eigen::Vector3d* normal) {
+  if (pts.size() < 3) return false;
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) m += p;
+  m /= double(pts.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) cov += (p - m) * (p - m).transpose();
+  cov /= double(pts.size());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
+  if (!(ev(0) <= max_ratio * ev(1)) || !(ev(0) <= max_variance)) return false;
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  int big = 0;
+  for (int i = 1; i < 3; ++i) {
+    if (std::abs(n(i)) > std::abs(n(big))) big = i;
+  }
+  if (n(big) < 0) n = -n;
+  *mean = m;
+  *normal = n;
+  return true;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
+}
+
+// ---------------------------------------------------------------------------------------
+// Ours: point-to-plane over all overlapping points.
+
+MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& track,
+                                       const LidarMounting& initial,
+                                       const MountingCalibrationOptions& o) {
+  MountingCalibrationResult res;
+  res.method = MountingMethod::kPointToPlane;
+  const std::vector<Ray>& rays = prep.rays;
+  Model model;
+  model.t_BL = initial.t_BL_m;
+  double ang[3] = {initial.gamma_rad, initial.beta_rad, initial.alpha_rad};
+  double dt = o.estimate_time_offset ? o.initial_time_offset_s : 0.0;
+
+  std::vector<int> all(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) all[i] = int(i);
+  std::vector<RayPose> poses;
+  std::vector<char> covered;
+  double trim_m = o.neighbour_radius_m;  // residuals beyond this are dropped (after the first pass)
+  bool first = true;
+  for (int outer = 0; outer < o.max_outer_iterations; ++outer) {
+    model.dt_lin = dt;
+    computePoses(rays, track, dt, &poses, &covered);
+    WorldCloud w;
+    buildWorld(rays, poses, covered, all, model, ang, dt, &w);
+    if (w.p.size() < 100) {
+      res.reason = "the pose track covers too few lidar rays (" + std::to_string(w.p.size()) + ")";
+      return res;
+    }
+
+    ceres::Problem problem;
+    std::vector<double> r0;
+    int pairs = 0;
+    for (size_t k = 0; k < w.p.size(); k += size_t(o.query_stride)) {
+      const Ray& a = rays[w.ray[k]];
+      if (a.range_m < o.min_range_m || a.range_m > o.max_range_m) continue;
+      // The other pass's neighbours make the local plane; the query's own pass's neighbours
+      // must see a plane with the same normal there (the query is on that surface, not on
+      // another one near an edge: such one-sided residuals would bias the estimate).
+      std::vector<std::pair<Ray, RayPose>> nb;
+      std::vector<Eigen::Vector3d> others, own;
+      double range_sum = a.range_m;
+      for (int j : neighbours(w, w.p[k], o.plane_radius_m)) {
+        const Ray& b = rays[w.ray[j]];
+        if (otherPass(a, b, o)) {
+          if (int(nb.size()) < o.max_neighbours && (w.p[j] - w.p[k]).norm() <= o.neighbour_radius_m) {
+            nb.emplace_back(b, poses[w.ray[j]]);
+          }
+          others.push_back(w.p[j]);
+          range_sum += b.range_m;
+        } else if (o.check_own_plane && b.left == a.left &&
+                   std::abs(double(b.utime - a.utime)) < o.min_pass_gap_s * 1e6) {
+          own.push_back(w.p[j]);
+        }
+      }
+      if (int(nb.size()) < o.min_neighbours) continue;
+      // A plane is flat to within the range noise (sigma = range_noise_fraction * range,
+      // at most along the normal) plus a millimetre: edges and corners are rejected.
+      const double sigma = o.range_noise_fraction * range_sum / double(others.size() + 1);
+      const double max_var = 2.0 * sigma * sigma + 1e-6;
+      Eigen::Vector3d mean, n;
+      if (!fitPlane(others, o.max_planarity_ratio, max_var, &mean, &n)) continue;
+      if (o.check_own_plane) {
+        Eigen::Vector3d own_mean, own_n;
+        if (int(own.size()) < o.min_neighbours) continue;
+        if (!fitPlane(own, o.max_planarity_ratio, max_var, &own_mean, &own_n)) continue;
+        if (std::abs(own_n.dot(n)) < std::cos(o.max_normal_angle_rad)) continue;
+      }
+      // The residual's plane: through the centroid of the nearest neighbours of the other
+      // pass (re-assembled in the cost), with the patch's normal.
+      mean.setZero();
+      for (const auto& [b, pb] : nb) mean += worldPoint(b, pb, model, ang, &dt);
+      mean /= double(nb.size());
+      // The query lies over the middle of the patch, not beyond its rim.
+      const Eigen::Vector3d off = w.p[k] - mean;
+      if ((off - n * n.dot(off)).norm() > 0.5 * o.neighbour_radius_m) continue;
+      const double r = n.dot(w.p[k] - mean);
+      if (!first && std::abs(r) > trim_m) continue;
+      r0.push_back(r);
+      const double weight = o.range_weighting ? 1.0 / std::max(1.0, a.range_m) : 1.0;
+      problem.AddResidualBlock(PointToPlaneCost::Create(&model, a, poses[w.ray[k]], std::move(nb), n, weight),
+                               new ceres::CauchyLoss(o.loss_scale_m), ang, &dt);
+      ++pairs;
+    }
+    if (pairs < o.min_correspondences) {
+      res.reason = "too few overlapping points of the two passes (" + std::to_string(pairs) + " < " +
+                   std::to_string(o.min_correspondences) + ")";
+      return res;
+    }
+    double ss = 0.0;
+    for (double r : r0) ss += r * r;
+    const double rms0 = std::sqrt(ss / double(r0.size()));
+    if (first) res.residual_before_m = rms0;
+    // Trim for the next round: 3 robust sigmas of this round's residuals (but never below
+    // o.min_trim_m, so noise-free data keeps its points).
+    {
+      std::vector<double> absr;
+      for (double r : r0) absr.push_back(std::abs(r));
+      trim_m = std::max(o.min_trim_m, 3.0 * 1.4826 * median(absr));
+    }
+    first = false;
+
+    if (o.estimate_time_offset) {
+      problem.SetParameterLowerBound(&dt, 0, -o.max_time_offset_s);
+      problem.SetParameterUpperBound(&dt, 0, o.max_time_offset_s);
+    } else {
+      problem.SetParameterBlockConstant(&dt);
+    }
+    const double before[4] = {ang[0], ang[1], ang[2], dt};
+    ceres::Solver::Options so;
+    configureSolver(&so, o.max_solver_iterations);
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    res.iterations += int(summary.iterations.size());
+    res.correspondences = pairs;
+
+    // RMS of the plain residuals at the estimate, with this round's correspondences.
+    {
+      std::vector<double> rr;
+      ceres::Problem::EvaluateOptions eo;
+      eo.apply_loss_function = false;
+      double cost = 0.0;
+      problem.Evaluate(eo, &cost, &rr, nullptr, nullptr);
+      double s2 = 0.0;
+      for (double r : rr) s2 += r * r;
+      res.residual_after_m = std::sqrt(s2 / double(rr.size()));
+    }
+    const double change = std::max({std::abs(ang[0] - before[0]), std::abs(ang[1] - before[1]),
+                                    std::abs(ang[2] - before[2]), std::abs(dt - before[3]) * 1e-2});
+    if (outer >= 1 && change < o.convergence_rad) break;
+  }
+  res.gamma_rad = ang[0];
+  res.beta_rad = ang[1];
+  res.alpha_rad = ang[2];
+  res.time_offset_s = o.estimate_time_offset ? dt : 0.0;
+  res.ok = true;
+  return res;
+}
+
+// ---------------------------------------------------------------------------------------
+// The paper's: corresponding edge points of the two passes (automatic: range
+// discontinuities, where a nearer surface such as the target board ends in front of a
+// farther one), Levenberg-Marquardt on the sum of squared distances (Eq. 15-17).
+
+MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const PoseTrack& track,
+                                      const LidarMounting& initial,
+                                      const MountingCalibrationOptions& o) {
+  MountingCalibrationResult res;
+  res.method = MountingMethod::kPaperPoints;
+  // The target's edge points: in each scan, a run of rays without range jumps (the board)
+  // with a jump to something farther at both ends (the window recess behind it) and the
+  // board's extent between its end points. Each end is an edge point, placed half an angle
+  // step beyond the run's last ray at its range: no bias from the ray spacing on average.
+  const Eigen::Matrix3d R_nom =
+      rotationXYZ(initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
+  std::vector<Ray> rays;
+  for (size_t s = 0; s < scans.size(); ++s) {
+    const Scan2D& scan = scans[s];
+    const size_t n = scan.ranges_m.size();
+    const auto valid = [&](size_t i) {
+      const double r = scan.ranges_m[i];
+      return r != 0.0 && r >= scan.range_min_m && r <= scan.range_max_m;
+    };
+    const auto edge = [&](size_t inner, size_t outer) {
+      const double r = scan.ranges_m[inner];
+      const double a = 0.5 * (scan.rayAngle(inner) + scan.rayAngle(outer));
+      return Ray{R_nom * rotating::pointInLidar(r, a), scan.rayUtime(inner), int(s), std::sin(a) > 0.0, r};
+    };
+    size_t i = 1;
+    while (i + 1 < n) {
+      if (!valid(i) || !valid(i - 1) || scan.ranges_m[i - 1] < scan.ranges_m[i] + o.edge_jump_m) {
+        ++i;
+        continue;
+      }
+      size_t j = i;  // the run [i, j]
+      while (j + 1 < n && valid(j + 1) && std::abs(scan.ranges_m[j + 1] - scan.ranges_m[j]) < o.edge_jump_m) ++j;
+      const bool closed = j + 1 < n && valid(j + 1) && scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
+      const double r_i = scan.ranges_m[i], r_j = scan.ranges_m[j];
+      const double extent =
+          (rotating::pointInLidar(r_i, scan.rayAngle(i)) - rotating::pointInLidar(r_j, scan.rayAngle(j))).norm();
+      if (closed && j >= i + 2 && extent >= o.target_min_extent_m && extent <= o.target_max_extent_m &&
+          std::min(r_i, r_j) >= o.min_range_m && std::max(r_i, r_j) <= o.max_edge_range_m) {
+        rays.push_back(edge(i, i - 1));
+        rays.push_back(edge(j, j + 1));
+      }
+      i = j + 1;
+    }
+  }
+  Model model;
+  model.t_BL = initial.t_BL_m;
+  double ang[3] = {initial.gamma_rad, initial.beta_rad, initial.alpha_rad};
+  double dt = 0.0;
+  std::vector<RayPose> poses;
+  std::vector<char> covered;
+  computePoses(rays, track, dt, &poses, &covered);
+  std::vector<int> all(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) all[i] = int(i);
+
+  double match_m = o.edge_match_m;
+  for (int outer = 0; outer < o.max_outer_iterations; ++outer) {
+    WorldCloud w;
+    buildWorld(rays, poses, covered, all, model, ang, dt, &w);
+    if (w.p.size() < 2) break;
+    // Mutual nearest edge points of the two passes; each pair once (A on the left half).
+    const auto nearestOther = [&](int k) {
+      for (int j : neighbours(w, w.p[k], match_m)) {
+        if (otherPass(rays[w.ray[k]], rays[w.ray[j]], o)) return j;
+      }
+      return -1;
+    };
+    ceres::Problem problem;
+    double ss = 0.0;
+    int pairs = 0;
+    for (size_t k = 0; k < w.p.size(); ++k) {
+      if (!rays[w.ray[k]].left && o.opposite_sides_only) continue;
+      const int j = nearestOther(int(k));
+      if (j < 0 || nearestOther(j) != int(k)) continue;
+      if (!o.opposite_sides_only && j < int(k)) continue;
+      ss += (w.p[k] - w.p[j]).squaredNorm();
+      problem.AddResidualBlock(PointPairCost::Create(&model, rays[w.ray[k]], poses[w.ray[k]],
+                                                     rays[w.ray[j]], poses[w.ray[j]]),
+                               nullptr, ang, &dt);
+      ++pairs;
+    }
+    if (pairs < o.min_point_pairs) {
+      res.reason = "too few corresponding edge points of the two passes (" + std::to_string(pairs) +
+                   " < " + std::to_string(o.min_point_pairs) + ")";
+      return res;
+    }
+    if (outer == 0) res.residual_before_m = std::sqrt(ss / pairs);
+    problem.SetParameterBlockConstant(&dt);
+    const double before[3] = {ang[0], ang[1], ang[2]};
+    ceres::Solver::Options so;
+    configureSolver(&so, o.max_solver_iterations);
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, &problem, &summary);
+    res.iterations += int(summary.iterations.size());
+    res.correspondences = pairs;
+    res.residual_after_m = std::sqrt(2.0 * summary.final_cost / pairs);
+    match_m = std::max(o.edge_match_min_m, 0.5 * match_m);
+    const double change = std::max(
+        {std::abs(ang[0] - before[0]), std::abs(ang[1] - before[1]), std::abs(ang[2] - before[2])});
+    if (outer >= 1 && change < o.convergence_rad && match_m <= o.edge_match_min_m) break;
+  }
+  if (res.correspondences == 0) {
+    res.reason = "no edge points (range discontinuities) seen by both passes";
+    return res;
+  }
+  res.gamma_rad = ang[0];
+  res.beta_rad = ang[1];
+  res.alpha_rad = ang[2];
+  res.ok = true;
+  return res;
+}
+
+}  // namespace
+
+MountingCalibrationResult calibrateMounting(const std::vector<Scan2D>& scans, const PoseTrack& track,
+                                            const LidarMounting& initial,
+                                            const MountingCalibrationOptions& options) {
+  MountingCalibrationResult fail;
+  fail.method = options.method;
+  if (scans.size() < 2 || track.size() < 2) {
+    fail.reason = "too little data: " + std::to_string(scans.size()) + " scans, " +
+                  std::to_string(track.size()) + " poses";
+    return fail;
+  }
+  const int64_t span_us = scans.back().utime - scans.front().utime;
+  if (double(span_us) < options.min_pass_gap_s * 1e6) {
+    fail.reason = "the scans span " + std::to_string(span_us * 1e-6) +
+                  " s, less than min_pass_gap_s: no second pass";
+    return fail;
+  }
+  if (options.method == MountingMethod::kPaperPoints) return paperPoints(scans, track, initial, options);
+  const Prepared prep = prepare(scans, initial, std::max(1, options.ray_stride));
+  return pointToPlane(prep, track, initial, options);
+}
+
+}  // namespace sweepmap
