@@ -26,6 +26,8 @@ struct EvalMobileOptions {
   // its planes' deviations beside the evaluated mounting's. Unset: no comparison.
   std::optional<LidarMounting> before;
   nlohmann::json extra = nlohmann::json::object();  // merged into report.json
+  // Figures already drawn into out_dir by the caller (file, caption): listed in the report first.
+  std::vector<std::pair<std::string, std::string>> extra_figures;
 };
 
 struct EvalMobileResult {
@@ -37,8 +39,10 @@ struct EvalMobileResult {
 EvalMobileResult evalMobileLog(const EvalMobileOptions& options);
 
 // --experiment paper: simulates the calibration circle and the lab loop into DIR/logs/,
-// calibrates the mounting from the circle into DIR/mounting_calibration.yaml, evaluates
-// the loop with it (and without, for comparison) and reports the calibration's error.
+// calibrates the mounting from the circle with both methods (ours into
+// DIR/mounting_calibration.yaml), shows the circle's double walls before and after, evaluates
+// the loop with our calibration (and with the mounting before it, for comparison) and
+// reports each method's error against the simulator's truth.
 struct MobileExperimentOptions {
   std::string rig_path = "config/rig_b.yaml";
   std::string scene_path = "config/scene_lab.yaml";
