@@ -56,7 +56,11 @@ struct MountingCalibrationOptions {
   bool check_own_plane = true;       // the query's own pass must see the same plane there
   double max_normal_angle_rad = 0.26;  // between the two passes' local planes (15 deg)
   double loss_scale_m = 0.03;        // Cauchy loss scale
-  double min_trim_m = 1e-4;          // residuals beyond max(this, 3 robust sigmas) are dropped
+  double trim_noise_sigmas = 4.0;    // after the first round, residuals beyond max(min_trim_m,
+  double min_trim_m = 1e-4;          //   this many range-noise sigmas) are dropped
+  double trim_sigmas = 0.0;          // > 0: also beyond this many robust sigmas of the last
+                                     //   round's residuals (noise-free data; with noise it
+                                     //   reinforces the current estimate: off by default)
   int min_correspondences = 200;
   double max_range_m = 100.0;        // farther rays are not used as query points
   bool range_weighting = false;      // residual / (range noise ~ range): far points weigh less
