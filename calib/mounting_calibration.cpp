@@ -346,6 +346,17 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       mean.setZero();
       for (const auto& [b, pb] : nb) mean += worldPoint(b, pb, model, ang, &dt);
       mean /= double(nb.size());
+      if (o.max_incidence_rad < 0.5 * M_PI) {
+        // Grazing rays: the range noise lies mostly in the plane and the patch is stretched
+        // along the ray; such patches are skipped for the query's and the neighbours' rays.
+        const Ray origin_a{Eigen::Vector3d::Zero(), a.utime, a.scan, a.left, 0.0};
+        const Eigen::Vector3d ua = (w.p[k] - worldPoint(origin_a, poses[w.ray[k]], model, ang, &dt)).normalized();
+        const auto& [b0, pb0] = nb.front();
+        const Ray origin_b{Eigen::Vector3d::Zero(), b0.utime, b0.scan, b0.left, 0.0};
+        const Eigen::Vector3d ub = (worldPoint(b0, pb0, model, ang, &dt) - worldPoint(origin_b, pb0, model, ang, &dt)).normalized();
+        const double c = std::cos(o.max_incidence_rad);
+        if (std::abs(ua.dot(n)) < c || std::abs(ub.dot(n)) < c) continue;
+      }
       // The query lies over the middle of the patch, not beyond its rim.
       const Eigen::Vector3d off = w.p[k] - mean;
       if ((off - n * n.dot(off)).norm() > 0.5 * o.neighbour_radius_m) continue;

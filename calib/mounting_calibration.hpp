@@ -50,6 +50,10 @@ struct MountingCalibrationOptions {
   double neighbour_radius_m = 0.15;  // the residual's neighbours (the nearest, up to max_neighbours)
   double plane_radius_m = 0.2;       // the patch tested for flatness and giving the normal
   double range_noise_fraction = 0.01;  // the lidar's range noise (X4: < 1 %), for the flatness test
+  // Rays more oblique to the local plane than this are skipped (grazing: the range noise lies
+  // mostly in the plane; measured on the simulated circle: 0.1-0.3 mrad less error in beta
+  // and alpha at 1.2 rad than with none).
+  double max_incidence_rad = 1.2;
   int min_neighbours = 6;       // of the other pass, for a local plane
   int max_neighbours = 12;
   double max_planarity_ratio = 0.2;  // smallest / middle eigenvalue of the neighbours
