@@ -310,9 +310,17 @@ int runMounting(const MountingOptions& o) {
   };
   report(ours, ours_s);
   if (paper) report(*paper, paper_s);
+  const bool offset_at_bound =
+      o.time_offset && ours.ok && std::abs(ours.time_offset_s) >= 0.99 * options.max_time_offset_s;
+  if (offset_at_bound) {
+    std::cerr << "calib mounting: warning: the time offset ran to its bound (+-" << options.max_time_offset_s
+              << " s): the drive does not observe it (a steady circle only turns the whole cloud); "
+                 "calibrate without --time-offset\n";
+  }
 
   nlohmann::json j = resultJson(ours, ours_s);
   j["track"] = o.track;
+  if (o.time_offset) j["time_offset_at_bound"] = offset_at_bound;
   j["log"] = o.log;
   j["scans"] = log.scans.size();
   if (log.log_error) j["log_error"] = log.error;
