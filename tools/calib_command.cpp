@@ -310,9 +310,17 @@ int runMounting(const MountingOptions& o) {
   };
   report(ours, ours_s);
   if (paper) report(*paper, paper_s);
+  const bool offset_at_bound =
+      o.time_offset && ours.ok && std::abs(ours.time_offset_s) >= 0.99 * options.max_time_offset_s;
+  if (offset_at_bound) {
+    std::cerr << "calib mounting: warning: the time offset ran to its bound (+-" << options.max_time_offset_s
+              << " s): the drive does not observe it (a steady circle only turns the whole cloud); "
+                 "calibrate without --time-offset\n";
+  }
 
   nlohmann::json j = resultJson(ours, ours_s);
   j["track"] = o.track;
+  if (o.time_offset) j["time_offset_at_bound"] = offset_at_bound;
   j["log"] = o.log;
   j["scans"] = log.scans.size();
   if (log.log_error) j["log_error"] = log.error;
@@ -418,13 +426,19 @@ Runner addCalibCommand(CLI::App& app) {
       "The log's wheel and IMU messages are replayed through the odometry node (EKF) for the "
       "track; every lidar ray is placed in the world with the pose at its own time. On a circle a "
       "place is seen by one half of the scan and, half a turn later, by the other: the two passes.\n\n"
-      "Ours (the result written): Ceres over all overlapping points, each point of one pass "
-      "against the local plane (PCA of its neighbours) of the other pass, both re-assembled with "
-      "the mounting, Cauchy loss, correspondences found again each outer iteration; with "
-      "--time-offset also the lidar-to-odometry time offset (unobservable on a steady circle: "
-      "needs speed or curvature changes). The paper's (reported beside it): edge points "
-      "(range discontinuities, e.g. the target board in front of its window) matched mutually "
-      "nearest across the passes, Levenberg-Marquardt on their squared distances (Eq. 15-17).\n\n"
+      "Ours (the result written): Ceres over all overlapping points of the two passes, each "
+      "point of one pass against the local plane of the other pass there (PCA of its neighbours; "
+      "patches that are not flat to within the range noise, or where the point's own pass sees "
+      "another plane, are skipped), both passes re-assembled with the mounting, Cauchy loss, "
+      "correspondences found again each outer iteration; with --time-offset also the "
+      "lidar-to-odometry time offset (unobservable on a steady circle, where it only turns the "
+      "whole cloud: needs speed or curvature changes, e.g. the lab loop). The paper's (reported "
+      "beside it): the calibration target's edge points found in every scan (a board: a run of "
+      "rays 0.3-0.8 m long with a range jump to something farther at both ends, as the lab's "
+      "board in front of its window), paired mutually nearest across the passes, "
+      "Levenberg-Marquardt on their squared distances (Eq. 15-17).\n\n"
+      "On a circle of radius R, alpha shows only as a shift of 2R alpha (1.7 mm per mrad at "
+      "R = 0.83 m) between the passes, so the track's relative error over half a lap limits it.\n\n"
       "Writes OUT atomically (mounting.gamma_rad/beta_rad/alpha_rad + provenance); set "
       "mounting.calibration_file in the rig file to use it. The search starts from the rig's "
       "mounting. Human report on stderr; --json prints gamma_rad, beta_rad, alpha_rad, "

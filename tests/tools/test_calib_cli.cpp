@@ -184,7 +184,7 @@ TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
 
   // The file goes into a rig file through mounting.calibration_file (relative to the rig).
   const MountingCalibration c = loadMountingCalibration(out.string());
-  EXPECT_DOUBLE_EQ(c.gamma_rad, j.at("gamma_rad").get<double>());
+  EXPECT_NEAR(c.gamma_rad, j.at("gamma_rad").get<double>(), 1e-12);  // 12 digits in the file
   EXPECT_EQ(c.source.at("tool"), "sweepmap calib mounting");
   std::string rig = readFile(kRigB);
   const std::string from = "calibration_file: \"\"";
