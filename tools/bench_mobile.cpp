@@ -1,0 +1,214 @@
+#include "tools/bench_mobile.hpp"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <thread>
+
+#include "core/event_log.hpp"
+#include "processes/channels.hpp"
+#include "processes/odometry_node.hpp"
+#include "tools/netns.hpp"
+#include "tools/process_group.hpp"
+#include "tools/replay_mobile.hpp"
+#include "tools/sim_mobile.hpp"
+
+namespace sweepmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double peakRssMiB() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return u.ru_maxrss / 1024.0;  // KiB on Linux
+}
+
+double cpuSeconds(int who) {
+  rusage u{};
+  getrusage(who, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+// utime + stime of a running process from /proc/<pid>/stat (fields 14 and 15, after the
+// parenthesised command name); -1 if it cannot be read.
+double processCpuSeconds(pid_t pid) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(f, line)) return -1.0;
+  const size_t close = line.rfind(')');
+  if (close == std::string::npos) return -1.0;
+  std::istringstream rest(line.substr(close + 2));
+  std::string field;
+  long long utime = 0, stime = 0;
+  for (int i = 3; i <= 15 && rest >> field; ++i) {
+    if (i == 14) utime = std::stoll(field);
+    if (i == 15) stime = std::stoll(field);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+struct SimulatedLog {
+  RigBConfig rig;
+  SimMobileResult result;
+  std::vector<Message> odometry_input;  // WHEEL_TICKS and IMU, in log order
+};
+
+// Simulates rig B with `overrides`; writes the whole log to `path` (if not empty), or
+// only the odometry's input channels when `odometry_only`.
+SimulatedLog simulate(const RigBBenchOptions& o, const std::vector<std::string>& overrides,
+                      const std::string& path, bool odometry_only) {
+  SimMobileOptions so;
+  loadSimMobileConfig(o.rig, o.scene, overrides, &so.rig, &so.scene);
+  SimulatedLog log;
+  log.rig = so.rig;
+  std::unique_ptr<EventLogWriter> writer;
+  if (!path.empty()) writer = std::make_unique<EventLogWriter>(path);
+  log.result = simulateMobile(so, [&](const Message& m) {
+    const bool odometry_input = m.channel == channels::kWheelTicks || m.channel == channels::kImu;
+    if (odometry_input) log.odometry_input.push_back(m);
+    if (writer && (odometry_input || !odometry_only)) writer->write(m.utime, m.channel, m.data);
+  });
+  if (writer) writer->close();
+  return log;
+}
+
+std::string rateOverride(int imu_hz) { return "sim.imu_rate_hz=" + std::to_string(imu_hz); }
+
+// OdometryNode (decode, wheel odometry, EKF, encode of both poses) over the simulated
+// stream, repeated until at least `min_s` of wall time has passed.
+void benchEkfInProcess(const RigBBenchOptions& o, std::ostream& out) {
+  out << "EKF in process (OdometryNode: decode, wheel odometry, EKF, encoded poses; 50 Hz wheels):\n";
+  for (int imu_hz : {100, 200, 400}) {
+    const SimulatedLog log = simulate(o, {rateOverride(imu_hz), "sim.duration_s=60"}, "", false);
+    int64_t messages = 0, updates = 0;
+    int reps = 0;
+    const auto t0 = Clock::now();
+    do {
+      OdometryNode node(log.rig.odometry);
+      Outbox outbox;
+      for (const Message& m : log.odometry_input) {
+        node.receive(m, outbox);
+        outbox.take();
+      }
+      const auto& c = node.ekf().counters();
+      updates += c.wheels + c.gyro + c.yaw + c.gated_wheels + c.gated_gyro + c.gated_yaw;
+      messages += static_cast<int64_t>(log.odometry_input.size());
+      ++reps;
+    } while (secondsSince(t0) < 1.0);
+    const double wall_s = secondsSince(t0);
+    const double per_log_s = wall_s / reps;
+    out << "  IMU " << std::setw(3) << imu_hz << " Hz: " << std::setprecision(0)
+        << updates / wall_s << " EKF updates/s, " << messages / wall_s << " messages/s, "
+        << std::setprecision(2) << wall_s / messages * 1e6 << " us/message; "
+        << log.result.duration_s << " s of input take " << per_log_s * 1e3 << " ms = "
+        << std::setprecision(3) << per_log_s / log.result.duration_s * 100.0
+        << " % of one core at real time\n"
+        << std::setprecision(2);
+  }
+}
+
+// The real sweepmap-odometry process fed by lcm-logplayer at real-time pace, in a private
+// network namespace. Its CPU share = (utime + stime) / wall time while it is fed.
+void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
+  namespace fs = std::filesystem;
+  out << "sweepmap-odometry process (lcm-logplayer at real-time pace, private network "
+         "namespace; share of one core = CPU s / wall s):\n";
+  std::string why;
+  if (o.bin_dir.empty()) {
+    out << "  skipped: no sweepmap-odometry executable\n";
+    return;
+  }
+  if (!enterPrivateNetwork(&why)) {
+    out << "  skipped: no private network namespace (" << why << ")\n";
+    return;
+  }
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
+  const std::string exe = (fs::path(o.bin_dir) / "sweepmap-odometry").string();
+  for (int imu_hz : {100, 200, 400}) {
+    const std::string log_path = o.work + "/odometry_input_imu" + std::to_string(imu_hz) + ".lcmlog";
+    const SimulatedLog log =
+        simulate(o, {rateOverride(imu_hz), "sim.duration_s=" + std::to_string(o.process_feed_s)},
+                 log_path, true);
+    ProcessGroup procs;
+    const std::string odo_log = o.work + "/odometry_imu" + std::to_string(imu_hz) + ".txt";
+    const pid_t odometry = procs.start("odometry", {exe, "--rig", o.rig, "--lcm-url", url}, odo_log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(800));  // start-up (config, LCM)
+    // Baseline: the same process idle (status at 1 Hz, waiting on its socket).
+    const double idle_cpu0 = processCpuSeconds(odometry);
+    auto t0 = Clock::now();
+    std::this_thread::sleep_for(std::chrono::seconds(2));
+    const double idle_share = (processCpuSeconds(odometry) - idle_cpu0) / secondsSince(t0);
+
+    const double children_cpu0 = cpuSeconds(RUSAGE_CHILDREN);
+    const double cpu0 = processCpuSeconds(odometry);
+    t0 = Clock::now();
+    const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + url, log_path},
+                                     o.work + "/logplayer.txt");
+    const int rc = procs.wait(player, o.process_feed_s * 3 + 10);
+    const double fed_s = secondsSince(t0);
+    const double share = (processCpuSeconds(odometry) - cpu0) / fed_s;
+    const double player_share = (cpuSeconds(RUSAGE_CHILDREN) - children_cpu0) / fed_s;
+    procs.stop(odometry, 5.0);
+    if (rc != 0 || cpu0 < 0) {
+      out << "  IMU " << imu_hz << " Hz: lcm-logplayer or sweepmap-odometry failed (see "
+          << o.work << ")\n";
+      continue;
+    }
+    out << "  IMU " << std::setw(3) << imu_hz << " Hz + 50 Hz wheels: " << std::setprecision(0)
+        << log.odometry_input.size() / fed_s << " messages/s for " << std::setprecision(1)
+        << fed_s << " s: sweepmap-odometry " << std::setprecision(2) << share * 100.0
+        << " % of one core (idle: " << idle_share * 100.0 << " %; lcm-logplayer itself: "
+        << player_share * 100.0 << " %)\n";
+  }
+  out << "  (/proc counts CPU in clock ticks of " << 1000 / sysconf(_SC_CLK_TCK)
+      << " ms: +-" << std::setprecision(2) << 100.0 / sysconf(_SC_CLK_TCK) / o.process_feed_s
+      << " % over one run)\n";
+}
+
+void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
+  out << "replay-mobile (odometry + world assembler + mapper + outputs, no PNG):\n";
+  struct Case {
+    const char* name;
+    std::vector<std::string> overrides;
+  };
+  for (const Case& c : {Case{"circle", {"sim.duration_s=" + std::to_string(o.circle_s)}},
+                        Case{"loop", {"sim.path=loop", "sim.duration_s=" + std::to_string(o.loop_s)}}}) {
+    const std::string log_path = o.work + "/rig_b_" + c.name + ".lcmlog";
+    const SimulatedLog log = simulate(o, c.overrides, log_path, false);
+    const auto t0 = Clock::now();
+    const MobileReplayResult r =
+        replayMobileLog(log_path, log.rig, o.work + "/replay_rig_b_" + c.name, /*plots=*/false);
+    const double wall_s = secondsSince(t0);
+    out << "  " << c.name << ": " << std::setprecision(1) << log.result.duration_s << " s, "
+        << r.scans << " scans in " << std::setprecision(2) << wall_s
+        << " s wall: real-time factor " << std::setprecision(1) << log.result.duration_s / wall_s
+        << ", " << std::setprecision(0) << r.points / wall_s << " points/s, peak RSS so far "
+        << std::setprecision(1) << peakRssMiB() << " MiB\n"
+        << std::setprecision(2);
+  }
+}
+
+}  // namespace
+
+int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
+  std::filesystem::create_directories(o.work);
+  out << std::fixed << std::setprecision(2);
+  out << "rig B (" << o.rig << ", " << o.scene << ")\n";
+  benchEkfInProcess(o, out);
+  benchReplay(o, out);
+  // Last: it moves this process into a private network namespace.
+  benchOdometryProcess(o, out);
+  return 0;
+}
+
+}  // namespace sweepmap
