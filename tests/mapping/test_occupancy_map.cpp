@@ -218,6 +218,43 @@ TEST_F(BoxRoomTest, InsertCloudsEqualsInsertCloudOneByOne) {
   EXPECT_EQ(reference, fileBytes(dir / "two.bt"));
 }
 
+// The one-pass update walks only the regions (3.2 m cubes at 10 cm) an insertion touched
+// and reuses the counts of the others. Three rooms 12 m apart are seen in turn, so most
+// regions are untouched in each batch; over many batches free space is clamped and pruned
+// into large nodes, and split again by an obstacle that appears and goes. The tree and
+// the counts must stay what OctoMap's own whole-tree passes give.
+TEST_F(BoxRoomTest, TouchedRegionsOnlyMatchOctomapOverManyBatches) {
+  spec_.scans = 8;
+  spec_.beams = 91;
+  OccupancyMap map(config_);
+  const RoomSweepSpec room = spec_;
+  for (int batch = 0; batch < 36; ++batch) {
+    const Eigen::Vector3f offset(12.0f * static_cast<float>(batch % 3), 0.0f, 0.0f);
+    std::vector<SensorCloud> clouds;
+    for (int k = 0; k < 3; ++k) {
+      RoomSweepSpec spec = room;
+      spec.room_min_m += offset;
+      spec.room_max_m += offset;
+      spec.seed = static_cast<uint32_t>(batch * 3 + k + 1);
+      spec.range_noise_sigma_m = batch < 24 ? 0.0 : 0.02;
+      spec.sensor_m = offset + Eigen::Vector3f(0.8f + 0.1f * static_cast<float>((batch + k) % 25),
+                                               1.55f, 1.35f);
+      SensorCloud c{syntheticRoomSweep(spec), spec.sensor_m};
+      if (batch >= 12 && batch < 20) {  // an obstacle in the middle of the (pruned) free space
+        for (float y = 0.5f; y < 1.2f; y += 0.05f) {
+          for (float z = 0.5f; z < 1.2f; z += 0.05f) c.points_m.push_back(offset + Eigen::Vector3f(3.55f, y, z));
+        }
+      }
+      clouds.push_back(std::move(c));
+    }
+    map.insertClouds(clouds);
+    ASSERT_TRUE(map.matchesOctomapReference()) << "after batch " << batch;
+  }
+  const MapStats s = map.stats();
+  EXPECT_EQ(s.sweeps_inserted, 108);
+  EXPECT_GT(s.occupied_voxels, 3 * 1000);
+}
+
 TEST(OccupancyMap, InsertCloudsSkipsBadOriginsAndInsertsTheRest) {
   MapperConfig config;
   config.resolution_m = 0.1;
