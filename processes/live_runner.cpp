@@ -21,7 +21,7 @@ void onSignal(int) { g_stop = true; }
 class Inbox {
  public:
   Inbox(size_t capacity, size_t capacity_bytes) : capacity_(capacity), capacity_bytes_(capacity_bytes) {}
-  void push(Message m) {
+  void push(Message m, bool wake) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (queue_.size() >= capacity_ || bytes_ + m.data.size() > capacity_bytes_) {
       ++dropped_[m.channel];
@@ -29,7 +29,7 @@ class Inbox {
     }
     bytes_ += m.data.size();
     queue_.push_back(std::move(m));
-    cv_.notify_one();
+    if (wake) cv_.notify_one();
   }
   // Waits until a message is there or `deadline`; returns everything queued.
   std::deque<Message> popUntil(std::chrono::steady_clock::time_point deadline) {
@@ -59,18 +59,19 @@ class Inbox {
 
 class RawHandler {
  public:
-  explicit RawHandler(Inbox* inbox) : inbox_(inbox) {}
+  RawHandler(Inbox* inbox, bool wake) : inbox_(inbox), wake_(wake) {}
   void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     Message m;
     m.utime = wallUtime();
     m.channel = channel;
     const auto* p = static_cast<const uint8_t*>(rbuf->data);
     m.data.assign(p, p + rbuf->data_size);
-    inbox_->push(std::move(m));
+    inbox_->push(std::move(m), wake_);
   }
 
  private:
   Inbox* inbox_;
+  bool wake_;
 };
 
 }  // namespace
@@ -113,7 +114,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     return 2;
   }
   Inbox inbox(options.queue_capacity, options.queue_capacity_bytes);
-  RawHandler handler(&inbox);
+  RawHandler handler(&inbox, options.wake_on_message);
   std::map<std::string, std::vector<Node*>> subscribers;
   for (Node* n : nodes) {
     for (const auto& ch : n->subscriptions()) {

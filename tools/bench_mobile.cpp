@@ -57,6 +57,25 @@ double processCpuSeconds(pid_t pid) {
   return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
 }
 
+// Voluntary + involuntary context switches of every thread of `pid` (thread wake-ups are
+// what a cheap process spends most of its CPU on).
+int64_t contextSwitches(pid_t pid) {
+  namespace fs = std::filesystem;
+  int64_t total = 0;
+  std::error_code ec;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task", ec)) {
+    std::ifstream f(task.path() / "status");
+    std::string key;
+    int64_t value = 0;
+    while (f >> key) {
+      if (key == "voluntary_ctxt_switches:" || key == "nonvoluntary_ctxt_switches:") {
+        if (f >> value) total += value;
+      }
+    }
+  }
+  return total;
+}
+
 struct SimulatedLog {
   RigBConfig rig;
   SimMobileResult result;
@@ -151,12 +170,14 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
 
     const double children_cpu0 = cpuSeconds(RUSAGE_CHILDREN);
     const double cpu0 = processCpuSeconds(odometry);
+    const int64_t switches0 = contextSwitches(odometry);
     t0 = Clock::now();
     const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + url, log_path},
                                      o.work + "/logplayer.txt");
     const int rc = procs.wait(player, o.process_feed_s * 3 + 10);
     const double fed_s = secondsSince(t0);
     const double share = (processCpuSeconds(odometry) - cpu0) / fed_s;
+    const double switches_per_s = (contextSwitches(odometry) - switches0) / fed_s;
     const double player_share = (cpuSeconds(RUSAGE_CHILDREN) - children_cpu0) / fed_s;
     procs.stop(odometry, 5.0);
     if (rc != 0 || cpu0 < 0) {
@@ -167,8 +188,9 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
     out << "  IMU " << std::setw(3) << imu_hz << " Hz + 50 Hz wheels: " << std::setprecision(0)
         << log.odometry_input.size() / fed_s << " messages/s for " << std::setprecision(1)
         << fed_s << " s: sweepmap-odometry " << std::setprecision(2) << share * 100.0
-        << " % of one core (idle: " << idle_share * 100.0 << " %; lcm-logplayer itself: "
-        << player_share * 100.0 << " %)\n";
+        << " % of one core, " << std::setprecision(0) << switches_per_s
+        << " thread switches/s (idle: " << std::setprecision(2) << idle_share * 100.0
+        << " %; lcm-logplayer itself: " << player_share * 100.0 << " %)\n";
   }
   out << "  (/proc counts CPU in clock ticks of " << 1000 / sysconf(_SC_CLK_TCK)
       << " ms: +-" << std::setprecision(2) << 100.0 / sysconf(_SC_CLK_TCK) / o.process_feed_s
