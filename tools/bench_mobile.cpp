@@ -1,12 +1,15 @@
 #include "tools/bench_mobile.hpp"
 
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
 
@@ -25,12 +28,6 @@ using Clock = std::chrono::steady_clock;
 
 double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
-}
-
-double peakRssMiB() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return u.ru_maxrss / 1024.0;  // KiB on Linux
 }
 
 double cpuSeconds(int who) {
@@ -165,7 +162,7 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
     // Baseline: the same process idle (status at 1 Hz, waiting on its socket).
     const double idle_cpu0 = processCpuSeconds(odometry);
     auto t0 = Clock::now();
-    std::this_thread::sleep_for(std::chrono::seconds(2));
+    std::this_thread::sleep_for(std::chrono::seconds(3));
     const double idle_share = (processCpuSeconds(odometry) - idle_cpu0) / secondsSince(t0);
 
     const double children_cpu0 = cpuSeconds(RUSAGE_CHILDREN);
@@ -198,24 +195,55 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
 }
 
 void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
-  out << "replay-mobile (odometry + world assembler + mapper + outputs, no PNG):\n";
+  out << "replay-mobile (odometry + world assembler + mapper + outputs, no PNG; each in a child "
+         "process, for its own peak RSS):\n";
   struct Case {
     const char* name;
     std::vector<std::string> overrides;
   };
-  for (const Case& c : {Case{"circle", {"sim.duration_s=" + std::to_string(o.circle_s)}},
-                        Case{"loop", {"sim.path=loop", "sim.duration_s=" + std::to_string(o.loop_s)}}}) {
-    const std::string log_path = o.work + "/rig_b_" + c.name + ".lcmlog";
+  // The same circle with every scan inserted on its own: the batching's share, same run.
+  const std::string circle = "sim.duration_s=" + std::to_string(o.circle_s);
+  for (const Case& c :
+       {Case{"circle", {circle}},
+        Case{"circle, per-scan insertion (mapper.batch_s=0)", {circle, "mapper.batch_s=0"}},
+        Case{"loop", {"sim.path=loop", "sim.duration_s=" + std::to_string(o.loop_s)}}}) {
+    const std::string name = std::string(c.name).substr(0, std::string(c.name).find(','));
+    const std::string log_path = o.work + "/rig_b_" + name + ".lcmlog";
+    const std::string out_dir = o.work + "/replay_rig_b_" + name;
     const SimulatedLog log = simulate(o, c.overrides, log_path, false);
     const auto t0 = Clock::now();
-    const MobileReplayResult r =
-        replayMobileLog(log_path, log.rig, o.work + "/replay_rig_b_" + c.name, /*plots=*/false);
+    const pid_t child = fork();
+    if (child == 0) {
+      int rc = 0;
+      try {
+        replayMobileLog(log_path, log.rig, out_dir, /*plots=*/false);
+      } catch (const std::exception& e) {
+        std::cerr << "replay-mobile failed: " << e.what() << "\n";
+        rc = 1;
+      }
+      std::_Exit(rc);
+    }
+    int status = 0;
+    rusage usage{};
+    const bool ok = child > 0 && wait4(child, &status, 0, &usage) == child &&
+                    WIFEXITED(status) && WEXITSTATUS(status) == 0;
     const double wall_s = secondsSince(t0);
+    if (!ok) {
+      out << "  " << c.name << ": replay failed\n";
+      continue;
+    }
+    int64_t points = 0;
+    try {
+      std::ifstream f(out_dir + "/summary.json");
+      points = nlohmann::json::parse(f).at("points").get<int64_t>();
+    } catch (const std::exception&) {
+      points = 0;
+    }
     out << "  " << c.name << ": " << std::setprecision(1) << log.result.duration_s << " s, "
-        << r.scans << " scans in " << std::setprecision(2) << wall_s
+        << log.result.scans << " scans in " << std::setprecision(2) << wall_s
         << " s wall: real-time factor " << std::setprecision(1) << log.result.duration_s / wall_s
-        << ", " << std::setprecision(0) << r.points / wall_s << " points/s, peak RSS so far "
-        << std::setprecision(1) << peakRssMiB() << " MiB\n"
+        << ", " << std::setprecision(0) << points / wall_s << " points/s, peak RSS "
+        << std::setprecision(1) << usage.ru_maxrss / 1024.0 << " MiB\n"
         << std::setprecision(2);
   }
 }
