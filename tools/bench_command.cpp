@@ -115,8 +115,11 @@ Runner addBenchCommand(CLI::App& app) {
     if (!o->skip_b) {
       o->rig_b.work = o->work;
       std::error_code ec;
-      const fs::path bin = fs::read_symlink("/proc/self/exe", ec).parent_path();
-      if (!ec && fs::exists(bin / "sweepmap-odometry")) o->rig_b.bin_dir = bin.string();
+      const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+      o->rig_b.sweepmap_exe = self.string();
+      if (!ec && fs::exists(self.parent_path() / "sweepmap-odometry")) {
+        o->rig_b.bin_dir = self.parent_path().string();
+      }
       benchRigB(o->rig_b, std::cout);
     }
     return 0;

@@ -1,9 +1,12 @@
 #include "tools/bench_mobile.hpp"
 
 #include <sys/resource.h>
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <fstream>
@@ -71,6 +74,20 @@ int64_t contextSwitches(pid_t pid) {
     }
   }
   return total;
+}
+
+// A "Key:   value kB" line of /proc/<pid>/status, in KiB (0 if absent).
+int64_t statusKib(pid_t pid, const std::string& key) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/status");
+  std::string word;
+  while (f >> word) {
+    if (word == key) {
+      int64_t kib = 0;
+      f >> kib;
+      return kib;
+    }
+  }
+  return 0;
 }
 
 struct SimulatedLog {
@@ -195,8 +212,8 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
 }
 
 void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
-  out << "replay-mobile (odometry + world assembler + mapper + outputs, no PNG; each in a child "
-         "process, for its own peak RSS):\n";
+  out << "sweepmap replay-mobile --no-plots (odometry + world assembler + mapper + outputs; the "
+         "command's wall time, start-up included, and its peak RSS):\n";
   struct Case {
     const char* name;
     std::vector<std::string> overrides;
@@ -211,25 +228,39 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
     const std::string log_path = o.work + "/rig_b_" + name + ".lcmlog";
     const std::string out_dir = o.work + "/replay_rig_b_" + name;
     const SimulatedLog log = simulate(o, c.overrides, log_path, false);
+    // The `sweepmap replay-mobile` command itself, so that its time includes start-up and its
+    // peak RSS is its own.
+    std::vector<std::string> args = {o.sweepmap_exe, "replay-mobile", log_path, "--rig", o.rig,
+                                     "--out", out_dir, "--no-plots"};
+    for (const std::string& kv : c.overrides) args.insert(args.end(), {"--set", kv});
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    const std::string log_txt = out_dir + ".txt";
+    posix_spawn_file_actions_addopen(&actions, 1, log_txt.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
     const auto t0 = Clock::now();
-    const pid_t child = fork();
-    if (child == 0) {
-      int rc = 0;
-      try {
-        replayMobileLog(log_path, log.rig, out_dir, /*plots=*/false);
-      } catch (const std::exception& e) {
-        std::cerr << "replay-mobile failed: " << e.what() << "\n";
-        rc = 1;
-      }
-      std::_Exit(rc);
-    }
+    pid_t child = -1;
+    const int spawn_rc = posix_spawn(&child, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    // Its peak RSS: VmHWM polled while it runs (the rusage of a spawned child would report
+    // this process's own peak, which the child's image inherits through exec).
     int status = 0;
-    rusage usage{};
-    const bool ok = child > 0 && wait4(child, &status, 0, &usage) == child &&
-                    WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    int64_t peak_kib = 0;
+    bool ok = spawn_rc == 0;
+    while (ok) {
+      const pid_t r = waitpid(child, &status, WNOHANG);
+      if (r == child) break;
+      if (r < 0) ok = false;
+      peak_kib = std::max(peak_kib, statusKib(child, "VmHWM:"));
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
     const double wall_s = secondsSince(t0);
     if (!ok) {
-      out << "  " << c.name << ": replay failed\n";
+      out << "  " << c.name << ": replay-mobile failed (see " << log_txt << ")\n";
       continue;
     }
     int64_t points = 0;
@@ -243,7 +274,7 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
         << log.result.scans << " scans in " << std::setprecision(2) << wall_s
         << " s wall: real-time factor " << std::setprecision(1) << log.result.duration_s / wall_s
         << ", " << std::setprecision(0) << points / wall_s << " points/s, peak RSS "
-        << std::setprecision(1) << usage.ru_maxrss / 1024.0 << " MiB\n"
+        << std::setprecision(1) << peak_kib / 1024.0 << " MiB\n"
         << std::setprecision(2);
   }
 }

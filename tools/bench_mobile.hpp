@@ -13,6 +13,7 @@ struct RigBBenchOptions {
   std::string rig = "config/rig_b.yaml";
   std::string scene = "config/scene_lab.yaml";
   std::string work = "build/bench";
+  std::string sweepmap_exe;          // the sweepmap executable (replay-mobile is run as a command)
   std::string bin_dir;               // where sweepmap-odometry is ("" = skip the process part)
   double process_feed_s = 12.0;      // log time fed to sweepmap-odometry per IMU rate
   double circle_s = 60.0;            // simulated circle for the replay
