@@ -135,19 +135,33 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
 
   std::atomic<bool> receiving{true};
   std::atomic<bool> lcm_failed{false};
-  std::thread receiver([&] {
-    while (receiving) {
-      if (lcm.handleTimeout(50) < 0) {
-        lcm_failed = true;
-        break;
+  // Waking per message: a receiver thread hands each message over at once. Otherwise the
+  // worker itself takes what LCM has buffered at each tick, so a message costs no thread
+  // switch of ours (LCM's own receive thread still wakes for it).
+  std::thread receiver;
+  if (options.wake_on_message) {
+    receiver = std::thread([&] {
+      while (receiving) {
+        if (lcm.handleTimeout(50) < 0) {
+          lcm_failed = true;
+          break;
+        }
       }
+    });
+  }
+  const auto receiveBuffered = [&] {
+    if (options.wake_on_message) return;
+    int rc = 0;
+    while ((rc = lcm.handleTimeout(0)) > 0) {
     }
-  });
+    if (rc < 0) lcm_failed = true;
+  };
 
   const auto period = std::chrono::milliseconds(std::max(1, options.tick_period_ms));
   auto next_tick = std::chrono::steady_clock::now();
   int64_t dropped_total = 0;
   while (!g_stop && !lcm_failed) {
+    receiveBuffered();
     for (const Message& m : inbox.popUntil(next_tick)) dispatch(m);
     if (std::chrono::steady_clock::now() >= next_tick) {
       const int64_t now = wallUtime();
@@ -169,10 +183,14 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     }
   }
   // Drain what arrived before the stop, then let the nodes flush.
-  for (const Message& m :
-       inbox.popUntil(std::chrono::steady_clock::now() + std::chrono::milliseconds(200))) {
-    dispatch(m);
+  auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+  if (!options.wake_on_message) {
+    while (!lcm_failed && std::chrono::steady_clock::now() < drain_until) {
+      if (lcm.handleTimeout(20) < 0) lcm_failed = true;
+    }
+    drain_until = std::chrono::steady_clock::now();
   }
+  for (const Message& m : inbox.popUntil(drain_until)) dispatch(m);
   const int64_t now = wallUtime();
   for (Node* n : nodes) {
     Outbox out;
@@ -181,7 +199,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     publishAll(lcm, out.take());
   }
   receiving = false;
-  receiver.join();
+  if (receiver.joinable()) receiver.join();
   if (lcm_failed) {
     std::cerr << "LCM receive failed: stopped\n";
     return 2;

@@ -19,10 +19,11 @@ namespace sweepmap {
 
 struct LiveOptions {
   int tick_period_ms = 1;
-  // true: the worker wakes for every message. false: messages wait for the next tick (at
-  // most tick_period_ms), so a stream of small messages costs one wake-up per tick instead
-  // of one per message (thread switches dominate the cost of a cheap node such as the
-  // odometry's). Results do not change: nodes never read the wall clock for them.
+  // true: a receiver thread wakes the worker for every message. false: no receiver thread;
+  // the worker takes the messages LCM has buffered at each tick (they wait at most
+  // tick_period_ms), so a stream of small messages costs one wake-up of ours per tick
+  // instead of two thread switches per message (which dominate the cost of a cheap node
+  // such as the odometry's). Results do not change: nodes never read the wall clock for them.
   bool wake_on_message = true;
   size_t queue_capacity = 10000;          // messages
   size_t queue_capacity_bytes = 64u << 20;  // and bytes (a Pi has little memory)
