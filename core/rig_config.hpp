@@ -78,6 +78,11 @@ struct MapperConfig {
   double prob_miss = 0.4;
   double clamp_min = 0.12;
   double clamp_max = 0.97;
+  // Rig B only (key mapper.batch_s of a rig-B file; rig A inserts every sweep on its own):
+  // sweeps whose time falls in the same batch_s window of message time are inserted with
+  // one update of the tree's inner nodes (OccupancyMap::insertClouds; same map). 0: each
+  // sweep on its own.
+  double batch_s = 0.0;
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <unordered_map>
+#include <unordered_set>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -111,11 +113,134 @@ void markRay(const octomap::OcTree& tree, const octomap::point3d& origin,
   }
 }
 
+// Voxels and leaves under a node, counted at full depth (a leaf above full depth, pruned
+// because its children were equal, stands for 8^levels voxels).
+struct LeafCounts {
+  int64_t occupied_voxels = 0;
+  int64_t free_voxels = 0;
+  int64_t leaves = 0;
+};
+
+void countLeaf(const octomap::OcTree& tree, const octomap::OcTreeNode* leaf, unsigned depth,
+               LeafCounts* c) {
+  const int64_t voxels = int64_t{1} << (3 * (tree.getTreeDepth() - depth));
+  (tree.isNodeOccupied(leaf) ? c->occupied_voxels : c->free_voxels) += voxels;
+  ++c->leaves;
+}
+
+void countRecurs(const octomap::OcTree& tree, const octomap::OcTreeNode* node, unsigned depth,
+                 LeafCounts* c) {
+  if (!tree.nodeHasChildren(node)) return countLeaf(tree, node, depth, c);
+  for (unsigned i = 0; i < 8; ++i) {
+    if (tree.nodeChildExists(node, i)) countRecurs(tree, tree.getNodeChild(node, i), depth + 1, c);
+  }
+}
+
+// After lazy leaf updates: what tree.updateInnerOccupancy() followed by tree.prune() make of
+// the tree, and the leaf counts, in one post-order pass instead of three whole-tree passes
+// (updateInnerOccupancy, prune, then stats() with memoryUsage()'s leaf count). Every inner
+// node gets the maximum of its children, and every node but the root whose eight children
+// are equal leaves is pruned, bottom-up. OctoMap's prune() also collapses bottom-up, depth by
+// depth, and stops at a depth where nothing was pruned; starting from a fully pruned tree,
+// as every insertion here leaves it, a collapsible node at one depth needs a prune below it
+// in the same pass, so both end fully pruned: the same tree (matchesOctomapReference()).
+void finalizeRecurs(octomap::OcTree& tree, octomap::OcTreeNode* node, unsigned depth,
+                    LeafCounts* c) {
+  if (!tree.nodeHasChildren(node)) return countLeaf(tree, node, depth, c);
+  for (unsigned i = 0; i < 8; ++i) {
+    if (tree.nodeChildExists(node, i)) finalizeRecurs(tree, tree.getNodeChild(node, i), depth + 1, c);
+  }
+  if (depth > 0 && tree.pruneNode(node)) {
+    c->leaves -= 7;  // eight leaves became one; the voxels they stand for are the same
+    return;
+  }
+  node->updateOccupancyChildren();
+}
+
+// finalizeRecurs() over the parts of the tree an insertion touched. The tree is split into
+// regions, the subtrees of the nodes at kRegionDepth (32 voxels a side: 1.6 m at 5 cm); a
+// region none of whose voxels was updated since the last pass is unchanged (nodes change
+// only by updates, which mark their region, and by pruning, which happens only in these
+// passes), so its counts are taken from the last pass instead of walking it. Above the
+// regions every node is visited as in finalizeRecurs(). A region's cached counts are used
+// only for the very node they were counted on; any other node there (e.g. re-created when a
+// pruned ancestor was expanded for a neighbour's update) is counted afresh.
+class IncrementalFinalizer {
+ public:
+  static constexpr unsigned kRegionDepth = 11;
+
+  void markDirty(const octomap::OcTreeKey& k) {
+    const unsigned shift = 16 - kRegionDepth;  // OcTree keys have 16 levels
+    const uint64_t r = regionId(k[0] >> shift, k[1] >> shift, k[2] >> shift);
+    if (r == last_marked_) return;
+    last_marked_ = r;
+    dirty_.insert(r);
+  }
+  // Updates whose keys were not marked (OctoMap's own insertion): walk everything next time.
+  void markAllDirty() { all_dirty_ = true; }
+
+  LeafCounts run(octomap::OcTree& tree) {
+    LeafCounts c;
+    if (tree.getRoot() != nullptr) recurs(tree, tree.getRoot(), 0, 0, 0, 0, &c);
+    dirty_.clear();
+    last_marked_ = kNone;
+    all_dirty_ = false;
+    return c;
+  }
+
+ private:
+  static constexpr uint64_t kNone = ~uint64_t{0};
+  static uint64_t regionId(uint64_t x, uint64_t y, uint64_t z) { return x | (y << 16) | (z << 32); }
+  static void add(LeafCounts* to, const LeafCounts& c) {
+    to->occupied_voxels += c.occupied_voxels;
+    to->free_voxels += c.free_voxels;
+    to->leaves += c.leaves;
+  }
+
+  // x, y, z: the node's key prefix (depth bits per axis).
+  void recurs(octomap::OcTree& tree, octomap::OcTreeNode* node, unsigned depth, uint64_t x,
+              uint64_t y, uint64_t z, LeafCounts* c) {
+    if (depth == kRegionDepth) {
+      const uint64_t r = regionId(x, y, z);
+      if (!all_dirty_ && dirty_.count(r) == 0) {
+        const auto it = cache_.find(r);
+        if (it != cache_.end() && it->second.node == node) return add(c, it->second.counts);
+      }
+      LeafCounts sub;
+      finalizeRecurs(tree, node, depth, &sub);
+      cache_[r] = {node, sub};
+      return add(c, sub);
+    }
+    if (!tree.nodeHasChildren(node)) return countLeaf(tree, node, depth, c);
+    for (unsigned i = 0; i < 8; ++i) {
+      if (tree.nodeChildExists(node, i)) {
+        // Child i sets key bit (15 - depth) of x, y, z to bits 0, 1, 2 of i.
+        recurs(tree, tree.getNodeChild(node, i), depth + 1, (x << 1) | (i & 1u),
+               (y << 1) | ((i >> 1) & 1u), (z << 1) | ((i >> 2) & 1u), c);
+      }
+    }
+    if (depth > 0 && tree.pruneNode(node)) {
+      c->leaves -= 7;
+      return;
+    }
+    node->updateOccupancyChildren();
+  }
+
+  struct Cached {
+    const octomap::OcTreeNode* node;
+    LeafCounts counts;
+  };
+  std::unordered_set<uint64_t> dirty_;
+  std::unordered_map<uint64_t, Cached> cache_;
+  uint64_t last_marked_ = kNone;
+  bool all_dirty_ = true;
+};
+
 // octomap's discretized insertion (computeDiscreteUpdate + computeUpdate), with the ray
 // keys collected in a bitmap over the sweep's key box instead of a hash set: the same
 // voxels get the same single update, about twice as fast.
 void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::Pointcloud& cloud,
-                       const octomap::point3d& origin) {
+                       const octomap::point3d& origin, IncrementalFinalizer* touched) {
   octomap::OcTreeKey origin_key;
   if (!tree.coordToKeyChecked(origin, origin_key)) {
     throw std::invalid_argument("OccupancyMap::insertCloud: sensor origin outside the map");
@@ -169,9 +294,15 @@ void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::P
   KeyBitmap occupied_bits(lo, hi);
   for (const auto& k : occupied) occupied_bits.set(k);
   free_bits.forEach([&](const octomap::OcTreeKey& k) {
-    if (!occupied_bits.test(k)) tree.updateNode(k, false, /*lazy_eval=*/true);
+    if (!occupied_bits.test(k)) {
+      touched->markDirty(k);
+      tree.updateNode(k, false, /*lazy_eval=*/true);
+    }
   });
-  for (const auto& k : occupied) tree.updateNode(k, true, /*lazy_eval=*/true);
+  for (const auto& k : occupied) {
+    touched->markDirty(k);
+    tree.updateNode(k, true, /*lazy_eval=*/true);
+  }
 }
 
 }  // namespace
@@ -190,6 +321,16 @@ struct OccupancyMap::Impl {
   int64_t points = 0;
   int64_t skipped = 0;
   octomap::Pointcloud scratch;  // reused between calls to avoid reallocating ~10 MB per sweep
+
+  // Leaf updates of one cloud (lazy: inner nodes stale until finalize()).
+  void castCloud(const std::vector<Eigen::Vector3f>& points_m, const octomap::point3d& origin,
+                 InsertMode mode);
+  bool originInside(const Eigen::Vector3f& origin_m) const;
+  void finalize();  // inner occupancy and pruning of the whole tree, then the stats
+  MapStats statsFrom(const LeafCounts& counts) const;
+  MapStats cached_stats;
+  bool stats_valid = false;
+  IncrementalFinalizer finalizer;
 };
 
 OccupancyMap::OccupancyMap(const MapperConfig& config)
@@ -199,22 +340,18 @@ OccupancyMap::~OccupancyMap() = default;
 OccupancyMap::OccupancyMap(OccupancyMap&&) noexcept = default;
 OccupancyMap& OccupancyMap::operator=(OccupancyMap&&) noexcept = default;
 
-void OccupancyMap::insertCloud(const std::vector<Eigen::Vector3f>& points_m,
-                               const Eigen::Vector3f& sensor_origin_m, InsertMode mode) {
-  if (!sensor_origin_m.allFinite()) {
-    throw std::invalid_argument("OccupancyMap::insertCloud: non-finite sensor origin");
-  }
-  octomap::Pointcloud& cloud = impl_->scratch;
+void OccupancyMap::Impl::castCloud(const std::vector<Eigen::Vector3f>& points_m,
+                                   const octomap::point3d& origin, InsertMode mode) {
+  octomap::Pointcloud& cloud = scratch;
   cloud.clear();
   cloud.reserve(points_m.size());
   for (const Eigen::Vector3f& p : points_m) {
     if (!p.allFinite()) {
-      ++impl_->skipped;
+      ++skipped;
       continue;
     }
     cloud.push_back(p.x(), p.y(), p.z());
   }
-  const octomap::point3d origin(sensor_origin_m.x(), sensor_origin_m.y(), sensor_origin_m.z());
 
   // Discretization (the default) first collapses the endpoints to distinct voxel keys and
   // casts one ray per key, to the voxel's centre. A sweep of a rotating 2D lidar is very
@@ -230,37 +367,100 @@ void OccupancyMap::insertCloud(const std::vector<Eigen::Vector3f>& points_m,
   // not depend on the order of the (hash-set ordered) updates either way.
   //
   // Lazy evaluation: the leaves are updated first and the inner nodes once afterwards
-  // (then pruned), instead of after every leaf update; the same tree, about 1.4x faster.
+  // (then pruned, see finalize()), instead of after every leaf update; the same tree,
+  // about 1.4x faster.
   if (mode == InsertMode::kDiscretized) {
-    insertDiscretized(impl_->tree, impl_->config.max_range_m, cloud, origin);
+    insertDiscretized(tree, config.max_range_m, cloud, origin, &finalizer);
   } else {
-    impl_->tree.insertPointCloud(cloud, origin, impl_->config.max_range_m, /*lazy_eval=*/true,
-                                 mode == InsertMode::kOctomapDiscretized);
+    finalizer.markAllDirty();
+    tree.insertPointCloud(cloud, origin, config.max_range_m, /*lazy_eval=*/true,
+                          mode == InsertMode::kOctomapDiscretized);
   }
-  impl_->tree.updateInnerOccupancy();
-  impl_->tree.prune();
-  impl_->points += static_cast<int64_t>(cloud.size());
-  ++impl_->sweeps;
+  points += static_cast<int64_t>(cloud.size());
+  ++sweeps;
+}
+
+bool OccupancyMap::Impl::originInside(const Eigen::Vector3f& origin_m) const {
+  octomap::OcTreeKey key;
+  return origin_m.allFinite() &&
+         tree.coordToKeyChecked(octomap::point3d(origin_m.x(), origin_m.y(), origin_m.z()), key);
+}
+
+void OccupancyMap::Impl::finalize() {
+  cached_stats = statsFrom(finalizer.run(tree));
+  stats_valid = true;
+}
+
+MapStats OccupancyMap::Impl::statsFrom(const LeafCounts& counts) const {
+  MapStats s;
+  s.sweeps_inserted = sweeps;
+  s.points_inserted = points;
+  s.resolution_m = tree.getResolution();
+  s.occupied_voxels = counts.occupied_voxels;
+  s.free_voxels = counts.free_voxels;
+  // OcTreeBaseImpl::memoryUsage(), with the leaf count of the same pass.
+  using Base = octomap::OcTreeBaseImpl<octomap::OcTreeNode, octomap::AbstractOccupancyOcTree>;
+  const size_t inner = tree.size() - static_cast<size_t>(counts.leaves);
+  s.memory_bytes = static_cast<int64_t>(sizeof(Base) + tree.memoryUsageNode() * tree.size() +
+                                        inner * sizeof(octomap::OcTreeNode * [8]));
+  return s;
+}
+
+void OccupancyMap::insertCloud(const std::vector<Eigen::Vector3f>& points_m,
+                               const Eigen::Vector3f& sensor_origin_m, InsertMode mode) {
+  if (!sensor_origin_m.allFinite()) {
+    throw std::invalid_argument("OccupancyMap::insertCloud: non-finite sensor origin");
+  }
+  if (!impl_->originInside(sensor_origin_m)) {
+    throw std::invalid_argument("OccupancyMap::insertCloud: sensor origin outside the map");
+  }
+  impl_->castCloud(points_m,
+                   octomap::point3d(sensor_origin_m.x(), sensor_origin_m.y(), sensor_origin_m.z()),
+                   mode);
+  impl_->finalize();
+}
+
+void OccupancyMap::insertClouds(const std::vector<SensorCloud>& clouds,
+                                std::vector<size_t>* rejected) {
+  bool any = false;
+  for (size_t i = 0; i < clouds.size(); ++i) {
+    const Eigen::Vector3f& o = clouds[i].origin_m;
+    if (!impl_->originInside(o)) {
+      if (rejected != nullptr) rejected->push_back(i);
+      continue;
+    }
+    impl_->castCloud(clouds[i].points_m, octomap::point3d(o.x(), o.y(), o.z()),
+                     InsertMode::kDiscretized);
+    any = true;
+  }
+  if (any) impl_->finalize();
 }
 
 MapStats OccupancyMap::stats() const {
+  if (impl_->stats_valid) return impl_->cached_stats;
+  LeafCounts counts;
+  if (impl_->tree.getRoot() != nullptr) countRecurs(impl_->tree, impl_->tree.getRoot(), 0, &counts);
+  return impl_->statsFrom(counts);
+}
+
+bool OccupancyMap::matchesOctomapReference() const {
   const octomap::OcTree& tree = impl_->tree;
+  octomap::OcTree reference(tree);  // deep copy
+  reference.updateInnerOccupancy();
+  reference.prune();
+  std::ostringstream ours(std::ios::binary), theirs(std::ios::binary);
+  tree.write(ours);  // full .ot: structure and every node's log-odds, inner nodes included
+  reference.write(theirs);
+  if (ours.str() != theirs.str()) return false;
   MapStats s;
-  s.sweeps_inserted = impl_->sweeps;
-  s.points_inserted = impl_->points;
-  s.resolution_m = tree.getResolution();
-  s.memory_bytes = static_cast<int64_t>(tree.memoryUsage());
   const unsigned max_depth = tree.getTreeDepth();
   for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
-    // A leaf above full depth (pruned: all children equal) stands for 8^(levels) voxels.
     const int64_t voxels = int64_t{1} << (3 * (max_depth - it.getDepth()));
-    if (tree.isNodeOccupied(*it)) {
-      s.occupied_voxels += voxels;
-    } else {
-      s.free_voxels += voxels;
-    }
+    (tree.isNodeOccupied(*it) ? s.occupied_voxels : s.free_voxels) += voxels;
   }
-  return s;
+  const MapStats fast = stats();
+  return fast.occupied_voxels == s.occupied_voxels && fast.free_voxels == s.free_voxels &&
+         fast.memory_bytes == static_cast<int64_t>(tree.memoryUsage());
 }
 
 int64_t OccupancyMap::skippedPoints() const { return impl_->skipped; }

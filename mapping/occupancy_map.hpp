@@ -36,6 +36,12 @@ enum class InsertMode {
 
 enum class Occupancy { kUnknown, kFree, kOccupied };
 
+// One cloud and the sensor origin its rays start from (map frame, metres).
+struct SensorCloud {
+  std::vector<Eigen::Vector3f> points_m;
+  Eigen::Vector3f origin_m = Eigen::Vector3f::Zero();
+};
+
 class OccupancyMap {
  public:
   // Throws std::invalid_argument if the config is out of range (resolution and max range
@@ -57,7 +63,25 @@ class OccupancyMap {
                    const Eigen::Vector3f& sensor_origin_m,
                    InsertMode mode = InsertMode::kDiscretized);
 
-  MapStats stats() const;  // walks every leaf: O(tree size)
+  // Inserts several clouds, each ray-cast from its own origin exactly as insertCloud()
+  // would (kDiscretized), but brings the tree's inner nodes and pruning up to date once at
+  // the end instead of after every cloud. The tree is the same as that of insertCloud()
+  // for each cloud in turn, byte for byte: lazy leaf updates do not depend on inner
+  // nodes, and pruning is lossless (a pruned node is expanded with its value when a voxel
+  // inside it is updated), so the final pruned tree depends only on the voxels' values.
+  // What it saves is the whole-tree passes (updateInnerOccupancy, prune), which dominate
+  // for small clouds such as the single scans of rig B. A cloud with a non-finite origin or
+  // one outside the map is not inserted (and not counted): its index goes to `rejected`.
+  void insertClouds(const std::vector<SensorCloud>& clouds, std::vector<size_t>* rejected = nullptr);
+
+  // Kept up to date by every insertion (the same pass that updates the inner nodes); for a
+  // loaded map it walks every leaf.
+  MapStats stats() const;
+
+  // A check for tests: whether the tree equals, node for node and value for value, what
+  // OctoMap's own updateInnerOccupancy() + prune() make of its leaves, and stats() what
+  // OctoMap's leaf iterator and memoryUsage() give. Copies the whole tree.
+  bool matchesOctomapReference() const;
   int64_t skippedPoints() const;
   const MapperConfig& config() const;
 

@@ -21,7 +21,7 @@ void onSignal(int) { g_stop = true; }
 class Inbox {
  public:
   Inbox(size_t capacity, size_t capacity_bytes) : capacity_(capacity), capacity_bytes_(capacity_bytes) {}
-  void push(Message m) {
+  void push(Message m, bool wake) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (queue_.size() >= capacity_ || bytes_ + m.data.size() > capacity_bytes_) {
       ++dropped_[m.channel];
@@ -29,7 +29,7 @@ class Inbox {
     }
     bytes_ += m.data.size();
     queue_.push_back(std::move(m));
-    cv_.notify_one();
+    if (wake) cv_.notify_one();
   }
   // Waits until a message is there or `deadline`; returns everything queued.
   std::deque<Message> popUntil(std::chrono::steady_clock::time_point deadline) {
@@ -59,18 +59,19 @@ class Inbox {
 
 class RawHandler {
  public:
-  explicit RawHandler(Inbox* inbox) : inbox_(inbox) {}
+  RawHandler(Inbox* inbox, bool wake) : inbox_(inbox), wake_(wake) {}
   void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     Message m;
     m.utime = wallUtime();
     m.channel = channel;
     const auto* p = static_cast<const uint8_t*>(rbuf->data);
     m.data.assign(p, p + rbuf->data_size);
-    inbox_->push(std::move(m));
+    inbox_->push(std::move(m), wake_);
   }
 
  private:
   Inbox* inbox_;
+  bool wake_;
 };
 
 }  // namespace
@@ -113,7 +114,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     return 2;
   }
   Inbox inbox(options.queue_capacity, options.queue_capacity_bytes);
-  RawHandler handler(&inbox);
+  RawHandler handler(&inbox, options.wake_on_message);
   std::map<std::string, std::vector<Node*>> subscribers;
   for (Node* n : nodes) {
     for (const auto& ch : n->subscriptions()) {
@@ -134,19 +135,33 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
 
   std::atomic<bool> receiving{true};
   std::atomic<bool> lcm_failed{false};
-  std::thread receiver([&] {
-    while (receiving) {
-      if (lcm.handleTimeout(50) < 0) {
-        lcm_failed = true;
-        break;
+  // Waking per message: a receiver thread hands each message over at once. Otherwise the
+  // worker itself takes what LCM has buffered at each tick, so a message costs no thread
+  // switch of ours (LCM's own receive thread still wakes for it).
+  std::thread receiver;
+  if (options.wake_on_message) {
+    receiver = std::thread([&] {
+      while (receiving) {
+        if (lcm.handleTimeout(50) < 0) {
+          lcm_failed = true;
+          break;
+        }
       }
+    });
+  }
+  const auto receiveBuffered = [&] {
+    if (options.wake_on_message) return;
+    int rc = 0;
+    while ((rc = lcm.handleTimeout(0)) > 0) {
     }
-  });
+    if (rc < 0) lcm_failed = true;
+  };
 
   const auto period = std::chrono::milliseconds(std::max(1, options.tick_period_ms));
   auto next_tick = std::chrono::steady_clock::now();
   int64_t dropped_total = 0;
   while (!g_stop && !lcm_failed) {
+    receiveBuffered();
     for (const Message& m : inbox.popUntil(next_tick)) dispatch(m);
     if (std::chrono::steady_clock::now() >= next_tick) {
       const int64_t now = wallUtime();
@@ -168,10 +183,14 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     }
   }
   // Drain what arrived before the stop, then let the nodes flush.
-  for (const Message& m :
-       inbox.popUntil(std::chrono::steady_clock::now() + std::chrono::milliseconds(200))) {
-    dispatch(m);
+  auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+  if (!options.wake_on_message) {
+    while (!lcm_failed && std::chrono::steady_clock::now() < drain_until) {
+      if (lcm.handleTimeout(20) < 0) lcm_failed = true;
+    }
+    drain_until = std::chrono::steady_clock::now();
   }
+  for (const Message& m : inbox.popUntil(drain_until)) dispatch(m);
   const int64_t now = wallUtime();
   for (Node* n : nodes) {
     Outbox out;
@@ -180,7 +199,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     publishAll(lcm, out.take());
   }
   receiving = false;
-  receiver.join();
+  if (receiver.joinable()) receiver.join();
   if (lcm_failed) {
     std::cerr << "LCM receive failed: stopped\n";
     return 2;

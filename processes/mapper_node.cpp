@@ -1,5 +1,7 @@
 #include "processes/mapper_node.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 
 #include "mapping/occupancy_map.hpp"
@@ -78,6 +80,7 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
       reportError("invalid", "MAP_SAVE: bad file name '" + r.path + "'");
       return;
     }
+    flushBatch(msg.utime, out);  // a save holds every sweep received so far
     save(r.path.empty() ? save_path_
                         : (std::filesystem::path(save_path_).parent_path() / name).string());
   }
@@ -102,6 +105,16 @@ void MapperNode::insert(int64_t now_utime, const SweepKey& key, Outbox& out) {
   pending_.erase(it);
   inserted_.insert(key);
   while (inserted_.size() > 1000) inserted_.erase(inserted_.begin());
+  if (config_.batch_s > 0.0) {
+    const int64_t batch_us = std::max<int64_t>(1, std::llround(config_.batch_s * 1e6));
+    // Floor division: windows [k * batch_us, (k + 1) * batch_us) also for negative times.
+    const int64_t window = key.first / batch_us - (key.first % batch_us < 0 ? 1 : 0);
+    if (!batch_.empty() && window != batch_window_) flushBatch(now_utime, out);
+    batch_window_ = window;
+    batch_.push_back(SensorCloud{std::move(points), it_origin});
+    batch_sweep_ids_.push_back(sweep_id);
+    return;
+  }
   try {
     map_->insertCloud(points, it_origin);
   } catch (const std::exception& e) {
@@ -110,7 +123,27 @@ void MapperNode::insert(int64_t now_utime, const SweepKey& key, Outbox& out) {
   }
   ++sweeps_inserted_;
   count("sweeps");
+  publishStats(now_utime, out);
+}
 
+void MapperNode::flushBatch(int64_t now_utime, Outbox& out) {
+  if (batch_.empty()) return;
+  std::vector<size_t> rejected;
+  map_->insertClouds(batch_, &rejected);
+  for (const size_t i : rejected) {
+    reportError("invalid", "sweep " + std::to_string(batch_sweep_ids_[i]) +
+                               " not inserted: non-finite sensor origin or outside the map");
+  }
+  const int64_t inserted = static_cast<int64_t>(batch_.size() - rejected.size());
+  batch_.clear();
+  batch_sweep_ids_.clear();
+  if (inserted == 0) return;
+  sweeps_inserted_ += inserted;
+  count("sweeps", inserted);
+  publishStats(now_utime, out);
+}
+
+void MapperNode::publishStats(int64_t now_utime, Outbox& out) {
   const MapStats st = map_->stats();
   map_stats_t m;
   m.utime = last_sweep_utime_;
@@ -135,6 +168,7 @@ void MapperNode::save(const std::string& path) {
 
 void MapperNode::finish(int64_t now_utime, Outbox& out) {
   while (!pending_.empty()) insert(now_utime, pending_.begin()->first, out);
+  flushBatch(now_utime, out);
   if (!save_path_.empty()) save(save_path_);
 }
 

@@ -3,6 +3,13 @@
 // MAP_STATS after each sweep, and saves the map (.bt, written atomically) on MAP_SAVE
 // and at finish(). A sweep is inserted when its SWEEP_STATUS arrives or a later sweep
 // starts; missing chunks cost only their points and are counted.
+//
+// Batches (config.batch_s > 0, rig B: one small sweep per lidar scan): sweeps whose time
+// (the SWEEP_CLOUD utime) falls in the same batch_s window, counted from utime 0, are
+// inserted together once a sweep of a later window is ready, before a save and at
+// finish() (OccupancyMap::insertClouds: the map is exactly the one that sweep-by-sweep
+// insertion builds, only the whole-tree updates are shared), and MAP_STATS goes out once
+// per batch. Batches depend on message content only, so live and offline runs agree.
 #pragma once
 
 #include <map>
@@ -12,11 +19,10 @@
 #include <Eigen/Core>
 
 #include "core/rig_config.hpp"
+#include "mapping/occupancy_map.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {
-
-class OccupancyMap;
 
 class MapperNode : public Node {
  public:
@@ -41,6 +47,8 @@ class MapperNode : public Node {
     std::map<int, std::vector<float>> chunks;  // chunk index -> xyz triples
   };
   void insert(int64_t now_utime, const SweepKey& key, Outbox& out);
+  void flushBatch(int64_t now_utime, Outbox& out);
+  void publishStats(int64_t now_utime, Outbox& out);
   void save(const std::string& path);
 
   MapperConfig config_;
@@ -51,6 +59,10 @@ class MapperNode : public Node {
   int64_t sweeps_inserted_ = 0;
   int64_t incomplete_ = 0;
   int64_t last_sweep_utime_ = 0;
+  // Sweeps waiting for the end of their batch window (batch_s > 0).
+  std::vector<SensorCloud> batch_;
+  std::vector<int64_t> batch_sweep_ids_;
+  int64_t batch_window_ = 0;
 };
 
 }  // namespace sweepmap

@@ -46,6 +46,10 @@ void RigBConfig::declare(ConfigSchema& s) {
   mounting.declare(s, "mounting.");
   assembler.declare(s, "assembler.");
   mapper.declare(s, "mapper.");
+  s.add("mapper.batch_s", &mapper.batch_s, "s",
+        "scans whose time falls in the same window of this length are inserted as one batch "
+        "(one update of the tree's inner nodes and one MAP_STATS; the map is the same); 0: "
+        "every scan on its own");
   sim.declare(s, "sim.");
 }
 
@@ -58,6 +62,9 @@ RigBConfig loadRigB(const std::string& path, const std::vector<std::string>& ove
   if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
       !(c.odometry.ekf.wheel_distance_m > 0)) {
     throw ConfigError(path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
+  }
+  if (!(c.mapper.batch_s >= 0.0 && c.mapper.batch_s <= 3600.0)) {
+    throw ConfigError(path + ": key 'mapper.batch_s' must be in [0, 3600]");
   }
   if (c.assembler.pose_channel != "ODOMETRY_POSE" && c.assembler.pose_channel != "WHEEL_ODOMETRY") {
     throw ConfigError(path + ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "core/event_log.hpp"
+#include "tools/bench_mobile.hpp"
 #include "tools/commands.hpp"
 #include "tools/log_sweeps.hpp"
 #include "tools/replay.hpp"
@@ -28,19 +29,28 @@ Runner addBenchCommand(CLI::App& app) {
       "bench",
       "Measure simulation and offline replay speed (assembly + plate correction + OctoMap) as "
       "real-time factors for modes 1 and 7, points per second, one sweep's plate correction and "
-      "peak memory. Prints "
-      "figures; run on an idle machine, compare ratios within one run");
+      "peak memory; rig B: EKF updates per second, the CPU share of the sweepmap-odometry process "
+      "at 100/200/400 Hz IMU (private network namespace), replay-mobile real-time factors on a "
+      "circle and a lab loop. Prints figures; run on an idle machine, compare ratios within one run");
   struct Opts {
     std::string rig = "config/rig_a.yaml";
     std::string scene = "config/scene_conference_room.yaml";
     std::string work = "build/bench";
     int sweeps = 2;
+    RigBBenchOptions rig_b;
+    bool skip_a = false, skip_b = false;
   };
   auto o = std::make_shared<Opts>();
   cmd->add_option("--rig", o->rig, "rig config")->capture_default_str()->check(CLI::ExistingFile);
   cmd->add_option("--scene", o->scene, "scene")->capture_default_str()->check(CLI::ExistingFile);
   cmd->add_option("--work", o->work, "scratch directory")->capture_default_str();
   cmd->add_option("--sweeps", o->sweeps, "sweeps per mode")->capture_default_str();
+  cmd->add_option("--rig-b", o->rig_b.rig, "rig B config")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--scene-b", o->rig_b.scene, "rig B scene")->capture_default_str()->check(CLI::ExistingFile);
+  cmd->add_option("--odometry-feed-s", o->rig_b.process_feed_s,
+                  "log time fed to sweepmap-odometry per IMU rate")->capture_default_str();
+  cmd->add_flag("--skip-rig-a", o->skip_a, "leave out rig A");
+  cmd->add_flag("--skip-rig-b", o->skip_b, "leave out rig B");
   return [o]() {
     namespace fs = std::filesystem;
     using clock = std::chrono::steady_clock;
@@ -49,6 +59,7 @@ Runner addBenchCommand(CLI::App& app) {
     std::cout << "sweepmap bench (one thread; real-time factor = simulated or logged time / "
                  "wall time)\n";
     for (int mode : {1, 7}) {
+      if (o->skip_a) break;
       SimOptions so;
       loadSimConfig(o->rig, o->scene, {"motor.mode=" + std::to_string(mode)}, &so.rig, &so.scene);
       so.sweeps = o->sweeps;
@@ -100,7 +111,17 @@ Runner addBenchCommand(CLI::App& app) {
         }
       }
     }
-    std::cout << "peak RSS " << peakRssMiB() << " MiB\n";
+    if (!o->skip_a) std::cout << "peak RSS " << peakRssMiB() << " MiB\n";
+    if (!o->skip_b) {
+      o->rig_b.work = o->work;
+      std::error_code ec;
+      const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+      o->rig_b.sweepmap_exe = self.string();
+      if (!ec && fs::exists(self.parent_path() / "sweepmap-odometry")) {
+        o->rig_b.bin_dir = self.parent_path().string();
+      }
+      benchRigB(o->rig_b, std::cout);
+    }
     return 0;
   };
 }

@@ -159,6 +159,7 @@ TEST_F(BoxRoomTest, SameInputGivesIdenticalBtFiles) {
     for (uint32_t seed : {1u, 2u, 3u}) {
       spec_.seed = seed;
       map.insertCloud(syntheticRoomSweep(spec_), spec_.sensor_m);
+      EXPECT_TRUE(map.matchesOctomapReference());
     }
     map.saveBinaryAtomic(path.string());
   }
@@ -172,6 +173,105 @@ TEST_F(BoxRoomTest, SameInputGivesIdenticalBtFiles) {
   EXPECT_TRUE(loaded.occupiedAt({0.05, 1.55, 1.35}));
   EXPECT_EQ(loaded.occupancyAt({1.05, 1.55, 1.35}), Occupancy::kFree);
   EXPECT_EQ(loaded.occupancyAt({5.05, 1.55, 1.35}), Occupancy::kUnknown);
+}
+
+// insertClouds() shares only the whole-tree updates between clouds: many small clouds
+// from moving origins (like rig B's scans), some overlapping and some repeating voxels,
+// give the same tree, byte for byte, as insertCloud() one by one.
+TEST_F(BoxRoomTest, InsertCloudsEqualsInsertCloudOneByOne) {
+  const auto dir = freshTestDir();
+  spec_.range_noise_sigma_m = 0.012;
+  spec_.scans = 6;
+  spec_.beams = 181;
+  std::vector<SensorCloud> clouds;
+  for (int k = 0; k < 12; ++k) {
+    spec_.seed = static_cast<uint32_t>(k + 1);
+    spec_.sensor_m = {1.0f + 0.03f * static_cast<float>(k), 1.55f, 1.35f};
+    clouds.push_back({syntheticRoomSweep(spec_), spec_.sensor_m});
+  }
+  OccupancyMap one_by_one(config_), batched(config_), two_batches(config_);
+  for (const SensorCloud& c : clouds) one_by_one.insertCloud(c.points_m, c.origin_m);
+  std::vector<size_t> rejected;
+  batched.insertClouds(clouds, &rejected);
+  EXPECT_TRUE(rejected.empty());
+  two_batches.insertClouds({clouds.begin(), clouds.begin() + 5});
+  two_batches.insertClouds({clouds.begin() + 5, clouds.end()});
+  const MapStats a = one_by_one.stats(), b = batched.stats();
+  EXPECT_EQ(a.sweeps_inserted, b.sweeps_inserted);
+  EXPECT_EQ(a.points_inserted, b.points_inserted);
+  EXPECT_EQ(a.occupied_voxels, b.occupied_voxels);
+  EXPECT_EQ(a.free_voxels, b.free_voxels);
+  EXPECT_EQ(a.memory_bytes, b.memory_bytes);
+  EXPECT_GT(a.occupied_voxels, 100);
+  for (const auto& [name, map] : {std::pair<const char*, const OccupancyMap*>{"one.bt", &one_by_one},
+                                  {"batched.bt", &batched},
+                                  {"two.bt", &two_batches}}) {
+    map->saveBinaryAtomic((dir / name).string());
+  }
+  // The one-pass inner update, pruning and counting equal OctoMap's own passes.
+  EXPECT_TRUE(one_by_one.matchesOctomapReference());
+  EXPECT_TRUE(batched.matchesOctomapReference());
+  EXPECT_TRUE(two_batches.matchesOctomapReference());
+  const std::string reference = fileBytes(dir / "one.bt");
+  ASSERT_GT(reference.size(), 1000u);
+  EXPECT_EQ(reference, fileBytes(dir / "batched.bt"));
+  EXPECT_EQ(reference, fileBytes(dir / "two.bt"));
+}
+
+// The one-pass update walks only the regions (3.2 m cubes at 10 cm) an insertion touched
+// and reuses the counts of the others. Three rooms 12 m apart are seen in turn, so most
+// regions are untouched in each batch; over many batches free space is clamped and pruned
+// into large nodes, and split again by an obstacle that appears and goes. The tree and
+// the counts must stay what OctoMap's own whole-tree passes give.
+TEST_F(BoxRoomTest, TouchedRegionsOnlyMatchOctomapOverManyBatches) {
+  spec_.scans = 8;
+  spec_.beams = 91;
+  OccupancyMap map(config_);
+  const RoomSweepSpec room = spec_;
+  for (int batch = 0; batch < 36; ++batch) {
+    const Eigen::Vector3f offset(12.0f * static_cast<float>(batch % 3), 0.0f, 0.0f);
+    std::vector<SensorCloud> clouds;
+    for (int k = 0; k < 3; ++k) {
+      RoomSweepSpec spec = room;
+      spec.room_min_m += offset;
+      spec.room_max_m += offset;
+      spec.seed = static_cast<uint32_t>(batch * 3 + k + 1);
+      spec.range_noise_sigma_m = batch < 24 ? 0.0 : 0.02;
+      spec.sensor_m = offset + Eigen::Vector3f(0.8f + 0.1f * static_cast<float>((batch + k) % 25),
+                                               1.55f, 1.35f);
+      SensorCloud c{syntheticRoomSweep(spec), spec.sensor_m};
+      if (batch >= 12 && batch < 20) {  // an obstacle in the middle of the (pruned) free space
+        for (float y = 0.5f; y < 1.2f; y += 0.05f) {
+          for (float z = 0.5f; z < 1.2f; z += 0.05f) c.points_m.push_back(offset + Eigen::Vector3f(3.55f, y, z));
+        }
+      }
+      clouds.push_back(std::move(c));
+    }
+    map.insertClouds(clouds);
+    ASSERT_TRUE(map.matchesOctomapReference()) << "after batch " << batch;
+  }
+  const MapStats s = map.stats();
+  EXPECT_EQ(s.sweeps_inserted, 108);
+  EXPECT_GT(s.occupied_voxels, 3 * 1000);
+}
+
+TEST(OccupancyMap, InsertCloudsSkipsBadOriginsAndInsertsTheRest) {
+  MapperConfig config;
+  config.resolution_m = 0.1;
+  OccupancyMap map(config);
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::vector<size_t> rejected;
+  map.insertClouds({{{{1.05f, 0.05f, 0.05f}}, {0.05f, 0.05f, 0.05f}},
+                    {{{2.05f, 0.05f, 0.05f}}, {nan, 0.05f, 0.05f}},
+                    {{{3.05f, 0.05f, 0.05f}}, {1e7f, 0.05f, 0.05f}},
+                    {{{0.05f, 1.05f, 0.05f}}, {0.05f, 0.05f, 0.05f}}},
+                   &rejected);
+  EXPECT_EQ(rejected, (std::vector<size_t>{1, 2}));
+  EXPECT_EQ(map.stats().sweeps_inserted, 2);
+  EXPECT_TRUE(map.occupiedAt({1.05, 0.05, 0.05}));
+  EXPECT_TRUE(map.occupiedAt({0.05, 1.05, 0.05}));
+  EXPECT_EQ(map.occupancyAt({2.05, 0.05, 0.05}), Occupancy::kUnknown);
+  EXPECT_EQ(map.occupancyAt({3.05, 0.05, 0.05}), Occupancy::kUnknown);
 }
 
 TEST_F(BoxRoomTest, SaveReplacesAndReportsFailures) {
