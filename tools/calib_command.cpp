@@ -212,23 +212,6 @@ struct MountingOptions {
   double min_pass_gap_s = MountingCalibrationOptions{}.min_pass_gap_s;
 };
 
-nlohmann::json resultJson(const MountingCalibrationResult& r, double seconds_taken) {
-  nlohmann::json j;
-  j["method"] = mountingMethodName(r.method);
-  j["ok"] = r.ok;
-  if (!r.ok) j["reason"] = r.reason;
-  j["gamma_rad"] = r.gamma_rad;
-  j["beta_rad"] = r.beta_rad;
-  j["alpha_rad"] = r.alpha_rad;
-  j["time_offset_s"] = r.time_offset_s;
-  j["residual_before_m"] = r.residual_before_m;
-  j["residual_after_m"] = r.residual_after_m;
-  j["correspondences"] = r.correspondences;
-  j["iterations"] = r.iterations;
-  j["time_s"] = seconds_taken;
-  return j;
-}
-
 int runMounting(const MountingOptions& o) {
   using clock = std::chrono::steady_clock;
   const auto t_start = clock::now();
@@ -318,22 +301,19 @@ int runMounting(const MountingOptions& o) {
                  "calibrate without --time-offset\n";
   }
 
-  nlohmann::json j = resultJson(ours, ours_s);
+  nlohmann::json j = mountingResultJson(ours, truth);
+  j["time_s"] = ours_s;
   j["track"] = o.track;
   if (o.time_offset) j["time_offset_at_bound"] = offset_at_bound;
   j["log"] = o.log;
   j["scans"] = log.scans.size();
   if (log.log_error) j["log_error"] = log.error;
-  if (paper) j["paper"] = resultJson(*paper, paper_s);
+  if (paper) {
+    j["paper"] = mountingResultJson(*paper, truth);
+    j["paper"]["time_s"] = paper_s;
+  }
   if (truth) {
     j["truth"] = {{"gamma_rad", truth->gamma_rad}, {"beta_rad", truth->beta_rad}, {"alpha_rad", truth->alpha_rad}};
-    const auto errors = [&](const MountingCalibrationResult& r) {
-      return nlohmann::json{{"gamma", (r.gamma_rad - truth->gamma_rad) * 1e3},
-                            {"beta", (r.beta_rad - truth->beta_rad) * 1e3},
-                            {"alpha", (r.alpha_rad - truth->alpha_rad) * 1e3}};
-    };
-    if (ours.ok) j["error_mrad"] = errors(ours);
-    if (paper && paper->ok) j["paper"]["error_mrad"] = errors(*paper);
   }
 
   if (!ours.ok) {

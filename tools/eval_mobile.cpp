@@ -608,26 +608,6 @@ HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track, const 
   return g;
 }
 
-json calibrationJson(const MountingCalibrationResult& c, const std::optional<LidarMounting>& truth) {
-  json j = {{"method", mountingMethodName(c.method)},
-            {"ok", c.ok},
-            {"gamma_rad", c.gamma_rad},
-            {"beta_rad", c.beta_rad},
-            {"alpha_rad", c.alpha_rad},
-            {"time_offset_s", c.time_offset_s},
-            {"residual_before_m", round6(c.residual_before_m)},
-            {"residual_after_m", round6(c.residual_after_m)},
-            {"correspondences", c.correspondences},
-            {"iterations", c.iterations}};
-  if (!c.reason.empty()) j["reason"] = c.reason;
-  if (truth) {
-    j["error_mrad"] = {{"gamma", round6(1000.0 * (c.gamma_rad - truth->gamma_rad))},
-                       {"beta", round6(1000.0 * (c.beta_rad - truth->beta_rad))},
-                       {"alpha", round6(1000.0 * (c.alpha_rad - truth->alpha_rad))}};
-  }
-  return j;
-}
-
 }  // namespace
 
 EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions& o) {
@@ -673,8 +653,8 @@ EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions& o) {
   const MountingCalibrationResult ours = calibrateMounting(circle.scans, circle.ekf, initial, ours_options);
   const MountingCalibrationResult paper = calibrateMounting(circle.scans, circle.ekf, initial, paper_options);
   json calibration = {{"log", "logs/circle.lcmlog"},
-                      {"ours", calibrationJson(ours, truth)},
-                      {"paper", calibrationJson(paper, truth)}};
+                      {"ours", mountingResultJson(ours, truth)},
+                      {"paper", mountingResultJson(paper, truth)}};
   if (truth) calibration["truth"] = mountingJson(*truth);
 
   EvalMobileOptions eo;

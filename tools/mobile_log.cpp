@@ -91,4 +91,24 @@ LidarMounting trueMounting(const truth_mounting_t& t) {
   return m;
 }
 
+nlohmann::json mountingResultJson(const MountingCalibrationResult& r, const std::optional<LidarMounting>& truth) {
+  nlohmann::json j = {{"method", mountingMethodName(r.method)},
+                      {"ok", r.ok},
+                      {"gamma_rad", r.gamma_rad},
+                      {"beta_rad", r.beta_rad},
+                      {"alpha_rad", r.alpha_rad},
+                      {"time_offset_s", r.time_offset_s},
+                      {"residual_before_m", r.residual_before_m},
+                      {"residual_after_m", r.residual_after_m},
+                      {"correspondences", r.correspondences},
+                      {"iterations", r.iterations}};
+  if (!r.ok) j["reason"] = r.reason;
+  if (truth && r.ok) {
+    j["error_mrad"] = {{"gamma", 1e3 * (r.gamma_rad - truth->gamma_rad)},
+                       {"beta", 1e3 * (r.beta_rad - truth->beta_rad)},
+                       {"alpha", 1e3 * (r.alpha_rad - truth->alpha_rad)}};
+  }
+  return j;
+}
+
 }  // namespace sweepmap

@@ -4,10 +4,12 @@
 // assembled again with any mounting without replaying the log.
 #pragma once
 
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "calib/mounting_calibration.hpp"
 #include "calib/world_assembly.hpp"
 #include "core/scan.hpp"
 #include "processes/rig_b.hpp"
@@ -39,5 +41,11 @@ std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack
 
 // The mounting the simulator used (truth), from TRUTH_MOUNTING.
 LidarMounting trueMounting(const truth_mounting_t& truth);
+
+// A mounting calibration's result for reports: method, ok (reason), gamma/beta/alpha_rad,
+// time_offset_s, residual_before_m/after_m, correspondences, iterations and, given the truth
+// and a result, error_mrad {gamma, beta, alpha} (estimate minus truth).
+nlohmann::json mountingResultJson(const MountingCalibrationResult& r,
+                                  const std::optional<LidarMounting>& truth = std::nullopt);
 
 }  // namespace sweepmap
