@@ -10,26 +10,21 @@ namespace sweepmap {
 namespace test {
 namespace {
 
-// One run of the paper experiment per test binary (~1-2 min): every test reads its report.
+// One run of the paper experiment (~1 min) per build, shared by every test (CTest runs each
+// in its own process).
 class EvalMobilePaper : public ::testing::Test {
  protected:
-  static void SetUpTestSuite() {
-    dir_ = new fs::path(scratchDir("eval_mobile_paper"));
-    status_ = sweepmap({"eval", "mobile", "--experiment", "paper", "--rig", sourcePath("config/rig_b.yaml"),
-                        "--scene", sourcePath("config/scene_lab.yaml"), "--out", dir_->string()},
-                       *dir_ / "run.txt");
-  }
-  static void TearDownTestSuite() { delete dir_; }
   void SetUp() override {
-    ASSERT_EQ(status_, 0) << readFile(*dir_ / "run.txt");
-    report_ = readJson(*dir_ / "report.json");
+    const CachedRun run = cachedRun("eval_mobile_paper", {"eval", "mobile", "--experiment", "paper", "--rig",
+                                                          sourcePath("config/rig_b.yaml"), "--scene",
+                                                          sourcePath("config/scene_lab.yaml")});
+    dir_ = run.out;
+    ASSERT_EQ(run.status, 0) << readFile(run.output);
+    report_ = readJson(dir_ / "report.json");
   }
-  static fs::path* dir_;
-  static int status_;
+  fs::path dir_;
   nlohmann::json report_;
 };
-fs::path* EvalMobilePaper::dir_ = nullptr;
-int EvalMobilePaper::status_ = -1;
 
 TEST_F(EvalMobilePaper, OurMountingCalibrationIsWithinOneMilliradianOfTruth) {
   const auto& e = report_["mounting_error_mrad"];
@@ -43,7 +38,7 @@ TEST_F(EvalMobilePaper, OurMountingCalibrationIsWithinOneMilliradianOfTruth) {
   EXPECT_TRUE(report_["calibration"]["ours"]["residual_after_m"].get<double>() <
               report_["calibration"]["ours"]["residual_before_m"].get<double>());
   // The written calibration is a mounting calibration file.
-  EXPECT_NE(readFile(*dir_ / "mounting_calibration.yaml").find("gamma_rad"), std::string::npos);
+  EXPECT_NE(readFile(dir_ / "mounting_calibration.yaml").find("gamma_rad"), std::string::npos);
 }
 
 TEST_F(EvalMobilePaper, CalibrationRemovesTheCirclesDoubleWalls) {
@@ -84,10 +79,10 @@ TEST_F(EvalMobilePaper, CeilingNormalDensityAndFigures) {
   for (const char* f : {"trajectory.png", "trajectory_error.png", "top_view.png", "side_view_xz.png",
                         "side_view_yz.png", "deviation_ceiling.png", "deviation_walls.png",
                         "loop_closure.png", "circle_ghost_before.png", "circle_ghost_after.png"}) {
-    EXPECT_TRUE(fs::exists(*dir_ / f)) << f;
+    EXPECT_TRUE(fs::exists(dir_ / f)) << f;
   }
-  EXPECT_TRUE(fs::exists(*dir_ / "report.md"));
-  EXPECT_TRUE(fs::exists(*dir_ / "logs" / "circle.lcmlog"));
+  EXPECT_TRUE(fs::exists(dir_ / "report.md"));
+  EXPECT_TRUE(fs::exists(dir_ / "logs" / "circle.lcmlog"));
 }
 
 TEST(EvalMobile, TruncatedLogIsReportedAndWhatCameBeforeIsEvaluated) {

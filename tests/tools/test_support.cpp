@@ -130,18 +130,26 @@ std::string cachedSimMobileLog(const std::string& name, const std::vector<std::s
   return cachedLog("sim-mobile", name, sim_args);
 }
 
+CachedRun cachedRun(const std::string& name, const std::vector<std::string>& args) {
+  const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_cache" / name;
+  CachedRun run{dir / "out", -1, dir / "output.txt"};
+  onceUnderLock(dir, joined(args), [&] {
+    std::vector<std::string> a = args;
+    a.insert(a.end(), {"--out", run.out.string()});
+    fs::remove_all(run.out);
+    std::ofstream(dir / "status.txt") << sweepmap(a, run.output);
+  });
+  run.status = std::stoi(readFile(dir / "status.txt"));
+  return run;
+}
+
 fs::path cachedReplay(const std::string& name, const std::string& log,
                       const std::vector<std::string>& extra_args) {
-  const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_cache" / name;
-  onceUnderLock(dir, log + " " + joined(extra_args), [&] {
-    std::vector<std::string> args = {"replay", log, "--out", (dir / "out").string()};
-    args.insert(args.end(), extra_args.begin(), extra_args.end());
-    fs::remove_all(dir / "out");
-    if (sweepmap(args, dir / "replay.txt") != 0) {
-      throw std::runtime_error("sweepmap replay failed: " + readFile(dir / "replay.txt"));
-    }
-  });
-  return dir / "out";
+  std::vector<std::string> args = {"replay", log};
+  args.insert(args.end(), extra_args.begin(), extra_args.end());
+  const CachedRun run = cachedRun(name, args);
+  if (run.status != 0) throw std::runtime_error("sweepmap replay failed: " + readFile(run.output));
+  return run.out;
 }
 
 }  // namespace test

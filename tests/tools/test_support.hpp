@@ -39,6 +39,14 @@ namespace test {
 std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args);
 // Same with `sweepmap sim-mobile` (rig B).
 std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args);
+// `sweepmap <args> --out DIR` run once per build (as above) for every test process that asks:
+// DIR, the exit status and the command's output (stdout and stderr).
+struct CachedRun {
+  fs::path out;
+  int status;
+  fs::path output;
+};
+CachedRun cachedRun(const std::string& name, const std::vector<std::string>& args);
 // Same for a replay of a cached log into a directory.
 fs::path cachedReplay(const std::string& name, const std::string& log,
                       const std::vector<std::string>& extra_args);
