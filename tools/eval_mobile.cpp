@@ -182,6 +182,7 @@ struct LoopClosure {
     double distance_m = 0;
   };
   std::vector<Plane> planes;
+  std::vector<Eigen::Vector3f> early_points;  // the points the early planes index
   std::optional<double> ghost_m;  // the largest distance among vertical planes
   std::string reason;
 };
@@ -230,6 +231,14 @@ LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track, const std:
   po.min_inliers = 100;
   po.distance_threshold_m = 0.03;
   for (const WallPlaneFit& e : extractPlanes(early_pts, po)) {
+    // A far, noisy wall (1 % of 5 m) can come out of RANSAC as two parallel planes a few
+    // centimetres apart, the second made of the first one's outliers: one surface, one plane.
+    const Eigen::Vector3d c = centroid(early_pts, e.inlier_indices);
+    const bool seen = std::any_of(lc.planes.begin(), lc.planes.end(), [&](const LoopClosure::Plane& q) {
+      return std::abs(q.early.normal.dot(e.normal)) > std::cos(3.0 * M_PI / 180.0) &&
+             std::abs(signedDistance(q.early, c)) < 0.1;
+    });
+    if (seen) continue;
     const auto refit = refitWalls(late_pts, {e}, 0.1);
     if (refit.empty() || refit[0].inliers < 100) continue;
     // The late pass's plane through its points near the early plane, then its own inliers.
@@ -240,6 +249,7 @@ LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track, const std:
     lc.ghost_m = std::max(lc.ghost_m.value_or(0.0), p.distance_m);
   }
   if (!lc.ghost_m) lc.reason = "no wall seen by both passes";
+  lc.early_points = std::move(early_pts);
   return lc;
 }
 
@@ -476,6 +486,7 @@ EvalMobileResult evalMobileLog(const EvalMobileOptions& o) {
   jl["planes"] = json::array();
   for (const auto& p : lc.planes) {
     jl["planes"].push_back({{"normal", {round6(p.early.normal.x()), round6(p.early.normal.y()), round6(p.early.normal.z())}},
+                            {"centroid_m", planeJson(p.early, lc.early_points)["centroid_m"]},
                             {"early_points", p.early.inliers},
                             {"late_points", p.late.inliers},
                             {"distance_mm", round6(1000.0 * p.distance_m)}});
