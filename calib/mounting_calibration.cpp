@@ -50,11 +50,12 @@ struct RayPose {
 struct Model {
   Eigen::Vector3d t_BL;
   double dt_lin = 0.0;
+  double t_mid_us = 0.0;  // reference time of the track drift
 };
 
 template <typename T>
 Eigen::Matrix<T, 3, 1> worldPoint(const Ray& ray, const RayPose& P, const Model& m, const T* ang,
-                                  const T* dt) {
+                                  const T* dt, const T* drift = nullptr) {
   using std::cos;
   using std::sin;
   // R(g, b, a) q = Rz(a) Ry(b) Rx(g) q, as LidarMounting::T_BL.
@@ -74,29 +75,35 @@ Eigen::Matrix<T, 3, 1> worldPoint(const Ray& ray, const RayPose& P, const Model&
   const T py = P.y + P.vy * ddt;
   const T th = P.th + P.vth * ddt;
   const T c = cos(th), s = sin(th);
+  if (drift != nullptr) {
+    // The track's slow position drift (odometry: its error grows at this world velocity),
+    // taken off about the middle time.
+    const T tt = T((double(ray.utime) - m.t_mid_us) * 1e-6);
+    return {px + c * bx - s * by - drift[0] * tt, py + s * bx + c * by - drift[1] * tt, bz};
+  }
   return {px + c * bx - s * by, py + s * bx + c * by, bz};
 }
 
 // Ours: the distance of point A from the local plane (normal n, fixed) through the
 // centroid of its neighbours B in the other pass, all re-assembled with the parameters.
-// Residual 1; parameters: (gamma, beta, alpha) [3], time offset [1].
+// Residual 1; parameters: (gamma, beta, alpha) [3], time offset [1], track drift [2].
 struct PointToPlaneCost {
   PointToPlaneCost(const Model* m, Ray a, RayPose pa, std::vector<std::pair<Ray, RayPose>> b,
                    Eigen::Vector3d n, double weight)
       : m_(m), a_(a), pa_(pa), b_(std::move(b)), n_(n * weight) {}
   template <typename T>
-  bool operator()(const T* ang, const T* dt, T* residual) const {
+  bool operator()(const T* ang, const T* dt, const T* drift, T* residual) const {
     Eigen::Matrix<T, 3, 1> c = Eigen::Matrix<T, 3, 1>::Zero();
-    for (const auto& [ray, pose] : b_) c += worldPoint(ray, pose, *m_, ang, dt);
+    for (const auto& [ray, pose] : b_) c += worldPoint(ray, pose, *m_, ang, dt, drift);
     c /= T(double(b_.size()));
-    const Eigen::Matrix<T, 3, 1> d = worldPoint(a_, pa_, *m_, ang, dt) - c;
+    const Eigen::Matrix<T, 3, 1> d = worldPoint(a_, pa_, *m_, ang, dt, drift) - c;
     residual[0] = n_.x() * d.x() + n_.y() * d.y() + n_.z() * d.z();
     return true;
   }
   static ceres::CostFunction* Create(const Model* m, const Ray& a, const RayPose& pa,
                                      std::vector<std::pair<Ray, RayPose>> b, const Eigen::Vector3d& n,
                                      double weight) {
-    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 1>(
+    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 1, 2>(
         new PointToPlaneCost(m, a, pa, std::move(b), n, weight));
   }
   const Model* m_;
@@ -202,13 +209,13 @@ struct WorldCloud {
 
 void buildWorld(const std::vector<Ray>& rays, const std::vector<RayPose>& poses,
                 const std::vector<char>& covered, const std::vector<int>& which, const Model& m,
-                const double* ang, double dt, WorldCloud* w) {
+                const double* ang, double dt, WorldCloud* w, const double* drift = nullptr) {
   w->ray.clear();
   w->p.clear();
   w->cloud->clear();
   for (int i : which) {
     if (!covered[i]) continue;
-    const Eigen::Vector3d p = worldPoint(rays[i], poses[i], m, ang, &dt);
+    const Eigen::Vector3d p = worldPoint(rays[i], poses[i], m, ang, &dt, drift);
     w->ray.push_back(i);
     w->p.push_back(p);
     w->cloud->push_back(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())));
@@ -286,6 +293,9 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
   model.t_BL = initial.t_BL_m;
   double ang[3] = {initial.gamma_rad, initial.beta_rad, initial.alpha_rad};
   double dt = o.estimate_time_offset ? o.initial_time_offset_s : 0.0;
+  double drift[2] = {0.0, 0.0};
+  const bool with_drift = o.estimate_track_drift;
+  if (!rays.empty()) model.t_mid_us = 0.5 * (double(rays.front().utime) + double(rays.back().utime));
 
   std::vector<int> all(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) all[i] = int(i);
@@ -297,7 +307,7 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
     model.dt_lin = dt;
     computePoses(rays, track, dt, &poses, &covered);
     WorldCloud w;
-    buildWorld(rays, poses, covered, all, model, ang, dt, &w);
+    buildWorld(rays, poses, covered, all, model, ang, dt, &w, drift);
     if (w.p.size() < 100) {
       res.reason = "the pose track covers too few lidar rays (" + std::to_string(w.p.size()) + ")";
       return res;
@@ -344,16 +354,16 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       // The residual's plane: through the centroid of the nearest neighbours of the other
       // pass (re-assembled in the cost), with the patch's normal.
       mean.setZero();
-      for (const auto& [b, pb] : nb) mean += worldPoint(b, pb, model, ang, &dt);
+      for (const auto& [b, pb] : nb) mean += worldPoint(b, pb, model, ang, &dt, drift);
       mean /= double(nb.size());
       if (o.max_incidence_rad < 0.5 * M_PI) {
         // Grazing rays: the range noise lies mostly in the plane and the patch is stretched
         // along the ray; such patches are skipped for the query's and the neighbours' rays.
         const Ray origin_a{Eigen::Vector3d::Zero(), a.utime, a.scan, a.left, 0.0};
-        const Eigen::Vector3d ua = (w.p[k] - worldPoint(origin_a, poses[w.ray[k]], model, ang, &dt)).normalized();
+        const Eigen::Vector3d ua = (w.p[k] - worldPoint(origin_a, poses[w.ray[k]], model, ang, &dt, drift)).normalized();
         const auto& [b0, pb0] = nb.front();
         const Ray origin_b{Eigen::Vector3d::Zero(), b0.utime, b0.scan, b0.left, 0.0};
-        const Eigen::Vector3d ub = (worldPoint(b0, pb0, model, ang, &dt) - worldPoint(origin_b, pb0, model, ang, &dt)).normalized();
+        const Eigen::Vector3d ub = (worldPoint(b0, pb0, model, ang, &dt, drift) - worldPoint(origin_b, pb0, model, ang, &dt, drift)).normalized();
         const double c = std::cos(o.max_incidence_rad);
         if (std::abs(ua.dot(n)) < c || std::abs(ub.dot(n)) < c) continue;
       }
@@ -372,7 +382,7 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       r0.push_back(r);
       const double weight = o.range_weighting ? 1.0 / std::max(1.0, a.range_m) : 1.0;
       problem.AddResidualBlock(PointToPlaneCost::Create(&model, a, poses[w.ray[k]], std::move(nb), n, weight),
-                               new ceres::CauchyLoss(o.loss_scale_m), ang, &dt);
+                               new ceres::CauchyLoss(o.loss_scale_m), ang, &dt, drift);
       ++pairs;
     }
     if (pairs < o.min_correspondences) {
@@ -398,6 +408,7 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
     } else {
       problem.SetParameterBlockConstant(&dt);
     }
+    if (!with_drift) problem.SetParameterBlockConstant(drift);
     const double before[4] = {ang[0], ang[1], ang[2], dt};
     ceres::Solver::Options so;
     configureSolver(&so, o.max_solver_iterations);
@@ -425,6 +436,8 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
   res.beta_rad = ang[1];
   res.alpha_rad = ang[2];
   res.time_offset_s = o.estimate_time_offset ? dt : 0.0;
+  res.drift_x_m_s = drift[0];
+  res.drift_y_m_s = drift[1];
   res.ok = true;
   return res;
 }

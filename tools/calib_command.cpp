@@ -208,6 +208,7 @@ struct MountingOptions {
   bool json = false;
   std::string track = "ekf";  // ekf | wheels | truth
   bool time_offset = false;
+  bool track_drift = false;  // also estimate the track's slow position drift (ours)
   bool no_paper = false;  // skip the paper's method (else reported beside ours)
   double min_pass_gap_s = MountingCalibrationOptions{}.min_pass_gap_s;
 };
@@ -254,6 +255,7 @@ int runMounting(const MountingOptions& o) {
   MountingCalibrationOptions options;
   options.min_pass_gap_s = o.min_pass_gap_s;
   options.estimate_time_offset = o.time_offset;
+  options.estimate_track_drift = o.track_drift;
   options.method = MountingMethod::kPointToPlane;
   const auto t_ours = clock::now();
   const MountingCalibrationResult ours = calibrateMounting(log.scans, *track, initial, options);
@@ -280,6 +282,9 @@ int runMounting(const MountingOptions& o) {
               << r.alpha_rad << " rad";
     if (o.time_offset && r.method == MountingMethod::kPointToPlane) {
       std::cerr << ", time offset " << r.time_offset_s * 1e3 << " ms";
+    }
+    if (o.track_drift && r.method == MountingMethod::kPointToPlane) {
+      std::cerr << ", track drift (" << r.drift_x_m_s * 1e3 << ", " << r.drift_y_m_s * 1e3 << ") mm/s";
     }
     std::cerr << "; residual RMS " << std::setprecision(4) << r.residual_before_m * 1e3 << " -> "
               << r.residual_after_m * 1e3 << " mm over " << r.correspondences << " correspondences, "
@@ -439,6 +444,8 @@ Runner addCalibCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"ekf", "wheels", "truth"}));
   mount->add_flag("--time-offset", m->time_offset, "also estimate the lidar-to-odometry time offset (ours)");
+  mount->add_flag("--track-drift", m->track_drift,
+                  "also estimate a slow drift (world velocity) of the track's position (ours; odometry tracks)");
   mount->add_flag("--no-paper", m->no_paper, "skip the paper's method");
   mount->add_option("--min-pass-gap", m->min_pass_gap_s,
                     "seconds between two observations of a place for them to be two passes")

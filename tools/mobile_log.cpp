@@ -98,6 +98,7 @@ nlohmann::json mountingResultJson(const MountingCalibrationResult& r, const std:
                       {"beta_rad", r.beta_rad},
                       {"alpha_rad", r.alpha_rad},
                       {"time_offset_s", r.time_offset_s},
+                      {"track_drift_m_s", {r.drift_x_m_s, r.drift_y_m_s}},
                       {"residual_before_m", r.residual_before_m},
                       {"residual_after_m", r.residual_after_m},
                       {"correspondences", r.correspondences},

@@ -43,7 +43,7 @@ std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack
 LidarMounting trueMounting(const truth_mounting_t& truth);
 
 // A mounting calibration's result for reports: method, ok (reason), gamma/beta/alpha_rad,
-// time_offset_s, residual_before_m/after_m, correspondences, iterations and, given the truth
+// time_offset_s, track_drift_m_s, residual_before_m/after_m, correspondences, iterations and, given the truth
 // and a result, error_mrad {gamma, beta, alpha} (estimate minus truth).
 nlohmann::json mountingResultJson(const MountingCalibrationResult& r,
                                   const std::optional<LidarMounting>& truth = std::nullopt);

@@ -131,6 +131,37 @@ TEST_F(NoiseFreeDrive, TimeOffsetRecoveredWhenInjected) {
   EXPECT_NEAR(r.time_offset_s, -kLidarLateUs * 1e-6, 5e-5);
 }
 
+TEST_F(NoiseFreeDrive, TrackDriftEstimatedWhenInjected) {
+  // Odometry drifts slowly (wheel-speed noise, slip): the two passes of a place are seen
+  // from positions a few millimetres apart, the shift alpha is seen by (1.7 mm/mrad).
+  SimMobileConfig c = quiet();
+  c.duration_s = 32.0;
+  drive(c);
+  constexpr double kVx = 2e-4, kVy = -1e-4;  // m/s: 6 and 3 mm over the drive
+  PoseTrack drifting;
+  for (const auto& [t, p] : track_.poses()) {
+    Pose2 q = p;
+    const double s = double(t - kStart) * 1e-6;
+    q.x_m += kVx * s;
+    q.y_m += kVy * s;
+    drifting.add(t, q);
+  }
+  MountingCalibrationOptions o;
+  o.method = MountingMethod::kPointToPlane;
+  o.range_noise_fraction = 0.0;  // the data's (as above)
+  const MountingCalibrationResult plain = calibrateMounting(scans_, drifting, initial(), o);
+  ASSERT_TRUE(plain.ok) << plain.reason;
+  std::cerr << "without drift: alpha error " << plain.alpha_rad - truth_[2] << ", beta error "
+            << plain.beta_rad - truth_[1] << " rad\n";
+  EXPECT_GT(std::abs(plain.alpha_rad - truth_[2]), 5e-4);  // measured 1.1 mrad
+  o.estimate_track_drift = true;
+  const MountingCalibrationResult r = calibrateMounting(scans_, drifting, initial(), o);
+  std::cerr << "drift " << r.drift_x_m_s << ", " << r.drift_y_m_s << " m/s\n";
+  expectTruth(r, 5e-6);  // measured 5e-7 rad
+  EXPECT_NEAR(r.drift_x_m_s, kVx, 1e-6);
+  EXPECT_NEAR(r.drift_y_m_s, kVy, 1e-6);
+}
+
 TEST_F(NoiseFreeDrive, TooLittleDataIsRefusedWithAReason) {
   SimMobileConfig c = quiet();
   c.duration_s = 4.0;  // not even a quarter turn: no second pass
