@@ -27,7 +27,7 @@ void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "gate_chi2_wheels", &ekf.gate_chi2_wheels, "", "Mahalanobis gate, wheels (2 dof)");
   s.add(p + "gate_chi2_gyro", &ekf.gate_chi2_gyro, "", "Mahalanobis gate, gyro (1 dof)");
   s.add(p + "yaw_sigma_rad", &ekf.yaw_sigma_rad, "rad",
-        "noise of the IMU's own yaw, fused with its offset from the world frame as a state (0: not fused; a 6-axis "
+        "noise of the IMU's own yaw, fused relative to its first reading (0: not fused; a 6-axis "
         "IMU whose yaw drifts needs 0 or a large value)");
   s.add(p + "gate_chi2_yaw", &ekf.gate_chi2_yaw, "", "Mahalanobis gate, IMU yaw (1 dof)");
   s.add(p + "history_s", &ekf.history_s, "s", "late messages within this are re-ordered");
