@@ -8,11 +8,8 @@ namespace sweepmap {
 
 OdometryEkf::OdometryEkf(const EkfConfig& config, int64_t start_utime)
     : config_(config), utime_(start_utime) {
-  // The IMU's yaw offset is unknown until its first reading: a variance far above any
-  // wrapped innovation's square (pi^2), so that reading passes the gate and sets it.
-  constexpr double kUnknownYawOffsetVariance = 100.0;
   cov_.diagonal() << 0.0, 0.0, 0.0, 1.0, 1.0,
-      config.initial_bias_sigma_rad_s * config.initial_bias_sigma_rad_s, kUnknownYawOffsetVariance;
+      config.initial_bias_sigma_rad_s * config.initial_bias_sigma_rad_s;
   base_state_ = state_;
   base_cov_ = cov_;
   base_utime_ = utime_;
@@ -165,19 +162,23 @@ bool OdometryEkf::apply(const Measurement& m) {
     Eigen::Matrix2d R;  // (v, w) = A (v_l, v_r): R = A diag(sl^2, sr^2) A^T
     R << 0.25 * (sl * sl + sr * sr), 0.5 * (sr * sr - sl * sl) / wd,
         0.5 * (sr * sr - sl * sl) / wd, (sl * sl + sr * sr) / (wd * wd);
-    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, kStateSize);
+    Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, 6);
     H(0, kV) = 1.0;
     H(1, kW) = 1.0;
     Eigen::Vector2d y(t.v_m_s - state_[kV], t.w_rad_s - state_[kW]);
     return update(y, H, R, config_.gate_chi2_wheels);
   }
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(1, kStateSize);
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(1, 6);
   Eigen::VectorXd y(1);
   Eigen::MatrixXd R(1, 1);
   if (m.kind == Kind::kYaw) {
+    if (!have_yaw_offset_) {  // the first reading ties the IMU's yaw to the world frame
+      yaw_offset_ = m.a - state_[kTheta];
+      have_yaw_offset_ = true;
+      return true;
+    }
     H(0, kTheta) = 1.0;
-    H(0, kYawOffset) = 1.0;
-    y[0] = std::remainder(m.a - state_[kYawOffset] - state_[kTheta], 2.0 * M_PI);
+    y[0] = std::remainder(m.a - yaw_offset_ - state_[kTheta], 2.0 * M_PI);
     R(0, 0) = config_.yaw_sigma_rad * config_.yaw_sigma_rad;
     return update(y, H, R, config_.gate_chi2_yaw);
   }

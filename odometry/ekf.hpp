@@ -2,11 +2,9 @@
 //  - state s = [x, y, theta, v, w, b_g]: pose in the world, forward speed, turn rate, gyro bias;
 //    a constant-velocity model predicts it (random-walk acceleration, turn acceleration, bias);
 //  - wheel speeds measure (v, w); the gyro measures w + b_g, so its bias is estimated;
-//  - the IMU's own yaw (HI219: static error, white noise) measures theta + o, where o, the
-//    offset between the IMU's yaw zero and the world frame, is a state too (optional:
-//    yaw_sigma_rad > 0): it stops the heading drift that gyro noise and an imperfect bias
-//    estimate would integrate. o starts unknown; since theta(0) = 0 defines the world frame,
-//    every reading refines o, so no single noisy reading fixes the heading's offset;
+//  - the IMU's own yaw (HI219: static error, white noise), relative to its value at the
+//    filter's first yaw reading, measures theta (optional: yaw_sigma_rad > 0): it stops
+//    the heading drift that gyro noise and an imperfect bias estimate would integrate;
 //  - every measurement is gated by its Mahalanobis distance: a slipping wheel disagrees
 //    with the gyro about w and is rejected (counted), not fused;
 //  - measurements are applied in timestamp order: one that arrives late is inserted into a
@@ -45,19 +43,19 @@ struct EkfConfig {
   double trusted_theta_sigma_rad = 0.2;      // beyond: not trusted
 };
 
-using EkfState = Eigen::Matrix<double, 7, 1>;
-using EkfCov = Eigen::Matrix<double, 7, 7>;
+using EkfState = Eigen::Matrix<double, 6, 1>;
+using EkfCov = Eigen::Matrix<double, 6, 6>;
 
 class OdometryEkf {
  public:
-  enum Index { kX = 0, kY, kTheta, kV, kW, kBias, kYawOffset, kStateSize };
+  enum Index { kX = 0, kY, kTheta, kV, kW, kBias };
 
   explicit OdometryEkf(const EkfConfig& config, int64_t start_utime = 0);
 
   // Each returns false when the input was rejected (bad, gated out, or too old).
   bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s);
   bool addGyro(int64_t utime, double w_rad_s);
-  // The IMU's yaw (wrapped or not); its offset from the world frame is estimated.
+  // The IMU's yaw; the first one fused sets the offset between its frame and the world.
   bool addYaw(int64_t utime, double yaw_rad);
 
   const EkfState& state() const { return state_; }
@@ -104,6 +102,8 @@ class OdometryEkf {
   EkfCov base_cov_;
   int64_t base_utime_;
   std::deque<Snapshot> history_;
+  bool have_yaw_offset_ = false;
+  double yaw_offset_ = 0.0;  // IMU yaw minus theta at the first yaw reading
   Counters counters_;
 };
 

@@ -188,38 +188,6 @@ TEST(OdometryEkf, ImuYawBoundsTheHeadingDriftOfABiasedNoisyGyro) {
   EXPECT_TRUE(fused.state().allFinite());
 }
 
-TEST(OdometryEkf, OutOfOrderYawGivesTheOrderedEstimate) {
-  // The yaw offset is part of the state, so a late first yaw reading re-applies like any other.
-  const Drive d = simulateDrive(4, 8.0, false);
-  EkfConfig c;
-  c.yaw_sigma_rad = 0.002;
-  std::vector<Drive::Sample> samples;
-  size_t k = 0;
-  for (const auto& s : d.samples) {
-    samples.push_back(s);
-    if (s.wheels) samples.push_back({s.utime + 1000, false, 1.0 + d.truth[k++].second.theta_rad, 1.0});  // b = 1: yaw
-  }
-  const auto feedAll = [](OdometryEkf& ekf, const std::vector<Drive::Sample>& v) {
-    for (const auto& s : v) {
-      if (!s.wheels && s.b == 1.0) {
-        ekf.addYaw(s.utime, s.a);
-      } else {
-        feed(ekf, s);
-      }
-    }
-  };
-  OdometryEkf ordered(c), shuffled(c);
-  feedAll(ordered, samples);
-  auto late = samples;
-  for (size_t i = 0; i + 20 <= late.size(); i += 20) std::reverse(late.begin() + i, late.begin() + i + 20);
-  feedAll(shuffled, late);
-  EXPECT_GT(shuffled.counters().reordered, 100);
-  EXPECT_GT(ordered.counters().yaw, 300);
-  EXPECT_NEAR(ordered.state()[OdometryEkf::kYawOffset], 1.0, 1e-3);
-  EXPECT_EQ(ordered.state(), shuffled.state());
-  EXPECT_EQ(ordered.covariance(), shuffled.covariance());
-}
-
 TEST(OdometryEkf, YawIsIgnoredWhenNotConfigured) {
   OdometryEkf ekf(EkfConfig{});
   EXPECT_TRUE(ekf.addWheels(10000, 0.2, 0.2));
