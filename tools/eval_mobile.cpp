@@ -172,6 +172,34 @@ json deviationJson(const DeviationStats& d) {
           {"histogram", {{"bin_mm", d.bin_mm}, {"range_mm", d.range_mm}, {"counts", d.bins}}}};
 }
 
+// What the room's planes say of one world-frame cloud: the planes, L1-L3, the deviations
+// of the ceiling and wall points (Fig. 9) and the ceiling's upward normal.
+struct RoomMeasures {
+  RoomPlanes planes;
+  RoomDims dims;
+  DeviationStats ceiling{1.0, 50.0}, walls{1.0, 50.0};
+  std::optional<Eigen::Vector3d> ceiling_up;
+};
+
+RoomMeasures measureRoom(const std::vector<Eigen::Vector3f>& cloud) {
+  RoomMeasures m;
+  m.planes = findRoomPlanes(cloud);
+  m.dims = roomDims(m.planes, cloud);
+  const std::vector<WallPlaneFit> ceiling =
+      m.planes.ceiling ? std::vector<WallPlaneFit>{*m.planes.ceiling} : std::vector<WallPlaneFit>{};
+  m.ceiling = deviations(cloud, ceiling, 0.0);
+  m.walls = deviations(cloud, m.planes.walls, 0.2);
+  if (m.planes.ceiling) {
+    m.ceiling_up = m.planes.ceiling->normal;
+    if (m.ceiling_up->z() < 0) *m.ceiling_up = -*m.ceiling_up;
+  }
+  return m;
+}
+
+json dimsJson(const RoomDims& d) { return {{"L1", nullable(d.L1)}, {"L2", nullable(d.L2)}, {"L3", nullable(d.L3)}}; }
+
+json vectorJson(const Eigen::Vector3d& v) { return {round6(v.x()), round6(v.y()), round6(v.z())}; }
+
 // Where the drive comes back to a place it passed at least `min_gap_s` earlier (pose within
 // `radius_m` and heading within `heading_rad`): the scans of both passes, and the distance
 // between the planes each pass sees there. A double wall is the ghost of Miao 2022 Fig. 11.
@@ -383,7 +411,8 @@ EvalMobileResult evalMobileLog(const EvalMobileOptions& o) {
 
   // Planes, room dimensions, deviations.
   progress("RANSAC planes");
-  const RoomPlanes planes = findRoomPlanes(cloud);
+  const RoomMeasures room = measureRoom(cloud);
+  const RoomPlanes& planes = room.planes;
   json jp;
   jp["walls"] = json::array();
   for (const auto& w : planes.walls) jp["walls"].push_back(planeJson(w, cloud));
@@ -391,16 +420,14 @@ EvalMobileResult evalMobileLog(const EvalMobileOptions& o) {
   jp["ceiling"] = planes.ceiling ? planeJson(*planes.ceiling, cloud) : json(nullptr);
   if (!planes.reason.empty()) jp["reason"] = planes.reason;
   r["planes"] = jp;
-  if (planes.ceiling) {
-    Eigen::Vector3d n = planes.ceiling->normal;
-    if (n.z() < 0) n = -n;
-    r["ceiling_normal"] = {round6(n.x()), round6(n.y()), round6(n.z())};
-    r["ceiling_tilt_mrad"] = round6(1000.0 * std::acos(std::clamp(n.z(), -1.0, 1.0)));
+  if (room.ceiling_up) {
+    r["ceiling_normal"] = vectorJson(*room.ceiling_up);
+    r["ceiling_tilt_mrad"] = round6(1000.0 * std::acos(std::clamp(room.ceiling_up->z(), -1.0, 1.0)));
   } else {
     r["ceiling_normal"] = nullptr;
   }
-  const RoomDims dims = roomDims(planes, cloud);
-  r["room_dims_m"] = {{"L1", nullable(dims.L1)}, {"L2", nullable(dims.L2)}, {"L3", nullable(dims.L3)}};
+  const RoomDims& dims = room.dims;
+  r["room_dims_m"] = dimsJson(dims);
   if (log.truth_mounting) {
     const double* s = log.truth_mounting->room_size_m;
     const double t1 = std::max(s[0], s[1]), t2 = std::min(s[0], s[1]), t3 = s[2];
@@ -422,29 +449,19 @@ EvalMobileResult evalMobileLog(const EvalMobileOptions& o) {
   if (!r.contains("mounting_error_mrad")) {
     r["mounting_error_mrad"] = r.contains("mounting_used_error_mrad") ? r["mounting_used_error_mrad"] : json(nullptr);
   }
-  const std::vector<WallPlaneFit> ceiling = planes.ceiling ? std::vector<WallPlaneFit>{*planes.ceiling}
-                                                           : std::vector<WallPlaneFit>{};
-  const DeviationStats dev_ceiling = deviations(cloud, ceiling, 0.0);
-  const DeviationStats dev_walls = deviations(cloud, planes.walls, 0.2);
+  const DeviationStats& dev_ceiling = room.ceiling;
+  const DeviationStats& dev_walls = room.walls;
   r["deviations"] = {{"ceiling", deviationJson(dev_ceiling)}, {"walls", deviationJson(dev_walls)}};
   if (o.before) {
     progress("the same with the mounting before calibration");
-    const auto cloud_b = assembleWorld(log, track, *o.before);
-    const RoomPlanes planes_b = findRoomPlanes(cloud_b);
-    const RoomDims dims_b = roomDims(planes_b, cloud_b);
-    const std::vector<WallPlaneFit> ceiling_b = planes_b.ceiling ? std::vector<WallPlaneFit>{*planes_b.ceiling}
-                                                                 : std::vector<WallPlaneFit>{};
-    const DeviationStats dc = deviations(cloud_b, ceiling_b, 0.0);
-    const DeviationStats dw = deviations(cloud_b, planes_b.walls, 0.2);
+    const RoomMeasures rb = measureRoom(assembleWorld(log, track, *o.before));
+    const DeviationStats& dc = rb.ceiling;
+    const DeviationStats& dw = rb.walls;
     json b;
     b["mounting"] = mountingJson(*o.before);
-    b["room_dims_m"] = {{"L1", nullable(dims_b.L1)}, {"L2", nullable(dims_b.L2)}, {"L3", nullable(dims_b.L3)}};
+    b["room_dims_m"] = dimsJson(rb.dims);
     b["deviations"] = {{"ceiling", deviationJson(dc)}, {"walls", deviationJson(dw)}};
-    if (planes_b.ceiling) {
-      Eigen::Vector3d n = planes_b.ceiling->normal;
-      if (n.z() < 0) n = -n;
-      b["ceiling_normal"] = {round6(n.x()), round6(n.y()), round6(n.z())};
-    }
+    if (rb.ceiling_up) b["ceiling_normal"] = vectorJson(*rb.ceiling_up);
     r["before_calibration"] = b;
     for (const auto& [name, before, after] :
          {std::tuple<std::string, const DeviationStats*, const DeviationStats*>{"ceiling", &dc, &dev_ceiling},
