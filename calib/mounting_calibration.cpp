@@ -223,6 +223,15 @@ void buildWorld(const std::vector<Ray>& rays, const std::vector<RayPose>& poses,
   if (!w->cloud->empty()) w->tree.setInputCloud(w->cloud);
 }
 
+// Indices (into w) within radius of p, in the k-d tree's order (deterministic for the same
+// cloud).
+std::vector<int> neighboursUnsorted(const WorldCloud& w, const Eigen::Vector3d& p, double radius) {
+  std::vector<int> idx;
+  std::vector<float> d2;
+  w.tree.radiusSearch(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())), radius, idx, d2);
+  return idx;
+}
+
 // Indices (into w) within radius of p, nearest first (ties by index: deterministic).
 std::vector<int> neighbours(const WorldCloud& w, const Eigen::Vector3d& p, double radius) {
   std::vector<int> idx;
@@ -314,7 +323,8 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
     }
 
     ceres::Problem problem;
-    std::vector<double> r0;
+    std::vector<double> r0;       // residuals at the current estimate [m]
+    std::vector<double> weights;  // of each residual block (1 / its sigma, or 1)
     int pairs = 0;
     for (size_t k = 0; k < w.p.size(); k += size_t(o.query_stride)) {
       const Ray& a = rays[w.ray[k]];
@@ -322,15 +332,13 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       // The other pass's neighbours make the local plane; the query's own pass's neighbours
       // must see a plane with the same normal there (the query is on that surface, not on
       // another one near an edge: such one-sided residuals would bias the estimate).
-      std::vector<std::pair<Ray, RayPose>> nb;
       std::vector<Eigen::Vector3d> others, own;
+      std::vector<int> other_idx;  // of the other pass within the plane radius
       double range_sum = a.range_m;
-      for (int j : neighbours(w, w.p[k], o.plane_radius_m)) {
+      for (int j : neighboursUnsorted(w, w.p[k], o.plane_radius_m)) {
         const Ray& b = rays[w.ray[j]];
         if (otherPass(a, b, o)) {
-          if (int(nb.size()) < o.max_neighbours && (w.p[j] - w.p[k]).norm() <= o.neighbour_radius_m) {
-            nb.emplace_back(b, poses[w.ray[j]]);
-          }
+          other_idx.push_back(j);
           others.push_back(w.p[j]);
           range_sum += b.range_m;
         } else if (o.check_own_plane && b.left == a.left &&
@@ -338,13 +346,30 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
           own.push_back(w.p[j]);
         }
       }
-      if (int(nb.size()) < o.min_neighbours) continue;
+      if (int(others.size()) < o.min_neighbours) continue;
       // A plane is flat to within the range noise (sigma = range_noise_fraction * range,
       // at most along the normal) plus a millimetre: edges and corners are rejected.
       const double sigma = o.range_noise_fraction * range_sum / double(others.size() + 1);
       const double max_var = 2.0 * sigma * sigma + 1e-6;
       Eigen::Vector3d mean, n;
       if (!fitPlane(others, o.max_planarity_ratio, max_var, &mean, &n)) continue;
+      std::vector<std::pair<Ray, RayPose>> nb;
+      // The residual's neighbours: the other pass's points nearest to the query within the
+      // plane (distance along the normal ignored: that is where the range noise lies, and
+      // choosing by it would pick the neighbours whose noise agrees with the query's).
+      std::vector<std::pair<double, int>> order;
+      for (int j : other_idx) {
+        const Eigen::Vector3d off = w.p[j] - w.p[k];
+        const double d2 = (off - n * n.dot(off)).squaredNorm();
+        if (d2 <= o.neighbour_radius_m * o.neighbour_radius_m) order.emplace_back(d2, j);
+      }
+      if (int(order.size()) < o.min_neighbours) continue;
+      const size_t count = std::min(order.size(), size_t(o.max_neighbours));
+      std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(count), order.end());
+      for (size_t i = 0; i < count; ++i) {
+        const int j = w.ray[order[i].second];
+        nb.emplace_back(rays[j], poses[j]);
+      }
       if (o.check_own_plane) {
         Eigen::Vector3d own_mean, own_n;
         if (int(own.size()) < o.min_neighbours) continue;
@@ -356,16 +381,21 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       mean.setZero();
       for (const auto& [b, pb] : nb) mean += worldPoint(b, pb, model, ang, &dt, drift);
       mean /= double(nb.size());
+      // The direction of a ray in the world, with the current estimate.
+      const auto rayDirection = [&](const Ray& ray, const RayPose& pose) -> Eigen::Vector3d {
+        const Ray origin{Eigen::Vector3d::Zero(), ray.utime, ray.scan, ray.left, 0.0};
+        return (worldPoint(ray, pose, model, ang, &dt, drift) - worldPoint(origin, pose, model, ang, &dt, drift))
+            .normalized();
+      };
+      const RayPose& pose_a = poses[w.ray[k]];
       if (o.max_incidence_rad < 0.5 * M_PI) {
         // Grazing rays: the range noise lies mostly in the plane and the patch is stretched
         // along the ray; such patches are skipped for the query's and the neighbours' rays.
-        const Ray origin_a{Eigen::Vector3d::Zero(), a.utime, a.scan, a.left, 0.0};
-        const Eigen::Vector3d ua = (w.p[k] - worldPoint(origin_a, poses[w.ray[k]], model, ang, &dt, drift)).normalized();
-        const auto& [b0, pb0] = nb.front();
-        const Ray origin_b{Eigen::Vector3d::Zero(), b0.utime, b0.scan, b0.left, 0.0};
-        const Eigen::Vector3d ub = (worldPoint(b0, pb0, model, ang, &dt, drift) - worldPoint(origin_b, pb0, model, ang, &dt, drift)).normalized();
         const double c = std::cos(o.max_incidence_rad);
-        if (std::abs(ua.dot(n)) < c || std::abs(ub.dot(n)) < c) continue;
+        if (std::abs(rayDirection(a, pose_a).dot(n)) < c ||
+            std::abs(rayDirection(nb.front().first, nb.front().second).dot(n)) < c) {
+          continue;
+        }
       }
       // The query lies over the middle of the patch, not beyond its rim.
       const Eigen::Vector3d off = w.p[k] - mean;
@@ -380,9 +410,25 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       if (o.trim_sigmas > 0) trim_m = std::min(trim_m, std::max(o.min_trim_m, robust_trim_m));
       if (!first && std::abs(r) > trim_m) continue;
       r0.push_back(r);
-      const double weight = o.range_weighting ? 1.0 / std::max(1.0, a.range_m) : 1.0;
-      problem.AddResidualBlock(PointToPlaneCost::Create(&model, a, poses[w.ray[k]], std::move(nb), n, weight),
-                               new ceres::CauchyLoss(o.loss_scale_m), ang, &dt, drift);
+      double weight = 1.0, loss_scale = o.loss_scale_m;
+      if (o.noise_weighting) {
+        // The residual in sigmas of its predicted noise: the query's range noise along the
+        // normal, the mean of its neighbours', and the model's floor. Near points are up to
+        // ten times more precise than far ones (the X4's noise grows with range).
+        const auto variance = [&](const Ray& ray, const RayPose& pose) {
+          const double s = o.range_noise_fraction * ray.range_m * rayDirection(ray, pose).dot(n);
+          return s * s;
+        };
+        double var_nb = 0.0;
+        for (const auto& [b, pb] : nb) var_nb += variance(b, pb);
+        var_nb /= double(nb.size() * nb.size());
+        weight = 1.0 / std::sqrt(variance(a, pose_a) + var_nb + o.model_sigma_m * o.model_sigma_m);
+        // Not tighter than loss_scale_m: the first rounds start centimetres out of alignment.
+        loss_scale = std::max(o.loss_scale_sigmas, o.loss_scale_m * weight);
+      }
+      weights.push_back(weight);
+      problem.AddResidualBlock(PointToPlaneCost::Create(&model, a, pose_a, std::move(nb), n, weight),
+                               new ceres::CauchyLoss(loss_scale), ang, &dt, drift);
       ++pairs;
     }
     if (pairs < o.min_correspondences) {
@@ -425,7 +471,7 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
       double cost = 0.0;
       problem.Evaluate(eo, &cost, &rr, nullptr, nullptr);
       double s2 = 0.0;
-      for (double r : rr) s2 += r * r;
+      for (size_t i = 0; i < rr.size(); ++i) s2 += (rr[i] / weights[i]) * (rr[i] / weights[i]);
       res.residual_after_m = std::sqrt(s2 / double(rr.size()));
     }
     const double change = std::max({std::abs(ang[0] - before[0]), std::abs(ang[1] - before[1]),

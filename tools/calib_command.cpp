@@ -423,7 +423,9 @@ Runner addCalibCommand(CLI::App& app) {
       "board in front of its window), paired mutually nearest across the passes, "
       "Levenberg-Marquardt on their squared distances (Eq. 15-17).\n\n"
       "On a circle of radius R, alpha shows only as a shift of 2R alpha (1.7 mm per mrad at "
-      "R = 0.83 m) between the passes, so the track's relative error over half a lap limits it.\n\n"
+      "R = 0.83 m) between the passes, so the track's relative error over half a lap limits it: "
+      "drive several laps (2 min: 4.6 laps at 0.2 m/s; measured on the simulator, EKF track, seeds "
+      "1-5: |alpha error| <= 0.9 mrad with 2 min, up to 1.03 mrad with 1 min).\n\n"
       "Writes OUT atomically (mounting.gamma_rad/beta_rad/alpha_rad + provenance); set "
       "mounting.calibration_file in the rig file to use it. The search starts from the rig's "
       "mounting. Human report on stderr; --json prints gamma_rad, beta_rad, alpha_rad, "
@@ -431,7 +433,8 @@ Runner addCalibCommand(CLI::App& app) {
       "paper's result under \"paper\" and, for simulated logs, the truth and error_mrad.\n\n"
       "Exit status: 0 calibrated; 1 not calibrated (too little data, no overlap); 2 bad rig, log "
       "or output path.\n"
-      "Example: sweepmap sim-mobile --rig config/rig_b.yaml --scene config/scene_lab.yaml --out "
+      "Example: sweepmap sim-mobile --rig config/rig_b.yaml --scene config/scene_lab.yaml --set "
+      "sim.duration_s=120 --out "
       "circle.lcmlog && sweepmap calib mounting --log circle.lcmlog --rig config/rig_b.yaml --out "
       "config/mounting_calibration.yaml");
   auto m = std::make_shared<MountingOptions>();

@@ -18,7 +18,7 @@ Runner addEvalMobile(CLI::App* eval) {
       "plane-to-plane distances against the scene's truth, and the double wall (ghost) where the "
       "drive returns to its start. Writes DIR/report.json, DIR/report.md, DIR/cloud.pcd and PNG "
       "figures. Either --log LOG (truth-based figures need the simulator's TRUTH_POSE and "
-      "TRUTH_MOUNTING) or --experiment paper (simulates the 60 s calibration circle and one "
+      "TRUTH_MOUNTING) or --experiment paper (simulates the 120 s calibration circle and one "
       "lap of the lab loop into DIR/logs/, calibrates the mounting from the circle with both methods "
       "(ours into DIR/mounting_calibration.yaml), draws the circle's double walls and the target before "
       "and after calibration (Fig. 6-7), evaluates the loop with our calibration beside the mounting "

@@ -1,7 +1,7 @@
 // End to end through `sweepmap calib plate-angle`: 50 simulated mode-7 sweeps of the
 // conference room (the paper's protocol) with the plate's installation error on
 // (sim.alpha_true_deg 29.3598 vs plate.alpha_deg 30), calibrated, written, loaded back.
-// And `sweepmap calib mounting` (rig B): the simulator's default 60 s circle in the lab,
+// And `sweepmap calib mounting` (rig B): a 120 s circle in the lab,
 // slip and noise on, the EKF track replayed from the log.
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -154,10 +154,12 @@ TEST(CalibCli, HelpDescribesTheGroupAndTheCommand) {
 
 const std::string kRigB = sourcePath("config/rig_b.yaml");
 
-// The simulator's defaults: the 60 s circle in the lab, slip and noise on, true mounting
-// error (0.0355, 0.0126, -0.0058) rad; the rig file believes (0, 0, 0).
+// The simulator's defaults for a calibration drive: the circle in the lab for 120 s (4.6
+// laps, as the paper experiment's), slip and noise on, true mounting error (0.0355, 0.0126,
+// -0.0058) rad; the rig file believes (0, 0, 0).
 std::string circleLog() {
-  return cachedSimMobileLog("circle_default", {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml")});
+  return cachedSimMobileLog("circle_calibration", {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml"),
+                                                   "--set", "sim.duration_s=120"});
 }
 
 TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {

@@ -10,7 +10,7 @@ namespace sweepmap {
 namespace test {
 namespace {
 
-// One run of the paper experiment (~1 min) per build, shared by every test (CTest runs each
+// One run of the paper experiment (~3 min) per build, shared by every test (CTest runs each
 // in its own process).
 class EvalMobilePaper : public ::testing::Test {
  protected:
