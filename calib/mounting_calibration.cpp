@@ -171,7 +171,7 @@ void computePoses(const std::vector<Ray>& rays, const PoseTrack& track, double d
       const double s = span_us * 1e-6;
       r.vx = (hi->x_m - lo->x_m) / s;
       r.vy = (hi->y_m - lo->y_m) / s;
-      r.vth = rotating::wrapAngle(hi->theta_rad - lo->theta_rad) / s;
+      r.vth = wrapAngle(hi->theta_rad - lo->theta_rad) / s;
     }
     (*covered)[i] = 1;
   }

@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "core/rig_config.hpp"
+#include "core/rig_components.hpp"
 
 namespace sweepmap {
 

@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace rotating {
@@ -42,8 +43,6 @@ inline double motorAngleFromTime(int64_t t_utime, int64_t t0_utime, double omega
   return omega_rad_s * 1e-6 * static_cast<double>(t_utime - t0_utime);
 }
 
-// Wraps an angle to (-pi, pi].
-double wrapAngle(double angle_rad);
 
 // Eq. 10: phi_offset = alpha - beta, wrapped.
 inline double phiOffset(double alpha_rad, double beta_rad) {

@@ -7,7 +7,7 @@
 namespace sweepmap {
 
 AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow& window,
-                             const RigConfig& rig) {
+                             const RotatingLidarConfig& rig) {
   AssembledSweep out;
   out.window = window;
   out.scans = static_cast<int>(scans.size());
@@ -50,7 +50,7 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   return out;
 }
 
-void correctSweep(const RigConfig& rig, AssembledSweep* sweep) {
+void correctSweep(const RotatingLidarConfig& rig, AssembledSweep* sweep) {
   AssembledSweep& out = *sweep;
   const PlateRegion region = PlateRegion::fromConfig(rig.plate);
   out.alpha_rad = rig.plate.alpha_deg * M_PI / 180.0;

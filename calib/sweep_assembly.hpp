@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "calib/plate.hpp"
-#include "core/rig_config.hpp"
+#include "rigs/rotating_lidar.hpp"
 #include "core/scan.hpp"
 
 namespace sweepmap {
@@ -40,11 +40,11 @@ struct AssembledSweep {
 // `scans` must be the valid scans of the window in time order. Rays with range 0 or
 // outside [range_min, range_max] of their scan are skipped.
 AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow& window,
-                             const RigConfig& rig);
+                             const RotatingLidarConfig& rig);
 
 // The attitude correction alone (Eq. 8-10): beta by plate.beta_method, the shape check,
 // phi_offset = alpha - beta and C_O, from points_Op and plate_rays. assembleSweep calls it;
 // tools re-run it to compare methods or alphas without re-assembling.
-void correctSweep(const RigConfig& rig, AssembledSweep* sweep);
+void correctSweep(const RotatingLidarConfig& rig, AssembledSweep* sweep);
 
 }  // namespace sweepmap

@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 
 // Orients a plane so that its normal points toward the origin (offset > 0).
 void orientTowardOrigin(WallPlaneFit* w) {

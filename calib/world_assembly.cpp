@@ -6,21 +6,6 @@
 
 namespace sweepmap {
 
-Eigen::Matrix3d rotationXYZ(double gamma, double beta, double alpha) {
-  return (Eigen::AngleAxisd(alpha, Eigen::Vector3d::UnitZ()) *
-          Eigen::AngleAxisd(beta, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(gamma, Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
-Eigen::Isometry3d LidarMounting::T_BL() const {
-  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-  T.linear() = rotationXYZ(gamma_rad, beta_rad, alpha_rad) *
-               rotationXYZ(nominal_rpy_rad.x(), nominal_rpy_rad.y(), nominal_rpy_rad.z());
-  T.translation() = t_BL_m;
-  return T;
-}
-
 void PoseTrack::add(int64_t utime, const Pose2& pose) { poses_[utime] = pose; }
 
 std::optional<Pose2> PoseTrack::at(int64_t utime) const {
@@ -34,7 +19,7 @@ std::optional<Pose2> PoseTrack::at(int64_t utime) const {
   const Pose2& a = lo->second;
   const Pose2& b = hi->second;
   return Pose2{a.x_m + f * (b.x_m - a.x_m), a.y_m + f * (b.y_m - a.y_m),
-               a.theta_rad + f * rotating::wrapAngle(b.theta_rad - a.theta_rad)};
+               a.theta_rad + f * wrapAngle(b.theta_rad - a.theta_rad)};
 }
 
 void PoseTrack::pruneBefore(int64_t utime) {

@@ -10,25 +10,12 @@
 #include <optional>
 #include <vector>
 
+#include "core/angles.hpp"
+#include "core/mounting.hpp"
 #include "core/scan.hpp"
 #include "odometry/wheel_odometry.hpp"
 
 namespace sweepmap {
-
-// Mounting of the lidar on the body: a nominal rotation (how the lidar is meant to sit,
-// e.g. horizontal or vertical) followed by the small mounting error (gamma about x,
-// beta about y, alpha about z) that calibration estimates, and the lidar's position.
-struct LidarMounting {
-  Eigen::Vector3d nominal_rpy_rad = Eigen::Vector3d::Zero();  // roll, pitch, yaw
-  double gamma_rad = 0.0;  // about body x
-  double beta_rad = 0.0;   // about body y
-  double alpha_rad = 0.0;  // about body z
-  Eigen::Vector3d t_BL_m = Eigen::Vector3d::Zero();  // (l1, 0, h) in Miao 2022
-  Eigen::Isometry3d T_BL() const;
-};
-
-// R(gamma, beta, alpha) = Rz(alpha) Ry(beta) Rx(gamma).
-Eigen::Matrix3d rotationXYZ(double gamma_rad, double beta_rad, double alpha_rad);
 
 // A time-ordered track of planar poses; linear interpolation (heading along the shorter arc).
 class PoseTrack {

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "core/config.hpp"
-#include "core/rig_config.hpp"
+#include "core/rig_components.hpp"
 
 namespace sweepmap {
 

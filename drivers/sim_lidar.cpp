@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 
 double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();

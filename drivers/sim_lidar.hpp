@@ -21,7 +21,7 @@
 #include <random>
 #include <vector>
 
-#include "core/rig_config.hpp"
+#include "core/rig_components.hpp"
 #include "drivers/lidar_device.hpp"
 #include "drivers/scene.hpp"
 #include "drivers/shaft_trajectory.hpp"

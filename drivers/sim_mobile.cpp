@@ -4,14 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
 
 constexpr double kGravity = 9.80665;
-constexpr double kDeg = M_PI / 180.0;
 
-double wrap(double a) { return std::atan2(std::sin(a), std::cos(a)); }
 
 Eigen::Matrix3d rotXYZ(double g, double b, double a) {
   return (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(b, Eigen::Vector3d::UnitY()) *
@@ -156,7 +155,7 @@ MobilePath MobilePath::fromFile(const std::string& file) {
     if (key != "start" && key != "segments") throw ConfigError("path file " + file + ": unknown key '" + key + "'");
   }
   double x = number(root["start"], "x_m", "start"), y = number(root["start"], "y_m", "start");
-  double theta = number(root["start"], "heading_deg", "start") * kDeg;
+  double theta = number(root["start"], "heading_deg", "start") * kDegToRad;
   std::vector<Segment> segments;
   for (size_t i = 0; i < root["segments"].size(); ++i) {
     const YAML::Node n = root["segments"][i];
@@ -183,7 +182,7 @@ bool MobilePath::closed() const {
   const Segment& first = segments_.front();
   const Pose2 end = poseAt(length_ * (1.0 - 1e-12));
   return std::hypot(end.x_m - first.x0, end.y_m - first.y0) < 0.01 &&
-         std::abs(wrap(end.theta_rad - first.theta0)) < 0.01;
+         std::abs(wrapAngle(end.theta_rad - first.theta0)) < 0.01;
 }
 
 const MobilePath::Segment& MobilePath::find(double s, double* local, int* lap) const {
@@ -378,10 +377,10 @@ std::vector<ImuSample> SimMobile::imu() {
     m.accel[0] = dv + c_.accel_sigma_m_s2 * n(rng);
     m.accel[1] = v * w + c_.accel_sigma_m_s2 * n(rng);
     m.accel[2] = kGravity + c_.accel_sigma_m_s2 * n(rng);
-    const double sa = c_.attitude_sigma_deg * kDeg;
-    m.rpy[0] = c_.roll_error_deg * kDeg + sa * n(rng);
-    m.rpy[1] = c_.pitch_error_deg * kDeg + sa * n(rng);
-    m.rpy[2] = wrap(worldPoseAt(t).theta_rad + c_.yaw_error_deg * kDeg + sa * n(rng));
+    const double sa = c_.attitude_sigma_deg * kDegToRad;
+    m.rpy[0] = c_.roll_error_deg * kDegToRad + sa * n(rng);
+    m.rpy[1] = c_.pitch_error_deg * kDegToRad + sa * n(rng);
+    m.rpy[2] = wrapAngle(worldPoseAt(t).theta_rad + c_.yaw_error_deg * kDegToRad + sa * n(rng));
     out.push_back(m);
   }
   return out;

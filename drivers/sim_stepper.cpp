@@ -8,11 +8,11 @@
 #include <iterator>
 #include <optional>
 #include <stdexcept>
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
 
-constexpr double kDegToRad = M_PI / 180.0;
 constexpr double kSheetRad = M_PI / 2;  // the shading sheet spans 90 deg
 // Roots this close outside a piece still count (clamped), so that a crossing exactly at a
 // segment boundary is not lost to rounding on both sides; much finer than the 1 us clock.
@@ -51,13 +51,6 @@ std::optional<double> firstCrossing(double angle0, double v, double a, double le
     if (up ? direction > 0.0 : direction < 0.0) return std::clamp(tau, from_s, to_s);
   }
   return std::nullopt;
-}
-
-// Wraps to (-pi, pi].
-double wrapAngle(double rad) {
-  double w = std::remainder(rad, 2 * M_PI);
-  if (w <= -M_PI) w += 2 * M_PI;
-  return w;
 }
 
 }  // namespace

@@ -31,7 +31,7 @@
 #include <random>
 #include <vector>
 
-#include "core/rig_config.hpp"
+#include "core/rig_components.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "drivers/stepper_device.hpp"
 

@@ -11,7 +11,7 @@
 #include <cstdio>
 #include <stdexcept>
 
-#include "mapping/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 
 namespace sweepmap {
 namespace {

@@ -18,7 +18,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "mapping/atomic_file.hpp"
+#include "core/atomic_file.hpp"
 
 extern char** environ;
 

@@ -19,7 +19,7 @@ constexpr int kScansToAcceptClockStep = 3;
 
 }  // namespace
 
-AssemblerNode::AssemblerNode(const RigConfig& rig) : Node("assembler"), rig_(rig) {}
+AssemblerNode::AssemblerNode(const RotatingLidarConfig& rig) : Node("assembler"), rig_(rig) {}
 
 std::vector<std::string> AssemblerNode::subscriptions() const {
   return {channels::kLidarScan, channels::kScanWindow};

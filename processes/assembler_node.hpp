@@ -8,14 +8,14 @@
 #include <functional>
 
 #include "calib/sweep_assembly.hpp"
-#include "core/rig_config.hpp"
+#include "rigs/rotating_lidar.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {
 
 class AssemblerNode : public Node {
  public:
-  explicit AssemblerNode(const RigConfig& rig);
+  explicit AssemblerNode(const RotatingLidarConfig& rig);
   std::vector<std::string> subscriptions() const override;
   void finish(int64_t now_utime, Outbox& out) override;
 
@@ -33,7 +33,7 @@ class AssemblerNode : public Node {
   void assembleReady(int64_t now_utime, bool flush, Outbox& out);
   void publishSweep(int64_t now_utime, const SweepWindow& window, Outbox& out);
 
-  RigConfig rig_;
+  RotatingLidarConfig rig_;
   std::deque<Scan2D> scans_;      // valid scans, strictly increasing utime
   std::deque<SweepWindow> windows_;  // closed windows, by start time
   int64_t last_window_end_ = INT64_MIN;

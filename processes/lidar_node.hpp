@@ -2,7 +2,7 @@
 // raw on LIDAR_SCAN. Invalid device output is dropped and counted.
 #pragma once
 
-#include "core/rig_config.hpp"
+#include "core/rig_components.hpp"
 #include "drivers/lidar_device.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "processes/node.hpp"

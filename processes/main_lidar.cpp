@@ -20,21 +20,23 @@ int main(int argc, char** argv) {
   uint64_t seed = 1;
   addCommonOptions(app, common);
   app.add_flag("--sim", sim, "simulated lidar in a simulated scene (follows TRUTH_SHAFT)");
-  app.add_option("--scene", scene_path, "scene file for --sim")->check(CLI::ExistingFile);
+  app.add_option("--scene", scene_path,
+                 "scene file or name for --sim (default: scene_conference_room)");
   app.add_option("--seed", seed, "simulation seed")->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  const RigConfig rig = loadRigOrExit(common);
+  const std::optional<Rig> loaded = loadRigOrReport(common);
+  if (!loaded) return 2;
+  const auto* rig_config = rigOfKindOrReport<RotatingLidarConfig>(*loaded, "sweepmap-lidar");
+  if (!rig_config) return 2;
+  const RotatingLidarConfig& rig = *rig_config;
   if (!sim) {
     std::cerr << "sweepmap-lidar: no real lidar driver is built yet; use --sim\n";
     return 2;
   }
-  if (scene_path.empty()) {
-    std::cerr << "sweepmap-lidar: --sim needs --scene FILE\n";
-    return 2;
-  }
+  if (scene_path.empty()) scene_path = defaultSceneName(loaded->kind());
   SceneConfig scene_config;
   try {
-    scene_config = loadScene(scene_path);
+    scene_config = loadScene(resolveConfigFile(scene_path));
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";
     return 2;

@@ -24,7 +24,11 @@ int main(int argc, char** argv) {
   app.add_option("--sweeps", sweeps, "sweeps to make, then exit (0 = until stopped)")
       ->capture_default_str();
   CLI11_PARSE(app, argc, argv);
-  const RigConfig rig = loadRigOrExit(common);
+  const std::optional<Rig> loaded = loadRigOrReport(common);
+  if (!loaded) return 2;
+  const auto* rig_config = rigOfKindOrReport<RotatingLidarConfig>(*loaded, "sweepmap-motor");
+  if (!rig_config) return 2;
+  const RotatingLidarConfig& rig = *rig_config;
   if (!sim) {
     std::cerr << "sweepmap-motor: no real stepper driver is built yet; use --sim\n";
     return 2;

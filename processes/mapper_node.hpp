@@ -18,7 +18,7 @@
 
 #include <Eigen/Core>
 
-#include "core/rig_config.hpp"
+#include "core/rig_components.hpp"
 #include "mapping/occupancy_map.hpp"
 #include "processes/node.hpp"
 

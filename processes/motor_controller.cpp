@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/angles.hpp"
 #include "drivers/motion_profile.hpp"
 #include "processes/channels.hpp"
 #include "sweepmap/motor_state_t.hpp"
@@ -11,8 +12,7 @@
 namespace sweepmap {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
-constexpr double kHomingApproachRad = 10.0 * kDeg;  // re-homing starts this far above the edge
+constexpr double kHomingApproachRad = 10.0 * kDegToRad;  // re-homing starts this far above the edge
 
 int64_t us(double seconds) { return static_cast<int64_t>(std::llround(seconds * 1e6)); }
 
@@ -35,17 +35,17 @@ const char* phaseName(MotorController::Phase p) {
   return "?";
 }
 
-MotorController::MotorController(const RigConfig& rig, StepperDevice* device, int sweeps,
+MotorController::MotorController(const RotatingLidarConfig& rig, StepperDevice* device, int sweeps,
                                  int64_t start_utime)
     : Node("motor"), rig_(rig), device_(device), sweeps_wanted_(sweeps) {
   const ScanMode mode = scanMode(rig.motor.mode);
   window_us_ = us(mode.period_s);
-  omega_ = rig.motor.sweep_angle_deg * kDeg / mode.period_s;  // Eq. 3
+  omega_ = rig.motor.sweep_angle_deg * kDegToRad / mode.period_s;  // Eq. 3
   nominal_.apply({start_utime, 0.0, 0.0, 0.0});
 }
 
 double MotorController::preRollAngle() const {
-  const double a = rig_.motor.accel_deg_s2 * kDeg;
+  const double a = rig_.motor.accel_deg_s2 * kDegToRad;
   return omega_ * omega_ / (2.0 * a) + omega_ * rig_.motor.margin_s;
 }
 
@@ -66,7 +66,7 @@ void MotorController::moveTo(int64_t now, double angle_rad, double speed_rad_s) 
   c.kind = StepperCommand::Kind::kMoveBy;
   c.delta_rad = angle_rad - commandedAngle(now);
   c.velocity_rad_s = speed_rad_s;
-  c.accel_rad_s2 = rig_.motor.accel_deg_s2 * kDeg;
+  c.accel_rad_s2 = rig_.motor.accel_deg_s2 * kDegToRad;
   command(now, c);
 }
 
@@ -78,7 +78,7 @@ void MotorController::enter(int64_t now, Phase phase, Outbox& out) {
 void MotorController::fault(int64_t now, const std::string& why, Outbox& out) {
   StepperCommand stop;
   stop.kind = StepperCommand::Kind::kStop;
-  stop.accel_rad_s2 = rig_.motor.accel_deg_s2 * kDeg;
+  stop.accel_rad_s2 = rig_.motor.accel_deg_s2 * kDegToRad;
   command(now, stop);
   detail_ = why;
   setFailed(why);
@@ -86,8 +86,8 @@ void MotorController::fault(int64_t now, const std::string& why, Outbox& out) {
 }
 
 void MotorController::startHoming(int64_t now, Outbox& out) {
-  const double speed = rig_.motor.homing_speed_deg_s * kDeg;
-  const double accel = rig_.motor.accel_deg_s2 * kDeg;
+  const double speed = rig_.motor.homing_speed_deg_s * kDegToRad;
+  const double accel = rig_.motor.accel_deg_s2 * kDegToRad;
   if (device_->switchBlocked()) {
     command(now, {StepperCommand::Kind::kRun, speed, accel, 0.0});
     seek_start_ = commandedAngle(now);
@@ -100,7 +100,7 @@ void MotorController::startHoming(int64_t now, Outbox& out) {
 }
 
 void MotorController::advance(int64_t now, Outbox& out) {
-  const double accel = rig_.motor.accel_deg_s2 * kDeg;
+  const double accel = rig_.motor.accel_deg_s2 * kDegToRad;
   const int64_t settle = us(rig_.motor.settle_s);
 
   for (const SwitchEdge& e : device_->poll(now)) {
@@ -118,7 +118,7 @@ void MotorController::advance(int64_t now, Outbox& out) {
       homed_ = false;  // stopped past the sheet; seek the edge next
     } else if (phase_ == Phase::kHomingSeek && e.blocked) {
       // The edge defines the home angle: angle(t_edge) = home_angle.
-      home_offset_ = rig_.motor.home_angle_deg * kDeg - nominal_.angleAt(e.utime);
+      home_offset_ = rig_.motor.home_angle_deg * kDegToRad - nominal_.angleAt(e.utime);
       homed_ = true;
       count("homings");
       command(now, {StepperCommand::Kind::kStop, 0.0, accel, 0.0});
@@ -135,7 +135,7 @@ void MotorController::advance(int64_t now, Outbox& out) {
       break;
     case Phase::kHomingLeave:
     case Phase::kHomingSeek:
-      if (std::abs(commandedAngle(now) - seek_start_) > rig_.motor.homing_search_deg * kDeg) {
+      if (std::abs(commandedAngle(now) - seek_start_) > rig_.motor.homing_search_deg * kDegToRad) {
         fault(now, "home switch not found within " +
                        std::to_string(rig_.motor.homing_search_deg) + " deg",
               out);
@@ -146,7 +146,7 @@ void MotorController::advance(int64_t now, Outbox& out) {
         if (!homed_) {
           startHoming(now, out);
         } else {
-          moveTo(now, start_angle, rig_.motor.move_speed_deg_s * kDeg);
+          moveTo(now, start_angle, rig_.motor.move_speed_deg_s * kDegToRad);
           phase_until_ = motion_end_ + settle + us(rig_.motor.pause_s);
           enter(now, Phase::kPositioning, out);
         }
@@ -175,7 +175,7 @@ void MotorController::advance(int64_t now, Outbox& out) {
         w.start_utime = window_start_;
         w.end_utime = window_end_;
         w.angular_velocity_rad_s = omega_;
-        w.sweep_angle_rad = rig_.motor.sweep_angle_deg * kDeg;
+        w.sweep_angle_rad = rig_.motor.sweep_angle_deg * kDegToRad;
         const bool naive = rig_.motor.action_sequence == "naive";
         w.action_sequence = naive ? scan_window_t::NAIVE : scan_window_t::IMPROVED;
         w.accel_overlap = naive;
@@ -199,9 +199,9 @@ void MotorController::advance(int64_t now, Outbox& out) {
           break;
         }
         const double target = rig_.motor.rehome_every_sweep
-                                  ? rig_.motor.home_angle_deg * kDeg + kHomingApproachRad
+                                  ? rig_.motor.home_angle_deg * kDegToRad + kHomingApproachRad
                                   : start_angle;
-        moveTo(now, target, rig_.motor.move_speed_deg_s * kDeg);
+        moveTo(now, target, rig_.motor.move_speed_deg_s * kDegToRad);
         phase_until_ = motion_end_ + settle;
         enter(now, Phase::kReturning, out);
       }

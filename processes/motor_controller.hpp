@@ -12,7 +12,7 @@
 // switch edge at homing.
 #pragma once
 
-#include "core/rig_config.hpp"
+#include "rigs/rotating_lidar.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "drivers/stepper_device.hpp"
 #include "processes/node.hpp"
@@ -36,7 +36,7 @@ class MotorController : public Node {
   };
 
   // `sweeps`: number of 3D sweeps to make, 0 = until stopped. `start_utime`: time origin.
-  MotorController(const RigConfig& rig, StepperDevice* device, int sweeps, int64_t start_utime);
+  MotorController(const RotatingLidarConfig& rig, StepperDevice* device, int sweeps, int64_t start_utime);
   std::vector<std::string> subscriptions() const override { return {}; }
 
   Phase phase() const { return phase_; }
@@ -62,7 +62,7 @@ class MotorController : public Node {
   void startHoming(int64_t now, Outbox& out);
   void fault(int64_t now, const std::string& why, Outbox& out);
 
-  RigConfig rig_;
+  RotatingLidarConfig rig_;
   StepperDevice* device_;
   int sweeps_wanted_;
   Phase phase_ = Phase::kIdle;

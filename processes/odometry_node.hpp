@@ -7,20 +7,11 @@
 
 #include <optional>
 
-#include "core/config.hpp"
+#include "odometry/odometry_config.hpp"
 #include "odometry/ekf.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {
-
-struct OdometryConfig {
-  double wheel_radius_m = 0.077;
-  double ticks_per_revolution = 4000.0;  // BreezySLAM's Mines rover: 180 deg per 2000 ticks
-  bool use_imu = true;
-  EkfConfig ekf;
-  void declare(ConfigSchema& s, const std::string& prefix);
-};
-
 
 
 class OdometryNode : public Node {

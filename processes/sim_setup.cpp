@@ -4,7 +4,7 @@
 
 namespace sweepmap {
 
-truth_rig_t makeTruthRig(const RigConfig& rig, const SceneConfig& scene_config, const Scene& scene,
+truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config, const Scene& scene,
                          int64_t utime) {
   truth_rig_t m;
   m.utime = utime;

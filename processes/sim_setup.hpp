@@ -3,7 +3,7 @@
 
 #include <cstdint>
 
-#include "core/rig_config.hpp"
+#include "rigs/rotating_lidar.hpp"
 #include "drivers/scene.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 
@@ -18,7 +18,7 @@ constexpr int64_t kSimEpochUtime = 1700000000000000LL;
 inline uint64_t stepperSeed(uint64_t seed) { return seed * 2 + 1; }
 inline uint64_t lidarSeed(uint64_t seed) { return seed * 2 + 2; }
 
-truth_rig_t makeTruthRig(const RigConfig& rig, const SceneConfig& scene_config, const Scene& scene,
+truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config, const Scene& scene,
                          int64_t utime);
 
 }  // namespace sweepmap

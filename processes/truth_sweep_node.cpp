@@ -51,7 +51,7 @@ void TruthSweepNode::publishReady(int64_t now, Outbox& out) {
     m.utime = now;
     m.sweep_id = w.sweep_id;
     m.first_ray_utime = first;
-    m.phi_offset_true_rad = rotating::wrapAngle(truth_->angleAt(first));
+    m.phi_offset_true_rad = wrapAngle(truth_->angleAt(first));
     m.alpha_true_rad = alpha_true_rad_;
     out.publish(channels::kTruthSweep, now, m);
   }

@@ -11,7 +11,7 @@
 
 #include "calib/world_assembly.hpp"
 #include "processes/node.hpp"
-#include "processes/rig_b.hpp"
+#include "rigs/mobile_lidar.hpp"
 
 namespace sweepmap {
 

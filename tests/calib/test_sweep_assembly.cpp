@@ -32,7 +32,7 @@ class SweepAssemblyTest : public ::testing::Test {
     s.ranges_m.assign(5, range);
     return s;
   }
-  RigConfig rig_;
+  RotatingLidarConfig rig_;
   SweepWindow window_;
 };
 
@@ -88,7 +88,7 @@ TEST_F(SweepAssemblyTest, CorrectionAppliesAlphaMinusBeta) {
   ASSERT_TRUE(out.corrected) << out.reason;
   const double beta = std::atan2(y, rig_.geometry.lidar_offset_x_mm * 1e-3);
   EXPECT_NEAR(out.plate.beta_rad, beta, 1e-6);
-  EXPECT_NEAR(out.phi_offset_rad, rotating::wrapAngle(30 * kDeg - beta), 1e-6);
+  EXPECT_NEAR(out.phi_offset_rad, wrapAngle(30 * kDeg - beta), 1e-6);
   const Eigen::Vector3f rotated =
       (rotating::rotZ(out.phi_offset_rad) * out.points_Op[0].cast<double>()).cast<float>();
   EXPECT_LT((out.points[0] - rotated).norm(), 1e-6);

@@ -9,8 +9,8 @@
 #include "calib/rotating_geometry.hpp"
 #include "calib/walls.hpp"
 #include "drivers/scene.hpp"
-#include "tests/tools/test_support.hpp"
-#include "tools/log_sweeps.hpp"
+#include "tests/e2e/test_support.hpp"
+#include "tools/offline/log_sweeps.hpp"
 
 namespace sweepmap {
 namespace {
@@ -140,7 +140,7 @@ TEST(WallExtraction, SimulatedConferenceRoomSweep) {
   const std::string log = test::cachedSimLog(
       "mode7x1_walls",
       {"--rig", rig_path, "--scene", scene_path, "--mode", "7", "--sweeps", "1", "--seed", "5"});
-  const RigConfig rig = loadRig(rig_path);
+  const RotatingLidarConfig rig = loadRotatingLidarConfig(rig_path);
   const SceneConfig scene_config = loadScene(scene_path);
   const Scene scene(scene_config, rig.plate);
   int sweeps = 0;
@@ -155,7 +155,7 @@ TEST(WallExtraction, SimulatedConferenceRoomSweep) {
     std::cout << "extractWalls: " << s.points.size() << " points, " << ms << " ms\n";
     ASSERT_EQ(e.walls.size(), 4u) << e.reason;
     // Assembled C_O = R_z(phi_offset - phi_true) * true C_O.
-    const double phi_error = rotating::wrapAngle(s.phi_offset_rad - *truth.phi_true_rad);
+    const double phi_error = wrapAngle(s.phi_offset_rad - *truth.phi_true_rad);
     const Eigen::Matrix3d R_err = rotating::rotZ(phi_error);
     const Eigen::Isometry3d T_room_O = scene.T_room_rig();
     const char* want[4] = {"y_min", "x_min", "y_max", "x_max"};  // normals +Y, +X, -Y, -X

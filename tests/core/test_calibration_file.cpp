@@ -6,7 +6,7 @@
 
 #include "core/calibration_file.hpp"
 #include "core/config.hpp"
-#include "core/rig_config.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 namespace {
@@ -51,11 +51,11 @@ TEST_F(CalibrationFileTest, RigFilePointsToCalibration) {
   const std::string from = "calibration_file: \"\"";
   rig.replace(rig.find(from), from.size(), "calibration_file: plate.yaml");
   std::ofstream(dir_ / "rig.yaml") << rig;
-  EXPECT_DOUBLE_EQ(loadRig((dir_ / "rig.yaml").string()).plate.alpha_deg, 29.5);
+  EXPECT_DOUBLE_EQ(loadRotatingLidarConfig((dir_ / "rig.yaml").string()).plate.alpha_deg, 29.5);
   // A missing calibration file is an error naming it.
   fs::remove(dir_ / "plate.yaml");
   try {
-    loadRig((dir_ / "rig.yaml").string());
+    loadRotatingLidarConfig((dir_ / "rig.yaml").string());
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("plate.yaml"), std::string::npos) << e.what();

@@ -4,7 +4,7 @@
 #include <sstream>
 
 #include "core/config.hpp"
-#include "core/rig_config.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 namespace {
@@ -92,14 +92,14 @@ TEST(ConfigSchema, YamlRoundTrip) {
   EXPECT_NE(printed.str().find("(default: 1.5)"), std::string::npos) << printed.str();
 }
 
-TEST(RigConfig, ShippedRigFilesLoad) {
+TEST(RotatingLidarConfig, ShippedRigFilesLoad) {
   for (const char* name : {"rig_a.yaml"}) {
     const std::string path = std::string(SWEEPMAP_SOURCE_DIR) + "/config/" + name;
-    EXPECT_NO_THROW(loadRig(path)) << path;
+    EXPECT_NO_THROW(loadRotatingLidarConfig(path)) << path;
   }
 }
 
-TEST(RigConfig, ScanModesMatchTable1) {
+TEST(RotatingLidarConfig, ScanModesMatchTable1) {
   for (int m = 1; m <= 7; ++m) {
     const ScanMode s = scanMode(m);
     const double n = 180.0 / s.gamma_deg;  // Eq. 1

@@ -65,7 +65,7 @@ class AssemblerNodeTest : public ::testing::Test {
     }
     return chunks;
   }
-  RigConfig rig_;
+  RotatingLidarConfig rig_;
 };
 
 TEST_F(AssemblerNodeTest, WindowAssembledOnceAScanPassesItsEnd) {

@@ -33,7 +33,7 @@ SimRigConfig exactDevice() {
 }
 
 // Runs the controller against a simulated stepper on a 1 ms virtual clock.
-ControllerRun runController(const RigConfig& rig, int sweeps, uint64_t seed, SimStepper** keep = nullptr,
+ControllerRun runController(const RotatingLidarConfig& rig, int sweeps, uint64_t seed, SimStepper** keep = nullptr,
                   std::unique_ptr<SimStepper>* owner = nullptr) {
   const int64_t t0 = kSimEpochUtime;
   auto stepper = std::make_unique<SimStepper>(rig.motor, rig.sim, seed, 0.8, t0, nullptr);
@@ -68,7 +68,7 @@ class ActionSequenceTiming : public ::testing::TestWithParam<int> {};
 TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
   const int mode = GetParam();
   for (const bool errors : {false, true}) {
-    RigConfig rig;
+    RotatingLidarConfig rig;
     rig.motor.mode = mode;
     if (!errors) rig.sim = exactDevice();
     std::unique_ptr<SimStepper> stepper;
@@ -111,7 +111,7 @@ TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
 INSTANTIATE_TEST_SUITE_P(AllModes, ActionSequenceTiming, ::testing::Range(1, 8));
 
 TEST(MotorController, NaiveSequenceOverlapsRamp) {
-  RigConfig rig;
+  RotatingLidarConfig rig;
   rig.motor.mode = 1;
   rig.motor.action_sequence = "naive";
   rig.sim = exactDevice();
@@ -126,7 +126,7 @@ TEST(MotorController, NaiveSequenceOverlapsRamp) {
 }
 
 TEST(MotorController, GoesThroughHomingScanningAndDone) {
-  RigConfig rig;
+  RotatingLidarConfig rig;
   rig.motor.mode = 1;
   const ControllerRun run = runController(rig, 1, 9);
   ASSERT_GE(run.states.size(), 5u);
@@ -147,7 +147,7 @@ class DeadSwitchStepper : public StepperDevice {
 };
 
 TEST(MotorController, FaultsWhenHomeSwitchNeverSeen) {
-  RigConfig rig;
+  RotatingLidarConfig rig;
   DeadSwitchStepper dead;
   MotorController motor(rig, &dead, 1, 0);
   OfflineBus bus;

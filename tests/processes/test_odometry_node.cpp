@@ -10,7 +10,7 @@
 #include "core/config.hpp"
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
-#include "processes/rig_b.hpp"
+#include "rigs/mobile_lidar.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
@@ -98,14 +98,14 @@ TEST(OdometryNode, BadInputRejectedAndCounted) {
 
 TEST(OdometryNode, ShippedConfigLoads) {
   const OdometryConfig c =
-      loadRigB(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml").odometry;
+      loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml").odometry;
   EXPECT_DOUBLE_EQ(c.wheel_radius_m, 0.077);
   EXPECT_FALSE(c.use_imu);
 }
 
 
 // mounting.calibration_file (relative to the rig file) replaces the rig's gamma/beta/alpha_rad.
-TEST(RigBConfig, MountingCalibrationFileReplacesTheAngles) {
+TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
   namespace fs = std::filesystem;
   const fs::path dir_ = fs::temp_directory_path() / "sweepmap_rig_b_mounting_file";
   fs::remove_all(dir_);
@@ -123,15 +123,15 @@ TEST(RigBConfig, MountingCalibrationFileReplacesTheAngles) {
   ASSERT_NE(rig.find(from), std::string::npos);
   rig.replace(rig.find(from), from.size(), "calibration_file: mounting.yaml");
   std::ofstream(dir_ / "rig_b.yaml") << rig;
-  const RigBConfig b = loadRigB((dir_ / "rig_b.yaml").string());
+  const MobileLidarConfig b = loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
   EXPECT_NEAR(b.mounting.gamma_rad, c.gamma_rad, 1e-12);
   EXPECT_DOUBLE_EQ(b.mounting.beta_rad, c.beta_rad);
   EXPECT_DOUBLE_EQ(b.mounting.alpha_rad, c.alpha_rad);
   // Without it the rig's own values stay.
-  EXPECT_DOUBLE_EQ(loadRigB(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml").mounting.gamma_rad, 0.0);
+  EXPECT_DOUBLE_EQ(loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml").mounting.gamma_rad, 0.0);
   fs::remove(dir_ / "mounting.yaml");
   try {
-    loadRigB((dir_ / "rig_b.yaml").string());
+    loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
     FAIL();
   } catch (const ConfigError& e) {
     EXPECT_NE(std::string(e.what()).find("mounting.yaml"), std::string::npos) << e.what();

@@ -1,0 +1,100 @@
+#include "core/rig_components.hpp"
+
+#include <stdexcept>
+
+
+namespace sweepmap {
+
+void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "beam_count", &beam_count, "", "rays per scan");
+  s.add(p + "angle_min_deg", &angle_min_deg, "deg", "angle of ray 0, from Z_L toward Y_L");
+  s.add(p + "angle_increment_deg", &angle_increment_deg, "deg", "angle between rays");
+  s.add(p + "scan_rate_hz", &scan_rate_hz, "Hz", "scans per second");
+  s.add(p + "steps_per_revolution", &steps_per_revolution, "",
+        "ray slots per mirror turn (sets the time between rays)");
+  s.add(p + "range_min_m", &range_min_m, "m", "shortest valid range");
+  s.add(p + "range_max_m", &range_max_m, "m", "longest valid range");
+}
+
+void MotorConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "mode", &mode, "", "scan mode 1..7 (Yuan 2021 Table 1)");
+  s.add(p + "sweep_angle_deg", &sweep_angle_deg, "deg", "rotation while the lidar window is open");
+  s.add(p + "accel_deg_s2", &accel_deg_s2, "deg/s^2", "nominal ramp acceleration");
+  s.add(p + "margin_s", &margin_s, "s",
+        "constant-speed time before the window opens and after it closes");
+  s.add(p + "move_speed_deg_s", &move_speed_deg_s, "deg/s", "speed of positioning moves");
+  s.add(p + "homing_speed_deg_s", &homing_speed_deg_s, "deg/s", "speed while seeking the switch");
+  s.add(p + "homing_search_deg", &homing_search_deg, "deg", "travel before homing gives up");
+  s.add(p + "home_angle_deg", &home_angle_deg, "deg", "shaft angle of the switch edge");
+  s.add(p + "action_sequence", &action_sequence, "",
+        "improved (motor runs before and after the lidar window) or naive");
+  s.add(p + "rehome_every_sweep", &rehome_every_sweep, "", "seek the switch before every sweep");
+  s.add(p + "pause_s", &pause_s, "s", "standstill between sweeps");
+  s.add(p + "settle_s", &settle_s, "s", "wait after a move's nominal end before the next");
+  s.add(p + "status_rate_hz", &status_rate_hz, "Hz", "MOTOR_STATE publication rate");
+}
+
+void GeometryConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "lidar_offset_x_mm", &lidar_offset_x_mm, "mm",
+        "distance of the scan plane from the rotation axis (t_L^O')");
+}
+
+void PlateConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "alpha_deg", &alpha_deg, "deg", "plate middle line from the front (X) axis");
+  s.add(p + "calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) whose plate.alpha_deg replaces alpha_deg; "
+        "empty: none");
+  s.add(p + "height_mm", &height_mm, "mm", "z of the plate surface in frame O");
+  s.add(p + "region_inner_radius_mm", &region_inner_radius_mm, "mm", "semi-ring inner radius");
+  s.add(p + "region_outer_radius_mm", &region_outer_radius_mm, "mm", "semi-ring outer radius");
+  s.add(p + "region_thickness_mm", &region_thickness_mm, "mm", "semi-ring thickness about height");
+  s.add(p + "hypotenuse_mm", &hypotenuse_mm, "mm", "plate hypotenuse (isosceles right triangle)");
+  s.add(p + "base_distance_mm", &base_distance_mm, "mm", "hypotenuse to rotation axis");
+  s.add(p + "min_points", &min_points, "", "fewest plate points for a correction");
+  s.add(p + "beta_method", &beta_method, "",
+        "centroid (Yuan 2021) or ray_plane (rays meeting the plate plane in the region)");
+  s.add(p + "range_gate_mm", &range_gate_mm, "mm",
+        "ray_plane: largest |measured - plane range| of a plate ray");
+}
+
+void AssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "chunk_points", &chunk_points, "", "points per SWEEP_CLOUD message");
+  s.add(p + "max_pending_scans", &max_pending_scans, "", "scan buffer bound (older dropped)");
+  s.add(p + "correct_attitude", &correct_attitude, "",
+        "apply the plate correction (false: publish the uncorrected cloud C_O')");
+}
+
+void MapperConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "resolution_m", &resolution_m, "m", "OctoMap voxel size");
+  s.add(p + "max_range_m", &max_range_m, "m", "rays are cut at this range");
+  s.add(p + "prob_hit", &prob_hit, "", "sensor model: occupancy probability of a hit");
+  s.add(p + "prob_miss", &prob_miss, "", "sensor model: occupancy probability of a miss");
+  s.add(p + "clamp_min", &clamp_min, "", "lower clamping threshold");
+  s.add(p + "clamp_max", &clamp_max, "", "upper clamping threshold");
+}
+
+void SimRigConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "alpha_true_deg", &alpha_true_deg, "deg", "true plate angle (installation error)");
+  s.add(p + "lidar_offset_x_mm", &lidar_offset_x_mm, "mm", "true lidar-to-axis offset");
+  s.add(p + "range_noise_sigma_mm", &range_noise_sigma_mm, "mm", "Gaussian range noise");
+  s.add(p + "accel_jitter", &accel_jitter, "", "ramp acceleration varies by +- this fraction");
+  s.add(p + "start_delay_max_ms", &start_delay_max_ms, "ms",
+        "motor starts uniformly 0..max after its command (lidar/motor start deviation)");
+  s.add(p + "switch_response_ms", &switch_response_ms, "ms", "home switch mean response time");
+  s.add(p + "switch_response_jitter_ms", &switch_response_jitter_ms, "ms",
+        "home switch response jitter (uniform +-)");
+  s.add(p + "switch_hysteresis_deg", &switch_hysteresis_deg, "deg",
+        "switch edge shift between the two approach directions");
+  s.add(p + "lidar_latency_ms", &lidar_latency_ms, "ms", "delivery delay after a scan's last ray");
+}
+
+ScanMode scanMode(int mode) {
+  static const ScanMode kModes[] = {{1, 1.0, 4.5},   {2, 2.0, 2.25},   {3, 4.0, 1.125},
+                                    {4, 5.0, 0.9},   {5, 8.0, 0.5625}, {6, 10.0, 0.45},
+                                    {7, 16.0, 0.28125}};
+  if (mode < 1 || mode > 7) throw std::out_of_range("scan mode must be 1..7");
+  return kModes[mode - 1];
+}
+
+
+}  // namespace sweepmap

@@ -1,0 +1,87 @@
+#include "rigs/mobile_lidar.hpp"
+
+#include <cmath>
+#include <filesystem>
+
+#include "core/calibration_file.hpp"
+#include "rigs/rig_kind.hpp"
+
+namespace sweepmap {
+
+void MountingConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "nominal_roll_deg", &nominal_roll_deg, "deg", "nominal lidar roll on the body");
+  s.add(p + "nominal_pitch_deg", &nominal_pitch_deg, "deg",
+        "nominal lidar pitch (90: horizontal scan plane, sector middle forward)");
+  s.add(p + "nominal_yaw_deg", &nominal_yaw_deg, "deg", "nominal lidar yaw");
+  s.add(p + "gamma_rad", &gamma_rad, "rad", "mounting error about body x (calibrated)");
+  s.add(p + "beta_rad", &beta_rad, "rad", "mounting error about body y (calibrated)");
+  s.add(p + "alpha_rad", &alpha_rad, "rad", "mounting error about body z (calibrated)");
+  s.add(p + "x_m", &x_m, "m", "lidar centre along body x (l1)");
+  s.add(p + "y_m", &y_m, "m", "lidar centre along body y");
+  s.add(p + "z_m", &z_m, "m", "lidar centre above the body plane (h)");
+  s.add(p + "calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) whose mounting.gamma/beta/alpha_rad replace "
+        "gamma/beta/alpha_rad; \"\" = none (sweepmap calib mounting writes it)");
+}
+
+LidarMounting MountingConfig::toMounting() const {
+  constexpr double kDeg = kDegToRad;
+  LidarMounting m;
+  m.nominal_rpy_rad = Eigen::Vector3d(nominal_roll_deg, nominal_pitch_deg, nominal_yaw_deg) * kDeg;
+  m.gamma_rad = gamma_rad;
+  m.beta_rad = beta_rad;
+  m.alpha_rad = alpha_rad;
+  m.t_BL_m = Eigen::Vector3d(x_m, y_m, z_m);
+  return m;
+}
+
+void WorldAssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "pose_channel", &pose_channel, "", "pose stream: ODOMETRY_POSE (EKF) or WHEEL_ODOMETRY");
+  s.add(p + "beam_count", &beam_count, "", "expected rays per scan (0: any)");
+  s.add(p + "max_pose_wait_s", &max_pose_wait_s, "s",
+        "assemble a scan with the poses there are after this long");
+}
+
+void MobileLidarConfig::declare(ConfigSchema& s) {
+  s.add("rig", &rig, "", "rig kind: mobile_lidar (a 2D lidar on a moving base, Miao 2022)");
+  odometry.declare(s, "odometry.");
+  mounting.declare(s, "mounting.");
+  assembler.declare(s, "assembler.");
+  mapper.declare(s, "mapper.");
+  s.add("mapper.batch_s", &mapper.batch_s, "s",
+        "scans whose time falls in the same window of this length are inserted as one batch "
+        "(one update of the tree's inner nodes and one MAP_STATS; the map is the same); 0: "
+        "every scan on its own");
+  sim.declare(s, "sim.");
+}
+
+MobileLidarConfig loadMobileLidarConfig(const std::string& path,
+                                        const std::vector<std::string>& overrides) {
+  MobileLidarConfig c;
+  ConfigSchema s;
+  c.declare(s);
+  s.loadFile(path);
+  for (const auto& o : overrides) s.set(o);
+  checkRigKind(path, c.rig, "mobile_lidar");
+  if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
+      !(c.odometry.ekf.wheel_distance_m > 0)) {
+    throw ConfigError(path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
+  }
+  if (!(c.mapper.batch_s >= 0.0 && c.mapper.batch_s <= 3600.0)) {
+    throw ConfigError(path + ": key 'mapper.batch_s' must be in [0, 3600]");
+  }
+  if (c.assembler.pose_channel != "ODOMETRY_POSE" && c.assembler.pose_channel != "WHEEL_ODOMETRY") {
+    throw ConfigError(path + ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
+  }
+  if (!c.mounting.calibration_file.empty()) {
+    std::filesystem::path calib(c.mounting.calibration_file);
+    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
+    const MountingCalibration m = loadMountingCalibration(calib.string());
+    c.mounting.gamma_rad = m.gamma_rad;
+    c.mounting.beta_rad = m.beta_rad;
+    c.mounting.alpha_rad = m.alpha_rad;
+  }
+  return c;
+}
+
+}  // namespace sweepmap

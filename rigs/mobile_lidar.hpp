@@ -1,0 +1,57 @@
+// Rig kind `mobile_lidar` (rig B, Miao 2022): a 2D lidar on a moving differential-drive
+// base with wheel encoders and an IMU. Odometry, the lidar's mounting, the world-frame
+// assembler and the mapper, from one strictly loaded YAML file (config/rig_b.yaml).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/config.hpp"
+#include "core/mounting.hpp"
+#include "core/rig_components.hpp"
+#include "drivers/sim_mobile.hpp"
+#include "odometry/odometry_config.hpp"
+
+namespace sweepmap {
+
+struct MountingConfig {
+  double nominal_roll_deg = 0.0;   // how the lidar is meant to sit (e.g. pitch 90: horizontal,
+  double nominal_pitch_deg = 0.0;  // sector middle looking forward)
+  double nominal_yaw_deg = 0.0;
+  double gamma_rad = 0.0;  // mounting error about x (calibrated)
+  double beta_rad = 0.0;   // about y
+  double alpha_rad = 0.0;  // about z
+  double x_m = 0.0;        // lidar centre in the body frame (l1, 0, h)
+  double y_m = 0.0;
+  double z_m = 0.0;
+  // A calibration YAML (relative to the rig file; "" = none) whose mounting.{gamma,beta,
+  // alpha}_rad replace the three values above (core/calibration_file.hpp).
+  std::string calibration_file;
+  void declare(ConfigSchema& s, const std::string& prefix);
+  LidarMounting toMounting() const;
+};
+
+struct WorldAssemblerConfig {
+  std::string pose_channel = "ODOMETRY_POSE";  // or WHEEL_ODOMETRY
+  int beam_count = 0;                          // expected rays per scan; 0 = any
+  double max_pose_wait_s = 2.0;  // a scan whose pose does not come within this is assembled with what is there
+  void declare(ConfigSchema& s, const std::string& prefix);
+};
+
+struct MobileLidarConfig {
+  std::string rig = "mobile_lidar";  // the kind, checked on load
+  OdometryConfig odometry;
+  MountingConfig mounting;
+  WorldAssemblerConfig assembler;
+  MapperConfig mapper;
+  SimMobileConfig sim;  // `sweepmap sim` only: the simulated car's truth and noise
+  void declare(ConfigSchema& s);
+};
+
+// Loads a rig file strictly (its `rig` key must say mobile_lidar), then applies `key=value`
+// overrides; a mounting calibration file the rig names replaces the mounting angles.
+// Throws ConfigError naming the file and the key.
+MobileLidarConfig loadMobileLidarConfig(const std::string& path,
+                                        const std::vector<std::string>& overrides = {});
+
+}  // namespace sweepmap

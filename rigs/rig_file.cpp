@@ -1,0 +1,137 @@
+#include "rigs/rig_file.hpp"
+
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <cstdlib>
+
+#include "core/config.hpp"
+
+namespace sweepmap {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct KindInfo {
+  RigKind kind;
+  const char* name;
+  const char* default_rig;
+  const char* default_scene;
+};
+constexpr KindInfo kKinds[] = {
+    {RigKind::kRotatingLidar, "rotating_lidar", "rig_a", "scene_conference_room"},
+    {RigKind::kMobileLidar, "mobile_lidar", "rig_b", "scene_lab"},
+};
+
+const KindInfo& info(RigKind kind) { return kKinds[static_cast<int>(kind)]; }
+
+fs::path executableDir() {
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  return ec ? fs::path() : exe.parent_path();
+}
+
+}  // namespace
+
+std::string rigKindName(RigKind kind) { return info(kind).name; }
+
+std::vector<std::string> rigKindNames() {
+  std::vector<std::string> names;
+  for (const auto& k : kKinds) names.emplace_back(k.name);
+  return names;
+}
+
+RigKind rigKindFromName(const std::string& name, const std::string& source) {
+  for (const auto& k : kKinds) {
+    if (name == k.name) return k.kind;
+  }
+  std::string known;
+  for (const auto& k : kKinds) known += std::string(known.empty() ? "" : ", ") + k.name;
+  throw ConfigError(source + ": key 'rig' is '" + name + "', not a rig kind (" + known + ")");
+}
+
+std::string defaultRigName(RigKind kind) { return info(kind).default_rig; }
+std::string defaultSceneName(RigKind kind) { return info(kind).default_scene; }
+
+void checkRigKind(const std::string& path, const std::string& found, const std::string& expected) {
+  if (found != expected) {
+    throw ConfigError(path + ": key 'rig' is '" + found + "', expected '" + expected + "'");
+  }
+}
+
+fs::path configDir() {
+  if (const char* env = std::getenv("SWEEPMAP_CONFIG_DIR"); env && *env) return fs::path(env);
+  return executableDir() / ".." / "share" / "sweepmap" / "config";
+}
+
+std::string resolveConfigFile(const std::string& path_or_name) {
+  if (path_or_name.empty()) throw ConfigError("no config file given");
+  if (fs::is_regular_file(path_or_name)) return path_or_name;
+  std::vector<fs::path> tried = {fs::path(path_or_name)};
+  // A bare name (no folder part) is looked up among the installed config files.
+  if (fs::path(path_or_name).parent_path().empty()) {
+    const fs::path dir = configDir();
+    for (const fs::path& c : {dir / path_or_name, dir / (path_or_name + ".yaml")}) {
+      if (fs::is_regular_file(c)) return fs::weakly_canonical(c).string();
+      tried.push_back(c.lexically_normal());
+    }
+  }
+  std::string list;
+  for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t.string();
+  throw ConfigError(path_or_name + ": no such config file (tried " + list + ")");
+}
+
+std::string resolveRigFile(const std::string& path_or_name) {
+  for (const auto& k : kKinds) {
+    if (path_or_name == k.name && !fs::exists(path_or_name)) {
+      return resolveConfigFile(k.default_rig);
+    }
+  }
+  return resolveConfigFile(path_or_name);
+}
+
+RigKind readRigKind(const std::string& path) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": " + e.what());
+  }
+  if (!root.IsMap() || !root["rig"]) {
+    std::string known;
+    for (const auto& k : kKinds) known += std::string(known.empty() ? "" : " | ") + k.name;
+    throw ConfigError(path + ": missing key 'rig' (the rig's kind: " + known + ")");
+  }
+  if (!root["rig"].IsScalar()) throw ConfigError(path + ": key 'rig' must be a kind name");
+  return rigKindFromName(root["rig"].as<std::string>(), path);
+}
+
+Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& overrides) {
+  Rig rig;
+  rig.path = resolveRigFile(path_or_name);
+  switch (readRigKind(rig.path)) {
+    case RigKind::kRotatingLidar:
+      rig.config = loadRotatingLidarConfig(rig.path, overrides);
+      break;
+    case RigKind::kMobileLidar:
+      rig.config = loadMobileLidarConfig(rig.path, overrides);
+      break;
+  }
+  return rig;
+}
+
+template <class T>
+const T& requireKind(const Rig& rig, const std::string& what) {
+  if (const T* c = std::get_if<T>(&rig.config)) return *c;
+  const RigKind wanted = static_cast<RigKind>(
+      decltype(rig.config)(std::in_place_type<T>).index());
+  throw ConfigError(rig.path + " is a " + rig.kindName() + " rig; " + what + " needs a " +
+                    rigKindName(wanted) + " rig");
+}
+template const RotatingLidarConfig& requireKind(const Rig&, const std::string&);
+template const MobileLidarConfig& requireKind(const Rig&, const std::string&);
+
+}  // namespace sweepmap

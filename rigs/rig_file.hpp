@@ -1,0 +1,50 @@
+// Loading any rig file: the kind from its `rig` key, then that kind's strict schema. Names
+// as well as paths: `--rig rig_b` is the file config/rig_b.yaml of the install tree
+// (build tree or installed prefix, found from the running executable), wherever the
+// command runs from.
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "rigs/mobile_lidar.hpp"
+#include "rigs/rig_kind.hpp"
+#include "rigs/rotating_lidar.hpp"
+
+namespace sweepmap {
+
+// A loaded rig: the file it came from and its kind's config. One alternative per RigKind,
+// in the same order.
+struct Rig {
+  std::string path;
+  std::variant<RotatingLidarConfig, MobileLidarConfig> config;
+  RigKind kind() const { return static_cast<RigKind>(config.index()); }
+  std::string kindName() const { return rigKindName(kind()); }
+};
+
+// The folder of the default rig and scene files: $SWEEPMAP_CONFIG_DIR if set, else
+// <executable's folder>/../share/sweepmap/config (the build tree links it to the source
+// config/ folder; `make install` copies it there).
+std::filesystem::path configDir();
+
+// A config file given by path or by name: an existing path is returned as is; otherwise
+// `name` or `name.yaml` in configDir(). For rig files a kind's name stands for its
+// reference rig (rotating_lidar -> rig_a). Throws ConfigError listing what was tried.
+std::string resolveConfigFile(const std::string& path_or_name);
+std::string resolveRigFile(const std::string& path_or_name);
+
+// The kind a rig file declares (its `rig` key alone). Throws ConfigError naming the file.
+RigKind readRigKind(const std::string& path);
+
+// Resolves, reads the kind, loads that kind's schema strictly and applies `key=value`
+// overrides. Throws ConfigError naming the file and the key.
+Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& overrides = {});
+
+// The rig's config if it is of kind T; throws ConfigError "PATH is a KIND rig; WHAT needs a
+// KIND2 rig" otherwise.
+template <class T>
+const T& requireKind(const Rig& rig, const std::string& what);
+
+}  // namespace sweepmap

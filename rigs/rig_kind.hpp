@@ -1,0 +1,33 @@
+// The kinds of rig sweepmap serves. A rig file names its kind in its `rig` key; each kind
+// has its own strict schema (rigs/rotating_lidar.hpp, rigs/mobile_lidar.hpp), and every
+// command and process reads the kind from the file. Adding a rig means adding a kind here,
+// its config struct to rigs/rig_file.hpp's Rig, and its branch where a command dispatches
+// (the compiler lists every such place: std::visit over Rig::config).
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace sweepmap {
+
+enum class RigKind {
+  kRotatingLidar,  // rig A: 2D lidar turned by a stepper, plate correction (Yuan 2021)
+  kMobileLidar,    // rig B: 2D lidar on a differential-drive car, odometry + IMU (Miao 2022)
+};
+
+// "rotating_lidar", "mobile_lidar": the value of a rig file's `rig` key.
+std::string rigKindName(RigKind kind);
+// Every kind's name, in declaration order.
+std::vector<std::string> rigKindNames();
+// The kind named `name`; throws ConfigError (naming `source`) for an unknown one.
+RigKind rigKindFromName(const std::string& name, const std::string& source);
+// The rig file of the kind's reference rig, by name ("rig_a", "rig_b").
+std::string defaultRigName(RigKind kind);
+// The scene its simulator uses by default, by name ("scene_conference_room", "scene_lab").
+std::string defaultSceneName(RigKind kind);
+
+// Throws ConfigError "PATH: key 'rig' is KIND_FOUND, expected EXPECTED" when a file of one
+// kind is loaded as another.
+void checkRigKind(const std::string& path, const std::string& found, const std::string& expected);
+
+}  // namespace sweepmap

@@ -1,0 +1,80 @@
+#include "rigs/rotating_lidar.hpp"
+
+#include <filesystem>
+
+#include "core/calibration_file.hpp"
+#include "rigs/rig_kind.hpp"
+
+namespace sweepmap {
+
+void RotatingLidarConfig::declare(ConfigSchema& s) {
+  s.add("rig", &rig, "", "rig kind: rotating_lidar (a 2D lidar turned by a stepper, Yuan 2021)");
+  lidar.declare(s, "lidar.");
+  motor.declare(s, "motor.");
+  geometry.declare(s, "geometry.");
+  plate.declare(s, "plate.");
+  assembler.declare(s, "assembler.");
+  mapper.declare(s, "mapper.");
+  sim.declare(s, "sim.");
+}
+
+RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
+                                            const std::vector<std::string>& overrides) {
+  RotatingLidarConfig rig;
+  ConfigSchema schema;
+  rig.declare(schema);
+  schema.loadFile(path);
+  for (const auto& o : overrides) schema.set(o);
+  checkRigKind(path, rig.rig, "rotating_lidar");
+  if (rig.motor.mode < 1 || rig.motor.mode > 7) {
+    throw ConfigError(path + ": key 'motor.mode' must be 1..7");
+  }
+  if (!rig.plate.calibration_file.empty()) {
+    std::filesystem::path calib(rig.plate.calibration_file);
+    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
+    rig.plate.alpha_deg = loadPlateCalibration(calib.string()).alpha_deg;
+  }
+  const auto require = [&](bool ok, const char* key, const char* what) {
+    if (!ok) throw ConfigError(path + ": key '" + key + "' " + what);
+  };
+  require(rig.lidar.beam_count > 0, "lidar.beam_count", "must be > 0");
+  require(rig.lidar.scan_rate_hz > 0, "lidar.scan_rate_hz", "must be > 0");
+  require(rig.lidar.steps_per_revolution >= rig.lidar.beam_count, "lidar.steps_per_revolution",
+          "must be >= beam_count");
+  require(rig.lidar.range_min_m >= 0 && rig.lidar.range_max_m > rig.lidar.range_min_m,
+          "lidar.range_max_m", "must exceed range_min_m >= 0");
+  require(rig.motor.sweep_angle_deg > 0, "motor.sweep_angle_deg", "must be > 0");
+  require(rig.motor.accel_deg_s2 > 0, "motor.accel_deg_s2", "must be > 0");
+  require(rig.motor.move_speed_deg_s > 0, "motor.move_speed_deg_s", "must be > 0");
+  require(rig.motor.homing_speed_deg_s > 0, "motor.homing_speed_deg_s", "must be > 0");
+  require(rig.motor.homing_search_deg > 0, "motor.homing_search_deg", "must be > 0");
+  require(rig.motor.margin_s >= 0, "motor.margin_s", "must be >= 0");
+  require(rig.motor.settle_s >= 0 && rig.motor.pause_s >= 0, "motor.settle_s", "and pause_s must be >= 0");
+  require(rig.motor.status_rate_hz > 0, "motor.status_rate_hz", "must be > 0");
+  require(rig.plate.region_inner_radius_mm >= 0 &&
+              rig.plate.region_outer_radius_mm > rig.plate.region_inner_radius_mm,
+          "plate.region_outer_radius_mm", "must exceed region_inner_radius_mm >= 0");
+  require(rig.plate.region_thickness_mm > 0, "plate.region_thickness_mm", "must be > 0");
+  require(rig.plate.min_points > 0, "plate.min_points", "must be > 0");
+  require(rig.plate.range_gate_mm > 0, "plate.range_gate_mm", "must be > 0");
+  require(rig.assembler.chunk_points > 0 && rig.assembler.chunk_points <= 5000,
+          "assembler.chunk_points", "must be 1..5000 (one UDP datagram)");
+  require(rig.assembler.max_pending_scans > 0, "assembler.max_pending_scans", "must be > 0");
+  require(rig.mapper.resolution_m >= 0.005, "mapper.resolution_m", "must be >= 0.005");
+  require(rig.mapper.max_range_m > 0 && rig.mapper.max_range_m <= 100, "mapper.max_range_m",
+          "must be in (0, 100]");
+  require(rig.mapper.prob_hit > 0.5 && rig.mapper.prob_hit < 1, "mapper.prob_hit", "must be in (0.5, 1)");
+  require(rig.mapper.prob_miss > 0 && rig.mapper.prob_miss < 0.5, "mapper.prob_miss", "must be in (0, 0.5)");
+  require(rig.mapper.clamp_min > 0 && rig.mapper.clamp_min < rig.mapper.clamp_max &&
+              rig.mapper.clamp_max < 1,
+          "mapper.clamp_max", "needs 0 < clamp_min < clamp_max < 1");
+  if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane") {
+    throw ConfigError(path + ": key 'plate.beta_method' must be centroid or ray_plane");
+  }
+  if (rig.motor.action_sequence != "improved" && rig.motor.action_sequence != "naive") {
+    throw ConfigError(path + ": key 'motor.action_sequence' must be improved or naive");
+  }
+  return rig;
+}
+
+}  // namespace sweepmap

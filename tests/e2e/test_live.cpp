@@ -1,0 +1,191 @@
+// The live processes over LCM, in a private network namespace that this test creates:
+// the clouds they publish equal those of the offline replay of their own log, and a
+// `sweepmap sim` log played by lcm-logplayer gives the clouds `sweepmap replay` gives; for
+// rig B, a `sweepmap sim --rig rig_b` log played into sweepmap-odometry, sweepmap-assembler
+// and sweepmap-mapper (all --rig rig_b) gives the poses, clouds and map of `sweepmap replay`.
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "processes/channels.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "tests/e2e/test_support.hpp"
+#include "tools/ops/netns.hpp"
+#include "tools/ops/process_group.hpp"
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+const std::string kRig = sourcePath("config/rig_a.yaml");
+const std::string kScene = sourcePath("config/scene_conference_room.yaml");
+const std::string kUrl = kDefaultLcmUrl;
+
+class LiveTest : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    std::string why;
+    netns_ok_ = enterPrivateNetwork(&why);
+    netns_why_ = why;
+  }
+  void SetUp() override {
+    if (!netns_ok_) GTEST_SKIP() << "no private network namespace: " << netns_why_;
+  }
+  static std::vector<std::string> proc(const std::string& name, std::vector<std::string> args) {
+    args.insert(args.begin(), binPath("sweepmap-" + name));
+    args.insert(args.end(), {"--rig", kRig, "--set", "motor.mode=1", "--lcm-url", kUrl});
+    return args;
+  }
+  // Chunk payloads of SWEEP_CLOUD keyed by (sweep, chunk).
+  static std::map<std::pair<int64_t, int>, std::vector<uint8_t>> chunks(const std::string& log) {
+    std::map<std::pair<int64_t, int>, std::vector<uint8_t>> out;
+    for (const auto& m : readChannel(log, channels::kSweepCloud)) {
+      cloud_chunk_t c;
+      EXPECT_TRUE(decodeMessage(m, &c));
+      out[{c.sweep_id, c.chunk_index}] = m.data;
+    }
+    return out;
+  }
+  static bool netns_ok_;
+  static std::string netns_why_;
+};
+
+bool LiveTest::netns_ok_ = false;
+std::string LiveTest::netns_why_;
+
+TEST_F(LiveTest, LiveCloudsEqualOfflineReplayOfTheirLog) {
+  const auto dir = scratchDir("live_vs_offline");
+  const std::string log = (dir / "live.lcmlog").string();
+  ProcessGroup procs;
+  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", log},
+                                   (dir / "logger.txt").string());
+  const pid_t assembler = procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t lidar = procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}),
+                                  (dir / "lidar.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t motor = procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}),
+                                  (dir / "motor.txt").string());
+  ASSERT_EQ(procs.wait(motor, 90.0), 0) << readFile(dir / "motor.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(lidar, 5.0), 0);
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+
+  const auto live = chunks(log);
+  ASSERT_FALSE(live.empty()) << "the live assembler published nothing";
+  ASSERT_EQ(sweepmap({"replay", log, "--rig", kRig, "--set", "motor.mode=1", "--out",
+                      (dir / "offline").string(), "--no-plots"},
+                     dir / "replay.txt"),
+            0)
+      << readFile(dir / "replay.txt");
+  const auto offline = chunks((dir / "offline" / "derived.lcmlog").string());
+  EXPECT_EQ(live.size(), offline.size());
+  int sweeps = 0;
+  for (const auto& [key, bytes] : live) {
+    ASSERT_TRUE(offline.count(key)) << "sweep " << key.first << " chunk " << key.second;
+    EXPECT_TRUE(bytes == offline.at(key)) << "sweep " << key.first << " chunk " << key.second
+                                          << " differs between live and offline";
+    sweeps += key.second == 0;
+  }
+  EXPECT_EQ(sweeps, 2);
+}
+
+TEST_F(LiveTest, LogplayerIntoLiveProcessesMatchesReplay) {
+  const auto dir = scratchDir("logplayer");
+  const std::string sim_log = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(sweepmap({"sim", "--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "2",
+                      "--seed", "8", "--out", sim_log}),
+            0);
+  const std::string rec = (dir / "recorded.lcmlog").string();
+  ProcessGroup procs;
+  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
+                                              "SWEEP_.*|MAP_STATS", rec},
+                                   (dir / "logger.txt").string());
+  const pid_t assembler = procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper = procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}),
+                                   (dir / "mapper.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
+                                   (dir / "logplayer.txt").string());
+  ASSERT_EQ(procs.wait(player, 120.0), 0) << readFile(dir / "logplayer.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0);
+  EXPECT_EQ(procs.stop(mapper, 60.0), 0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+  EXPECT_TRUE(fs::exists(dir / "live_map.bt"));
+
+  ASSERT_EQ(sweepmap({"replay", sim_log, "--rig", kRig, "--set", "motor.mode=1", "--out",
+                      (dir / "offline").string(), "--no-plots"}),
+            0);
+  const auto live = chunks(rec);
+  const auto offline = chunks((dir / "offline" / "derived.lcmlog").string());
+  ASSERT_FALSE(live.empty());
+  EXPECT_EQ(live.size(), offline.size());
+  for (const auto& [key, bytes] : offline) {
+    ASSERT_TRUE(live.count(key)) << "sweep " << key.first << " chunk " << key.second;
+    EXPECT_TRUE(bytes == live.at(key));
+  }
+  // The live mapper's map equals the replayed one (same sweeps, same order).
+  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(dir / "offline" / "map.bt"));
+}
+
+TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
+  const auto dir = scratchDir("live_rig_b");
+  const std::string rig_b = sourcePath("config/rig_b.yaml");
+  const std::string sim_log = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(sweepmap({"sim", "--rig", rig_b, "--scene", sourcePath("config/scene_lab.yaml"),
+                      "--set", "sim.duration_s=12", "--seed", "5", "--out", sim_log}),
+            0);
+  const std::string rec = (dir / "recorded.lcmlog").string();
+  const auto procB = [&](const std::string& name, std::vector<std::string> args) {
+    args.insert(args.begin(), binPath("sweepmap-" + name));
+    args.insert(args.end(), {"--rig", rig_b, "--lcm-url", kUrl});
+    return args;
+  };
+  ProcessGroup procs;
+  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
+                                              "ODOMETRY_POSE|WHEEL_ODOMETRY|SWEEP_CLOUD", rec},
+                                   (dir / "logger.txt").string());
+  const pid_t odometry = procs.start("odometry", procB("odometry", {}), (dir / "odometry.txt").string());
+  const pid_t assembler = procs.start("assembler", procB("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper = procs.start("mapper", procB("mapper", {"--save", (dir / "live_map.bt").string()}),
+                                   (dir / "mapper.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
+                                   (dir / "logplayer.txt").string());
+  ASSERT_EQ(procs.wait(player, 120.0), 0) << readFile(dir / "logplayer.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(odometry, 10.0), 0) << readFile(dir / "odometry.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0) << readFile(dir / "assembler.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(mapper, 60.0), 0) << readFile(dir / "mapper.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+
+  const auto offline_dir = dir / "offline";
+  ASSERT_EQ(sweepmap({"replay", sim_log, "--rig", rig_b, "--out", offline_dir.string(),
+                      "--no-plots"},
+                     dir / "replay.txt"),
+            0)
+      << readFile(dir / "replay.txt");
+  const std::string derived = (offline_dir / "derived.lcmlog").string();
+  for (const char* channel : {channels::kOdometryPose, channels::kWheelOdometry, channels::kSweepCloud}) {
+    const auto live = readChannel(rec, channel);
+    const auto offline = readChannel(derived, channel);
+    ASSERT_FALSE(offline.empty()) << channel;
+    ASSERT_EQ(live.size(), offline.size()) << channel;
+    size_t differ = 0;
+    for (size_t i = 0; i < live.size(); ++i) differ += live[i].data != offline[i].data;
+    EXPECT_EQ(differ, 0u) << channel << ": " << differ << " of " << live.size()
+                          << " messages differ between live and offline";
+  }
+  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(offline_dir / "map.bt"))
+      << "the live mapper's map differs from the replay's";
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace sweepmap

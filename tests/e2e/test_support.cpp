@@ -1,0 +1,156 @@
+#include "tests/e2e/test_support.hpp"
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "core/event_log.hpp"
+
+extern char** environ;
+
+namespace sweepmap {
+namespace test {
+
+std::string sourcePath(const std::string& rel) { return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel; }
+std::string binPath(const std::string& name) { return std::string(SWEEPMAP_BINARY_DIR) + "/bin/" + name; }
+
+fs::path scratchDir(const std::string& name) {
+  const fs::path p = fs::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / name;
+  fs::remove_all(p);
+  fs::create_directories(p);
+  return p;
+}
+
+int sweepmap(const std::vector<std::string>& args, const fs::path& out_file) {
+  std::vector<std::string> argv = {binPath("sweepmap")};
+  argv.insert(argv.end(), args.begin(), args.end());
+  posix_spawn_file_actions_t fa;
+  posix_spawn_file_actions_init(&fa);
+  const std::string out = out_file.empty() ? "/dev/null" : out_file.string();
+  posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  std::vector<char*> cargs;
+  for (auto& a : argv) cargs.push_back(a.data());
+  cargs.push_back(nullptr);
+  pid_t pid;
+  if (posix_spawn(&pid, cargs[0], &fa, nullptr, cargs.data(), environ) != 0) return -1;
+  posix_spawn_file_actions_destroy(&fa);
+  int status = 0;
+  waitpid(pid, &status, 0);
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string readFile(const fs::path& p) {
+  std::ifstream f(p, std::ios::binary);
+  std::ostringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+nlohmann::json readJson(const fs::path& p) { return nlohmann::json::parse(readFile(p)); }
+
+std::vector<Message> readChannel(const std::string& log, const std::string& channel) {
+  std::vector<Message> out;
+  EventLogReader r(log);
+  LogEvent e;
+  while (r.next(&e)) {
+    if (e.channel == channel) out.push_back({e.utime, e.channel, e.data});
+  }
+  return out;
+}
+
+}  // namespace test
+}  // namespace sweepmap
+
+#include <sys/file.h>
+#include <unistd.h>
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+std::string binaryStamp() {
+  const auto t = fs::last_write_time(binPath("sweepmap")).time_since_epoch().count();
+  return std::to_string(t);
+}
+
+// Runs `make` once per stamp under an exclusive lock on `dir/.lock`.
+void onceUnderLock(const fs::path& dir, const std::string& key,
+                   const std::function<void()>& make) {
+  fs::create_directories(dir);
+  const int fd = ::open((dir / ".lock").c_str(), O_CREAT | O_RDWR, 0644);
+  ::flock(fd, LOCK_EX);
+  const fs::path marker = dir / ".done";
+  const std::string stamp = binaryStamp() + " " + key;
+  if (!fs::exists(marker) || readFile(marker) != stamp) {
+    fs::remove(marker);
+    make();
+    std::ofstream(marker) << stamp;
+  }
+  ::flock(fd, LOCK_UN);
+  ::close(fd);
+}
+
+std::string joined(const std::vector<std::string>& v) {
+  std::string s;
+  for (const auto& a : v) s += a + " ";
+  return s;
+}
+
+}  // namespace
+
+namespace {
+
+std::string cachedLog(const std::string& command, const std::string& name,
+                      const std::vector<std::string>& sim_args) {
+  const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_cache" / name;
+  const std::string log = (dir / "sim.lcmlog").string();
+  onceUnderLock(dir, (command == "sim" ? "" : command + " ") + joined(sim_args), [&] {
+    std::vector<std::string> args = {command};
+    args.insert(args.end(), sim_args.begin(), sim_args.end());
+    args.insert(args.end(), {"--out", log});
+    if (sweepmap(args, dir / "sim.txt") != 0) {
+      throw std::runtime_error("sweepmap " + command + " failed: " + readFile(dir / "sim.txt"));
+    }
+  });
+  return log;
+}
+
+}  // namespace
+
+std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args) {
+  return cachedLog("sim", name, sim_args);
+}
+
+std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args) {
+  return cachedLog("sim", name, sim_args);
+}
+
+CachedRun cachedRun(const std::string& name, const std::vector<std::string>& args) {
+  const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_cache" / name;
+  CachedRun run{dir / "out", -1, dir / "output.txt"};
+  onceUnderLock(dir, joined(args), [&] {
+    std::vector<std::string> a = args;
+    a.insert(a.end(), {"--out", run.out.string()});
+    fs::remove_all(run.out);
+    std::ofstream(dir / "status.txt") << sweepmap(a, run.output);
+  });
+  run.status = std::stoi(readFile(dir / "status.txt"));
+  return run;
+}
+
+fs::path cachedReplay(const std::string& name, const std::string& log,
+                      const std::vector<std::string>& extra_args) {
+  std::vector<std::string> args = {"replay", log};
+  args.insert(args.end(), extra_args.begin(), extra_args.end());
+  const CachedRun run = cachedRun(name, args);
+  if (run.status != 0) throw std::runtime_error("sweepmap replay failed: " + readFile(run.output));
+  return run.out;
+}
+
+}  // namespace test
+}  // namespace sweepmap

@@ -1,0 +1,55 @@
+// Helpers for the end-to-end tests: paths, running the tool, reading files and logs.
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "processes/node.hpp"
+
+namespace sweepmap {
+namespace test {
+
+namespace fs = std::filesystem;
+
+std::string sourcePath(const std::string& rel);  // in the source tree
+std::string binPath(const std::string& name);    // build/bin/<name>
+fs::path scratchDir(const std::string& name);    // fresh, under the build tree
+
+// Runs build/bin/sweepmap with `args`; returns the exit status. Output goes to
+// `dir/<label>.txt` if `dir` is set.
+int sweepmap(const std::vector<std::string>& args, const fs::path& out_file = {});
+
+std::string readFile(const fs::path& p);
+nlohmann::json readJson(const fs::path& p);
+// Every message of `channel` in the log, in log order.
+std::vector<Message> readChannel(const std::string& log, const std::string& channel);
+
+}  // namespace test
+}  // namespace sweepmap
+
+namespace sweepmap {
+namespace test {
+
+// A simulated log shared by the tests of one build: made once (under a file lock, so
+// parallel CTest processes wait for one another) with `sweepmap sim <args> --out LOG`,
+// and remade when the sweepmap binary changes.
+std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args);
+// The same for a rig-B log (kept apart from cachedSimLog for the readers of the tests).
+std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args);
+// `sweepmap <args> --out DIR` run once per build (as above) for every test process that asks:
+// DIR, the exit status and the command's output (stdout and stderr).
+struct CachedRun {
+  fs::path out;
+  int status;
+  fs::path output;
+};
+CachedRun cachedRun(const std::string& name, const std::vector<std::string>& args);
+// Same for a replay of a cached log into a directory.
+fs::path cachedReplay(const std::string& name, const std::string& log,
+                      const std::vector<std::string>& extra_args);
+
+}  // namespace test
+}  // namespace sweepmap

@@ -1,0 +1,303 @@
+#include "tools/offline/runs.hpp"
+#include "tools/bench/bench_mobile.hpp"
+
+#include <sys/resource.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <chrono>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+#include <thread>
+
+#include "core/event_log.hpp"
+#include "processes/channels.hpp"
+#include "processes/odometry_node.hpp"
+#include "tools/ops/netns.hpp"
+#include "tools/ops/process_group.hpp"
+#include "tools/offline/replay_mobile.hpp"
+#include "tools/offline/sim_mobile.hpp"
+
+namespace sweepmap {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+double cpuSeconds(int who) {
+  rusage u{};
+  getrusage(who, &u);
+  return u.ru_utime.tv_sec + u.ru_stime.tv_sec + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-6;
+}
+
+// utime + stime of a running process from /proc/<pid>/stat (fields 14 and 15, after the
+// parenthesised command name); -1 if it cannot be read.
+double processCpuSeconds(pid_t pid) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(f, line)) return -1.0;
+  const size_t close = line.rfind(')');
+  if (close == std::string::npos) return -1.0;
+  std::istringstream rest(line.substr(close + 2));
+  std::string field;
+  long long utime = 0, stime = 0;
+  for (int i = 3; i <= 15 && rest >> field; ++i) {
+    if (i == 14) utime = std::stoll(field);
+    if (i == 15) stime = std::stoll(field);
+  }
+  return static_cast<double>(utime + stime) / static_cast<double>(sysconf(_SC_CLK_TCK));
+}
+
+// Voluntary + involuntary context switches of every thread of `pid` (thread wake-ups are
+// what a cheap process spends most of its CPU on).
+int64_t contextSwitches(pid_t pid) {
+  namespace fs = std::filesystem;
+  int64_t total = 0;
+  std::error_code ec;
+  for (const auto& task : fs::directory_iterator("/proc/" + std::to_string(pid) + "/task", ec)) {
+    std::ifstream f(task.path() / "status");
+    std::string key;
+    int64_t value = 0;
+    while (f >> key) {
+      if (key == "voluntary_ctxt_switches:" || key == "nonvoluntary_ctxt_switches:") {
+        if (f >> value) total += value;
+      }
+    }
+  }
+  return total;
+}
+
+// A "Key:   value kB" line of /proc/<pid>/status, in KiB (0 if absent).
+int64_t statusKib(pid_t pid, const std::string& key) {
+  std::ifstream f("/proc/" + std::to_string(pid) + "/status");
+  std::string word;
+  while (f >> word) {
+    if (word == key) {
+      int64_t kib = 0;
+      f >> kib;
+      return kib;
+    }
+  }
+  return 0;
+}
+
+struct SimulatedLog {
+  MobileLidarConfig rig;
+  SimMobileResult result;
+  std::vector<Message> odometry_input;  // WHEEL_TICKS and IMU, in log order
+};
+
+// Simulates rig B with `overrides`; writes the whole log to `path` (if not empty), or
+// only the odometry's input channels when `odometry_only`.
+SimulatedLog simulate(const RigBBenchOptions& o, const std::vector<std::string>& overrides,
+                      const std::string& path, bool odometry_only) {
+  SimMobileOptions so;
+  const SimSetup setup = loadSimSetup(o.rig, o.scene, overrides);
+  so.rig = requireKind<MobileLidarConfig>(setup.rig, "the rig-B bench");
+  so.scene = setup.scene;
+  SimulatedLog log;
+  log.rig = so.rig;
+  std::unique_ptr<EventLogWriter> writer;
+  if (!path.empty()) writer = std::make_unique<EventLogWriter>(path);
+  log.result = simulateMobile(so, [&](const Message& m) {
+    const bool odometry_input = m.channel == channels::kWheelTicks || m.channel == channels::kImu;
+    if (odometry_input) log.odometry_input.push_back(m);
+    if (writer && (odometry_input || !odometry_only)) writer->write(m.utime, m.channel, m.data);
+  });
+  if (writer) writer->close();
+  return log;
+}
+
+std::string rateOverride(int imu_hz) { return "sim.imu_rate_hz=" + std::to_string(imu_hz); }
+
+// OdometryNode (decode, wheel odometry, EKF, encode of both poses) over the simulated
+// stream, repeated until at least `min_s` of wall time has passed.
+void benchEkfInProcess(const RigBBenchOptions& o, std::ostream& out) {
+  out << "EKF in process (OdometryNode: decode, wheel odometry, EKF, encoded poses; 50 Hz wheels):\n";
+  for (int imu_hz : {100, 200, 400}) {
+    const SimulatedLog log = simulate(o, {rateOverride(imu_hz), "sim.duration_s=60"}, "", false);
+    int64_t messages = 0, updates = 0;
+    int reps = 0;
+    const auto t0 = Clock::now();
+    do {
+      OdometryNode node(log.rig.odometry);
+      Outbox outbox;
+      for (const Message& m : log.odometry_input) {
+        node.receive(m, outbox);
+        outbox.take();
+      }
+      const auto& c = node.ekf().counters();
+      updates += c.wheels + c.gyro + c.yaw + c.gated_wheels + c.gated_gyro + c.gated_yaw;
+      messages += static_cast<int64_t>(log.odometry_input.size());
+      ++reps;
+    } while (secondsSince(t0) < 1.0);
+    const double wall_s = secondsSince(t0);
+    const double per_log_s = wall_s / reps;
+    out << "  IMU " << std::setw(3) << imu_hz << " Hz: " << std::setprecision(0)
+        << updates / wall_s << " EKF updates/s, " << messages / wall_s << " messages/s, "
+        << std::setprecision(2) << wall_s / messages * 1e6 << " us/message; "
+        << log.result.duration_s << " s of input take " << per_log_s * 1e3 << " ms = "
+        << std::setprecision(3) << per_log_s / log.result.duration_s * 100.0
+        << " % of one core at real time\n"
+        << std::setprecision(2);
+  }
+}
+
+// The real sweepmap-odometry process fed by lcm-logplayer at real-time pace, in a private
+// network namespace. Its CPU share = (utime + stime) / wall time while it is fed.
+void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
+  namespace fs = std::filesystem;
+  out << "sweepmap-odometry process (lcm-logplayer at real-time pace, private network "
+         "namespace; share of one core = CPU s / wall s):\n";
+  std::string why;
+  if (o.bin_dir.empty()) {
+    out << "  skipped: no sweepmap-odometry executable\n";
+    return;
+  }
+  if (!enterPrivateNetwork(&why)) {
+    out << "  skipped: no private network namespace (" << why << ")\n";
+    return;
+  }
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
+  const std::string exe = (fs::path(o.bin_dir) / "sweepmap-odometry").string();
+  for (int imu_hz : {100, 200, 400}) {
+    const std::string log_path = o.work + "/odometry_input_imu" + std::to_string(imu_hz) + ".lcmlog";
+    const SimulatedLog log =
+        simulate(o, {rateOverride(imu_hz), "sim.duration_s=" + std::to_string(o.process_feed_s)},
+                 log_path, true);
+    ProcessGroup procs;
+    const std::string odo_log = o.work + "/odometry_imu" + std::to_string(imu_hz) + ".txt";
+    const pid_t odometry = procs.start("odometry", {exe, "--rig", o.rig, "--lcm-url", url}, odo_log);
+    std::this_thread::sleep_for(std::chrono::milliseconds(800));  // start-up (config, LCM)
+    // Baseline: the same process idle (status at 1 Hz, waiting on its socket).
+    const double idle_cpu0 = processCpuSeconds(odometry);
+    auto t0 = Clock::now();
+    std::this_thread::sleep_for(std::chrono::seconds(3));
+    const double idle_share = (processCpuSeconds(odometry) - idle_cpu0) / secondsSince(t0);
+
+    const double children_cpu0 = cpuSeconds(RUSAGE_CHILDREN);
+    const double cpu0 = processCpuSeconds(odometry);
+    const int64_t switches0 = contextSwitches(odometry);
+    t0 = Clock::now();
+    const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + url, log_path},
+                                     o.work + "/logplayer.txt");
+    const int rc = procs.wait(player, o.process_feed_s * 3 + 10);
+    const double fed_s = secondsSince(t0);
+    const double share = (processCpuSeconds(odometry) - cpu0) / fed_s;
+    const double switches_per_s = (contextSwitches(odometry) - switches0) / fed_s;
+    const double player_share = (cpuSeconds(RUSAGE_CHILDREN) - children_cpu0) / fed_s;
+    procs.stop(odometry, 5.0);
+    if (rc != 0 || cpu0 < 0) {
+      out << "  IMU " << imu_hz << " Hz: lcm-logplayer or sweepmap-odometry failed (see "
+          << o.work << ")\n";
+      continue;
+    }
+    out << "  IMU " << std::setw(3) << imu_hz << " Hz + 50 Hz wheels: " << std::setprecision(0)
+        << log.odometry_input.size() / fed_s << " messages/s for " << std::setprecision(1)
+        << fed_s << " s: sweepmap-odometry " << std::setprecision(2) << share * 100.0
+        << " % of one core, " << std::setprecision(0) << switches_per_s
+        << " thread switches/s (idle: " << std::setprecision(2) << idle_share * 100.0
+        << " %; lcm-logplayer itself: " << player_share * 100.0 << " %)\n";
+  }
+  out << "  (/proc counts CPU in clock ticks of " << 1000 / sysconf(_SC_CLK_TCK)
+      << " ms: +-" << std::setprecision(2) << 100.0 / sysconf(_SC_CLK_TCK) / o.process_feed_s
+      << " % over one run)\n";
+}
+
+void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
+  out << "sweepmap replay --no-plots (odometry + world assembler + mapper + outputs; the "
+         "command's wall time, start-up included, its CPU time (less "
+         "sensitive to a busy machine) and its peak RSS):\n";
+  struct Case {
+    const char* name;
+    std::vector<std::string> overrides;
+  };
+  // The same circle with every scan inserted on its own: the batching's share, same run.
+  const std::string circle = "sim.duration_s=" + std::to_string(o.circle_s);
+  for (const Case& c :
+       {Case{"circle", {circle}},
+        Case{"circle, per-scan insertion (mapper.batch_s=0)", {circle, "mapper.batch_s=0"}},
+        Case{"loop", {"sim.path=loop", "sim.duration_s=" + std::to_string(o.loop_s)}}}) {
+    const std::string name = std::string(c.name).substr(0, std::string(c.name).find(','));
+    const std::string log_path = o.work + "/rig_b_" + name + ".lcmlog";
+    const std::string out_dir = o.work + "/replay_rig_b_" + name;
+    const SimulatedLog log = simulate(o, c.overrides, log_path, false);
+    // The `sweepmap replay` command itself, so that its time includes start-up and its
+    // peak RSS is its own.
+    std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path, "--rig", o.rig,
+                                     "--out", out_dir, "--no-plots"};
+    for (const std::string& kv : c.overrides) args.insert(args.end(), {"--set", kv});
+    std::vector<char*> argv;
+    for (std::string& a : args) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    const std::string log_txt = out_dir + ".txt";
+    posix_spawn_file_actions_addopen(&actions, 1, log_txt.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+    const auto t0 = Clock::now();
+    pid_t child = -1;
+    const int spawn_rc = posix_spawn(&child, argv[0], &actions, nullptr, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    // Its peak RSS: VmHWM polled while it runs (the rusage of a spawned child would report
+    // this process's own peak, which the child's image inherits through exec).
+    int status = 0;
+    int64_t peak_kib = 0;
+    rusage usage{};  // its CPU time (exact; only ru_maxrss carries over through exec)
+    bool ok = spawn_rc == 0;
+    while (ok) {
+      const pid_t r = wait4(child, &status, WNOHANG, &usage);
+      if (r == child) break;
+      if (r < 0) ok = false;
+      peak_kib = std::max(peak_kib, statusKib(child, "VmHWM:"));
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+    const double wall_s = secondsSince(t0);
+    if (!ok) {
+      out << "  " << c.name << ": replay failed (see " << log_txt << ")\n";
+      continue;
+    }
+    const double cpu_s = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+                         (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+    int64_t points = 0;
+    try {
+      std::ifstream f(out_dir + "/summary.json");
+      points = nlohmann::json::parse(f).at("points").get<int64_t>();
+    } catch (const std::exception&) {
+      points = 0;
+    }
+    out << "  " << c.name << ": " << std::setprecision(1) << log.result.duration_s << " s, "
+        << log.result.scans << " scans in " << std::setprecision(2) << wall_s
+        << " s wall: real-time factor " << std::setprecision(1) << log.result.duration_s / wall_s
+        << " (" << log.result.duration_s / cpu_s << " on its " << std::setprecision(2) << cpu_s
+        << " CPU s), " << std::setprecision(0) << points / wall_s << " points/s, peak RSS "
+        << std::setprecision(1) << peak_kib / 1024.0 << " MiB\n"
+        << std::setprecision(2);
+  }
+}
+
+}  // namespace
+
+int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
+  std::filesystem::create_directories(o.work);
+  out << std::fixed << std::setprecision(2);
+  out << "rig B (" << o.rig << ", " << o.scene << ")\n";
+  benchEkfInProcess(o, out);
+  benchReplay(o, out);
+  // Last: it moves this process into a private network namespace.
+  benchOdometryProcess(o, out);
+  return 0;
+}
+
+}  // namespace sweepmap

@@ -1,0 +1,26 @@
+// Rig-B part of `sweepmap bench`: EKF updates per second in process, the CPU share of the
+// real sweepmap-odometry executable at HI219-like IMU rates (in a private network
+// namespace, fed by lcm-logplayer at real-time pace), and the `sweepmap replay` real-time
+// factor on a simulated circle and lab loop. Prints figures; asserts nothing.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+namespace sweepmap {
+
+struct RigBBenchOptions {
+  std::string rig = "rig_b";  // path or name
+  std::string scene = "scene_lab";
+  std::string work = "build/bench";
+  std::string sweepmap_exe;          // the sweepmap executable (its replay is run as a command)
+  std::string bin_dir;               // where sweepmap-odometry is ("" = skip the process part)
+  double process_feed_s = 12.0;      // log time fed to sweepmap-odometry per IMU rate
+  double circle_s = 60.0;            // simulated circle for the replay
+  double loop_s = 130.0;             // simulated lab loop for the replay (one lap ~ 125 s)
+};
+
+// Returns 0; a part that cannot run (no network namespace) says why and is skipped.
+int benchRigB(const RigBBenchOptions& options, std::ostream& out);
+
+}  // namespace sweepmap

@@ -1,0 +1,87 @@
+// `sweepmap bench`: speed and memory figures of each rig kind (tools/bench/).
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+
+#include "rigs/rig_file.hpp"
+#include "tools/bench/bench_mobile.hpp"
+#include "tools/bench/bench_rotating.hpp"
+#include "tools/cli/commands.hpp"
+
+namespace sweepmap {
+
+Runner addBenchCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "bench",
+      "Measure speed and memory for each rig given (default: rig_a and rig_b). "
+      "rotating_lidar: simulation and offline replay speed (assembly + plate correction + "
+      "OctoMap) as real-time factors for modes 1 and 7, points per second, one sweep's plate "
+      "correction and peak memory. mobile_lidar: EKF updates per second, the CPU share of the "
+      "sweepmap-odometry process at 100/200/400 Hz IMU (private network namespace), and "
+      "`sweepmap replay` real-time factors on a circle and a lab loop. Prints figures; run on "
+      "an idle machine, compare ratios within one run");
+  struct Opts {
+    std::vector<std::string> rigs = {"rig_a", "rig_b"};
+    std::string scene;
+    std::string work = "build/bench";
+    int sweeps = 2;
+    double odometry_feed_s = RigBBenchOptions{}.process_feed_s;
+  };
+  auto o = std::make_shared<Opts>();
+  cmd->add_option("--rig", o->rigs, "rig files or names to bench (repeatable)")
+      ->capture_default_str();
+  cmd->add_option("--scene", o->scene, "scene file or name (default: each rig kind's scene)");
+  cmd->add_option("--work", o->work, "scratch directory")->capture_default_str();
+  cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: sweeps per mode")->capture_default_str();
+  cmd->add_option("--odometry-feed-s", o->odometry_feed_s,
+                  "mobile_lidar: log time fed to sweepmap-odometry per IMU rate")
+      ->capture_default_str();
+  return [o]() {
+    namespace fs = std::filesystem;
+    std::vector<Rig> rigs;
+    try {
+      for (const auto& r : o->rigs) rigs.push_back(loadRig(r));
+    } catch (const std::exception& e) {
+      std::cerr << "config error: " << e.what() << "\n";
+      return 2;
+    }
+    fs::create_directories(o->work);
+    std::cout << std::fixed << std::setprecision(2);
+    std::cout << "sweepmap bench (one thread; real-time factor = simulated or logged time / "
+                 "wall time)\n";
+    for (const Rig& rig : rigs) {
+      std::cout << "== " << rig.path << " (" << rig.kindName() << ")\n";
+      const std::string scene =
+          o->scene.empty() ? defaultSceneName(rig.kind()) : o->scene;
+      switch (rig.kind()) {
+        case RigKind::kRotatingLidar: {
+          RotatingBenchOptions b;
+          b.rig = rig.path;
+          b.scene = scene;
+          b.work = o->work;
+          b.sweeps = o->sweeps;
+          benchRotating(b, std::cout);
+          break;
+        }
+        case RigKind::kMobileLidar: {
+          RigBBenchOptions b;
+          b.rig = rig.path;
+          b.scene = scene;
+          b.work = o->work;
+          b.process_feed_s = o->odometry_feed_s;
+          std::error_code ec;
+          const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+          b.sweepmap_exe = self.string();
+          if (!ec && fs::exists(self.parent_path() / "sweepmap-odometry")) {
+            b.bin_dir = self.parent_path().string();
+          }
+          benchRigB(b, std::cout);
+          break;
+        }
+      }
+    }
+    return 0;
+  };
+}
+
+}  // namespace sweepmap

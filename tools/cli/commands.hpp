@@ -1,0 +1,24 @@
+// Subcommands of the `sweepmap` tool. Each registers itself on the CLI11 app and returns
+// the function that runs it.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <string>
+
+
+namespace sweepmap {
+
+using Runner = std::function<int()>;
+
+Runner addSimCommand(CLI::App& app);
+Runner addReplayCommand(CLI::App& app);
+Runner addDemoCommand(CLI::App& app, const std::string& argv0);
+Runner addSpyCommand(CLI::App& app, const std::string& argv0);
+Runner addBenchCommand(CLI::App& app);
+Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle, calib mounting
+Runner addEvalCommand(CLI::App& app);
+Runner addImportCommand(CLI::App& app);  // group: import breezyslam
+
+}  // namespace sweepmap

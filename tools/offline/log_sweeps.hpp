@@ -1,0 +1,48 @@
+// Reads an LCM log and hands every sweep the assembler builds from it to a callback, with
+// the ground truth the log carries (simulated logs). Used by replay, calibration and
+// evaluation, so they all see exactly the sweeps the live assembler would publish.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "calib/sweep_assembly.hpp"
+#include "rigs/rotating_lidar.hpp"
+#include "processes/node.hpp"
+
+namespace sweepmap {
+
+struct SweepTruth {
+  std::optional<double> phi_true_rad;    // true phi_offset (shaft angle at the first ray)
+  std::optional<double> alpha_true_rad;  // true plate angle
+};
+
+struct LogReadResult {
+  int64_t events = 0;
+  int64_t first_utime = 0;
+  int64_t last_utime = 0;
+  std::map<std::string, int64_t> skipped_channels;
+  int64_t scans = 0, invalid = 0, dropped = 0;  // assembler counters
+  bool log_error = false;  // truncated or corrupt log (everything before it was processed)
+  std::string error;
+  std::optional<double> alpha_true_rad;
+  std::string scene;
+};
+
+struct LogSweepOptions {
+  // Extra nodes on the bus after the assembler (e.g. the mapper), and a sink for every
+  // message the nodes publish (e.g. derived.lcmlog).
+  std::vector<Node*> extra_nodes;
+  std::function<void(const Message&)> sink;
+  std::function<void(uint64_t offset, uint64_t size)> progress;
+};
+
+// Throws LogError if the log cannot be opened; a bad log later on is reported in the result.
+LogReadResult forEachSweep(const std::string& log_path, const RotatingLidarConfig& rig,
+                           const std::function<void(const AssembledSweep&, const SweepTruth&)>& on_sweep,
+                           const LogSweepOptions& options = {});
+
+}  // namespace sweepmap

@@ -1,0 +1,115 @@
+#include "tools/offline/mobile_log.hpp"
+
+#include "core/event_log.hpp"
+#include "processes/channels.hpp"
+#include "processes/convert.hpp"
+#include "processes/offline_bus.hpp"
+#include "processes/odometry_node.hpp"
+#include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/pose2d_t.hpp"
+
+namespace sweepmap {
+namespace {
+
+void addPose(const Message& m, PoseTrack* track) {
+  pose2d_t p;
+  if (decodeMessage(m, &p) && std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad)) {
+    track->add(p.utime, {p.x_m, p.y_m, p.theta_rad});
+  }
+}
+
+}  // namespace
+
+MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig) {
+  MobileLog log;
+  EventLogReader reader(path);
+  OdometryNode odometry(rig.odometry);
+  OfflineBus bus;
+  bus.attach(&odometry);
+  bus.setSink([&](const Message& m) {
+    if (m.channel == channels::kOdometryPose) addPose(m, &log.ekf);
+    if (m.channel == channels::kWheelOdometry) addPose(m, &log.wheels);
+  });
+  LogEvent ev;
+  int64_t now = 0;
+  try {
+    while (reader.next(&ev)) {
+      now = std::max(now, ev.utime);
+      Message msg{ev.utime, ev.channel, std::move(ev.data)};
+      if (msg.channel == channels::kWheelTicks || msg.channel == channels::kImu) {
+        bus.tick(now);
+        bus.deliver(msg);
+      } else if (msg.channel == channels::kLidarScan) {
+        lidar_scan_t m;
+        if (!decodeMessage(msg, &m)) {
+          ++log.invalid_scans;
+          continue;
+        }
+        Scan2D scan = fromLcm(m);
+        if (!validateScan(scan, rig.assembler.beam_count).empty()) {
+          ++log.invalid_scans;
+          continue;
+        }
+        log.scans.push_back(std::move(scan));
+      } else if (msg.channel == channels::kTruthPose) {
+        addPose(msg, &log.truth);
+      } else if (msg.channel == channels::kTruthMounting && !log.truth_mounting) {
+        truth_mounting_t t;
+        if (decodeMessage(msg, &t)) log.truth_mounting = t;
+      }
+    }
+  } catch (const LogError& e) {
+    log.log_error = true;
+    log.error = e.what();
+  }
+  bus.finish(now);
+  log.gated_wheel_readings = odometry.ekf().counters().gated_wheels;
+  return log;
+}
+
+std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack& track,
+                                           const LidarMounting& mounting,
+                                           std::vector<int>* scan_of_point) {
+  std::vector<Eigen::Vector3f> cloud;
+  if (scan_of_point) scan_of_point->clear();
+  const Eigen::Isometry3d T_BL = mounting.T_BL();
+  for (size_t j = 0; j < log.scans.size(); ++j) {
+    const auto pts = scanToWorld(log.scans[j], track, T_BL);
+    cloud.insert(cloud.end(), pts.begin(), pts.end());
+    if (scan_of_point) scan_of_point->insert(scan_of_point->end(), pts.size(), static_cast<int>(j));
+  }
+  return cloud;
+}
+
+LidarMounting trueMounting(const truth_mounting_t& t) {
+  LidarMounting m;
+  m.nominal_rpy_rad = Eigen::Vector3d(t.nominal_rpy_rad[0], t.nominal_rpy_rad[1], t.nominal_rpy_rad[2]);
+  m.gamma_rad = t.gamma_true_rad;
+  m.beta_rad = t.beta_true_rad;
+  m.alpha_rad = t.alpha_true_rad;
+  m.t_BL_m = Eigen::Vector3d(t.t_BL_m[0], t.t_BL_m[1], t.t_BL_m[2]);
+  return m;
+}
+
+nlohmann::json mountingResultJson(const MountingCalibrationResult& r, const std::optional<LidarMounting>& truth) {
+  nlohmann::json j = {{"method", mountingMethodName(r.method)},
+                      {"ok", r.ok},
+                      {"gamma_rad", r.gamma_rad},
+                      {"beta_rad", r.beta_rad},
+                      {"alpha_rad", r.alpha_rad},
+                      {"time_offset_s", r.time_offset_s},
+                      {"track_drift_m_s", {r.drift_x_m_s, r.drift_y_m_s}},
+                      {"residual_before_m", r.residual_before_m},
+                      {"residual_after_m", r.residual_after_m},
+                      {"correspondences", r.correspondences},
+                      {"iterations", r.iterations}};
+  if (!r.ok) j["reason"] = r.reason;
+  if (truth && r.ok) {
+    j["error_mrad"] = {{"gamma", 1e3 * (r.gamma_rad - truth->gamma_rad)},
+                       {"beta", 1e3 * (r.beta_rad - truth->beta_rad)},
+                       {"alpha", 1e3 * (r.alpha_rad - truth->alpha_rad)}};
+  }
+  return j;
+}
+
+}  // namespace sweepmap

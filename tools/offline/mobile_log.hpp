@@ -1,0 +1,51 @@
+// A rig-B log in memory for calibration and evaluation: its valid lidar scans, the poses
+// of the odometry process replayed over its raw wheel and IMU messages (EKF and wheels
+// alone), and the simulator's truth when present. The world-frame cloud can then be
+// assembled again with any mounting without replaying the log.
+#pragma once
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/mounting_calibration.hpp"
+#include "calib/world_assembly.hpp"
+#include "core/scan.hpp"
+#include "rigs/mobile_lidar.hpp"
+#include "sweepmap/truth_mounting_t.hpp"
+
+namespace sweepmap {
+
+struct MobileLog {
+  std::vector<Scan2D> scans;  // valid scans (validateScan), in log order
+  PoseTrack ekf;              // ODOMETRY_POSE, replayed
+  PoseTrack wheels;           // WHEEL_ODOMETRY, replayed
+  PoseTrack truth;            // TRUTH_POSE from the log (simulation only)
+  std::optional<truth_mounting_t> truth_mounting;  // TRUTH_MOUNTING (simulation only)
+  int64_t invalid_scans = 0;
+  int64_t gated_wheel_readings = 0;
+  bool log_error = false;  // truncated or corrupt: everything before the error is kept
+  std::string error;
+};
+
+// Reads `path` through the odometry node of `rig`. Throws LogError if the file cannot be
+// opened; a corrupt tail sets log_error/error and keeps what came before.
+MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig);
+
+// World points of every scan with `track` and the mounting; `scan_of_point`, when given,
+// receives the index (into log.scans) of each point's scan.
+std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack& track,
+                                           const LidarMounting& mounting,
+                                           std::vector<int>* scan_of_point = nullptr);
+
+// The mounting the simulator used (truth), from TRUTH_MOUNTING.
+LidarMounting trueMounting(const truth_mounting_t& truth);
+
+// A mounting calibration's result for reports: method, ok (reason), gamma/beta/alpha_rad,
+// time_offset_s, track_drift_m_s, residual_before_m/after_m, correspondences, iterations and, given the truth
+// and a result, error_mrad {gamma, beta, alpha} (estimate minus truth).
+nlohmann::json mountingResultJson(const MountingCalibrationResult& r,
+                                  const std::optional<LidarMounting>& truth = std::nullopt);
+
+}  // namespace sweepmap

@@ -1,0 +1,158 @@
+#include "tools/offline/replay.hpp"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <sstream>
+
+#include "calib/rotating_geometry.hpp"
+#include "core/event_log.hpp"
+#include "mapping/cloud_io.hpp"
+#include "mapping/occupancy_map.hpp"
+#include "mapping/plot.hpp"
+#include "processes/mapper_node.hpp"
+#include "tools/offline/log_sweeps.hpp"
+#include "core/angles.hpp"
+
+namespace sweepmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Rounds for JSON so the file is stable and readable (values are far from these limits).
+double round6(double v) { return std::round(v * 1e6) / 1e6; }
+
+class ProgressBar {
+ public:
+  ProgressBar(bool enabled, uint64_t total) : enabled_(enabled && isatty(2)), total_(total) {}
+  void update(uint64_t done) {
+    if (!enabled_ || total_ == 0) return;
+    const int pct = static_cast<int>(100 * done / total_);
+    if (pct == last_) return;
+    last_ = pct;
+    const int width = 40;
+    const int fill = pct * width / 100;
+    std::fprintf(stderr, "\rreplay [%s%s] %3d%%", std::string(fill, '#').c_str(),
+                 std::string(width - fill, ' ').c_str(), pct);
+    std::fflush(stderr);
+  }
+  ~ProgressBar() {
+    if (enabled_ && last_ >= 0) std::fprintf(stderr, "\n");
+  }
+
+ private:
+  bool enabled_;
+  uint64_t total_;
+  int last_ = -1;
+};
+
+}  // namespace
+
+ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& rig) {
+  ReplayResult result;
+  const fs::path out(options.out_dir);
+  if (!fs::exists(options.log_path)) throw std::runtime_error(options.log_path + ": no such log");
+  fs::create_directories(out / "sweeps");
+
+  EventLogWriter derived((out / "derived.lcmlog").string());
+  MapperNode mapper(rig.mapper, (out / "map.bt").string());
+  nlohmann::json sweeps = nlohmann::json::array();
+  std::vector<Eigen::Vector3f> first_Op, first_O;
+  ProgressBar bar(options.progress, fs::file_size(options.log_path));
+
+  LogSweepOptions lo;
+  lo.extra_nodes = {&mapper};
+  lo.sink = [&](const Message& m) { derived.write(m.utime, m.channel, m.data); };
+  lo.progress = [&](uint64_t offset, uint64_t) { bar.update(offset); };
+  const LogReadResult read = forEachSweep(
+      options.log_path, rig,
+      [&](const AssembledSweep& s, const SweepTruth& truth) {
+        std::ostringstream name;
+        // Numbered in log order: sweep ids start again when the motor process restarts.
+        name << "sweep_" << std::setw(6) << std::setfill('0') << result.sweeps;
+        writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
+        writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
+        nlohmann::json j;
+        j["id"] = s.window.sweep_id;
+        j["file"] = name.str();
+        j["window_start_utime"] = s.window.start_utime;
+        j["mode"] = s.window.mode;
+        j["scans"] = s.scans;
+        j["points"] = s.points.size();
+        j["plate_points"] = s.plate.points;
+        j["beta_deg"] = s.plate.found ? nlohmann::json(round6(s.plate.beta_rad * kRadToDeg))
+                                      : nlohmann::json(nullptr);
+        j["phi_offset_deg"] = round6(s.phi_offset_rad * kRadToDeg);
+        j["corrected"] = s.corrected;
+        j["reason"] = s.reason;
+        if (truth.phi_true_rad) {
+          // Frame O' is the lidar frame at the window's first ray: the true phi_offset is
+          // the true shaft angle then (0 = X_L along the rig's front).
+          j["phi_true_deg"] = round6(*truth.phi_true_rad * kRadToDeg);
+          j["phi_error_deg"] = round6(
+              wrapAngle(s.phi_offset_rad - *truth.phi_true_rad) * kRadToDeg);
+        }
+        sweeps.push_back(j);
+        result.points += static_cast<int64_t>(s.points.size());
+        ++result.sweeps;
+        if (result.sweeps == 1) {
+          first_Op = s.points_Op;
+          first_O = s.points;
+        }
+      },
+      lo);
+  derived.close();
+  result.events = read.events;
+  result.log_error = read.log_error;
+  result.error = read.error;
+
+  nlohmann::json summary;
+  summary["log"] = fs::path(options.log_path).filename().string();
+  summary["events"] = read.events;
+  summary["sweeps"] = sweeps;
+  const MapStats st = mapper.map().stats();
+  summary["map"] = {{"resolution_m", st.resolution_m},
+                    {"occupied_voxels", st.occupied_voxels},
+                    {"free_voxels", st.free_voxels},
+                    {"sweeps_inserted", st.sweeps_inserted}};
+  summary["skipped_channels"] = read.skipped_channels;
+  summary["assembler"] = {
+      {"scans", read.scans}, {"invalid", read.invalid}, {"dropped", read.dropped}};
+  if (read.alpha_true_rad) {
+    summary["truth"] = {{"alpha_true_deg", round6(*read.alpha_true_rad * kRadToDeg)},
+                        {"scene", read.scene}};
+  }
+  if (result.log_error) summary["error"] = result.error;
+  {
+    const std::string tmp = (out / "summary.json.tmp").string();
+    std::ofstream f(tmp);
+    f << summary.dump(2) << "\n";
+    f.close();
+    fs::rename(tmp, out / "summary.json");
+  }
+  result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
+
+  if (options.plots && !first_O.empty()) {
+    PlotOptions po;
+    po.title = "Sweep 0, top view (z between -0.3 and 1.0 m): uncorrected C_O' and corrected C_O";
+    po.z_band_m = PlotRange{-0.3, 1.0};
+    try {
+      plotTopView((out / "top_view.png").string(),
+                  {{"uncorrected C_O'", "red", first_Op}, {"corrected C_O", "blue", first_O}},
+                  po);
+    } catch (const std::exception& e) {
+      std::cerr << "replay: top view not drawn: " << e.what() << "\n";
+    }
+  }
+  return result;
+}
+
+}  // namespace sweepmap
