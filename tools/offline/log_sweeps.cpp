@@ -1,15 +1,12 @@
 #include "tools/offline/log_sweeps.hpp"
 
-#include <set>
-
 #include "calib/rotating_geometry.hpp"
-#include "core/event_log.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "processes/assembler_node.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
-#include "processes/offline_bus.hpp"
 #include "sweepmap/truth_rig_t.hpp"
+#include "tools/offline/log_player.hpp"
 
 namespace sweepmap {
 
@@ -17,15 +14,27 @@ LogReadResult forEachSweep(
     const std::string& log_path, const RotatingLidarConfig& rig,
     const std::function<void(const AssembledSweep&, const SweepTruth&)>& on_sweep,
     const LogSweepOptions& options) {
-  EventLogReader reader(log_path);
+  LogPlayer player(log_path);
   LogReadResult result;
-  OfflineBus bus;
   AssemblerNode assembler(rig);
-  bus.attach(&assembler);
-  for (Node* n : options.extra_nodes) bus.attach(n);
-  if (options.sink) bus.setSink(options.sink);
+  player.bus().attach(&assembler);
+  for (Node* n : options.extra_nodes) player.bus().attach(n);
+  if (options.sink) player.bus().setSink(options.sink);
+  player.addInputs({channels::kLidarScan, channels::kScanWindow});
+  if (options.progress) player.setProgress(options.progress);
 
   ShaftTrajectory truth;
+  player.handle(channels::kTruthShaft, [&](const Message& m) {
+    truth_shaft_t t;
+    if (decodeMessage(m, &t)) truth.apply(fromLcm(t));
+  });
+  player.handle(channels::kTruthRig, [&](const Message& m) {
+    truth_rig_t t;
+    if (decodeMessage(m, &t)) {
+      result.alpha_true_rad = t.alpha_true_rad;
+      result.scene = t.scene;
+    }
+  });
   assembler.setSweepObserver([&](const AssembledSweep& s) {
     SweepTruth t;
     if (truth.covers(s.first_ray_utime)) {
@@ -35,44 +44,20 @@ LogReadResult forEachSweep(
     on_sweep(s, t);
   });
 
-  const std::set<std::string> inputs = {channels::kLidarScan, channels::kScanWindow};
-  LogEvent ev;
-  int64_t now = 0;
-  try {
-    while (reader.next(&ev)) {
-      ++result.events;
-      if (result.events == 1) result.first_utime = ev.utime;
-      result.last_utime = ev.utime;
-      now = std::max(now, ev.utime);
-      if (options.progress) options.progress(reader.offset(), reader.size());
-      Message m{ev.utime, ev.channel, std::move(ev.data)};
-      if (m.channel == channels::kTruthShaft) {
-        truth_shaft_t t;
-        if (decodeMessage(m, &t)) truth.apply(fromLcm(t));
-      } else if (m.channel == channels::kTruthRig) {
-        truth_rig_t t;
-        if (decodeMessage(m, &t)) {
-          result.alpha_true_rad = t.alpha_true_rad;
-          result.scene = t.scene;
-        }
-      } else if (inputs.count(m.channel)) {
-        bus.tick(now);
-        bus.deliver(m);
-      } else {
-        ++result.skipped_channels[m.channel];
-      }
-    }
-  } catch (const LogError& e) {
-    result.log_error = true;
-    result.error = e.what();
-  }
+  const LogPlayResult played = player.play();
+  result.events = played.events;
+  result.first_utime = played.first_utime;
+  result.last_utime = played.last_utime;
+  result.skipped_channels = played.skipped_channels;
+  result.log_error = played.log_error;
+  result.error = played.error;
   if (!result.log_error) {
-    bus.finish(now);
+    player.finish();
   } else {
     // Keep the outputs of the other nodes (e.g. save the map); no half window is assembled.
     for (Node* n : options.extra_nodes) {
       Outbox out;
-      n->finish(now, out);
+      n->finish(played.now_utime, out);
       for (auto& m : out.take()) {
         if (options.sink) options.sink(m);
       }

@@ -1,12 +1,11 @@
 #include "tools/offline/mobile_log.hpp"
 
-#include "core/event_log.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
-#include "processes/offline_bus.hpp"
 #include "processes/odometry_node.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "tools/offline/log_player.hpp"
 
 namespace sweepmap {
 namespace {
@@ -22,47 +21,36 @@ void addPose(const Message& m, PoseTrack* track) {
 
 MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig) {
   MobileLog log;
-  EventLogReader reader(path);
+  LogPlayer player(path);
   OdometryNode odometry(rig.odometry);
-  OfflineBus bus;
-  bus.attach(&odometry);
-  bus.setSink([&](const Message& m) {
+  player.bus().attach(&odometry);
+  player.bus().setSink([&](const Message& m) {
     if (m.channel == channels::kOdometryPose) addPose(m, &log.ekf);
     if (m.channel == channels::kWheelOdometry) addPose(m, &log.wheels);
   });
-  LogEvent ev;
-  int64_t now = 0;
-  try {
-    while (reader.next(&ev)) {
-      now = std::max(now, ev.utime);
-      Message msg{ev.utime, ev.channel, std::move(ev.data)};
-      if (msg.channel == channels::kWheelTicks || msg.channel == channels::kImu) {
-        bus.tick(now);
-        bus.deliver(msg);
-      } else if (msg.channel == channels::kLidarScan) {
-        lidar_scan_t m;
-        if (!decodeMessage(msg, &m)) {
-          ++log.invalid_scans;
-          continue;
-        }
-        Scan2D scan = fromLcm(m);
-        if (!validateScan(scan, rig.assembler.beam_count).empty()) {
-          ++log.invalid_scans;
-          continue;
-        }
-        log.scans.push_back(std::move(scan));
-      } else if (msg.channel == channels::kTruthPose) {
-        addPose(msg, &log.truth);
-      } else if (msg.channel == channels::kTruthMounting && !log.truth_mounting) {
-        truth_mounting_t t;
-        if (decodeMessage(msg, &t)) log.truth_mounting = t;
-      }
+  player.addInputs({channels::kWheelTicks, channels::kImu});
+  player.handle(channels::kLidarScan, [&](const Message& msg) {
+    lidar_scan_t m;
+    if (!decodeMessage(msg, &m)) {
+      ++log.invalid_scans;
+      return;
     }
-  } catch (const LogError& e) {
-    log.log_error = true;
-    log.error = e.what();
-  }
-  bus.finish(now);
+    Scan2D scan = fromLcm(m);
+    if (!validateScan(scan, rig.assembler.beam_count).empty()) {
+      ++log.invalid_scans;
+      return;
+    }
+    log.scans.push_back(std::move(scan));
+  });
+  player.handle(channels::kTruthPose, [&](const Message& m) { addPose(m, &log.truth); });
+  player.handle(channels::kTruthMounting, [&](const Message& m) {
+    truth_mounting_t t;
+    if (!log.truth_mounting && decodeMessage(m, &t)) log.truth_mounting = t;
+  });
+  const LogPlayResult played = player.play();
+  log.log_error = played.log_error;
+  log.error = played.error;
+  player.finish();
   log.gated_wheel_readings = odometry.ekf().counters().gated_wheels;
   return log;
 }

@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "calib/rotating_geometry.hpp"
+#include "core/atomic_file.hpp"
 #include "core/event_log.hpp"
 #include "mapping/cloud_io.hpp"
 #include "mapping/occupancy_map.hpp"
@@ -26,9 +27,6 @@ namespace sweepmap {
 namespace {
 
 namespace fs = std::filesystem;
-
-// Rounds for JSON so the file is stable and readable (values are far from these limits).
-double round6(double v) { return std::round(v * 1e6) / 1e6; }
 
 class ProgressBar {
  public:
@@ -54,6 +52,67 @@ class ProgressBar {
   int last_ = -1;
 };
 
+// The JSON line of one sweep in summary.json.
+nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth, const std::string& file) {
+  nlohmann::json j;
+  j["id"] = s.window.sweep_id;
+  j["file"] = file;
+  j["window_start_utime"] = s.window.start_utime;
+  j["mode"] = s.window.mode;
+  j["scans"] = s.scans;
+  j["points"] = s.points.size();
+  j["plate_points"] = s.plate.points;
+  j["beta_deg"] = s.plate.found ? nlohmann::json(roundTo(s.plate.beta_rad * kRadToDeg, 6))
+                                : nlohmann::json(nullptr);
+  j["phi_offset_deg"] = roundTo(s.phi_offset_rad * kRadToDeg, 6);
+  j["corrected"] = s.corrected;
+  j["reason"] = s.reason;
+  if (truth.phi_true_rad) {
+    // Frame O' is the lidar frame at the window's first ray: the true phi_offset is
+    // the true shaft angle then (0 = X_L along the rig's front).
+    j["phi_true_deg"] = roundTo(*truth.phi_true_rad * kRadToDeg, 6);
+    j["phi_error_deg"] =
+        roundTo(wrapAngle(s.phi_offset_rad - *truth.phi_true_rad) * kRadToDeg, 6);
+  }
+  return j;
+}
+
+void writeSummary(const fs::path& out, const std::string& log_path, const LogReadResult& read,
+                  const nlohmann::json& sweeps, const MapperNode& mapper,
+                  const ReplayResult& result) {
+  nlohmann::json summary;
+  summary["log"] = fs::path(log_path).filename().string();
+  summary["events"] = read.events;
+  summary["sweeps"] = sweeps;
+  const MapStats st = mapper.map().stats();
+  summary["map"] = {{"resolution_m", st.resolution_m},
+                    {"occupied_voxels", st.occupied_voxels},
+                    {"free_voxels", st.free_voxels},
+                    {"sweeps_inserted", st.sweeps_inserted}};
+  summary["skipped_channels"] = read.skipped_channels;
+  summary["assembler"] = {
+      {"scans", read.scans}, {"invalid", read.invalid}, {"dropped", read.dropped}};
+  if (read.alpha_true_rad) {
+    summary["truth"] = {{"alpha_true_deg", roundTo(*read.alpha_true_rad * kRadToDeg, 6)},
+                        {"scene", read.scene}};
+  }
+  if (result.log_error) summary["error"] = result.error;
+  writeFileAtomic((out / "summary.json").string(), summary.dump(2) + "\n");
+}
+
+void plotFirstSweep(const fs::path& out, const std::vector<Eigen::Vector3f>& first_Op,
+                    const std::vector<Eigen::Vector3f>& first_O) {
+  PlotOptions po;
+  po.title = "Sweep 0, top view (z between -0.3 and 1.0 m): uncorrected C_O' and corrected C_O";
+  po.z_band_m = PlotRange{-0.3, 1.0};
+  try {
+    plotTopView((out / "top_view.png").string(),
+                {{"uncorrected C_O'", "red", first_Op}, {"corrected C_O", "blue", first_O}}, po);
+  } catch (const std::exception& e) {
+    std::cerr << "replay: top view not drawn: " << e.what() << "\n";
+  }
+}
+
 }  // namespace
 
 ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& rig) {
@@ -72,86 +131,27 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   lo.extra_nodes = {&mapper};
   lo.sink = [&](const Message& m) { derived.write(m.utime, m.channel, m.data); };
   lo.progress = [&](uint64_t offset, uint64_t) { bar.update(offset); };
-  const LogReadResult read = forEachSweep(
-      options.log_path, rig,
-      [&](const AssembledSweep& s, const SweepTruth& truth) {
-        std::ostringstream name;
-        // Numbered in log order: sweep ids start again when the motor process restarts.
-        name << "sweep_" << std::setw(6) << std::setfill('0') << result.sweeps;
-        writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
-        writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
-        nlohmann::json j;
-        j["id"] = s.window.sweep_id;
-        j["file"] = name.str();
-        j["window_start_utime"] = s.window.start_utime;
-        j["mode"] = s.window.mode;
-        j["scans"] = s.scans;
-        j["points"] = s.points.size();
-        j["plate_points"] = s.plate.points;
-        j["beta_deg"] = s.plate.found ? nlohmann::json(round6(s.plate.beta_rad * kRadToDeg))
-                                      : nlohmann::json(nullptr);
-        j["phi_offset_deg"] = round6(s.phi_offset_rad * kRadToDeg);
-        j["corrected"] = s.corrected;
-        j["reason"] = s.reason;
-        if (truth.phi_true_rad) {
-          // Frame O' is the lidar frame at the window's first ray: the true phi_offset is
-          // the true shaft angle then (0 = X_L along the rig's front).
-          j["phi_true_deg"] = round6(*truth.phi_true_rad * kRadToDeg);
-          j["phi_error_deg"] = round6(
-              wrapAngle(s.phi_offset_rad - *truth.phi_true_rad) * kRadToDeg);
-        }
-        sweeps.push_back(j);
-        result.points += static_cast<int64_t>(s.points.size());
-        ++result.sweeps;
-        if (result.sweeps == 1) {
-          first_Op = s.points_Op;
-          first_O = s.points;
-        }
-      },
-      lo);
+  const auto onSweep = [&](const AssembledSweep& s, const SweepTruth& truth) {
+    std::ostringstream name;
+    // Numbered in log order: sweep ids start again when the motor process restarts.
+    name << "sweep_" << std::setw(6) << std::setfill('0') << result.sweeps;
+    writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
+    writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
+    sweeps.push_back(sweepJson(s, truth, name.str()));
+    result.points += static_cast<int64_t>(s.points.size());
+    if (++result.sweeps == 1) {
+      first_Op = s.points_Op;
+      first_O = s.points;
+    }
+  };
+  const LogReadResult read = forEachSweep(options.log_path, rig, onSweep, lo);
   derived.close();
   result.events = read.events;
   result.log_error = read.log_error;
   result.error = read.error;
-
-  nlohmann::json summary;
-  summary["log"] = fs::path(options.log_path).filename().string();
-  summary["events"] = read.events;
-  summary["sweeps"] = sweeps;
-  const MapStats st = mapper.map().stats();
-  summary["map"] = {{"resolution_m", st.resolution_m},
-                    {"occupied_voxels", st.occupied_voxels},
-                    {"free_voxels", st.free_voxels},
-                    {"sweeps_inserted", st.sweeps_inserted}};
-  summary["skipped_channels"] = read.skipped_channels;
-  summary["assembler"] = {
-      {"scans", read.scans}, {"invalid", read.invalid}, {"dropped", read.dropped}};
-  if (read.alpha_true_rad) {
-    summary["truth"] = {{"alpha_true_deg", round6(*read.alpha_true_rad * kRadToDeg)},
-                        {"scene", read.scene}};
-  }
-  if (result.log_error) summary["error"] = result.error;
-  {
-    const std::string tmp = (out / "summary.json.tmp").string();
-    std::ofstream f(tmp);
-    f << summary.dump(2) << "\n";
-    f.close();
-    fs::rename(tmp, out / "summary.json");
-  }
   result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
-
-  if (options.plots && !first_O.empty()) {
-    PlotOptions po;
-    po.title = "Sweep 0, top view (z between -0.3 and 1.0 m): uncorrected C_O' and corrected C_O";
-    po.z_band_m = PlotRange{-0.3, 1.0};
-    try {
-      plotTopView((out / "top_view.png").string(),
-                  {{"uncorrected C_O'", "red", first_Op}, {"corrected C_O", "blue", first_O}},
-                  po);
-    } catch (const std::exception& e) {
-      std::cerr << "replay: top view not drawn: " << e.what() << "\n";
-    }
-  }
+  writeSummary(out, options.log_path, read, sweeps, mapper, result);
+  if (options.plots && !first_O.empty()) plotFirstSweep(out, first_Op, first_O);
   return result;
 }
 
