@@ -249,6 +249,66 @@ TEST(Tool, SpyPutsTheTypesJarOnItsClassPath) {
   EXPECT_EQ(cmd.find("Xincgc"), std::string::npos) << cmd;
 }
 
+// Every rig kind through the same commands, by rig name, from a directory with no config/
+// folder: the rig and scene files are found in the install tree (bin/../share/sweepmap).
+TEST(Tool, SimAndReplayAnyRigByNameFromAnotherDirectory) {
+  const auto dir = scratchDir("rig_names");
+  ASSERT_EQ(sweepmapIn(dir, {"sim", "--rig", "rig_a", "--mode", "1", "--sweeps", "1", "--out",
+                             "a.lcmlog"},
+                       dir / "sim_a.txt"),
+            0)
+      << readFile(dir / "sim_a.txt");
+  EXPECT_NE(readFile(dir / "sim_a.txt").find("rotating_lidar"), std::string::npos);
+  ASSERT_EQ(sweepmapIn(dir, {"replay", "a.lcmlog", "--rig", "rig_a", "--no-plots", "--out", "a"},
+                       dir / "replay_a.txt"),
+            0)
+      << readFile(dir / "replay_a.txt");
+  EXPECT_EQ(readJson(dir / "a" / "summary.json")["sweeps"].size(), 1u);
+
+  ASSERT_EQ(sweepmapIn(dir, {"sim", "--rig", "rig_b", "--set", "sim.duration_s=4", "--out",
+                             "b.lcmlog"},
+                       dir / "sim_b.txt"),
+            0)
+      << readFile(dir / "sim_b.txt");
+  EXPECT_NE(readFile(dir / "sim_b.txt").find("mobile_lidar"), std::string::npos);
+  ASSERT_EQ(sweepmapIn(dir, {"replay", "b.lcmlog", "--rig", "mobile_lidar", "--no-plots", "--out",
+                             "b"},
+                       dir / "replay_b.txt"),
+            0)
+      << readFile(dir / "replay_b.txt");
+  EXPECT_GT(readJson(dir / "b" / "summary.json")["scans"].get<int>(), 0);
+}
+
+// A rig of the wrong kind for a command, a file without a kind, a name that is nowhere:
+// each a config error (exit 2) that names the file and what was expected.
+TEST(Tool, RigKindErrorsAreClear) {
+  const auto dir = scratchDir("rig_kind_errors");
+  EXPECT_EQ(sweepmap({"sim", "--rig", "rig_b", "--mode", "3", "--out", (dir / "x.lcmlog").string()},
+                     dir / "mode.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "mode.txt").find("rotating_lidar"), std::string::npos)
+      << readFile(dir / "mode.txt");
+  EXPECT_EQ(sweepmap({"calib", "mounting", "--log", (dir / "x.lcmlog").string(), "--rig", "rig_a",
+                      "--out", (dir / "m.yaml").string()},
+                     dir / "calib.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "calib.txt").find("needs a mobile_lidar rig"), std::string::npos)
+      << readFile(dir / "calib.txt");
+  std::ofstream(dir / "nokind.yaml") << "lidar:\n  beam_count: 10\n";
+  EXPECT_EQ(sweepmap({"replay", (dir / "x.lcmlog").string(), "--rig",
+                      (dir / "nokind.yaml").string(), "--out", (dir / "o").string()},
+                     dir / "nokind.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "nokind.txt").find("missing key 'rig'"), std::string::npos)
+      << readFile(dir / "nokind.txt");
+  EXPECT_EQ(sweepmap({"replay", (dir / "x.lcmlog").string(), "--rig", "rig_z", "--out",
+                      (dir / "o").string()},
+                     dir / "noname.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "noname.txt").find("rig_z.yaml"), std::string::npos)
+      << readFile(dir / "noname.txt");
+}
+
 }  // namespace
 }  // namespace test
 }  // namespace sweepmap

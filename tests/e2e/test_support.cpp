@@ -26,6 +26,11 @@ fs::path scratchDir(const std::string& name) {
 }
 
 int sweepmap(const std::vector<std::string>& args, const fs::path& out_file) {
+  return sweepmapIn({}, args, out_file);
+}
+
+int sweepmapIn(const fs::path& cwd, const std::vector<std::string>& args,
+               const fs::path& out_file) {
   std::vector<std::string> argv = {binPath("sweepmap")};
   argv.insert(argv.end(), args.begin(), args.end());
   posix_spawn_file_actions_t fa;
@@ -33,6 +38,7 @@ int sweepmap(const std::vector<std::string>& args, const fs::path& out_file) {
   const std::string out = out_file.empty() ? "/dev/null" : out_file.string();
   posix_spawn_file_actions_addopen(&fa, 1, out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_adddup2(&fa, 1, 2);
+  if (!cwd.empty()) posix_spawn_file_actions_addchdir_np(&fa, cwd.c_str());
   std::vector<char*> cargs;
   for (auto& a : argv) cargs.push_back(a.data());
   cargs.push_back(nullptr);

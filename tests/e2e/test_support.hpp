@@ -21,6 +21,9 @@ fs::path scratchDir(const std::string& name);    // fresh, under the build tree
 // Runs build/bin/sweepmap with `args`; returns the exit status. Output goes to
 // `dir/<label>.txt` if `dir` is set.
 int sweepmap(const std::vector<std::string>& args, const fs::path& out_file = {});
+// The same, run from the working directory `cwd`.
+int sweepmapIn(const fs::path& cwd, const std::vector<std::string>& args,
+               const fs::path& out_file = {});
 
 std::string readFile(const fs::path& p);
 nlohmann::json readJson(const fs::path& p);

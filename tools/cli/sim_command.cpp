@@ -44,13 +44,15 @@ Runner addSimCommand(CLI::App& app) {
   return [o, mode, sweeps]() {
     SimSetup setup;
     try {
+      const std::string rig_file = resolveRigFile(o->rig);
+      const RigKind kind = readRigKind(rig_file);
+      if (kind != RigKind::kRotatingLidar && (mode->count() || sweeps->count())) {
+        throw ConfigError("--mode and --sweeps apply to rotating_lidar rigs; " + rig_file +
+                          " is a " + rigKindName(kind) + " rig (its sim.* keys set the drive)");
+      }
       std::vector<std::string> sets = o->sets;
       if (o->mode > 0) sets.push_back("motor.mode=" + std::to_string(o->mode));
-      setup = loadSimSetup(o->rig, o->scene, sets);
-      if (setup.rig.kind() != RigKind::kRotatingLidar && (mode->count() || sweeps->count())) {
-        throw ConfigError("--mode and --sweeps apply to rotating_lidar rigs; " + setup.rig.path +
-                          " is a " + setup.rig.kindName() + " rig (its sim.* keys set the drive)");
-      }
+      setup = loadSimSetup(rig_file, o->scene, sets);
     } catch (const std::exception& e) {
       std::cerr << "config error: " << e.what() << "\n";
       return 2;

@@ -1,0 +1,115 @@
+// Rig kinds: the kind read from the file, its schema applied strictly, names resolved in
+// the install tree, and clear errors for a file of the wrong or no kind.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <fstream>
+
+#include "core/config.hpp"
+#include "rigs/rig_file.hpp"
+
+namespace sweepmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kRigA = std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_a.yaml";
+const std::string kRigB = std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml";
+
+// The message of the ConfigError `f` throws ("" when it throws none).
+template <class F>
+std::string configError(F f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+fs::path scratch(const std::string& name) {
+  const fs::path d = fs::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+TEST(RigFile, KindComesFromTheFile) {
+  EXPECT_EQ(readRigKind(kRigA), RigKind::kRotatingLidar);
+  EXPECT_EQ(readRigKind(kRigB), RigKind::kMobileLidar);
+  const Rig a = loadRig(kRigA);
+  EXPECT_EQ(a.kind(), RigKind::kRotatingLidar);
+  EXPECT_EQ(a.kindName(), "rotating_lidar");
+  EXPECT_EQ(std::get<RotatingLidarConfig>(a.config).lidar.beam_count, 1081);
+  const Rig b = loadRig(kRigB, {"mapper.batch_s=2"});
+  EXPECT_EQ(b.kind(), RigKind::kMobileLidar);
+  EXPECT_DOUBLE_EQ(std::get<MobileLidarConfig>(b.config).mapper.batch_s, 2.0);
+}
+
+TEST(RigFile, EveryShippedRigFileLoads) {
+  for (const char* name : {"rig_a", "rig_b", "rig_b_mines_rover"}) {
+    EXPECT_NO_THROW(loadRig(name)) << name;
+  }
+}
+
+TEST(RigFile, NamesResolveInTheInstallTreeFromAnyDirectory) {
+  const fs::path here = fs::current_path();
+  fs::current_path(scratch("names"));
+  const Rig b = loadRig("rig_b");
+  EXPECT_EQ(b.kind(), RigKind::kMobileLidar);
+  EXPECT_TRUE(fs::equivalent(b.path, kRigB)) << b.path;
+  EXPECT_TRUE(fs::equivalent(loadRig("rig_a.yaml").path, kRigA));
+  // A kind's name stands for its reference rig.
+  EXPECT_TRUE(fs::equivalent(resolveRigFile("rotating_lidar"), kRigA));
+  EXPECT_TRUE(fs::equivalent(resolveConfigFile("scene_lab"),
+                             fs::path(SWEEPMAP_SOURCE_DIR) / "config" / "scene_lab.yaml"));
+  const std::string missing = configError([] { resolveRigFile("rig_z"); });
+  EXPECT_NE(missing.find("rig_z.yaml"), std::string::npos) << missing;
+  fs::current_path(here);
+}
+
+TEST(RigFile, ConfigDirCanBeOverridden) {
+  const fs::path dir = scratch("config_dir");
+  fs::copy_file(kRigA, dir / "my_rig.yaml");
+  setenv("SWEEPMAP_CONFIG_DIR", dir.c_str(), 1);
+  EXPECT_EQ(loadRig("my_rig").kind(), RigKind::kRotatingLidar);
+  EXPECT_NE(configError([] { resolveRigFile("rig_b"); }).find("rig_b"), std::string::npos);
+  unsetenv("SWEEPMAP_CONFIG_DIR");
+  EXPECT_NO_THROW(resolveRigFile("rig_b"));
+}
+
+TEST(RigFile, MissingOrUnknownKindIsAClearError) {
+  const fs::path dir = scratch("kinds");
+  std::ofstream(dir / "none.yaml") << "lidar:\n  beam_count: 10\n";
+  const std::string none = configError([&] { loadRig((dir / "none.yaml").string()); });
+  EXPECT_NE(none.find("none.yaml"), std::string::npos) << none;
+  EXPECT_NE(none.find("missing key 'rig'"), std::string::npos) << none;
+  EXPECT_NE(none.find("rotating_lidar"), std::string::npos) << none;
+
+  std::ofstream(dir / "bad.yaml") << "rig: spinning_lidar\n";
+  const std::string bad = configError([&] { loadRig((dir / "bad.yaml").string()); });
+  EXPECT_NE(bad.find("'spinning_lidar'"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("mobile_lidar"), std::string::npos) << bad;
+}
+
+TEST(RigFile, AFileOfOneKindIsNotLoadedAsAnother) {
+  const std::string as_b = configError([] { loadMobileLidarConfig(kRigA); });
+  EXPECT_NE(as_b.find("rig_a.yaml"), std::string::npos) << as_b;
+  EXPECT_FALSE(as_b.empty());
+  const std::string as_a = configError([] { loadRotatingLidarConfig(kRigB); });
+  EXPECT_FALSE(as_a.empty());
+  // Overriding the kind is caught as well.
+  const std::string set = configError([] { loadRotatingLidarConfig(kRigA, {"rig=mobile_lidar"}); });
+  EXPECT_NE(set.find("expected 'rotating_lidar'"), std::string::npos) << set;
+}
+
+TEST(RigFile, RequireKindNamesBothKinds) {
+  const Rig a = loadRig(kRigA);
+  EXPECT_NO_THROW(requireKind<RotatingLidarConfig>(a, "sweepmap-motor"));
+  const std::string e = configError([&] { requireKind<MobileLidarConfig>(a, "sweepmap-odometry"); });
+  EXPECT_NE(e.find("is a rotating_lidar rig"), std::string::npos) << e;
+  EXPECT_NE(e.find("sweepmap-odometry needs a mobile_lidar rig"), std::string::npos) << e;
+}
+
+}  // namespace
+}  // namespace sweepmap
