@@ -25,6 +25,65 @@ void prepareSimMobileConfig(const std::string& rig_path, MobileLidarConfig* rig)
   rig->sim.validate(rig_path);
 }
 
+namespace {
+
+// One stream's event in the merged log: its time, its stream (the tie-break at equal
+// times) and its index in that stream.
+struct Stamped {
+  int64_t utime;
+  int order;  // -1 TRUTH_MOUNTING, 0 TRUTH_POSE, 1 WHEEL_TICKS, 2 IMU, 3 LIDAR_SCAN
+  size_t index;
+};
+
+truth_mounting_t truthMounting(const SimMobileOptions& options, const SimMobile& car,
+                               const LidarMounting& nominal, int64_t utime) {
+  const MobileLidarConfig& rig = options.rig;
+  truth_mounting_t m{};
+  m.utime = utime;
+  m.gamma_true_rad = rig.sim.gamma_true_rad;
+  m.beta_true_rad = rig.sim.beta_true_rad;
+  m.alpha_true_rad = rig.sim.alpha_true_rad;
+  const Eigen::Isometry3d W = car.T_room_world();
+  for (int k = 0; k < 3; ++k) {
+    m.nominal_rpy_rad[k] = nominal.nominal_rpy_rad[k];
+    m.t_BL_m[k] = nominal.t_BL_m[k];
+  }
+  m.world_in_room[0] = W.translation().x();
+  m.world_in_room[1] = W.translation().y();
+  m.world_in_room[2] = std::atan2(W.linear()(1, 0), W.linear()(0, 0));
+  m.room_size_m[0] = options.scene.room_length_m;
+  m.room_size_m[1] = options.scene.room_width_m;
+  m.room_size_m[2] = options.scene.room_height_m;
+  m.scene = options.scene.name;
+  return m;
+}
+
+pose2d_t truthPose(const TruthPose& t) {
+  pose2d_t m{};
+  m.utime = t.utime;
+  m.x_m = t.pose.x_m;
+  m.y_m = t.pose.y_m;
+  m.theta_rad = t.pose.theta_rad;
+  m.v_m_s = t.v_m_s;
+  m.w_rad_s = t.w_rad_s;
+  m.gyro_bias_rad_s = t.gyro_bias_rad_s;
+  m.trusted = true;
+  return m;
+}
+
+imu_t imuMessage(const ImuSample& s) {
+  imu_t m{};
+  m.utime = s.utime;
+  for (int k = 0; k < 3; ++k) {
+    m.gyro_rad_s[k] = s.gyro[k];
+    m.accel_m_s2[k] = s.accel[k];
+    m.rpy_rad[k] = s.rpy[k];
+  }
+  return m;
+}
+
+}  // namespace
+
 SimMobileResult simulateMobile(const SimMobileOptions& options,
                                const std::function<void(const Message&)>& sink) {
   const MobileLidarConfig& rig = options.rig;
@@ -37,12 +96,7 @@ SimMobileResult simulateMobile(const SimMobileOptions& options,
   const LidarMounting nominal = rig.mounting.toMounting();
   SimMobile car(rig.sim, wheels, nominal.nominal_rpy_rad, nominal.t_BL_m, scene, options.seed, t0);
 
-  // Each stream is generated whole, then the four are merged by event time.
-  struct Stamped {
-    int64_t utime;
-    int order;  // tie-break between streams
-    size_t index;
-  };
+  // Each stream is generated whole, then the streams are merged by event time.
   std::vector<Stamped> events;
   const auto truth = car.truth();
   // TRUTH_MOUNTING at start and at 1 Hz (order -1: before anything else at the same time).
@@ -64,66 +118,21 @@ SimMobileResult simulateMobile(const SimMobileOptions& options,
   SimMobileResult result;
   for (const Stamped& e : events) {
     Outbox out;
-    switch (e.order) {
-      case -1: {
-        truth_mounting_t m{};
-        m.utime = e.utime;
-        m.gamma_true_rad = rig.sim.gamma_true_rad;
-        m.beta_true_rad = rig.sim.beta_true_rad;
-        m.alpha_true_rad = rig.sim.alpha_true_rad;
-        const Eigen::Isometry3d W = car.T_room_world();
-        for (int k = 0; k < 3; ++k) {
-          m.nominal_rpy_rad[k] = nominal.nominal_rpy_rad[k];
-          m.t_BL_m[k] = nominal.t_BL_m[k];
-        }
-        m.world_in_room[0] = W.translation().x();
-        m.world_in_room[1] = W.translation().y();
-        m.world_in_room[2] = std::atan2(W.linear()(1, 0), W.linear()(0, 0));
-        m.room_size_m[0] = options.scene.room_length_m;
-        m.room_size_m[1] = options.scene.room_width_m;
-        m.room_size_m[2] = options.scene.room_height_m;
-        m.scene = options.scene.name;
-        out.publish(channels::kTruthMounting, e.utime, m);
-        break;
-      }
-      case 0: {
-        const TruthPose& t = truth[e.index];
-        pose2d_t m{};
-        m.utime = t.utime;
-        m.x_m = t.pose.x_m;
-        m.y_m = t.pose.y_m;
-        m.theta_rad = t.pose.theta_rad;
-        m.v_m_s = t.v_m_s;
-        m.w_rad_s = t.w_rad_s;
-        m.gyro_bias_rad_s = t.gyro_bias_rad_s;
-        m.trusted = true;
-        out.publish(channels::kTruthPose, e.utime, m);
-        break;
-      }
-      case 1: {
-        wheel_ticks_t m{};
-        m.utime = ticks[e.index].utime;
-        m.left_ticks = ticks[e.index].left;
-        m.right_ticks = ticks[e.index].right;
-        out.publish(channels::kWheelTicks, e.utime, m);
-        break;
-      }
-      case 2: {
-        const ImuSample& s = imu[e.index];
-        imu_t m{};
-        m.utime = s.utime;
-        for (int k = 0; k < 3; ++k) {
-          m.gyro_rad_s[k] = s.gyro[k];
-          m.accel_m_s2[k] = s.accel[k];
-          m.rpy_rad[k] = s.rpy[k];
-        }
-        out.publish(channels::kImu, e.utime, m);
-        break;
-      }
-      default:
-        out.publish(channels::kLidarScan, e.utime, toLcm(scans[e.index]));
-        ++result.scans;
-        break;
+    if (e.order == -1) {
+      out.publish(channels::kTruthMounting, e.utime, truthMounting(options, car, nominal, e.utime));
+    } else if (e.order == 0) {
+      out.publish(channels::kTruthPose, e.utime, truthPose(truth[e.index]));
+    } else if (e.order == 1) {
+      wheel_ticks_t m{};
+      m.utime = ticks[e.index].utime;
+      m.left_ticks = ticks[e.index].left;
+      m.right_ticks = ticks[e.index].right;
+      out.publish(channels::kWheelTicks, e.utime, m);
+    } else if (e.order == 2) {
+      out.publish(channels::kImu, e.utime, imuMessage(imu[e.index]));
+    } else {
+      out.publish(channels::kLidarScan, e.utime, toLcm(scans[e.index]));
+      ++result.scans;
     }
     for (auto& m : out.take()) {
       ++result.messages;
