@@ -186,6 +186,24 @@ TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
       << "the live mapper's map differs from the replay's";
 }
 
+// `sweepmap demo` for a mobile_lidar rig: the simulated devices played live into the three
+// processes; the live mapper's map equals the replay of the recorded log, byte for byte.
+TEST_F(LiveTest, RigBDemoLiveMapEqualsReplayedMap) {
+  const auto dir = scratchDir("demo_rig_b");
+  ASSERT_EQ(sweepmap({"demo", "--rig", "rig_b", "--set", "sim.duration_s=8", "--seed", "3",
+                      "--out", dir.string()},
+                     dir / "demo.txt"),
+            0)
+      << readFile(dir / "demo.txt");
+  for (const char* f : {"devices.lcmlog", "demo.lcmlog", "cloud.pcd", "map.bt", "live_map.bt",
+                        "summary.json"}) {
+    EXPECT_TRUE(fs::exists(dir / f)) << f;
+  }
+  EXPECT_GT(readJson(dir / "summary.json")["scans"].get<int>(), 40);
+  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(dir / "map.bt"))
+      << "the live mapper's map differs from the replay of the recorded log";
+}
+
 }  // namespace
 }  // namespace test
 }  // namespace sweepmap

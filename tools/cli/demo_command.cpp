@@ -10,16 +10,23 @@ namespace sweepmap {
 Runner addDemoCommand(CLI::App& app, const std::string& argv0) {
   auto* cmd = app.add_subcommand(
       "demo",
-      "The main job: start sweepmap-motor, -lidar (simulated devices), -assembler, -mapper and "
-      "lcm-logger as separate processes in a private network namespace, make a few 3D sweeps "
-      "of the default room, stop everything cleanly, replay the recorded log, and leave the "
-      "log, per-sweep clouds, maps and a PNG top view in the output directory");
+      "The main job: run the rig's processes and lcm-logger as separate processes in a private "
+      "network namespace with simulated devices, stop everything cleanly, replay the recorded "
+      "log, and leave the log, clouds, maps and a PNG top view in the output directory. "
+      "rotating_lidar: sweepmap-motor and -lidar (simulated stepper and lidar), -assembler, "
+      "-mapper make --sweeps 3D sweeps of the default room. mobile_lidar: the simulated car's "
+      "raw channels (DIR/devices.lcmlog) are played in real time by lcm-logplayer into "
+      "sweepmap-odometry, -assembler and -mapper (the drive is the rig's sim.* keys: "
+      "a 60 s circle for rig_b)");
   auto o = std::make_shared<DemoOptions>();
   cmd->add_option("--rig", o->rig, "rig file or name")->capture_default_str();
   cmd->add_option("--scene", o->scene, "scene file or name (default: the rig kind's scene)");
   cmd->add_option("--out", o->out, "output directory")->capture_default_str();
-  cmd->add_option("--mode", o->mode, "scan mode 1..7")->capture_default_str()->check(CLI::Range(1, 7));
-  cmd->add_option("--sweeps", o->sweeps, "number of sweeps")->capture_default_str()
+  cmd->add_option("--set", o->overrides,
+                  "override a rig key for every process: key=value; mobile_lidar also takes "
+                  "scene.<key> (repeatable)");
+  cmd->add_option("--mode", o->mode, "rotating_lidar: scan mode 1..7")->capture_default_str()->check(CLI::Range(1, 7));
+  cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: number of sweeps")->capture_default_str()
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "simulation seed")->capture_default_str();
   return [o]() {

@@ -99,14 +99,14 @@ ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
             const ReplayResult r = replayLog(o, config);
             std::ostringstream line;
             line << r.events << " events, " << r.sweeps << " sweeps, " << r.points << " points";
-            return ReplayRunResult{line.str(), r.log_error, r.error};
+            return ReplayRunResult{line.str(), r.sweeps, 0, r.points, r.log_error, r.error};
           },
           [&](const MobileLidarConfig& config) {
             const MobileReplayResult r =
                 replayMobileLog(options.log_path, config, options.out_dir, options.plots);
             std::ostringstream line;
             line << r.events << " events, " << r.scans << " scans, " << r.points << " points";
-            return ReplayRunResult{line.str(), r.log_error, r.error};
+            return ReplayRunResult{line.str(), 0, r.scans, r.points, r.log_error, r.error};
           }},
       rig.config);
 }

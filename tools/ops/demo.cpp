@@ -6,30 +6,57 @@
 #include <iostream>
 #include <thread>
 
+#include "core/event_log.hpp"
 #include "processes/channels.hpp"
 #include "rigs/rig_file.hpp"
-#include "tools/offline/replay.hpp"
+#include "tools/offline/runs.hpp"
 #include "tools/ops/netns.hpp"
 #include "tools/ops/process_group.hpp"
 
 namespace sweepmap {
+namespace {
 
-// Long because it is one script: start the processes in dependency order, wait for the
-// motor's sweeps, stop them in reverse order with the pauses the last messages need, replay
-// the log, and tell the user where everything is. Each step is a few lines.
-int runDemo(const DemoOptions& o) {
-  namespace fs = std::filesystem;
-  const fs::path bin = fs::read_symlink("/proc/self/exe").parent_path();
-  const fs::path out = fs::absolute(o.out);
-  fs::create_directories(out / "logs");
-  const std::string mode_set = "motor.mode=" + std::to_string(o.mode);
-  const Rig loaded = loadRig(o.rig, {mode_set});
-  const RotatingLidarConfig rig_config = requireKind<RotatingLidarConfig>(loaded, "the live demo");
-  const std::string rig = fs::absolute(loaded.path).string();
-  const std::string scene =
-      fs::absolute(resolveConfigFile(o.scene.empty() ? defaultSceneName(loaded.kind()) : o.scene))
-          .string();
+namespace fs = std::filesystem;
 
+void pause(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
+
+// What both kinds' demos share: the output folder, the LCM URL in a private network, the
+// process group with one log file per process, and the processes' common arguments.
+struct DemoRun {
+  fs::path bin;
+  fs::path out;
+  std::string url = kDefaultLcmUrl;
+  std::string log;  // the recorded LCM log
+  std::string rig;  // absolute rig file
+  std::vector<std::string> rig_sets;
+  ProcessGroup procs;
+
+  std::string logFile(const std::string& name) const {
+    return (out / "logs" / (name + ".txt")).string();
+  }
+  // bin/sweepmap-<name> --rig RIG [--set k=v]... --lcm-url URL <extra>
+  pid_t startProcess(const std::string& name, const std::vector<std::string>& extra) {
+    std::vector<std::string> argv = {(bin / ("sweepmap-" + name)).string(), "--rig", rig};
+    for (const auto& s : rig_sets) argv.insert(argv.end(), {"--set", s});
+    argv.insert(argv.end(), {"--lcm-url", url});
+    argv.insert(argv.end(), extra.begin(), extra.end());
+    return procs.start(name, argv, logFile(name));
+  }
+  pid_t startLogger() {
+    fs::remove(log);
+    return procs.start("lcm-logger", {"lcm-logger", "--lcm-url=" + url, "-f", log},
+                       logFile("logger"));
+  }
+};
+
+DemoRun prepare(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& rig_sets) {
+  DemoRun run;
+  run.bin = fs::read_symlink("/proc/self/exe").parent_path();
+  run.out = fs::absolute(o.out);
+  fs::create_directories(run.out / "logs");
+  run.log = (run.out / "demo.lcmlog").string();
+  run.rig = fs::absolute(rig.path).string();
+  run.rig_sets = rig_sets;
   std::string why;
   if (enterPrivateNetwork(&why)) {
     std::cout << "demo: running in a private network namespace (lo only)\n";
@@ -37,69 +64,143 @@ int runDemo(const DemoOptions& o) {
     std::cout << "demo: network namespaces unavailable (" << why
               << "); using LCM's default URL with ttl=0 (this host only)\n";
   }
-  const std::string url = kDefaultLcmUrl;
-  const std::string log = (out / "demo.lcmlog").string();
-  fs::remove(log);
+  return run;
+}
 
-  ProcessGroup procs;
-  const auto logFile = [&](const std::string& n) { return (out / "logs" / (n + ".txt")).string(); };
-  const pid_t logger =
-      procs.start("lcm-logger", {"lcm-logger", "--lcm-url=" + url, "-f", log}, logFile("logger"));
-  const pid_t mapper = procs.start(
-      "mapper",
-      {(bin / "sweepmap-mapper").string(), "--rig", rig, "--set", mode_set, "--lcm-url", url,
-       "--save", (out / "live_map.bt").string()},
-      logFile("mapper"));
-  const pid_t assembler = procs.start(
-      "assembler",
-      {(bin / "sweepmap-assembler").string(), "--rig", rig, "--set", mode_set, "--lcm-url", url},
-      logFile("assembler"));
-  const pid_t lidar = procs.start(
-      "lidar",
-      {(bin / "sweepmap-lidar").string(), "--rig", rig, "--set", mode_set, "--lcm-url", url,
-       "--sim", "--scene", scene, "--seed", std::to_string(o.seed)},
-      logFile("lidar"));
-  std::this_thread::sleep_for(std::chrono::milliseconds(700));  // subscribers ready
-  const pid_t motor = procs.start(
-      "motor",
-      {(bin / "sweepmap-motor").string(), "--rig", rig, "--set", mode_set, "--lcm-url", url,
-       "--sim", "--sweeps", std::to_string(o.sweeps), "--seed", std::to_string(o.seed)},
-      logFile("motor"));
-
-  const double per_sweep_s = scanMode(o.mode).period_s + 15.0;
-  std::cout << "demo: " << o.sweeps << " sweeps in mode " << o.mode << ", about "
-            << static_cast<int>(o.sweeps * (scanMode(o.mode).period_s + 5.0))
-            << " s; processes log to " << (out / "logs").string() << "\n";
-  const int motor_rc = procs.wait(motor, o.sweeps * per_sweep_s + 30.0);
-  if (motor_rc != 0) std::cerr << "demo: motor ended with status " << motor_rc << "\n";
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));  // last scans delivered
-  int failures = motor_rc != 0;
-  failures += procs.stop(lidar, 5.0) != 0;
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  failures += procs.stop(assembler, 10.0) != 0;
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
-  failures += procs.stop(mapper, 120.0) != 0;
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  failures += procs.stop(logger, 10.0) != 0;
-
-  std::cout << "demo: replaying " << log << "\n";
-  ReplayOptions ro;
-  ro.log_path = log;
-  ro.out_dir = out.string();
+// Replays the recorded log offline into the output folder.
+ReplayRunResult replayRecorded(const DemoRun& run, const Rig& rig) {
+  std::cout << "demo: replaying " << run.log << "\n";
+  ReplayRunOptions ro;
+  ro.log_path = run.log;
+  ro.out_dir = run.out.string();
   ro.progress = true;
-  const ReplayResult r = replayLog(ro, rig_config);
-  if (r.log_error) {
-    std::cerr << "demo: " << r.error << "\n";
-    ++failures;
+  const ReplayRunResult r = replayRig(rig, ro);
+  if (r.log_error) std::cerr << "demo: " << r.error << "\n";
+  return r;
+}
+
+int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& sets,
+                 const std::string& scene) {
+  DemoRun run = prepare(o, rig, sets);
+  const pid_t logger = run.startLogger();
+  const pid_t mapper = run.startProcess("mapper", {"--save", (run.out / "live_map.bt").string()});
+  const pid_t assembler = run.startProcess("assembler", {});
+  const pid_t lidar =
+      run.startProcess("lidar", {"--sim", "--scene", scene, "--seed", std::to_string(o.seed)});
+  pause(700);  // subscribers ready
+  const pid_t motor = run.startProcess(
+      "motor", {"--sim", "--sweeps", std::to_string(o.sweeps), "--seed", std::to_string(o.seed)});
+
+  const double period_s = scanMode(o.mode).period_s;
+  std::cout << "demo: " << o.sweeps << " sweeps in mode " << o.mode << ", about "
+            << static_cast<int>(o.sweeps * (period_s + 5.0)) << " s; processes log to "
+            << (run.out / "logs").string() << "\n";
+  const int motor_rc = run.procs.wait(motor, o.sweeps * (period_s + 15.0) + 30.0);
+  if (motor_rc != 0) std::cerr << "demo: motor ended with status " << motor_rc << "\n";
+  pause(500);  // last scans delivered
+  int failures = motor_rc != 0;
+  failures += run.procs.stop(lidar, 5.0) != 0;
+  pause(300);
+  failures += run.procs.stop(assembler, 10.0) != 0;
+  pause(500);
+  failures += run.procs.stop(mapper, 120.0) != 0;
+  pause(300);
+  failures += run.procs.stop(logger, 10.0) != 0;
+
+  const ReplayRunResult r = replayRecorded(run, rig);
+  failures += r.log_error || r.sweeps != o.sweeps;
+  std::cout << "\ndemo: done (" << r.summary << ")\n"
+            << "  recorded log     " << run.log << "\n"
+            << "  per-sweep clouds " << (run.out / "sweeps").string() << "/sweep_*.pcd, *.ply\n"
+            << "  map (replayed)   " << (run.out / "map.bt").string() << "\n"
+            << "  map (live)       " << (run.out / "live_map.bt").string() << "\n"
+            << "  top view         " << (run.out / "top_view.png").string() << "\n"
+            << "  summary          " << (run.out / "summary.json").string() << "\n";
+  return failures;
+}
+
+int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& sets) {
+  // The devices: the simulated car's raw channels, simulated first, then played in real time.
+  const std::string devices = (fs::absolute(o.out) / "devices.lcmlog").string();
+  fs::create_directories(fs::absolute(o.out));
+  const SimSetup setup = loadSimSetup(rig.path, o.scene, sets);
+  SimRunOptions so;
+  so.seed = o.seed;
+  SimRunResult sim;
+  {
+    EventLogWriter w(devices);
+    sim = simulateRig(setup, so, [&](const Message& m) { w.write(m.utime, m.channel, m.data); });
+    w.close();
   }
-  std::cout << "\ndemo: done (" << r.sweeps << " sweeps, " << r.points << " points)\n"
-            << "  recorded log     " << log << "\n"
-            << "  per-sweep clouds " << (out / "sweeps").string() << "/sweep_*.pcd, *.ply\n"
-            << "  map (replayed)   " << (out / "map.bt").string() << "\n"
-            << "  map (live)       " << (out / "live_map.bt").string() << "\n"
-            << "  top view         " << (out / "top_view.png").string() << "\n"
-            << "  summary          " << (out / "summary.json").string() << "\n";
-  return failures == 0 && r.sweeps == o.sweeps ? 0 : 1;
+  std::cout << "demo: simulated devices: " << sim.summary << " -> " << devices << "\n";
+
+  std::vector<std::string> rig_sets;  // the processes take the rig's keys, not the scene's
+  for (const auto& s : sets) {
+    if (s.rfind("scene.", 0) != 0) rig_sets.push_back(s);
+  }
+  DemoRun run = prepare(o, rig, rig_sets);
+  const pid_t logger = run.startLogger();
+  const pid_t odometry = run.startProcess("odometry", {});
+  const pid_t assembler = run.startProcess("assembler", {});
+  const pid_t mapper = run.startProcess("mapper", {"--save", (run.out / "live_map.bt").string()});
+  pause(700);  // subscribers ready
+  std::cout << "demo: playing the devices for "
+            << std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s
+            << " s; processes log to " << (run.out / "logs").string() << "\n";
+  const pid_t player = run.procs.start(
+      "lcm-logplayer",
+      {"lcm-logplayer", "--lcm-url=" + run.url,
+       "--regexp=WHEEL_TICKS|IMU|LIDAR_SCAN|TRUTH_POSE|TRUTH_MOUNTING", devices},
+      run.logFile("logplayer"));
+  const double duration_s = std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s;
+  int failures = run.procs.wait(player, duration_s * 2.0 + 60.0) != 0;
+  pause(800);  // last poses and scans through
+  failures += run.procs.stop(odometry, 10.0) != 0;
+  pause(300);
+  failures += run.procs.stop(assembler, 10.0) != 0;
+  pause(300);
+  failures += run.procs.stop(mapper, 120.0) != 0;
+  pause(300);
+  failures += run.procs.stop(logger, 10.0) != 0;
+
+  const ReplayRunResult r = replayRecorded(run, rig);
+  failures += r.log_error || r.scans == 0;
+  std::cout << "\ndemo: done (" << r.summary << ")\n"
+            << "  devices' log     " << devices << "\n"
+            << "  recorded log     " << run.log << "\n"
+            << "  world cloud      " << (run.out / "cloud.pcd").string() << "\n"
+            << "  map (replayed)   " << (run.out / "map.bt").string() << "\n"
+            << "  map (live)       " << (run.out / "live_map.bt").string() << "\n"
+            << "  top view         " << (run.out / "top_view.png").string() << "\n"
+            << "  summary          " << (run.out / "summary.json").string() << "\n";
+  return failures;
+}
+
+}  // namespace
+
+int runDemo(const DemoOptions& o) {
+  const RigKind kind = readRigKind(resolveRigFile(o.rig));
+  std::vector<std::string> sets = o.overrides;
+  if (kind == RigKind::kRotatingLidar) sets.push_back("motor.mode=" + std::to_string(o.mode));
+  std::vector<std::string> rig_sets;
+  for (const auto& s : sets) {
+    if (s.rfind("scene.", 0) != 0) rig_sets.push_back(s);
+  }
+  const Rig rig = loadRig(o.rig, rig_sets);
+  switch (rig.kind()) {
+    case RigKind::kRotatingLidar: {
+      if (rig_sets.size() != sets.size()) {
+        throw ConfigError("scene.<key> overrides are for mobile_lidar demos; give a rotating_lidar "
+                          "demo another --scene file");
+      }
+      const std::string scene = fs::absolute(resolveConfigFile(
+          o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene)).string();
+      return rotatingDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
+    }
+    case RigKind::kMobileLidar:
+      return mobileDemo(o, rig, sets) == 0 ? 0 : 1;
+  }
+  return 1;
 }
 
 }  // namespace sweepmap

@@ -1,11 +1,18 @@
-// `sweepmap demo`: the main job. Starts the rig's processes and lcm-logger as separate
-// processes in a private network namespace with simulated devices, records a run, stops
-// everything cleanly, replays the recorded log offline and leaves the log, clouds, maps
-// and pictures in one directory.
+// `sweepmap demo`: the main job. Starts the rig kind's processes and lcm-logger as separate
+// processes in a private network namespace, with simulated devices, records a run, stops
+// everything cleanly, replays the recorded log offline and leaves the log, clouds, maps and
+// pictures in one directory.
+//   rotating_lidar: sweepmap-motor and -lidar drive the simulated stepper and lidar;
+//     -assembler and -mapper build the sweeps and the map.
+//   mobile_lidar: the simulated car's raw channels (WHEEL_TICKS, IMU, LIDAR_SCAN and its
+//     truth) are simulated into DIR/devices.lcmlog and played in real time by lcm-logplayer,
+//     standing in for the wheel board, IMU and lidar drivers; sweepmap-odometry, -assembler
+//     and -mapper process them live.
 #pragma once
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace sweepmap {
 
@@ -13,12 +20,13 @@ struct DemoOptions {
   std::string rig = "rig_a";  // path or name; its kind decides the processes
   std::string scene;          // path or name; "" = the kind's default scene
   std::string out = "out";
+  std::vector<std::string> overrides;  // rig keys for every process (and scene.<key>)
   int mode = 7;               // rotating_lidar: scan mode
   int sweeps = 3;             // rotating_lidar: 3D sweeps
   uint64_t seed = 1;
 };
 
-// Returns the exit status: 0 when every process ended cleanly and the replay has all sweeps.
+// Returns the exit status: 0 when every process ended cleanly and the replay has the run.
 // Throws ConfigError for a bad rig or scene.
 int runDemo(const DemoOptions& options);
 
