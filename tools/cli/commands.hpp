@@ -14,7 +14,7 @@ using Runner = std::function<int()>;
 
 Runner addSimCommand(CLI::App& app);
 Runner addReplayCommand(CLI::App& app);
-Runner addDemoCommand(CLI::App& app, const std::string& argv0);
+Runner addDemoCommand(CLI::App& app);
 Runner addSpyCommand(CLI::App& app, const std::string& argv0);
 Runner addBenchCommand(CLI::App& app);
 Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle, calib mounting

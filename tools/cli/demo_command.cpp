@@ -7,7 +7,7 @@
 
 namespace sweepmap {
 
-Runner addDemoCommand(CLI::App& app, const std::string& argv0) {
+Runner addDemoCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "demo",
       "The main job: run the rig's processes and lcm-logger as separate processes in a private "

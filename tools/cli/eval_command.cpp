@@ -7,6 +7,33 @@
 
 namespace sweepmap {
 
+namespace {
+
+// What each rig kind's evaluation measures, for --help.
+const char* const kEvalFooter =
+    "rotating_lidar (Yuan 2021 section 5, Appendix B): phi_error of every sweep (uncorrected "
+    "C_O', corrected with beta by ray_plane and by centroid), E_map = d tan(phi_error) and the "
+    "distance d50 where it reaches 50 mm, alpha calibrated by LM over the wall normals of the "
+    "mode-7 sweeps (into DIR/plate_calibration.yaml), wall-plane deviations. The experiment: "
+    "--sweeps-per-mode sweeps of each of the 7 modes, --calib-sweeps mode-7 sweeps for alpha, "
+    "mode 1 with the naive action sequence (unless --no-naive).\n\n"
+    "mobile_lidar (Miao 2022 section 5): trajectory RMSE of wheel odometry alone and of the EKF "
+    "against the truth, top and side views, RANSAC planes of walls, floor and ceiling (ceiling "
+    "normal, deviation histograms), the density D (Eq. 18-19), room dimensions L1-L3 from "
+    "plane-to-plane distances against the scene's truth, and the double wall (ghost) where the "
+    "drive returns to its start. The experiment simulates the 120 s calibration circle and one "
+    "lap of the lab loop, calibrates the mounting from the circle with both methods (ours into "
+    "DIR/mounting_calibration.yaml), draws the circle's double walls and the target before and "
+    "after calibration (Fig. 6-7), evaluates the loop with our calibration beside the mounting "
+    "before it, and reports mounting_error_mrad against the truth (~3 min). --logs takes one "
+    "log; --compare-uncalibrated also assembles it with no mounting error.\n\n"
+    "Exit status: 0 evaluated; 1 a log is corrupt (after evaluating what came before) or holds "
+    "nothing to evaluate (the report says why); 2 bad rig, scene or option.\n"
+    "Examples: sweepmap eval --experiment paper --rig rig_a --out eval_a\n"
+    "          sweepmap eval --experiment paper --rig rig_b --out eval_b";
+
+}  // namespace
+
 Runner addEvalCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "eval",
@@ -14,27 +41,7 @@ Runner addEvalCommand(CLI::App& app) {
       "carry it, into DIR/report.json, DIR/report.md and PNG figures. Either --logs LOG... "
       "(existing logs) or --experiment paper (simulates the paper's experiment into DIR/logs/, "
       "calibrates, then evaluates). Same inputs and seed give identical files");
-  cmd->footer(
-      "rotating_lidar (Yuan 2021 section 5, Appendix B): phi_error of every sweep (uncorrected "
-      "C_O', corrected with beta by ray_plane and by centroid), E_map = d tan(phi_error) and the "
-      "distance d50 where it reaches 50 mm, alpha calibrated by LM over the wall normals of the "
-      "mode-7 sweeps (into DIR/plate_calibration.yaml), wall-plane deviations. The experiment: "
-      "--sweeps-per-mode sweeps of each of the 7 modes, --calib-sweeps mode-7 sweeps for alpha, "
-      "mode 1 with the naive action sequence (unless --no-naive).\n\n"
-      "mobile_lidar (Miao 2022 section 5): trajectory RMSE of wheel odometry alone and of the EKF "
-      "against the truth, top and side views, RANSAC planes of walls, floor and ceiling (ceiling "
-      "normal, deviation histograms), the density D (Eq. 18-19), room dimensions L1-L3 from "
-      "plane-to-plane distances against the scene's truth, and the double wall (ghost) where the "
-      "drive returns to its start. The experiment simulates the 120 s calibration circle and one "
-      "lap of the lab loop, calibrates the mounting from the circle with both methods (ours into "
-      "DIR/mounting_calibration.yaml), draws the circle's double walls and the target before and "
-      "after calibration (Fig. 6-7), evaluates the loop with our calibration beside the mounting "
-      "before it, and reports mounting_error_mrad against the truth (~3 min). --logs takes one "
-      "log; --compare-uncalibrated also assembles it with no mounting error.\n\n"
-      "Exit status: 0 evaluated; 1 a log is corrupt (after evaluating what came before) or holds "
-      "nothing to evaluate (the report says why); 2 bad rig, scene or option.\n"
-      "Examples: sweepmap eval --experiment paper --rig rig_a --out eval_a\n"
-      "          sweepmap eval --experiment paper --rig rig_b --out eval_b");
+  cmd->footer(kEvalFooter);
   auto q = std::make_shared<EvalRequest>();
   auto no_plots = std::make_shared<bool>(false);
   auto quiet = std::make_shared<bool>(false);

@@ -12,7 +12,7 @@ int main(int argc, char** argv) {
   const auto add = [&](sweepmap::Runner r) { runners[app.get_subcommands({}).back()] = r; };
   add(sweepmap::addSimCommand(app));
   add(sweepmap::addReplayCommand(app));
-  add(sweepmap::addDemoCommand(app, argv[0]));
+  add(sweepmap::addDemoCommand(app));
   add(sweepmap::addSpyCommand(app, argv[0]));
   add(sweepmap::addBenchCommand(app));
   add(sweepmap::addCalibCommand(app));
