@@ -9,6 +9,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "core/atomic_file.hpp"
 #include "core/config.hpp"
 
 namespace sweepmap {
@@ -94,21 +95,8 @@ void writeCalibrationFile(const std::string& path, const std::string& header, co
   for (const auto& l : logs) em << l;
   em << YAML::EndSeq << YAML::EndMap << YAML::EndMap;
 
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream f(tmp, std::ios::trunc);
-    f << "# " << header << "\n" << em.c_str() << "\n";
-    f.flush();
-    if (!f) {
-      f.close();
-      std::remove(tmp.c_str());
-      throw std::runtime_error(tmp + ": write failed");
-    }
-  }
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot replace (rename failed)");
-  }
+  // Written whole, fsync'ed and renamed over `path`: a reader never sees half a file.
+  writeFileAtomic(path, "# " + header + "\n" + em.c_str() + "\n");
 }
 
 }  // namespace
