@@ -12,12 +12,6 @@ namespace {
 constexpr double kGravity = 9.80665;
 
 
-Eigen::Matrix3d rotXYZ(double g, double b, double a) {
-  return (Eigen::AngleAxisd(a, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(b, Eigen::Vector3d::UnitY()) *
-          Eigen::AngleAxisd(g, Eigen::Vector3d::UnitX()))
-      .toRotationMatrix();
-}
-
 Eigen::Isometry3d planar(const Pose2& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
   T.linear() = Eigen::AngleAxisd(p.theta_rad, Eigen::Vector3d::UnitZ()).toRotationMatrix();
@@ -263,8 +257,8 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
   }
   start_room_ = path_.poseAt(s0_);
   T_BL_ = Eigen::Isometry3d::Identity();
-  T_BL_.linear() = rotXYZ(c_.gamma_true_rad, c_.beta_true_rad, c_.alpha_true_rad) *
-                   rotXYZ(nominal_rpy_rad.x(), nominal_rpy_rad.y(), nominal_rpy_rad.z());
+  T_BL_.linear() = rotationXYZ(c_.gamma_true_rad, c_.beta_true_rad, c_.alpha_true_rad) *
+                   rotationXYZ(nominal_rpy_rad.x(), nominal_rpy_rad.y(), nominal_rpy_rad.z());
   T_BL_.translation() = t_BL_m;
   rays_ = static_cast<int>(std::lround(c_.sample_rate_hz / c_.scan_rate_hz));
 
