@@ -233,11 +233,10 @@ std::vector<int> neighboursUnsorted(const WorldCloud& w, const Eigen::Vector3d& 
   return idx;
 }
 
-// Indices (into w) within radius of p, nearest first (ties by index: deterministic).
+// Indices (into w) within radius of p, nearest first (ties by index: deterministic; the
+// order depends only on which points are within the radius).
 std::vector<int> neighbours(const WorldCloud& w, const Eigen::Vector3d& p, double radius) {
-  std::vector<int> idx;
-  std::vector<float> d2;
-  w.tree.radiusSearch(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())), radius, idx, d2);
+  std::vector<int> idx = neighboursUnsorted(w, p, radius);
   std::vector<std::pair<double, int>> order;
   order.reserve(idx.size());
   for (int k : idx) order.emplace_back((w.p[k] - p).squaredNorm(), k);
