@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "calib/rotating_geometry.hpp"
 
@@ -232,11 +233,10 @@ std::vector<int> neighboursUnsorted(const WorldCloud& w, const Eigen::Vector3d& 
   return idx;
 }
 
-// Indices (into w) within radius of p, nearest first (ties by index: deterministic).
+// Indices (into w) within radius of p, nearest first (ties by index: deterministic; the
+// order depends only on which points are within the radius).
 std::vector<int> neighbours(const WorldCloud& w, const Eigen::Vector3d& p, double radius) {
-  std::vector<int> idx;
-  std::vector<float> d2;
-  w.tree.radiusSearch(pcl::PointXYZ(float(p.x()), float(p.y()), float(p.z())), radius, idx, d2);
+  std::vector<int> idx = neighboursUnsorted(w, p, radius);
   std::vector<std::pair<double, int>> order;
   order.reserve(idx.size());
   for (int k : idx) order.emplace_back((w.p[k] - p).squaredNorm(), k);
@@ -289,8 +289,215 @@ bool fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_ratio, double 
   return true;
 }
 
+// One outer iteration of either method: the rays, their poses and the world cloud
+// re-assembled with the current estimate, whose parameter blocks (ang[3], dt and, for
+// ours, drift[2]; else nullptr) the residual blocks refine.
+struct Round {
+  const std::vector<Ray>& rays;
+  const std::vector<RayPose>& poses;
+  const WorldCloud& w;
+  const Model& model;
+  double* ang;
+  double* dt;
+  double* drift;
+};
+
 // ---------------------------------------------------------------------------------------
 // Ours: point-to-plane over all overlapping points.
+
+// The neighbours of query k within plane_radius_m: of the other pass (the local plane),
+// and of the query's own pass (same half of the scan, less than min_pass_gap_s away: the
+// plane the query itself lies on).
+struct Patch {
+  std::vector<Eigen::Vector3d> others, own;
+  std::vector<int> other_idx;  // of the other pass within the plane radius (into w)
+  double range_sum = 0.0;      // of the query and the other pass's points
+};
+
+// One query point's residual block: its distance from the other pass's local plane.
+struct PlaneResidual {
+  std::vector<std::pair<Ray, RayPose>> nb;  // the other pass's nearest points in the plane
+  Eigen::Vector3d n;                        // the plane's normal (held fixed in the cost)
+  double r = 0.0;                           // the residual at the current estimate [m]
+  double weight = 1.0, loss_scale = 0.0;
+};
+
+// The residuals of one outer iteration, in the order of their residual blocks.
+struct RoundResiduals {
+  std::vector<double> r0;       // residuals at the current estimate [m]
+  std::vector<double> weights;  // of each residual block (1 / its sigma, or 1)
+  int pairs = 0;
+};
+
+// The other pass's neighbours make the local plane; the query's own pass's neighbours
+// must see a plane with the same normal there (the query is on that surface, not on
+// another one near an edge: such one-sided residuals would bias the estimate).
+Patch gatherPatch(const Round& rd, size_t k, const MountingCalibrationOptions& o) {
+  const Ray& a = rd.rays[rd.w.ray[k]];
+  Patch patch;
+  patch.range_sum = a.range_m;
+  for (int j : neighboursUnsorted(rd.w, rd.w.p[k], o.plane_radius_m)) {
+    const Ray& b = rd.rays[rd.w.ray[j]];
+    if (otherPass(a, b, o)) {
+      patch.other_idx.push_back(j);
+      patch.others.push_back(rd.w.p[j]);
+      patch.range_sum += b.range_m;
+    } else if (o.check_own_plane && b.left == a.left &&
+               std::abs(double(b.utime - a.utime)) < o.min_pass_gap_s * 1e6) {
+      patch.own.push_back(rd.w.p[j]);
+    }
+  }
+  return patch;
+}
+
+// The residual's neighbours: the other pass's points nearest to the query within the
+// plane (distance along the normal ignored: that is where the range noise lies, and
+// choosing by it would pick the neighbours whose noise agrees with the query's), up to
+// max_neighbours. False if fewer than min_neighbours are within neighbour_radius_m.
+bool nearestInPlane(const Round& rd, size_t k, const std::vector<int>& other_idx,
+                    const Eigen::Vector3d& n, const MountingCalibrationOptions& o,
+                    std::vector<std::pair<Ray, RayPose>>* nb) {
+  std::vector<std::pair<double, int>> order;
+  for (int j : other_idx) {
+    const Eigen::Vector3d off = rd.w.p[j] - rd.w.p[k];
+    const double d2 = (off - n * n.dot(off)).squaredNorm();
+    if (d2 <= o.neighbour_radius_m * o.neighbour_radius_m) order.emplace_back(d2, j);
+  }
+  if (int(order.size()) < o.min_neighbours) return false;
+  const size_t count = std::min(order.size(), size_t(o.max_neighbours));
+  std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(count), order.end());
+  for (size_t i = 0; i < count; ++i) {
+    const int j = rd.w.ray[order[i].second];
+    nb->emplace_back(rd.rays[j], rd.poses[j]);
+  }
+  return true;
+}
+
+// The direction of a ray in the world, with the current estimate.
+Eigen::Vector3d rayDirection(const Round& rd, const Ray& ray, const RayPose& pose) {
+  const Ray origin{Eigen::Vector3d::Zero(), ray.utime, ray.scan, ray.left, 0.0};
+  return (worldPoint(ray, pose, rd.model, rd.ang, rd.dt, rd.drift) -
+          worldPoint(origin, pose, rd.model, rd.ang, rd.dt, rd.drift))
+      .normalized();
+}
+
+// The residual's weight and the Cauchy loss's scale: the residual in sigmas of its
+// predicted noise (the query's range noise along the normal, the mean of its neighbours',
+// and the model's floor) with noise_weighting; else metres and loss_scale_m.
+void weigh(const Round& rd, const Ray& a, const RayPose& pose_a,
+           const MountingCalibrationOptions& o, PlaneResidual* pr) {
+  pr->weight = 1.0;
+  pr->loss_scale = o.loss_scale_m;
+  if (!o.noise_weighting) return;
+  // Near points are up to ten times more precise than far ones (the X4's noise grows with
+  // range).
+  const auto variance = [&](const Ray& ray, const RayPose& pose) {
+    const double s = o.range_noise_fraction * ray.range_m * rayDirection(rd, ray, pose).dot(pr->n);
+    return s * s;
+  };
+  double var_nb = 0.0;
+  for (const auto& [b, pb] : pr->nb) var_nb += variance(b, pb);
+  var_nb /= double(pr->nb.size() * pr->nb.size());
+  pr->weight = 1.0 / std::sqrt(variance(a, pose_a) + var_nb + o.model_sigma_m * o.model_sigma_m);
+  // Not tighter than loss_scale_m: the first rounds start centimetres out of alignment.
+  pr->loss_scale = std::max(o.loss_scale_sigmas, o.loss_scale_m * pr->weight);
+}
+
+// Query k's residual against the other pass's local plane, unless the patch there is not
+// flat, not seen as the same plane by the query's own pass, grazing, or the query lies
+// beyond its rim or (after the first round, `trim`) too far from it.
+std::optional<PlaneResidual> planeResidual(const Round& rd, size_t k, bool trim,
+                                           double robust_trim_m,
+                                           const MountingCalibrationOptions& o) {
+  const Ray& a = rd.rays[rd.w.ray[k]];
+  const Patch patch = gatherPatch(rd, k, o);
+  if (int(patch.others.size()) < o.min_neighbours) return std::nullopt;
+  // A plane is flat to within the range noise (sigma = range_noise_fraction * range,
+  // at most along the normal) plus a millimetre: edges and corners are rejected.
+  const double sigma = o.range_noise_fraction * patch.range_sum / double(patch.others.size() + 1);
+  const double max_var = 2.0 * sigma * sigma + 1e-6;
+  PlaneResidual pr;
+  Eigen::Vector3d mean;
+  if (!fitPlane(patch.others, o.max_planarity_ratio, max_var, &mean, &pr.n)) return std::nullopt;
+  const Eigen::Vector3d& n = pr.n;
+  if (!nearestInPlane(rd, k, patch.other_idx, n, o, &pr.nb)) return std::nullopt;
+  if (o.check_own_plane) {
+    Eigen::Vector3d own_mean, own_n;
+    if (int(patch.own.size()) < o.min_neighbours) return std::nullopt;
+    if (!fitPlane(patch.own, o.max_planarity_ratio, max_var, &own_mean, &own_n)) return std::nullopt;
+    if (std::abs(own_n.dot(n)) < std::cos(o.max_normal_angle_rad)) return std::nullopt;
+  }
+  // The residual's plane: through the centroid of the nearest neighbours of the other
+  // pass (re-assembled in the cost), with the patch's normal.
+  mean.setZero();
+  for (const auto& [b, pb] : pr.nb) mean += worldPoint(b, pb, rd.model, rd.ang, rd.dt, rd.drift);
+  mean /= double(pr.nb.size());
+  const RayPose& pose_a = rd.poses[rd.w.ray[k]];
+  if (o.max_incidence_rad < 0.5 * M_PI) {
+    // Grazing rays: the range noise lies mostly in the plane and the patch is stretched
+    // along the ray; such patches are skipped for the query's and the neighbours' rays.
+    const double c = std::cos(o.max_incidence_rad);
+    if (std::abs(rayDirection(rd, a, pose_a).dot(n)) < c ||
+        std::abs(rayDirection(rd, pr.nb.front().first, pr.nb.front().second).dot(n)) < c) {
+      return std::nullopt;
+    }
+  }
+  // The query lies over the middle of the patch, not beyond its rim.
+  const Eigen::Vector3d off = rd.w.p[k] - mean;
+  if ((off - n * n.dot(off)).norm() > 0.5 * o.neighbour_radius_m) return std::nullopt;
+  pr.r = n.dot(rd.w.p[k] - mean);
+  // After the first round, residuals beyond what the range noise explains are dropped
+  // (points over an edge of the other pass's surface). The bound comes from the noise
+  // model, not from the residuals at the current estimate: trimming by those reinforces
+  // the estimate and, with noise, made it drift (0.2 mrad per outer iteration in alpha
+  // on the simulated circle).
+  double trim_m = std::max(o.min_trim_m, o.trim_noise_sigmas * sigma);
+  if (o.trim_sigmas > 0) trim_m = std::min(trim_m, std::max(o.min_trim_m, robust_trim_m));
+  if (trim && std::abs(pr.r) > trim_m) return std::nullopt;
+  weigh(rd, a, pose_a, o, &pr);
+  return pr;
+}
+
+// Every query_stride-th point within the query ranges that has a plane residual: its
+// residual block in `problem`.
+RoundResiduals addPlaneResiduals(const Round& rd, bool trim, double robust_trim_m,
+                                 const MountingCalibrationOptions& o, ceres::Problem* problem) {
+  RoundResiduals rs;
+  for (size_t k = 0; k < rd.w.p.size(); k += size_t(o.query_stride)) {
+    const Ray& a = rd.rays[rd.w.ray[k]];
+    if (a.range_m < o.min_range_m || a.range_m > o.max_range_m) continue;
+    std::optional<PlaneResidual> pr = planeResidual(rd, k, trim, robust_trim_m, o);
+    if (!pr) continue;
+    rs.r0.push_back(pr->r);
+    rs.weights.push_back(pr->weight);
+    const RayPose& pose_a = rd.poses[rd.w.ray[k]];
+    problem->AddResidualBlock(
+        PointToPlaneCost::Create(&rd.model, a, pose_a, std::move(pr->nb), pr->n, pr->weight),
+        new ceres::CauchyLoss(pr->loss_scale), rd.ang, rd.dt, rd.drift);
+    ++rs.pairs;
+  }
+  return rs;
+}
+
+// trim_sigmas robust sigmas (1.4826 median absolute residual) of the round's residuals.
+double robustTrim(const std::vector<double>& r0, const MountingCalibrationOptions& o) {
+  std::vector<double> absr;
+  for (double r : r0) absr.push_back(std::abs(r));
+  std::nth_element(absr.begin(), absr.begin() + absr.size() / 2, absr.end());
+  return o.trim_sigmas * 1.4826 * absr[absr.size() / 2];
+}
+
+// RMS of the plain residuals (no loss, no weights) at the problem's current parameters.
+double plainRms(ceres::Problem* problem, const std::vector<double>& weights) {
+  std::vector<double> rr;
+  ceres::Problem::EvaluateOptions eo;
+  eo.apply_loss_function = false;
+  double cost = 0.0;
+  problem->Evaluate(eo, &cost, &rr, nullptr, nullptr);
+  double s2 = 0.0;
+  for (size_t i = 0; i < rr.size(); ++i) s2 += (rr[i] / weights[i]) * (rr[i] / weights[i]);
+  return std::sqrt(s2 / double(rr.size()));
+}
 
 MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& track,
                                        const LidarMounting& initial,
@@ -323,128 +530,17 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
     }
 
     ceres::Problem problem;
-    std::vector<double> r0;       // residuals at the current estimate [m]
-    std::vector<double> weights;  // of each residual block (1 / its sigma, or 1)
-    int pairs = 0;
-    for (size_t k = 0; k < w.p.size(); k += size_t(o.query_stride)) {
-      const Ray& a = rays[w.ray[k]];
-      if (a.range_m < o.min_range_m || a.range_m > o.max_range_m) continue;
-      // The other pass's neighbours make the local plane; the query's own pass's neighbours
-      // must see a plane with the same normal there (the query is on that surface, not on
-      // another one near an edge: such one-sided residuals would bias the estimate).
-      std::vector<Eigen::Vector3d> others, own;
-      std::vector<int> other_idx;  // of the other pass within the plane radius
-      double range_sum = a.range_m;
-      for (int j : neighboursUnsorted(w, w.p[k], o.plane_radius_m)) {
-        const Ray& b = rays[w.ray[j]];
-        if (otherPass(a, b, o)) {
-          other_idx.push_back(j);
-          others.push_back(w.p[j]);
-          range_sum += b.range_m;
-        } else if (o.check_own_plane && b.left == a.left &&
-                   std::abs(double(b.utime - a.utime)) < o.min_pass_gap_s * 1e6) {
-          own.push_back(w.p[j]);
-        }
-      }
-      if (int(others.size()) < o.min_neighbours) continue;
-      // A plane is flat to within the range noise (sigma = range_noise_fraction * range,
-      // at most along the normal) plus a millimetre: edges and corners are rejected.
-      const double sigma = o.range_noise_fraction * range_sum / double(others.size() + 1);
-      const double max_var = 2.0 * sigma * sigma + 1e-6;
-      Eigen::Vector3d mean, n;
-      if (!fitPlane(others, o.max_planarity_ratio, max_var, &mean, &n)) continue;
-      std::vector<std::pair<Ray, RayPose>> nb;
-      // The residual's neighbours: the other pass's points nearest to the query within the
-      // plane (distance along the normal ignored: that is where the range noise lies, and
-      // choosing by it would pick the neighbours whose noise agrees with the query's).
-      std::vector<std::pair<double, int>> order;
-      for (int j : other_idx) {
-        const Eigen::Vector3d off = w.p[j] - w.p[k];
-        const double d2 = (off - n * n.dot(off)).squaredNorm();
-        if (d2 <= o.neighbour_radius_m * o.neighbour_radius_m) order.emplace_back(d2, j);
-      }
-      if (int(order.size()) < o.min_neighbours) continue;
-      const size_t count = std::min(order.size(), size_t(o.max_neighbours));
-      std::partial_sort(order.begin(), order.begin() + std::ptrdiff_t(count), order.end());
-      for (size_t i = 0; i < count; ++i) {
-        const int j = w.ray[order[i].second];
-        nb.emplace_back(rays[j], poses[j]);
-      }
-      if (o.check_own_plane) {
-        Eigen::Vector3d own_mean, own_n;
-        if (int(own.size()) < o.min_neighbours) continue;
-        if (!fitPlane(own, o.max_planarity_ratio, max_var, &own_mean, &own_n)) continue;
-        if (std::abs(own_n.dot(n)) < std::cos(o.max_normal_angle_rad)) continue;
-      }
-      // The residual's plane: through the centroid of the nearest neighbours of the other
-      // pass (re-assembled in the cost), with the patch's normal.
-      mean.setZero();
-      for (const auto& [b, pb] : nb) mean += worldPoint(b, pb, model, ang, &dt, drift);
-      mean /= double(nb.size());
-      // The direction of a ray in the world, with the current estimate.
-      const auto rayDirection = [&](const Ray& ray, const RayPose& pose) -> Eigen::Vector3d {
-        const Ray origin{Eigen::Vector3d::Zero(), ray.utime, ray.scan, ray.left, 0.0};
-        return (worldPoint(ray, pose, model, ang, &dt, drift) - worldPoint(origin, pose, model, ang, &dt, drift))
-            .normalized();
-      };
-      const RayPose& pose_a = poses[w.ray[k]];
-      if (o.max_incidence_rad < 0.5 * M_PI) {
-        // Grazing rays: the range noise lies mostly in the plane and the patch is stretched
-        // along the ray; such patches are skipped for the query's and the neighbours' rays.
-        const double c = std::cos(o.max_incidence_rad);
-        if (std::abs(rayDirection(a, pose_a).dot(n)) < c ||
-            std::abs(rayDirection(nb.front().first, nb.front().second).dot(n)) < c) {
-          continue;
-        }
-      }
-      // The query lies over the middle of the patch, not beyond its rim.
-      const Eigen::Vector3d off = w.p[k] - mean;
-      if ((off - n * n.dot(off)).norm() > 0.5 * o.neighbour_radius_m) continue;
-      const double r = n.dot(w.p[k] - mean);
-      // After the first round, residuals beyond what the range noise explains are dropped
-      // (points over an edge of the other pass's surface). The bound comes from the noise
-      // model, not from the residuals at the current estimate: trimming by those reinforces
-      // the estimate and, with noise, made it drift (0.2 mrad per outer iteration in alpha
-      // on the simulated circle).
-      double trim_m = std::max(o.min_trim_m, o.trim_noise_sigmas * sigma);
-      if (o.trim_sigmas > 0) trim_m = std::min(trim_m, std::max(o.min_trim_m, robust_trim_m));
-      if (!first && std::abs(r) > trim_m) continue;
-      r0.push_back(r);
-      double weight = 1.0, loss_scale = o.loss_scale_m;
-      if (o.noise_weighting) {
-        // The residual in sigmas of its predicted noise: the query's range noise along the
-        // normal, the mean of its neighbours', and the model's floor. Near points are up to
-        // ten times more precise than far ones (the X4's noise grows with range).
-        const auto variance = [&](const Ray& ray, const RayPose& pose) {
-          const double s = o.range_noise_fraction * ray.range_m * rayDirection(ray, pose).dot(n);
-          return s * s;
-        };
-        double var_nb = 0.0;
-        for (const auto& [b, pb] : nb) var_nb += variance(b, pb);
-        var_nb /= double(nb.size() * nb.size());
-        weight = 1.0 / std::sqrt(variance(a, pose_a) + var_nb + o.model_sigma_m * o.model_sigma_m);
-        // Not tighter than loss_scale_m: the first rounds start centimetres out of alignment.
-        loss_scale = std::max(o.loss_scale_sigmas, o.loss_scale_m * weight);
-      }
-      weights.push_back(weight);
-      problem.AddResidualBlock(PointToPlaneCost::Create(&model, a, pose_a, std::move(nb), n, weight),
-                               new ceres::CauchyLoss(loss_scale), ang, &dt, drift);
-      ++pairs;
-    }
-    if (pairs < o.min_correspondences) {
-      res.reason = "too few overlapping points of the two passes (" + std::to_string(pairs) + " < " +
-                   std::to_string(o.min_correspondences) + ")";
+    const Round rd{rays, poses, w, model, ang, &dt, drift};
+    const RoundResiduals rs = addPlaneResiduals(rd, !first, robust_trim_m, o, &problem);
+    if (rs.pairs < o.min_correspondences) {
+      res.reason = "too few overlapping points of the two passes (" + std::to_string(rs.pairs) +
+                   " < " + std::to_string(o.min_correspondences) + ")";
       return res;
     }
-    if (o.trim_sigmas > 0) {
-      std::vector<double> absr;
-      for (double r : r0) absr.push_back(std::abs(r));
-      std::nth_element(absr.begin(), absr.begin() + absr.size() / 2, absr.end());
-      robust_trim_m = o.trim_sigmas * 1.4826 * absr[absr.size() / 2];
-    }
+    if (o.trim_sigmas > 0) robust_trim_m = robustTrim(rs.r0, o);
     double ss = 0.0;
-    for (double r : r0) ss += r * r;
-    const double rms0 = std::sqrt(ss / double(r0.size()));
+    for (double r : rs.r0) ss += r * r;
+    const double rms0 = std::sqrt(ss / double(rs.r0.size()));
     if (first) res.residual_before_m = rms0;
     first = false;
 
@@ -461,19 +557,8 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
     ceres::Solver::Summary summary;
     ceres::Solve(so, &problem, &summary);
     res.iterations += int(summary.iterations.size());
-    res.correspondences = pairs;
-
-    // RMS of the plain residuals at the estimate, with this round's correspondences.
-    {
-      std::vector<double> rr;
-      ceres::Problem::EvaluateOptions eo;
-      eo.apply_loss_function = false;
-      double cost = 0.0;
-      problem.Evaluate(eo, &cost, &rr, nullptr, nullptr);
-      double s2 = 0.0;
-      for (size_t i = 0; i < rr.size(); ++i) s2 += (rr[i] / weights[i]) * (rr[i] / weights[i]);
-      res.residual_after_m = std::sqrt(s2 / double(rr.size()));
-    }
+    res.correspondences = rs.pairs;
+    res.residual_after_m = plainRms(&problem, rs.weights);  // with this round's correspondences
     const double change = std::max({std::abs(ang[0] - before[0]), std::abs(ang[1] - before[1]),
                                     std::abs(ang[2] - before[2]), std::abs(dt - before[3]) * 1e-2});
     if (outer >= 1 && change < o.convergence_rad) break;
@@ -493,50 +578,79 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
 // discontinuities, where a nearer surface such as the target board ends in front of a
 // farther one), Levenberg-Marquardt on the sum of squared distances (Eq. 15-17).
 
+// The target's edge points in scan `s`: a run of rays without range jumps (the board)
+// with a jump to something farther at both ends (the window recess behind it) and the
+// board's extent between its end points. Each end is an edge point, placed half an angle
+// step beyond the run's last ray at its range: no bias from the ray spacing on average.
+void addTargetEdges(const Scan2D& scan, int s, const Eigen::Matrix3d& R_nom,
+                    const MountingCalibrationOptions& o, std::vector<Ray>* rays) {
+  const size_t n = scan.ranges_m.size();
+  const auto valid = [&](size_t i) {
+    const double r = scan.ranges_m[i];
+    return r != 0.0 && r >= scan.range_min_m && r <= scan.range_max_m;
+  };
+  const auto edge = [&](size_t inner, size_t outer) {
+    const double r = scan.ranges_m[inner];
+    const double a = 0.5 * (scan.rayAngle(inner) + scan.rayAngle(outer));
+    return Ray{R_nom * rotating::pointInLidar(r, a), scan.rayUtime(inner), s, std::sin(a) > 0.0, r};
+  };
+  size_t i = 1;
+  while (i + 1 < n) {
+    if (!valid(i) || !valid(i - 1) || scan.ranges_m[i - 1] < scan.ranges_m[i] + o.edge_jump_m) {
+      ++i;
+      continue;
+    }
+    size_t j = i;  // the run [i, j]
+    while (j + 1 < n && valid(j + 1) && std::abs(scan.ranges_m[j + 1] - scan.ranges_m[j]) < o.edge_jump_m) ++j;
+    const bool closed = j + 1 < n && valid(j + 1) && scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
+    const double r_i = scan.ranges_m[i], r_j = scan.ranges_m[j];
+    const double extent =
+        (rotating::pointInLidar(r_i, scan.rayAngle(i)) - rotating::pointInLidar(r_j, scan.rayAngle(j))).norm();
+    if (closed && j >= i + 2 && extent >= o.target_min_extent_m && extent <= o.target_max_extent_m &&
+        std::min(r_i, r_j) >= o.min_range_m && std::max(r_i, r_j) <= o.max_edge_range_m) {
+      rays->push_back(edge(i, i - 1));
+      rays->push_back(edge(j, j + 1));
+    }
+    i = j + 1;
+  }
+}
+
+// Mutual nearest edge points of the two passes within match_m, each pair once (A on the
+// left half): their residual blocks in `problem`. Returns the number of pairs and adds
+// their squared distances at the current estimate to *ss.
+int addEdgePairs(const Round& rd, double match_m, const MountingCalibrationOptions& o,
+                 ceres::Problem* problem, double* ss) {
+  const WorldCloud& w = rd.w;
+  const auto nearestOther = [&](int k) {
+    for (int j : neighbours(w, w.p[k], match_m)) {
+      if (otherPass(rd.rays[w.ray[k]], rd.rays[w.ray[j]], o)) return j;
+    }
+    return -1;
+  };
+  int pairs = 0;
+  for (size_t k = 0; k < w.p.size(); ++k) {
+    if (!rd.rays[w.ray[k]].left && o.opposite_sides_only) continue;
+    const int j = nearestOther(int(k));
+    if (j < 0 || nearestOther(j) != int(k)) continue;
+    if (!o.opposite_sides_only && j < int(k)) continue;
+    *ss += (w.p[k] - w.p[j]).squaredNorm();
+    problem->AddResidualBlock(PointPairCost::Create(&rd.model, rd.rays[w.ray[k]], rd.poses[w.ray[k]],
+                                                    rd.rays[w.ray[j]], rd.poses[w.ray[j]]),
+                              nullptr, rd.ang, rd.dt);
+    ++pairs;
+  }
+  return pairs;
+}
+
 MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const PoseTrack& track,
                                       const LidarMounting& initial,
                                       const MountingCalibrationOptions& o) {
   MountingCalibrationResult res;
   res.method = MountingMethod::kPaperPoints;
-  // The target's edge points: in each scan, a run of rays without range jumps (the board)
-  // with a jump to something farther at both ends (the window recess behind it) and the
-  // board's extent between its end points. Each end is an edge point, placed half an angle
-  // step beyond the run's last ray at its range: no bias from the ray spacing on average.
   const Eigen::Matrix3d R_nom =
       rotationXYZ(initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
   std::vector<Ray> rays;
-  for (size_t s = 0; s < scans.size(); ++s) {
-    const Scan2D& scan = scans[s];
-    const size_t n = scan.ranges_m.size();
-    const auto valid = [&](size_t i) {
-      const double r = scan.ranges_m[i];
-      return r != 0.0 && r >= scan.range_min_m && r <= scan.range_max_m;
-    };
-    const auto edge = [&](size_t inner, size_t outer) {
-      const double r = scan.ranges_m[inner];
-      const double a = 0.5 * (scan.rayAngle(inner) + scan.rayAngle(outer));
-      return Ray{R_nom * rotating::pointInLidar(r, a), scan.rayUtime(inner), int(s), std::sin(a) > 0.0, r};
-    };
-    size_t i = 1;
-    while (i + 1 < n) {
-      if (!valid(i) || !valid(i - 1) || scan.ranges_m[i - 1] < scan.ranges_m[i] + o.edge_jump_m) {
-        ++i;
-        continue;
-      }
-      size_t j = i;  // the run [i, j]
-      while (j + 1 < n && valid(j + 1) && std::abs(scan.ranges_m[j + 1] - scan.ranges_m[j]) < o.edge_jump_m) ++j;
-      const bool closed = j + 1 < n && valid(j + 1) && scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
-      const double r_i = scan.ranges_m[i], r_j = scan.ranges_m[j];
-      const double extent =
-          (rotating::pointInLidar(r_i, scan.rayAngle(i)) - rotating::pointInLidar(r_j, scan.rayAngle(j))).norm();
-      if (closed && j >= i + 2 && extent >= o.target_min_extent_m && extent <= o.target_max_extent_m &&
-          std::min(r_i, r_j) >= o.min_range_m && std::max(r_i, r_j) <= o.max_edge_range_m) {
-        rays.push_back(edge(i, i - 1));
-        rays.push_back(edge(j, j + 1));
-      }
-      i = j + 1;
-    }
-  }
+  for (size_t s = 0; s < scans.size(); ++s) addTargetEdges(scans[s], int(s), R_nom, o, &rays);
   Model model;
   model.t_BL = initial.t_BL_m;
   double ang[3] = {initial.gamma_rad, initial.beta_rad, initial.alpha_rad};
@@ -552,27 +666,9 @@ MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const Po
     WorldCloud w;
     buildWorld(rays, poses, covered, all, model, ang, dt, &w);
     if (w.p.size() < 2) break;
-    // Mutual nearest edge points of the two passes; each pair once (A on the left half).
-    const auto nearestOther = [&](int k) {
-      for (int j : neighbours(w, w.p[k], match_m)) {
-        if (otherPass(rays[w.ray[k]], rays[w.ray[j]], o)) return j;
-      }
-      return -1;
-    };
     ceres::Problem problem;
     double ss = 0.0;
-    int pairs = 0;
-    for (size_t k = 0; k < w.p.size(); ++k) {
-      if (!rays[w.ray[k]].left && o.opposite_sides_only) continue;
-      const int j = nearestOther(int(k));
-      if (j < 0 || nearestOther(j) != int(k)) continue;
-      if (!o.opposite_sides_only && j < int(k)) continue;
-      ss += (w.p[k] - w.p[j]).squaredNorm();
-      problem.AddResidualBlock(PointPairCost::Create(&model, rays[w.ray[k]], poses[w.ray[k]],
-                                                     rays[w.ray[j]], poses[w.ray[j]]),
-                               nullptr, ang, &dt);
-      ++pairs;
-    }
+    const int pairs = addEdgePairs({rays, poses, w, model, ang, &dt, nullptr}, match_m, o, &problem, &ss);
     if (pairs < o.min_point_pairs) {
       res.reason = "too few corresponding edge points of the two passes (" + std::to_string(pairs) +
                    " < " + std::to_string(o.min_point_pairs) + ")";

@@ -198,18 +198,20 @@ std::vector<WallPlaneFit> extractPlanes(const std::vector<Eigen::Vector3f>& clou
   return out;
 }
 
-WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
-                            const WallExtractionOptions& options) {
-  WallExtraction result;
-  if (cloud_O.empty()) {
-    result.reason = "empty cloud";
-    return result;
-  }
+namespace {
+
+// Two facing walls: candidates a and b, and the axis between them.
+struct FacingPair {
+  int a, b;
+  Eigen::Vector3d axis;  // from b's normal to a's
+};
+
+// The vertical RANSAC planes of the cloud (floor and ceiling removed first), largest first.
+std::vector<WallPlaneFit> verticalCandidates(const std::vector<Eigen::Vector3f>& cloud_O,
+                                             const WallExtractionOptions& options) {
   auto down = downsampled(cloud_O, options.voxel_m);
   auto remaining = withoutHorizontalSlabs(*down, options.voxel_m > 0 ? options.voxel_m : 0.05,
                                           options.horizontal_peak_factor);
-
-  // Vertical planes, largest first.
   std::vector<WallPlaneFit> candidates;
   for (const WallPlaneFit& w :
        ransacPlanes(remaining, pcl::SACMODEL_PARALLEL_PLANE,
@@ -218,21 +220,14 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
                     options.ransac_max_iterations)) {
     if (std::abs(w.normal.z()) <= options.max_normal_z) candidates.push_back(w);
   }
-  result.candidate_planes = static_cast<int>(candidates.size());
-  if (candidates.size() < 4) {
-    result.reason = "only " + std::to_string(candidates.size()) +
-                    " vertical plane(s) of at least " + std::to_string(options.min_inliers) +
-                    " points (4 walls needed)";
-    return result;
-  }
+  return candidates;
+}
 
-  // Two pairs of facing planes, the pairs perpendicular, with the most points.
-  const double tol = options.parallel_tolerance_deg * kDegToRad;
-  struct Pair {
-    int a, b;
-    Eigen::Vector3d axis;  // from b's normal to a's
-  };
-  std::vector<Pair> pairs;
+// Two pairs of facing planes, the pairs perpendicular, with the most points (within
+// `tol` rad); false if there are none.
+bool bestPerpendicularPairs(const std::vector<WallPlaneFit>& candidates, double tol,
+                            FacingPair* first, FacingPair* second) {
+  std::vector<FacingPair> pairs;
   for (size_t a = 0; a < candidates.size(); ++a) {
     for (size_t b = a + 1; b < candidates.size(); ++b) {
       if (angleBetween(candidates[a].normal, -candidates[b].normal) <= tol) {
@@ -242,11 +237,11 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
     }
   }
   int best_score = -1;
-  const Pair* best[2] = {nullptr, nullptr};
+  const FacingPair* best[2] = {nullptr, nullptr};
   for (size_t p = 0; p < pairs.size(); ++p) {
     for (size_t q = p + 1; q < pairs.size(); ++q) {
-      const Pair& P = pairs[p];
-      const Pair& Q = pairs[q];
+      const FacingPair& P = pairs[p];
+      const FacingPair& Q = pairs[q];
       if (P.a == Q.a || P.a == Q.b || P.b == Q.a || P.b == Q.b) continue;
       if (std::abs(angleBetween(P.axis, Q.axis) - M_PI / 2) > tol) continue;
       const int score = candidates[P.a].inliers + candidates[P.b].inliers +
@@ -258,18 +253,21 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
       }
     }
   }
-  if (best_score < 0) {
-    result.reason = "no two perpendicular pairs of facing walls among " +
-                    std::to_string(candidates.size()) + " vertical planes";
-    return result;
-  }
+  if (best_score < 0) return false;
+  *first = *best[0];
+  *second = *best[1];
+  return true;
+}
 
-  // Order: [0] normal ~ +Y, [1] ~ +X, [2] ~ -Y, [3] ~ -X.
-  const Pair* y_pair = best[0];
-  const Pair* x_pair = best[1];
+// The two pairs' walls in the order of WallExtraction::walls: [0] normal ~ +Y, [1] ~ +X,
+// [2] ~ -Y, [3] ~ -X.
+std::vector<WallPlaneFit> orderedWalls(const std::vector<WallPlaneFit>& candidates,
+                                       const FacingPair& first, const FacingPair& second) {
+  const FacingPair* y_pair = &first;
+  const FacingPair* x_pair = &second;
   if (std::abs(y_pair->axis.y()) < std::abs(x_pair->axis.y())) std::swap(y_pair, x_pair);
   std::vector<WallPlaneFit> ordered(4);
-  const auto place = [&](const Pair* pr, int slot_pos, int slot_neg, int coord) {
+  const auto place = [&](const FacingPair* pr, int slot_pos, int slot_neg, int coord) {
     const WallPlaneFit& a = candidates[pr->a];
     const WallPlaneFit& b = candidates[pr->b];
     const bool a_pos = a.normal[coord] >= b.normal[coord];
@@ -278,10 +276,38 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
   };
   place(y_pair, 0, 2, 1);
   place(x_pair, 1, 3, 0);
+  return ordered;
+}
 
+}  // namespace
+
+WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
+                            const WallExtractionOptions& options) {
+  WallExtraction result;
+  if (cloud_O.empty()) {
+    result.reason = "empty cloud";
+    return result;
+  }
+  // Vertical planes, largest first.
+  const std::vector<WallPlaneFit> candidates = verticalCandidates(cloud_O, options);
+  result.candidate_planes = static_cast<int>(candidates.size());
+  if (candidates.size() < 4) {
+    result.reason = "only " + std::to_string(candidates.size()) +
+                    " vertical plane(s) of at least " + std::to_string(options.min_inliers) +
+                    " points (4 walls needed)";
+    return result;
+  }
+  FacingPair first, second;
+  if (!bestPerpendicularPairs(candidates, options.parallel_tolerance_deg * kDegToRad, &first,
+                              &second)) {
+    result.reason = "no two perpendicular pairs of facing walls among " +
+                    std::to_string(candidates.size()) + " vertical planes";
+    return result;
+  }
   // Refit on the full-resolution cloud (indices into cloud_O; non-finite points never
   // come within the distance of a plane).
-  result.walls = refitWalls(cloud_O, ordered, options.distance_threshold_m);
+  result.walls = refitWalls(cloud_O, orderedWalls(candidates, first, second),
+                            options.distance_threshold_m);
   for (const auto& w : result.walls) {
     if (w.inliers < 3) {
       result.walls.clear();

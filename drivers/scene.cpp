@@ -63,89 +63,124 @@ void SceneConfig::declare(ConfigSchema& s, const std::string& p) {
         "wall plane to the board's front face, into the room (negative: inside the recess)");
 }
 
-void SceneConfig::validate(const std::string& source) const {
-  const auto require = [&source](bool ok, const std::string& key, const std::string& why) {
-    if (!ok) throw ConfigError(source + ": key '" + key + "' " + why);
-  };
-  const auto positive = [&require](double v, const std::string& key) {
-    require(v > 0.0, key, "must be positive");
-  };
-  positive(room_length_m, "room.length_m");
-  positive(room_width_m, "room.width_m");
-  positive(room_height_m, "room.height_m");
-  positive(door_width_m, "door.width_m");
-  positive(door_height_m, "door.height_m");
-  positive(door_depth_m, "door.depth_m");
-  positive(table_length_m, "table.length_m");
-  positive(table_width_m, "table.width_m");
-  positive(table_height_m, "table.height_m");
-  positive(table_top_thickness_m, "table.top_thickness_m");
-  positive(table_leg_size_m, "table.leg_size_m");
-  positive(cabinet_length_m, "cabinet.length_m");
-  positive(cabinet_width_m, "cabinet.width_m");
-  positive(cabinet_height_m, "cabinet.height_m");
+namespace {
 
-  const double half_l = room_length_m / 2, half_w = room_width_m / 2;
-  require(std::abs(door_center_x_m) + door_width_m / 2 < half_l, "door.center_x_m",
-          "puts the door recess outside the +Y wall");
-  require(door_height_m < room_height_m, "door.height_m", "must be below the ceiling");
-
-  require(std::abs(table_center_x_m) + table_length_m / 2 <= half_l, "table.center_x_m",
-          "puts the table outside the room");
-  require(std::abs(table_center_y_m) + table_width_m / 2 <= half_w, "table.center_y_m",
-          "puts the table outside the room");
-  require(table_height_m <= room_height_m, "table.height_m", "must be below the ceiling");
-  require(table_top_thickness_m < table_height_m, "table.top_thickness_m",
-          "must be less than the table height");
-  require(2 * table_leg_size_m <= std::min(table_length_m, table_width_m), "table.leg_size_m",
-          "legs do not fit under the top");
-
-  require(std::abs(cabinet_center_x_m) + cabinet_length_m / 2 <= half_l, "cabinet.center_x_m",
-          "puts the cabinet outside the room");
-  require(std::abs(cabinet_center_y_m) + cabinet_width_m / 2 <= half_w, "cabinet.center_y_m",
-          "puts the cabinet outside the room");
-  require(cabinet_height_m <= room_height_m, "cabinet.height_m", "must be below the ceiling");
-
-  if (target_enabled) {
-    require(target_wall == "x_min" || target_wall == "x_max" || target_wall == "y_min", "target.wall",
-            "must be x_min, x_max or y_min (y_max holds the door)");
-    positive(target_window_width_m, "target.window_width_m");
-    positive(target_window_height_m, "target.window_height_m");
-    positive(target_window_depth_m, "target.window_depth_m");
-    positive(target_board_width_m, "target.board_width_m");
-    positive(target_board_height_m, "target.board_height_m");
-    positive(target_board_thickness_m, "target.board_thickness_m");
-    require(target_window_sill_m > 0.0, "target.window_sill_m", "must be positive");
-    const double half_wall = target_wall == "y_min" ? half_l : half_w;
-    require(std::abs(target_position_m) + target_window_width_m / 2 < half_wall, "target.position_m",
-            "puts the window outside its wall");
-    require(target_window_sill_m + target_window_height_m < room_height_m, "target.window_height_m",
-            "puts the window's top above the ceiling");
-    require(target_board_width_m <= target_window_width_m, "target.board_width_m",
-            "must not exceed the window's width");
-    require(target_board_height_m <= target_window_height_m, "target.board_height_m",
-            "must not exceed the window's height");
-    require(target_board_thickness_m - target_board_offset_m <= target_window_depth_m,
-            "target.board_offset_m", "puts the board behind the window's back");
-    require(target_board_offset_m < std::min(half_l, half_w), "target.board_offset_m",
-            "puts the board across the room");
+// Throws ConfigError "SOURCE: key 'KEY' WHY" for the first check that fails.
+class SceneChecks {
+ public:
+  explicit SceneChecks(const std::string& source) : source_(source) {}
+  void require(bool ok, const std::string& key, const std::string& why) const {
+    if (!ok) throw ConfigError(source_ + ": key '" + key + "' " + why);
   }
-  require(std::abs(rig_x_m) + kPostSideM / 2 < half_l, "rig.x_m", "puts the rig outside the room");
-  require(std::abs(rig_y_m) + kPostSideM / 2 < half_w, "rig.y_m", "puts the rig outside the room");
-  require(rig_z_m > 0.0 && rig_z_m < room_height_m, "rig.z_m", "must be between floor and ceiling");
+  void positive(double v, const std::string& key) const { require(v > 0.0, key, "must be positive"); }
+
+ private:
+  const std::string& source_;
+};
+
+void checkSizes(const SceneConfig& c, const SceneChecks& check) {
+  check.positive(c.room_length_m, "room.length_m");
+  check.positive(c.room_width_m, "room.width_m");
+  check.positive(c.room_height_m, "room.height_m");
+  check.positive(c.door_width_m, "door.width_m");
+  check.positive(c.door_height_m, "door.height_m");
+  check.positive(c.door_depth_m, "door.depth_m");
+  check.positive(c.table_length_m, "table.length_m");
+  check.positive(c.table_width_m, "table.width_m");
+  check.positive(c.table_height_m, "table.height_m");
+  check.positive(c.table_top_thickness_m, "table.top_thickness_m");
+  check.positive(c.table_leg_size_m, "table.leg_size_m");
+  check.positive(c.cabinet_length_m, "cabinet.length_m");
+  check.positive(c.cabinet_width_m, "cabinet.width_m");
+  check.positive(c.cabinet_height_m, "cabinet.height_m");
+}
+
+// The door, the table and the cabinet inside the room.
+void checkFurniture(const SceneConfig& c, const SceneChecks& check) {
+  const double half_l = c.room_length_m / 2, half_w = c.room_width_m / 2;
+  check.require(std::abs(c.door_center_x_m) + c.door_width_m / 2 < half_l, "door.center_x_m",
+                "puts the door recess outside the +Y wall");
+  check.require(c.door_height_m < c.room_height_m, "door.height_m", "must be below the ceiling");
+
+  check.require(std::abs(c.table_center_x_m) + c.table_length_m / 2 <= half_l, "table.center_x_m",
+                "puts the table outside the room");
+  check.require(std::abs(c.table_center_y_m) + c.table_width_m / 2 <= half_w, "table.center_y_m",
+                "puts the table outside the room");
+  check.require(c.table_height_m <= c.room_height_m, "table.height_m", "must be below the ceiling");
+  check.require(c.table_top_thickness_m < c.table_height_m, "table.top_thickness_m",
+                "must be less than the table height");
+  check.require(2 * c.table_leg_size_m <= std::min(c.table_length_m, c.table_width_m),
+                "table.leg_size_m", "legs do not fit under the top");
+
+  check.require(std::abs(c.cabinet_center_x_m) + c.cabinet_length_m / 2 <= half_l,
+                "cabinet.center_x_m", "puts the cabinet outside the room");
+  check.require(std::abs(c.cabinet_center_y_m) + c.cabinet_width_m / 2 <= half_w,
+                "cabinet.center_y_m", "puts the cabinet outside the room");
+  check.require(c.cabinet_height_m <= c.room_height_m, "cabinet.height_m",
+                "must be below the ceiling");
+}
+
+// The calibration target: its window inside its wall, its board inside the window.
+void checkTarget(const SceneConfig& c, const SceneChecks& check) {
+  const double half_l = c.room_length_m / 2, half_w = c.room_width_m / 2;
+  check.require(c.target_wall == "x_min" || c.target_wall == "x_max" || c.target_wall == "y_min",
+                "target.wall", "must be x_min, x_max or y_min (y_max holds the door)");
+  check.positive(c.target_window_width_m, "target.window_width_m");
+  check.positive(c.target_window_height_m, "target.window_height_m");
+  check.positive(c.target_window_depth_m, "target.window_depth_m");
+  check.positive(c.target_board_width_m, "target.board_width_m");
+  check.positive(c.target_board_height_m, "target.board_height_m");
+  check.positive(c.target_board_thickness_m, "target.board_thickness_m");
+  check.require(c.target_window_sill_m > 0.0, "target.window_sill_m", "must be positive");
+  const double half_wall = c.target_wall == "y_min" ? half_l : half_w;
+  check.require(std::abs(c.target_position_m) + c.target_window_width_m / 2 < half_wall,
+                "target.position_m", "puts the window outside its wall");
+  check.require(c.target_window_sill_m + c.target_window_height_m < c.room_height_m,
+                "target.window_height_m", "puts the window's top above the ceiling");
+  check.require(c.target_board_width_m <= c.target_window_width_m, "target.board_width_m",
+                "must not exceed the window's width");
+  check.require(c.target_board_height_m <= c.target_window_height_m, "target.board_height_m",
+                "must not exceed the window's height");
+  check.require(c.target_board_thickness_m - c.target_board_offset_m <= c.target_window_depth_m,
+                "target.board_offset_m", "puts the board behind the window's back");
+  check.require(c.target_board_offset_m < std::min(half_l, half_w), "target.board_offset_m",
+                "puts the board across the room");
+}
+
+// The rig inside the room, its stand's post clear of the table and the cabinet.
+void checkRig(const SceneConfig& c, const SceneChecks& check) {
+  const double half_l = c.room_length_m / 2, half_w = c.room_width_m / 2;
+  check.require(std::abs(c.rig_x_m) + kPostSideM / 2 < half_l, "rig.x_m",
+                "puts the rig outside the room");
+  check.require(std::abs(c.rig_y_m) + kPostSideM / 2 < half_w, "rig.y_m",
+                "puts the rig outside the room");
+  check.require(c.rig_z_m > 0.0 && c.rig_z_m < c.room_height_m, "rig.z_m",
+                "must be between floor and ceiling");
   const double post = kPostSideM / 2;
-  const auto post_box =
-      box(rig_x_m - post, rig_x_m + post, rig_y_m - post, rig_y_m + post, 0, room_height_m);
-  const auto table_box = box(
-      table_center_x_m - table_length_m / 2, table_center_x_m + table_length_m / 2,
-      table_center_y_m - table_width_m / 2, table_center_y_m + table_width_m / 2, 0, room_height_m);
-  const auto cabinet_box =
-      box(cabinet_center_x_m - cabinet_length_m / 2, cabinet_center_x_m + cabinet_length_m / 2,
-          cabinet_center_y_m - cabinet_width_m / 2, cabinet_center_y_m + cabinet_width_m / 2, 0,
-          room_height_m);
-  require(!footprintsOverlap(post_box, table_box), "rig.x_m", "puts the rig's stand in the table");
-  require(!footprintsOverlap(post_box, cabinet_box), "rig.x_m",
-          "puts the rig's stand in the cabinet");
+  const auto post_box = box(c.rig_x_m - post, c.rig_x_m + post, c.rig_y_m - post,
+                            c.rig_y_m + post, 0, c.room_height_m);
+  const auto table_box = box(c.table_center_x_m - c.table_length_m / 2,
+                             c.table_center_x_m + c.table_length_m / 2,
+                             c.table_center_y_m - c.table_width_m / 2,
+                             c.table_center_y_m + c.table_width_m / 2, 0, c.room_height_m);
+  const auto cabinet_box = box(c.cabinet_center_x_m - c.cabinet_length_m / 2,
+                               c.cabinet_center_x_m + c.cabinet_length_m / 2,
+                               c.cabinet_center_y_m - c.cabinet_width_m / 2,
+                               c.cabinet_center_y_m + c.cabinet_width_m / 2, 0, c.room_height_m);
+  check.require(!footprintsOverlap(post_box, table_box), "rig.x_m",
+                "puts the rig's stand in the table");
+  check.require(!footprintsOverlap(post_box, cabinet_box), "rig.x_m",
+                "puts the rig's stand in the cabinet");
+}
+
+}  // namespace
+
+void SceneConfig::validate(const std::string& source) const {
+  const SceneChecks check(source);
+  checkSizes(*this, check);
+  checkFurniture(*this, check);
+  if (target_enabled) checkTarget(*this, check);
+  checkRig(*this, check);
 }
 
 SceneConfig loadScene(const std::string& path, const std::vector<std::string>& overrides) {
@@ -157,6 +192,95 @@ SceneConfig loadScene(const std::string& path, const std::vector<std::string>& o
   scene.validate(path);
   return scene;
 }
+
+namespace {
+
+// The shell: floor, ceiling and walls. The +Y wall is door.depth_m thicker so the recess has
+// a back (the door leaf); the floor runs under the recess.
+std::vector<SceneBox> shellBoxes(const SceneConfig& c) {
+  const double l = c.room_length_m / 2, w = c.room_width_m / 2, h = c.room_height_m;
+  const double t = kWallThicknessM;
+  const double y_outer = w + c.door_depth_m + t;
+  const double door_x0 = c.door_center_x_m - c.door_width_m / 2;
+  const double door_x1 = c.door_center_x_m + c.door_width_m / 2;
+  return {
+      {"floor", box(-l - t, l + t, -w - t, y_outer, -t, 0)},
+      {"ceiling", box(-l - t, l + t, -w - t, y_outer, h, h + t)},
+      {"wall_x_min", box(-l - t, -l, -w - t, y_outer, 0, h)},
+      {"wall_x_max", box(l, l + t, -w - t, y_outer, 0, h)},
+      {"wall_y_min", box(-l, l, -w - t, -w, 0, h)},
+      {"wall_y_max_left", box(-l, door_x0, w, y_outer, 0, h)},
+      {"wall_y_max_right", box(door_x1, l, w, y_outer, 0, h)},
+      {"door_lintel", box(door_x0, door_x1, w, y_outer, c.door_height_m, h)},
+      {"door_leaf", box(door_x0, door_x1, w + c.door_depth_m, y_outer, 0, c.door_height_m)},
+  };
+}
+
+// The calibration target: the target's wall slab rebuilt around the window opening, the
+// window's back and the board in front of it.
+void addTarget(const SceneConfig& c, std::vector<SceneBox>* boxes) {
+  const double l = c.room_length_m / 2, w = c.room_width_m / 2, h = c.room_height_m;
+  const double t = kWallThicknessM;
+  const double y_outer = w + c.door_depth_m + t;
+  // A box in the wall's own coordinates: u along the wall, z up, depth behind the wall
+  // plane (negative: in the room).
+  const auto wallBox = [&](double u0, double u1, double z0, double z1, double d0, double d1) {
+    if (c.target_wall == "x_min") return box(-l - d1, -l - d0, u0, u1, z0, z1);
+    if (c.target_wall == "x_max") return box(l + d0, l + d1, u0, u1, z0, z1);
+    return box(u0, u1, -w - d1, -w - d0, z0, z1);  // y_min
+  };
+  const std::string wall_name = "wall_" + c.target_wall;
+  double u_lo, u_hi;
+  if (c.target_wall == "y_min") {
+    u_lo = -l;
+    u_hi = l;
+  } else {
+    u_lo = -w - t;
+    u_hi = y_outer;
+  }
+  boxes->erase(std::remove_if(boxes->begin(), boxes->end(),
+                              [&](const SceneBox& b) { return b.name == wall_name; }),
+               boxes->end());
+  const double wu0 = c.target_position_m - c.target_window_width_m / 2;
+  const double wu1 = c.target_position_m + c.target_window_width_m / 2;
+  const double wz0 = c.target_window_sill_m, wz1 = wz0 + c.target_window_height_m;
+  boxes->push_back({wall_name + "_below_window", wallBox(u_lo, u_hi, 0, wz0, 0, t)});
+  boxes->push_back({wall_name + "_above_window", wallBox(u_lo, u_hi, wz1, h, 0, t)});
+  boxes->push_back({wall_name + "_left_of_window", wallBox(u_lo, wu0, wz0, wz1, 0, t)});
+  boxes->push_back({wall_name + "_right_of_window", wallBox(wu1, u_hi, wz0, wz1, 0, t)});
+  boxes->push_back({"window_back", wallBox(wu0, wu1, wz0, wz1, c.target_window_depth_m,
+                                           c.target_window_depth_m + t)});
+  const double bz = 0.5 * (wz0 + wz1);
+  const double d0 = -c.target_board_offset_m;
+  boxes->push_back({"target_board",
+                    wallBox(c.target_position_m - c.target_board_width_m / 2,
+                            c.target_position_m + c.target_board_width_m / 2,
+                            bz - c.target_board_height_m / 2, bz + c.target_board_height_m / 2, d0,
+                            d0 + c.target_board_thickness_m)});
+}
+
+// The table (a top on four legs flush with its corners) and the cabinet.
+void addFurniture(const SceneConfig& c, std::vector<SceneBox>* boxes) {
+  const double tx0 = c.table_center_x_m - c.table_length_m / 2;
+  const double tx1 = c.table_center_x_m + c.table_length_m / 2;
+  const double ty0 = c.table_center_y_m - c.table_width_m / 2;
+  const double ty1 = c.table_center_y_m + c.table_width_m / 2;
+  const double leg_top = c.table_height_m - c.table_top_thickness_m;
+  const double s = c.table_leg_size_m;
+  boxes->push_back({"table_top", box(tx0, tx1, ty0, ty1, leg_top, c.table_height_m)});
+  boxes->push_back({"table_leg_1", box(tx0, tx0 + s, ty0, ty0 + s, 0, leg_top)});
+  boxes->push_back({"table_leg_2", box(tx1 - s, tx1, ty0, ty0 + s, 0, leg_top)});
+  boxes->push_back({"table_leg_3", box(tx0, tx0 + s, ty1 - s, ty1, 0, leg_top)});
+  boxes->push_back({"table_leg_4", box(tx1 - s, tx1, ty1 - s, ty1, 0, leg_top)});
+
+  boxes->push_back(
+      {"cabinet", box(c.cabinet_center_x_m - c.cabinet_length_m / 2,
+                      c.cabinet_center_x_m + c.cabinet_length_m / 2,
+                      c.cabinet_center_y_m - c.cabinet_width_m / 2,
+                      c.cabinet_center_y_m + c.cabinet_width_m / 2, 0, c.cabinet_height_m)});
+}
+
+}  // namespace
 
 Scene::Scene(const SceneConfig& config, const PlateConfig& plate) : config_(config) {
   const SceneConfig& c = config_;
@@ -170,87 +294,15 @@ Scene::Scene(const SceneConfig& config, const PlateConfig& plate) : config_(conf
   T_room_rig_ = Eigen::Translation3d(c.rig_x_m, c.rig_y_m, c.rig_z_m) *
                 Eigen::AngleAxisd(c.rig_yaw_deg * M_PI / 180.0, Eigen::Vector3d::UnitZ());
 
-  const double l = c.room_length_m / 2, w = c.room_width_m / 2, h = c.room_height_m;
-  const double t = kWallThicknessM;
+  const double l = c.room_length_m / 2, w = c.room_width_m / 2;
   walls_ = {{"x_min", Eigen::Vector3d::UnitX(), l},
             {"x_max", -Eigen::Vector3d::UnitX(), l},
             {"y_min", Eigen::Vector3d::UnitY(), w},
             {"y_max", -Eigen::Vector3d::UnitY(), w}};
 
-  // Shell. The +Y wall is door.depth_m thicker so the recess has a back (the door leaf);
-  // the floor runs under the recess.
-  const double y_outer = w + c.door_depth_m + t;
-  const double door_x0 = c.door_center_x_m - c.door_width_m / 2;
-  const double door_x1 = c.door_center_x_m + c.door_width_m / 2;
-  boxes_ = {
-      {"floor", box(-l - t, l + t, -w - t, y_outer, -t, 0)},
-      {"ceiling", box(-l - t, l + t, -w - t, y_outer, h, h + t)},
-      {"wall_x_min", box(-l - t, -l, -w - t, y_outer, 0, h)},
-      {"wall_x_max", box(l, l + t, -w - t, y_outer, 0, h)},
-      {"wall_y_min", box(-l, l, -w - t, -w, 0, h)},
-      {"wall_y_max_left", box(-l, door_x0, w, y_outer, 0, h)},
-      {"wall_y_max_right", box(door_x1, l, w, y_outer, 0, h)},
-      {"door_lintel", box(door_x0, door_x1, w, y_outer, c.door_height_m, h)},
-      {"door_leaf", box(door_x0, door_x1, w + c.door_depth_m, y_outer, 0, c.door_height_m)},
-  };
-
-  if (c.target_enabled) {
-    // A box in the wall's own coordinates: u along the wall, z up, depth behind the wall
-    // plane (negative: in the room).
-    const auto wallBox = [&](double u0, double u1, double z0, double z1, double d0, double d1) {
-      if (c.target_wall == "x_min") return box(-l - d1, -l - d0, u0, u1, z0, z1);
-      if (c.target_wall == "x_max") return box(l + d0, l + d1, u0, u1, z0, z1);
-      return box(u0, u1, -w - d1, -w - d0, z0, z1);  // y_min
-    };
-    // The wall slab is rebuilt around the window opening.
-    const std::string wall_name = "wall_" + c.target_wall;
-    double u_lo, u_hi;
-    if (c.target_wall == "y_min") {
-      u_lo = -l;
-      u_hi = l;
-    } else {
-      u_lo = -w - t;
-      u_hi = y_outer;
-    }
-    boxes_.erase(std::remove_if(boxes_.begin(), boxes_.end(),
-                                [&](const SceneBox& b) { return b.name == wall_name; }),
-                 boxes_.end());
-    const double wu0 = c.target_position_m - c.target_window_width_m / 2;
-    const double wu1 = c.target_position_m + c.target_window_width_m / 2;
-    const double wz0 = c.target_window_sill_m, wz1 = wz0 + c.target_window_height_m;
-    boxes_.push_back({wall_name + "_below_window", wallBox(u_lo, u_hi, 0, wz0, 0, t)});
-    boxes_.push_back({wall_name + "_above_window", wallBox(u_lo, u_hi, wz1, h, 0, t)});
-    boxes_.push_back({wall_name + "_left_of_window", wallBox(u_lo, wu0, wz0, wz1, 0, t)});
-    boxes_.push_back({wall_name + "_right_of_window", wallBox(wu1, u_hi, wz0, wz1, 0, t)});
-    boxes_.push_back({"window_back", wallBox(wu0, wu1, wz0, wz1, c.target_window_depth_m,
-                                             c.target_window_depth_m + t)});
-    const double bz = 0.5 * (wz0 + wz1);
-    const double d0 = -c.target_board_offset_m;
-    boxes_.push_back({"target_board",
-                      wallBox(c.target_position_m - c.target_board_width_m / 2,
-                              c.target_position_m + c.target_board_width_m / 2,
-                              bz - c.target_board_height_m / 2, bz + c.target_board_height_m / 2, d0,
-                              d0 + c.target_board_thickness_m)});
-  }
-
-  const double tx0 = c.table_center_x_m - c.table_length_m / 2;
-  const double tx1 = c.table_center_x_m + c.table_length_m / 2;
-  const double ty0 = c.table_center_y_m - c.table_width_m / 2;
-  const double ty1 = c.table_center_y_m + c.table_width_m / 2;
-  const double leg_top = c.table_height_m - c.table_top_thickness_m;
-  const double s = c.table_leg_size_m;
-  boxes_.push_back({"table_top", box(tx0, tx1, ty0, ty1, leg_top, c.table_height_m)});
-  boxes_.push_back({"table_leg_1", box(tx0, tx0 + s, ty0, ty0 + s, 0, leg_top)});
-  boxes_.push_back({"table_leg_2", box(tx1 - s, tx1, ty0, ty0 + s, 0, leg_top)});
-  boxes_.push_back({"table_leg_3", box(tx0, tx0 + s, ty1 - s, ty1, 0, leg_top)});
-  boxes_.push_back({"table_leg_4", box(tx1 - s, tx1, ty1 - s, ty1, 0, leg_top)});
-
-  boxes_.push_back(
-      {"cabinet", box(c.cabinet_center_x_m - c.cabinet_length_m / 2,
-                      c.cabinet_center_x_m + c.cabinet_length_m / 2,
-                      c.cabinet_center_y_m - c.cabinet_width_m / 2,
-                      c.cabinet_center_y_m + c.cabinet_width_m / 2, 0, c.cabinet_height_m)});
-
+  boxes_ = shellBoxes(c);
+  if (c.target_enabled) addTarget(c, &boxes_);
+  addFurniture(c, &boxes_);
   // The stand's post, axis-aligned in the room frame whatever the rig's yaw.
   const double p = kPostSideM / 2;
   boxes_.push_back({"stand_post", box(c.rig_x_m - p, c.rig_x_m + p, c.rig_y_m - p, c.rig_y_m + p, 0,

@@ -100,9 +100,20 @@ void MotorController::startHoming(int64_t now, Outbox& out) {
 }
 
 void MotorController::advance(int64_t now, Outbox& out) {
+  handleSwitchEdges(now, out);
+  advancePhase(now, out);
+  if (now >= next_state_utime_) {
+    publishState(now, out);
+  }
+}
+
+double MotorController::startAngle() const {
+  return rig_.motor.action_sequence == "naive" ? 0.0 : -preRollAngle();
+}
+
+void MotorController::handleSwitchEdges(int64_t now, Outbox& out) {
   const double accel = rig_.motor.accel_deg_s2 * kDegToRad;
   const int64_t settle = us(rig_.motor.settle_s);
-
   for (const SwitchEdge& e : device_->poll(now)) {
     switch_event_t m;
     m.utime = e.utime;
@@ -126,9 +137,11 @@ void MotorController::advance(int64_t now, Outbox& out) {
       enter(now, Phase::kHomingStop, out);
     }
   }
+}
 
-  const double start_angle =
-      rig_.motor.action_sequence == "naive" ? 0.0 : -preRollAngle();
+void MotorController::advancePhase(int64_t now, Outbox& out) {
+  const double accel = rig_.motor.accel_deg_s2 * kDegToRad;
+  const int64_t settle = us(rig_.motor.settle_s);
   switch (phase_) {
     case Phase::kIdle:
       startHoming(now, out);
@@ -146,44 +159,20 @@ void MotorController::advance(int64_t now, Outbox& out) {
         if (!homed_) {
           startHoming(now, out);
         } else {
-          moveTo(now, start_angle, rig_.motor.move_speed_deg_s * kDegToRad);
+          moveTo(now, startAngle(), rig_.motor.move_speed_deg_s * kDegToRad);
           phase_until_ = motion_end_ + settle + us(rig_.motor.pause_s);
           enter(now, Phase::kPositioning, out);
         }
       }
       break;
     case Phase::kPositioning:
-      if (now >= phase_until_) {
-        ++sweep_id_;
-        command(now, {StepperCommand::Kind::kRun, omega_, accel, 0.0});
-        window_start_ = rig_.motor.action_sequence == "naive"
-                            ? now
-                            : motion_end_ + us(rig_.motor.margin_s);
-        window_end_ = window_start_ + window_us_;
-        enter(now, now >= window_start_ ? Phase::kScanning : Phase::kAccelerating, out);
-      }
+      if (now >= phase_until_) startSweep(now, out);
       break;
     case Phase::kAccelerating:
       if (now >= window_start_) enter(now, Phase::kScanning, out);
       break;
     case Phase::kScanning:
-      if (now >= window_end_) {
-        scan_window_t w;
-        w.utime = now;
-        w.sweep_id = sweep_id_;
-        w.mode = rig_.motor.mode;
-        w.start_utime = window_start_;
-        w.end_utime = window_end_;
-        w.angular_velocity_rad_s = omega_;
-        w.sweep_angle_rad = rig_.motor.sweep_angle_deg * kDegToRad;
-        const bool naive = rig_.motor.action_sequence == "naive";
-        w.action_sequence = naive ? scan_window_t::NAIVE : scan_window_t::IMPROVED;
-        w.accel_overlap = naive;
-        out.publish(channels::kScanWindow, now, w);
-        phase_until_ = naive ? now : window_end_ + us(rig_.motor.margin_s);
-        enter(now, Phase::kDecelerating, out);
-        motion_end_ = INT64_MAX;  // stop not yet commanded
-      }
+      if (now >= window_end_) closeWindow(now, out);
       break;
     case Phase::kDecelerating:
       if (motion_end_ == INT64_MAX) {
@@ -192,18 +181,7 @@ void MotorController::advance(int64_t now, Outbox& out) {
           phase_until_ = motion_end_ + settle;
         }
       } else if (now >= phase_until_) {
-        ++sweeps_done_;
-        count("sweeps");
-        if (sweeps_wanted_ > 0 && sweeps_done_ >= sweeps_wanted_) {
-          enter(now, Phase::kDone, out);
-          break;
-        }
-        const double target = rig_.motor.rehome_every_sweep
-                                  ? rig_.motor.home_angle_deg * kDegToRad + kHomingApproachRad
-                                  : start_angle;
-        moveTo(now, target, rig_.motor.move_speed_deg_s * kDegToRad);
-        phase_until_ = motion_end_ + settle;
-        enter(now, Phase::kReturning, out);
+        finishSweep(now, out);
       }
       break;
     case Phase::kReturning:
@@ -220,10 +198,50 @@ void MotorController::advance(int64_t now, Outbox& out) {
     case Phase::kFault:
       break;
   }
+}
 
-  if (now >= next_state_utime_) {
-    publishState(now, out);
+void MotorController::startSweep(int64_t now, Outbox& out) {
+  const double accel = rig_.motor.accel_deg_s2 * kDegToRad;
+  ++sweep_id_;
+  command(now, {StepperCommand::Kind::kRun, omega_, accel, 0.0});
+  window_start_ = rig_.motor.action_sequence == "naive"
+                      ? now
+                      : motion_end_ + us(rig_.motor.margin_s);
+  window_end_ = window_start_ + window_us_;
+  enter(now, now >= window_start_ ? Phase::kScanning : Phase::kAccelerating, out);
+}
+
+void MotorController::closeWindow(int64_t now, Outbox& out) {
+  scan_window_t w;
+  w.utime = now;
+  w.sweep_id = sweep_id_;
+  w.mode = rig_.motor.mode;
+  w.start_utime = window_start_;
+  w.end_utime = window_end_;
+  w.angular_velocity_rad_s = omega_;
+  w.sweep_angle_rad = rig_.motor.sweep_angle_deg * kDegToRad;
+  const bool naive = rig_.motor.action_sequence == "naive";
+  w.action_sequence = naive ? scan_window_t::NAIVE : scan_window_t::IMPROVED;
+  w.accel_overlap = naive;
+  out.publish(channels::kScanWindow, now, w);
+  phase_until_ = naive ? now : window_end_ + us(rig_.motor.margin_s);
+  enter(now, Phase::kDecelerating, out);
+  motion_end_ = INT64_MAX;  // stop not yet commanded
+}
+
+void MotorController::finishSweep(int64_t now, Outbox& out) {
+  ++sweeps_done_;
+  count("sweeps");
+  if (sweeps_wanted_ > 0 && sweeps_done_ >= sweeps_wanted_) {
+    enter(now, Phase::kDone, out);
+    return;
   }
+  const double target = rig_.motor.rehome_every_sweep
+                            ? rig_.motor.home_angle_deg * kDegToRad + kHomingApproachRad
+                            : startAngle();
+  moveTo(now, target, rig_.motor.move_speed_deg_s * kDegToRad);
+  phase_until_ = motion_end_ + us(rig_.motor.settle_s);
+  enter(now, Phase::kReturning, out);
 }
 
 void MotorController::publishState(int64_t now, Outbox& out) {

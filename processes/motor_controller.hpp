@@ -61,6 +61,14 @@ class MotorController : public Node {
   void publishState(int64_t now, Outbox& out);
   void startHoming(int64_t now, Outbox& out);
   void fault(int64_t now, const std::string& why, Outbox& out);
+  // The steps of advance(): the switch's edges (publish; homing reacts to them), then the
+  // phase's own transition.
+  void handleSwitchEdges(int64_t now, Outbox& out);
+  void advancePhase(int64_t now, Outbox& out);
+  void startSweep(int64_t now, Outbox& out);   // positioned: run up, open the window
+  void closeWindow(int64_t now, Outbox& out);  // window over: publish SCAN_WINDOW
+  void finishSweep(int64_t now, Outbox& out);  // stopped: done, or back to the start
+  double startAngle() const;                   // of each sweep (-pre-roll; naive: 0)
 
   RotatingLidarConfig rig_;
   StepperDevice* device_;
