@@ -246,7 +246,12 @@ int calibratePlateAngleFromLogs(const PlateAngleCalibRequest& o) {
   }
   if (in.sweeps.empty()) return reportNothingCalibrated(o, in);
   const AlphaFit f = fitAlpha(in.sweeps);
-  writeCalibration(o, in, f);
+  try {
+    writeCalibration(o, in, f);
+  } catch (const std::exception& e) {
+    std::cerr << "calib plate-angle: " << e.what() << "\n";
+    return 2;  // as the mounting calibration: a bad output path
+  }
   const double total_s = seconds(Clock::now() - t_start);
   reportHuman(o, in, f, total_s);
   if (o.json) reportJson(o, in, f, total_s);

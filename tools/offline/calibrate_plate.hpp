@@ -24,8 +24,7 @@ struct PlateAngleCalibRequest {
 // Reads every sweep of the logs, extracts each corrected sweep's four walls, runs the LM of
 // Algorithm A1 over their normals and writes `out`. Human report (per sweep, result, timing)
 // on stderr; with `json` the result on stdout. Returns the exit status: 0 calibrated, 1 no
-// usable sweep, 2 bad rig, log or output path. Throws (std::runtime_error) only when the
-// calibration file cannot be written.
+// usable sweep, 2 bad rig, log or output path (the calibration file cannot be written).
 int calibratePlateAngleFromLogs(const PlateAngleCalibRequest& request);
 
 }  // namespace sweepmap
