@@ -309,7 +309,7 @@ int runMounting(const MountingOptions& o) {
                  "calibrate without --time-offset\n";
   }
 
-  nlohmann::json j = mountingResultJson(ours, truth);
+  nlohmann::json j = nlohmann::json::parse(mountingResultJsonText(ours, truth));
   j["time_s"] = ours_s;
   j["track"] = o.track;
   if (o.time_offset) j["time_offset_at_bound"] = offset_at_bound;
@@ -317,7 +317,7 @@ int runMounting(const MountingOptions& o) {
   j["scans"] = log.scans.size();
   if (log.log_error) j["log_error"] = log.error;
   if (paper) {
-    j["paper"] = mountingResultJson(*paper, truth);
+    j["paper"] = nlohmann::json::parse(mountingResultJsonText(*paper, truth));
     j["paper"]["time_s"] = paper_s;
   }
   if (truth) {

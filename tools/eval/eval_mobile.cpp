@@ -698,8 +698,8 @@ EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions& o) {
   const MountingCalibrationResult ours = calibrateMounting(circle.scans, circle.ekf, initial, ours_options);
   const MountingCalibrationResult paper = calibrateMounting(circle.scans, circle.ekf, initial, paper_options);
   json calibration = {{"log", "logs/circle.lcmlog"},
-                      {"ours", mountingResultJson(ours, truth)},
-                      {"paper", mountingResultJson(paper, truth)}};
+                      {"ours", json::parse(mountingResultJsonText(ours, truth))},
+                      {"paper", json::parse(mountingResultJsonText(paper, truth))}};
   if (truth) calibration["truth"] = mountingJson(*truth);
 
   EvalMobileOptions eo;
