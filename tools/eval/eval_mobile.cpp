@@ -19,7 +19,7 @@
 #include "core/atomic_file.hpp"
 #include "mapping/cloud_io.hpp"
 #include "mapping/plot.hpp"
-#include "tools/eval/eval_rotating.hpp"
+#include "tools/eval/metrics.hpp"
 #include "tools/eval/figures.hpp"
 #include "tools/offline/mobile_log.hpp"
 #include "tools/offline/sim_mobile.hpp"
