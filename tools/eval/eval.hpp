@@ -1,6 +1,15 @@
 // `sweepmap eval` for any rig: dispatches on the rig's kind to its paper's evaluation
 // (rotating_lidar: Yuan 2021, tools/eval/eval_rotating.hpp; mobile_lidar: Miao 2022,
 // tools/eval/eval_mobile.hpp), of existing logs or of a simulated experiment.
+//
+// The library, by job (rotating_* for rig A, mobile_* for rig B; internal headers in
+// namespace sweepmap::eval):
+//   eval_rotating, eval_mobile  the drivers: a log or an experiment, step by step
+//   metrics, *_metrics          the measures (E_map distance, deviations, phi_error, alpha,
+//                               trajectory errors, room planes and dimensions, ghosts)
+//   *_figures                   one function per PNG (figures.hpp collects them)
+//   *_report                    report.json and report.md, the only files that use JSON
+//   common.hpp                  number formatting, progress lines, a stopwatch
 #pragma once
 
 #include <cstdint>

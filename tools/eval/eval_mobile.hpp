@@ -6,7 +6,7 @@
 // DIR/report.md and PNG figures.
 #pragma once
 
-#include <nlohmann/json.hpp>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,13 +25,10 @@ struct EvalMobileOptions {
   // A mounting to compare with (before calibration: the nominal rotation without error):
   // its planes' deviations beside the evaluated mounting's. Unset: no comparison.
   std::optional<LidarMounting> before;
-  nlohmann::json extra = nlohmann::json::object();  // merged into report.json
-  // Figures already drawn into out_dir by the caller (file, caption): listed in the report first.
-  std::vector<std::pair<std::string, std::string>> extra_figures;
 };
 
+// The numbers are in out_dir/report.json.
 struct EvalMobileResult {
-  nlohmann::json report;
   bool failed = false;  // corrupt log, no scans, no poses
   std::string message;
 };

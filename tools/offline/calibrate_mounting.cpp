@@ -132,7 +132,7 @@ bool timeOffsetAtBound(const MountingCalibRequest& o, const MethodRuns& runs) {
 nlohmann::json resultJson(const MountingCalibRequest& o, const MobileLog& log,
                           const MethodRuns& runs, const std::optional<LidarMounting>& truth,
                           bool offset_at_bound) {
-  nlohmann::json j = mountingResultJson(runs.ours, truth);
+  nlohmann::json j = nlohmann::json::parse(mountingResultJsonText(runs.ours, truth));
   j["time_s"] = runs.ours_s;
   j["track"] = o.track;
   if (o.time_offset) j["time_offset_at_bound"] = offset_at_bound;
@@ -140,7 +140,7 @@ nlohmann::json resultJson(const MountingCalibRequest& o, const MobileLog& log,
   j["scans"] = log.scans.size();
   if (log.log_error) j["log_error"] = log.error;
   if (runs.paper) {
-    j["paper"] = mountingResultJson(*runs.paper, truth);
+    j["paper"] = nlohmann::json::parse(mountingResultJsonText(*runs.paper, truth));
     j["paper"]["time_s"] = runs.paper_s;
   }
   if (truth) {

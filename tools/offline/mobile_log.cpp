@@ -1,5 +1,7 @@
 #include "tools/offline/mobile_log.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/odometry_node.hpp"
@@ -79,7 +81,7 @@ LidarMounting trueMounting(const truth_mounting_t& t) {
   return m;
 }
 
-nlohmann::json mountingResultJson(const MountingCalibrationResult& r, const std::optional<LidarMounting>& truth) {
+std::string mountingResultJsonText(const MountingCalibrationResult& r, const std::optional<LidarMounting>& truth) {
   nlohmann::json j = {{"method", mountingMethodName(r.method)},
                       {"ok", r.ok},
                       {"gamma_rad", r.gamma_rad},
@@ -97,7 +99,7 @@ nlohmann::json mountingResultJson(const MountingCalibrationResult& r, const std:
                        {"beta", 1e3 * (r.beta_rad - truth->beta_rad)},
                        {"alpha", 1e3 * (r.alpha_rad - truth->alpha_rad)}};
   }
-  return j;
+  return j.dump();
 }
 
 }  // namespace sweepmap

@@ -4,7 +4,6 @@
 // assembled again with any mounting without replaying the log.
 #pragma once
 
-#include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
 #include <vector>
@@ -42,10 +41,12 @@ std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack
 // The mounting the simulator used (truth), from TRUTH_MOUNTING.
 LidarMounting trueMounting(const truth_mounting_t& truth);
 
-// A mounting calibration's result for reports: method, ok (reason), gamma/beta/alpha_rad,
-// time_offset_s, track_drift_m_s, residual_before_m/after_m, correspondences, iterations and, given the truth
-// and a result, error_mrad {gamma, beta, alpha} (estimate minus truth).
-nlohmann::json mountingResultJson(const MountingCalibrationResult& r,
-                                  const std::optional<LidarMounting>& truth = std::nullopt);
+// A mounting calibration's result for reports, as the text of a JSON object: method, ok
+// (reason), gamma/beta/alpha_rad, time_offset_s, track_drift_m_s, residual_before_m/after_m,
+// correspondences, iterations and, given the truth and a result, error_mrad {gamma, beta,
+// alpha} (estimate minus truth). Text, so that no JSON type is in a header; parse it to add
+// keys (numbers read back exactly).
+std::string mountingResultJsonText(const MountingCalibrationResult& r,
+                                   const std::optional<LidarMounting>& truth = std::nullopt);
 
 }  // namespace sweepmap
