@@ -42,6 +42,16 @@ struct DemoRun {
     argv.insert(argv.end(), extra.begin(), extra.end());
     return procs.start(name, argv, logFile(name));
   }
+  // Stops the processes in order (upstream first), each with its grace time and then a
+  // pause for its last messages to reach the next; returns how many did not end cleanly.
+  int stopInOrder(const std::vector<std::pair<pid_t, double>>& pids_grace, int pause_ms) {
+    int failures = 0;
+    for (size_t i = 0; i < pids_grace.size(); ++i) {
+      if (i > 0) pause(pause_ms);
+      failures += procs.stop(pids_grace[i].first, pids_grace[i].second) != 0;
+    }
+    return failures;
+  }
   pid_t startLogger() {
     fs::remove(log);
     return procs.start("lcm-logger", {"lcm-logger", "--lcm-url=" + url, "-f", log},
@@ -99,13 +109,8 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   if (motor_rc != 0) std::cerr << "demo: motor ended with status " << motor_rc << "\n";
   pause(500);  // last scans delivered
   int failures = motor_rc != 0;
-  failures += run.procs.stop(lidar, 5.0) != 0;
-  pause(300);
-  failures += run.procs.stop(assembler, 10.0) != 0;
-  pause(500);
-  failures += run.procs.stop(mapper, 120.0) != 0;
-  pause(300);
-  failures += run.procs.stop(logger, 10.0) != 0;
+  failures += run.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}},
+                              400);
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.sweeps != o.sweeps;
@@ -155,13 +160,8 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
   const double duration_s = std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s;
   int failures = run.procs.wait(player, duration_s * 2.0 + 60.0) != 0;
   pause(800);  // last poses and scans through
-  failures += run.procs.stop(odometry, 10.0) != 0;
-  pause(300);
-  failures += run.procs.stop(assembler, 10.0) != 0;
-  pause(300);
-  failures += run.procs.stop(mapper, 120.0) != 0;
-  pause(300);
-  failures += run.procs.stop(logger, 10.0) != 0;
+  failures += run.stopInOrder(
+      {{odometry, 10.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 300);
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.scans == 0;
