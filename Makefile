@@ -1,4 +1,4 @@
-# The README's two commands. Both install missing Debian packages first (tools/setup.sh).
+# The README's two commands. Both install missing Debian packages first (tools/ops/setup.sh).
 #   make demo  - build and run the main job: a simulated 3D scan and map (out/)
 #   make test  - build and run every test through CTest
 BUILD ?= build
@@ -10,7 +10,7 @@ CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 all: build
 
 setup:
-	@bash tools/setup.sh
+	@bash tools/ops/setup.sh
 
 $(BUILD)/Makefile: CMakeLists.txt
 	cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
