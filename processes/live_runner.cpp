@@ -57,16 +57,22 @@ class Inbox {
   std::map<std::string, int64_t> dropped_;
 };
 
+// LCM's receive callback: copies the message into the inbox. Subscribed with
+// subscribeFunction (a plain function and a context pointer), not with subscribe(channel,
+// &Class::method, object): GCC 12's -fsanitize=vptr miscompiles the wrapper's call through a
+// pointer to member (lcm-cpp-impl.hpp:108, `(subs->handler->*subs->handlerMethod)(...)`
+// reads a wrong `subs` and crashes; clang's is fine), so a sanitizer build could not run.
 class RawHandler {
  public:
   RawHandler(Inbox* inbox, bool wake) : inbox_(inbox), wake_(wake) {}
-  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  static void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                        RawHandler* self) {
     Message m;
     m.utime = wallUtime();
     m.channel = channel;
     const auto* p = static_cast<const uint8_t*>(rbuf->data);
     m.data.assign(p, p + rbuf->data_size);
-    inbox_->push(std::move(m), wake_);
+    self->inbox_->push(std::move(m), self->wake_);
   }
 
  private:
@@ -75,6 +81,7 @@ class RawHandler {
 };
 
 // One runLive: the nodes' subscriptions, the optional receiver thread and the worker's loop.
+// The subscriptions end with it (the handler they point to lives here).
 class LiveRun {
  public:
   LiveRun(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options)
@@ -87,7 +94,9 @@ class LiveRun {
   void subscribe() {
     for (Node* n : nodes_) {
       for (const auto& ch : n->subscriptions()) {
-        if (subscribers_[ch].empty()) lcm_.subscribe(ch, &RawHandler::onMessage, &handler_);
+        if (subscribers_[ch].empty()) {
+          subscriptions_.push_back(lcm_.subscribeFunction(ch, &RawHandler::onMessage, &handler_));
+        }
         subscribers_[ch].push_back(n);
       }
     }
@@ -126,8 +135,8 @@ class LiveRun {
     }
   }
 
-  // Drains what arrived before the stop, lets the nodes flush and stops the receiver.
-  // Returns false if LCM failed.
+  // Drains what arrived before the stop, lets the nodes flush, stops the receiver and
+  // unsubscribes. Returns false if LCM failed.
   bool finish() {
     auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
     if (!options_.wake_on_message) {
@@ -146,6 +155,7 @@ class LiveRun {
     }
     receiving_ = false;
     if (receiver_.joinable()) receiver_.join();
+    for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
     return !lcm_failed_;
   }
 
@@ -191,6 +201,7 @@ class LiveRun {
   Inbox inbox_;
   RawHandler handler_;
   std::map<std::string, std::vector<Node*>> subscribers_;
+  std::vector<lcm::Subscription*> subscriptions_;
   std::thread receiver_;
   std::atomic<bool> receiving_{true};
   std::atomic<bool> lcm_failed_{false};
