@@ -1,19 +1,34 @@
-# The README's two commands. Both install missing Debian packages first (tools/setup.sh).
-#   make demo  - build and run the main job: a simulated 3D scan and map (out/)
-#   make test  - build and run every test through CTest
+# The README's commands. Each installs missing Debian packages first (tools/ops/setup.sh).
+#   make demo           - build and run the main job: a simulated 3D scan and map (out/)
+#   make test           - build and run every test through CTest (labels unit and e2e), then
+#                         test-sanitize: what CI runs (.ci/run)
+#   make test-unit      - build only the unit tests and run them (ctest -L unit)
+#   make test-sanitize  - the unit tests under AddressSanitizer (with LeakSanitizer) and
+#                         UndefinedBehaviorSanitizer, in their own build tree: any report fails
 BUILD ?= build
+SANITIZE_BUILD ?= build-sanitize
 JOBS ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
+# -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable.
+SANITIZE_CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1" \
+                        -DSWEEPMAP_SANITIZE=ON -DSWEEPMAP_BUILD_TESTS=ON
+CTEST = ctest --output-on-failure -j$(JOBS) --timeout 900
+# Reports are fatal already (-fno-sanitize-recover=all, ASan's default); these add the
+# stack trace of an undefined-behaviour report and keep leak checking on.
+SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-.PHONY: all setup build demo test bench clean
+.PHONY: all setup build demo test test-unit test-sanitize bench clean
 
 all: build
 
 setup:
-	@bash tools/setup.sh
+	@bash tools/ops/setup.sh
 
 $(BUILD)/Makefile: CMakeLists.txt
 	cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
+
+$(SANITIZE_BUILD)/Makefile: CMakeLists.txt
+	cmake -S . -B $(SANITIZE_BUILD) $(SANITIZE_CMAKE_FLAGS)
 
 build: setup $(BUILD)/Makefile
 	cmake --build $(BUILD) -j$(JOBS)
@@ -22,10 +37,20 @@ demo: build
 	$(BUILD)/bin/sweepmap demo --out out
 
 test: build
-	cd $(BUILD) && ctest --output-on-failure -j$(JOBS) --timeout 900
+	cd $(BUILD) && $(CTEST)
+	@$(MAKE) --no-print-directory test-sanitize
+
+test-unit: setup $(BUILD)/Makefile
+	cmake --build $(BUILD) -j$(JOBS) --target unit_tests
+	cd $(BUILD) && $(CTEST) -L unit
+
+# Only the unit tests' targets: neither the executables nor the e2e tests are built here.
+test-sanitize: setup $(SANITIZE_BUILD)/Makefile
+	cmake --build $(SANITIZE_BUILD) -j$(JOBS) --target unit_tests
+	cd $(SANITIZE_BUILD) && $(SANITIZE_ENV) $(CTEST) -L unit
 
 bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench
 
 clean:
-	rm -rf $(BUILD) out
+	rm -rf $(BUILD) $(SANITIZE_BUILD) out

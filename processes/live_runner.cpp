@@ -57,21 +57,155 @@ class Inbox {
   std::map<std::string, int64_t> dropped_;
 };
 
+// LCM's receive callback: copies the message into the inbox. Subscribed with
+// subscribeFunction (a plain function and a context pointer), not with subscribe(channel,
+// &Class::method, object): GCC 12's -fsanitize=vptr miscompiles the wrapper's call through a
+// pointer to member (lcm-cpp-impl.hpp:108, `(subs->handler->*subs->handlerMethod)(...)`
+// reads a wrong `subs` and crashes; clang's is fine), so a sanitizer build could not run.
 class RawHandler {
  public:
   RawHandler(Inbox* inbox, bool wake) : inbox_(inbox), wake_(wake) {}
-  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+  static void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel,
+                        RawHandler* self) {
     Message m;
     m.utime = wallUtime();
     m.channel = channel;
     const auto* p = static_cast<const uint8_t*>(rbuf->data);
     m.data.assign(p, p + rbuf->data_size);
-    inbox_->push(std::move(m), wake_);
+    self->inbox_->push(std::move(m), self->wake_);
   }
 
  private:
   Inbox* inbox_;
   bool wake_;
+};
+
+// One runLive: the nodes' subscriptions, the optional receiver thread and the worker's loop.
+// The subscriptions end with it (the handler they point to lives here).
+class LiveRun {
+ public:
+  LiveRun(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options)
+      : lcm_(lcm),
+        nodes_(nodes),
+        options_(options),
+        inbox_(options.queue_capacity, options.queue_capacity_bytes),
+        handler_(&inbox_, options.wake_on_message) {}
+
+  void subscribe() {
+    for (Node* n : nodes_) {
+      for (const auto& ch : n->subscriptions()) {
+        if (subscribers_[ch].empty()) {
+          subscriptions_.push_back(lcm_.subscribeFunction(ch, &RawHandler::onMessage, &handler_));
+        }
+        subscribers_[ch].push_back(n);
+      }
+    }
+  }
+
+  // Waking per message: a receiver thread hands each message over at once. Otherwise the
+  // worker itself takes what LCM has buffered at each tick, so a message costs no thread
+  // switch of ours (LCM's own receive thread still wakes for it).
+  void startReceiver() {
+    if (!options_.wake_on_message) return;
+    receiver_ = std::thread([this] {
+      while (receiving_) {
+        if (lcm_.handleTimeout(50) < 0) {
+          lcm_failed_ = true;
+          break;
+        }
+      }
+    });
+  }
+
+  // Until a signal, options.should_stop or an LCM failure.
+  void loop() {
+    const auto period = std::chrono::milliseconds(std::max(1, options_.tick_period_ms));
+    auto next_tick = std::chrono::steady_clock::now();
+    while (!g_stop && !lcm_failed_) {
+      receiveBuffered();
+      for (const Message& m : inbox_.popUntil(next_tick)) dispatch(m);
+      if (std::chrono::steady_clock::now() < next_tick) continue;
+      tickNodes();
+      next_tick += period;
+      if (std::chrono::steady_clock::now() > next_tick + 100 * period) {
+        next_tick = std::chrono::steady_clock::now();  // fell behind: do not burst
+      }
+      countDropped();
+      if (options_.should_stop && options_.should_stop()) break;
+    }
+  }
+
+  // Drains what arrived before the stop, lets the nodes flush, stops the receiver and
+  // unsubscribes. Returns false if LCM failed.
+  bool finish() {
+    auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
+    if (!options_.wake_on_message) {
+      while (!lcm_failed_ && std::chrono::steady_clock::now() < drain_until) {
+        if (lcm_.handleTimeout(20) < 0) lcm_failed_ = true;
+      }
+      drain_until = std::chrono::steady_clock::now();
+    }
+    for (const Message& m : inbox_.popUntil(drain_until)) dispatch(m);
+    const int64_t now = wallUtime();
+    for (Node* n : nodes_) {
+      Outbox out;
+      n->finish(now, out);
+      n->publishStatus(now, out);
+      publishAll(lcm_, out.take());
+    }
+    receiving_ = false;
+    if (receiver_.joinable()) receiver_.join();
+    for (lcm::Subscription* s : subscriptions_) lcm_.unsubscribe(s);
+    return !lcm_failed_;
+  }
+
+ private:
+  void receiveBuffered() {
+    if (options_.wake_on_message) return;
+    int rc = 0;
+    while ((rc = lcm_.handleTimeout(0)) > 0) {
+    }
+    if (rc < 0) lcm_failed_ = true;
+  }
+
+  void dispatch(const Message& m) {
+    const auto it = subscribers_.find(m.channel);
+    if (it == subscribers_.end()) return;
+    for (Node* n : it->second) {
+      Outbox out;
+      n->receive(m, out);
+      publishAll(lcm_, out.take());
+    }
+  }
+
+  void tickNodes() {
+    const int64_t now = wallUtime();
+    for (Node* n : nodes_) {
+      Outbox out;
+      n->tick(now, out);
+      publishAll(lcm_, out.take());
+    }
+  }
+
+  void countDropped() {
+    for (const auto& [channel, d] : inbox_.takeDropped()) {
+      dropped_total_ += d;
+      for (Node* n : subscribers_[channel]) n->countLostInput(d);
+      std::cerr << "receive queue full: " << dropped_total_ << " messages dropped so far\n";
+    }
+  }
+
+  lcm::LCM& lcm_;
+  const std::vector<Node*>& nodes_;
+  const LiveOptions& options_;
+  Inbox inbox_;
+  RawHandler handler_;
+  std::map<std::string, std::vector<Node*>> subscribers_;
+  std::vector<lcm::Subscription*> subscriptions_;
+  std::thread receiver_;
+  std::atomic<bool> receiving_{true};
+  std::atomic<bool> lcm_failed_{false};
+  int64_t dropped_total_ = 0;
 };
 
 }  // namespace
@@ -113,94 +247,11 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     std::cerr << "LCM initialisation failed\n";
     return 2;
   }
-  Inbox inbox(options.queue_capacity, options.queue_capacity_bytes);
-  RawHandler handler(&inbox, options.wake_on_message);
-  std::map<std::string, std::vector<Node*>> subscribers;
-  for (Node* n : nodes) {
-    for (const auto& ch : n->subscriptions()) {
-      if (subscribers[ch].empty()) lcm.subscribe(ch, &RawHandler::onMessage, &handler);
-      subscribers[ch].push_back(n);
-    }
-  }
-
-  const auto dispatch = [&](const Message& m) {
-    const auto it = subscribers.find(m.channel);
-    if (it == subscribers.end()) return;
-    for (Node* n : it->second) {
-      Outbox out;
-      n->receive(m, out);
-      publishAll(lcm, out.take());
-    }
-  };
-
-  std::atomic<bool> receiving{true};
-  std::atomic<bool> lcm_failed{false};
-  // Waking per message: a receiver thread hands each message over at once. Otherwise the
-  // worker itself takes what LCM has buffered at each tick, so a message costs no thread
-  // switch of ours (LCM's own receive thread still wakes for it).
-  std::thread receiver;
-  if (options.wake_on_message) {
-    receiver = std::thread([&] {
-      while (receiving) {
-        if (lcm.handleTimeout(50) < 0) {
-          lcm_failed = true;
-          break;
-        }
-      }
-    });
-  }
-  const auto receiveBuffered = [&] {
-    if (options.wake_on_message) return;
-    int rc = 0;
-    while ((rc = lcm.handleTimeout(0)) > 0) {
-    }
-    if (rc < 0) lcm_failed = true;
-  };
-
-  const auto period = std::chrono::milliseconds(std::max(1, options.tick_period_ms));
-  auto next_tick = std::chrono::steady_clock::now();
-  int64_t dropped_total = 0;
-  while (!g_stop && !lcm_failed) {
-    receiveBuffered();
-    for (const Message& m : inbox.popUntil(next_tick)) dispatch(m);
-    if (std::chrono::steady_clock::now() >= next_tick) {
-      const int64_t now = wallUtime();
-      for (Node* n : nodes) {
-        Outbox out;
-        n->tick(now, out);
-        publishAll(lcm, out.take());
-      }
-      next_tick += period;
-      if (std::chrono::steady_clock::now() > next_tick + 100 * period) {
-        next_tick = std::chrono::steady_clock::now();  // fell behind: do not burst
-      }
-      for (const auto& [channel, d] : inbox.takeDropped()) {
-        dropped_total += d;
-        for (Node* n : subscribers[channel]) n->countLostInput(d);
-        std::cerr << "receive queue full: " << dropped_total << " messages dropped so far\n";
-      }
-      if (options.should_stop && options.should_stop()) break;
-    }
-  }
-  // Drain what arrived before the stop, then let the nodes flush.
-  auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
-  if (!options.wake_on_message) {
-    while (!lcm_failed && std::chrono::steady_clock::now() < drain_until) {
-      if (lcm.handleTimeout(20) < 0) lcm_failed = true;
-    }
-    drain_until = std::chrono::steady_clock::now();
-  }
-  for (const Message& m : inbox.popUntil(drain_until)) dispatch(m);
-  const int64_t now = wallUtime();
-  for (Node* n : nodes) {
-    Outbox out;
-    n->finish(now, out);
-    n->publishStatus(now, out);
-    publishAll(lcm, out.take());
-  }
-  receiving = false;
-  if (receiver.joinable()) receiver.join();
-  if (lcm_failed) {
+  LiveRun run(lcm, nodes, options);
+  run.subscribe();
+  run.startReceiver();
+  run.loop();
+  if (!run.finish()) {
     std::cerr << "LCM receive failed: stopped\n";
     return 2;
   }

@@ -86,7 +86,7 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
   }
 }
 
-void MapperNode::insert(int64_t now_utime, const SweepKey& key, Outbox& out) {
+void MapperNode::insert(int64_t now_utime, SweepKey key, Outbox& out) {
   const int64_t sweep_id = key.second;
   auto it = pending_.find(key);
   if (it == pending_.end()) return;

@@ -46,7 +46,9 @@ class MapperNode : public Node {
     Eigen::Vector3f origin = Eigen::Vector3f::Zero();
     std::map<int, std::vector<float>> chunks;  // chunk index -> xyz triples
   };
-  void insert(int64_t now_utime, const SweepKey& key, Outbox& out);
+  // Inserts the pending sweep `key` and erases it from pending_. The key is taken by value:
+  // callers pass pending_.begin()->first, which the erase would free.
+  void insert(int64_t now_utime, SweepKey key, Outbox& out);
   void flushBatch(int64_t now_utime, Outbox& out);
   void publishStats(int64_t now_utime, Outbox& out);
   void save(const std::string& path);

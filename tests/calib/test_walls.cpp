@@ -4,18 +4,43 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include "calib/rotating_geometry.hpp"
 #include "calib/walls.hpp"
+#include "core/event_log.hpp"
 #include "drivers/scene.hpp"
-#include "tests/e2e/test_support.hpp"
 #include "tools/offline/log_sweeps.hpp"
+#include "tools/offline/runs.hpp"
 
 namespace sweepmap {
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
+
+std::string sourcePath(const std::string& rel) { return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel; }
+
+// What `sweepmap sim --rig <rig> --scene <scene> --mode <mode> --sweeps 1 --seed <seed> --out
+// LOG` writes, made in this process through the same library calls (same seed, same log).
+std::string simulatedLog(const std::string& name, const std::string& rig_path,
+                         const std::string& scene_path, int mode, uint64_t seed) {
+  const std::filesystem::path dir =
+      std::filesystem::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const std::string log_path = (dir / "sim.lcmlog").string();
+  const SimSetup setup = loadSimSetup(rig_path, scene_path, {"motor.mode=" + std::to_string(mode)});
+  SimRunOptions options;
+  options.seed = seed;
+  options.sweeps = 1;
+  EventLogWriter log(log_path);
+  const SimRunResult r = simulateRig(
+      setup, options, [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
+  log.close();
+  if (!r.ok) throw std::runtime_error("simulation failed: " + r.summary);
+  return log_path;
+}
 
 double angleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
   return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) / kDeg;
@@ -131,15 +156,13 @@ TEST(WallExtraction, RefitOnFullCloudKeepsOrientation) {
   EXPECT_GT(refit[0].inliers, 10000);
 }
 
-// One simulated mode-7 sweep of the conference room (sweepmap sim): the four walls are
+// One simulated mode-7 sweep of the conference room (as sweepmap sim): the four walls are
 // found, their normals match the scene's truth turned by the sweep's residual attitude
 // error, and neither the door recess nor the cabinet front is taken for a wall.
 TEST(WallExtraction, SimulatedConferenceRoomSweep) {
-  const std::string rig_path = test::sourcePath("config/rig_a.yaml");
-  const std::string scene_path = test::sourcePath("config/scene_conference_room.yaml");
-  const std::string log = test::cachedSimLog(
-      "mode7x1_walls",
-      {"--rig", rig_path, "--scene", scene_path, "--mode", "7", "--sweeps", "1", "--seed", "5"});
+  const std::string rig_path = sourcePath("config/rig_a.yaml");
+  const std::string scene_path = sourcePath("config/scene_conference_room.yaml");
+  const std::string log = simulatedLog("mode7x1_walls", rig_path, scene_path, 7, 5);
   const RotatingLidarConfig rig = loadRotatingLidarConfig(rig_path);
   const SceneConfig scene_config = loadScene(scene_path);
   const Scene scene(scene_config, rig.plate);
