@@ -21,7 +21,8 @@ double meanNearestNeighbourDistance(const std::vector<Eigen::Vector3f>& cloud) {
   double sum = 0.0;
   for (size_t i = 0; i < pc->size(); ++i) {
     // The nearest hit is the point itself (or a duplicate at distance 0).
-    if (tree.nearestKSearch((*pc)[i], 2, idx, d2) == 2) sum += std::sqrt(static_cast<double>(d2[1]));
+    if (tree.nearestKSearch((*pc)[i], 2, idx, d2) == 2)
+      sum += std::sqrt(static_cast<double>(d2[1]));
   }
   return sum / static_cast<double>(pc->size());
 }

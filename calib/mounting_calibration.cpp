@@ -102,8 +102,8 @@ struct PointToPlaneCost {
     return true;
   }
   static ceres::CostFunction* Create(const Model* m, const Ray& a, const RayPose& pa,
-                                     std::vector<std::pair<Ray, RayPose>> b, const Eigen::Vector3d& n,
-                                     double weight) {
+                                     std::vector<std::pair<Ray, RayPose>> b,
+                                     const Eigen::Vector3d& n, double weight) {
     return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 3, 1, 2>(
         new PointToPlaneCost(m, a, pa, std::move(b), n, weight));
   }
@@ -130,7 +130,8 @@ struct PointPairCost {
   }
   static ceres::CostFunction* Create(const Model* m, const Ray& a, const RayPose& pa, const Ray& b,
                                      const RayPose& pb) {
-    return new ceres::AutoDiffCostFunction<PointPairCost, 3, 3, 1>(new PointPairCost(m, a, pa, b, pb));
+    return new ceres::AutoDiffCostFunction<PointPairCost, 3, 3, 1>(
+        new PointPairCost(m, a, pa, b, pb));
   }
   const Model* m_;
   Ray a_;
@@ -185,16 +186,16 @@ struct Prepared {
 
 Prepared prepare(const std::vector<Scan2D>& scans, const LidarMounting& initial, int stride) {
   Prepared p;
-  const Eigen::Matrix3d R_nom =
-      rotationXYZ(initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
+  const Eigen::Matrix3d R_nom = rotationXYZ(
+      initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
   for (size_t s = 0; s < scans.size(); ++s) {
     const Scan2D& scan = scans[s];
     for (size_t i = 0; i < scan.ranges_m.size(); i += size_t(stride)) {
       const double r = scan.ranges_m[i];
       if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;
       const double a = scan.rayAngle(i);
-      p.rays.push_back({R_nom * rotating::pointInLidar(r, a), scan.rayUtime(i), int(s),
-                        std::sin(a) > 0.0, r});
+      p.rays.push_back(
+          {R_nom * rotating::pointInLidar(r, a), scan.rayUtime(i), int(s), std::sin(a) > 0.0, r});
     }
   }
   return p;
@@ -264,8 +265,8 @@ void configureSolver(ceres::Solver::Options* so, int max_iterations) {
 }
 
 // Least-squares plane (PCA) of `pts`: false if they are not planar (smallest eigenvalue
-// above `max_ratio` times the middle one, or above `max_variance`). The normal's sign is fixed (largest component
-// positive) so results do not depend on the eigen solver's choice.
+// above `max_ratio` times the middle one, or above `max_variance`). The normal's sign is fixed
+// (largest component positive) so results do not depend on the eigen solver's choice.
 bool fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_ratio, double max_variance,
               Eigen::Vector3d* mean, Eigen::Vector3d* normal) {
   if (pts.size() < 3) return false;
@@ -424,7 +425,8 @@ std::optional<PlaneResidual> planeResidual(const Round& rd, size_t k, bool trim,
   if (o.check_own_plane) {
     Eigen::Vector3d own_mean, own_n;
     if (int(patch.own.size()) < o.min_neighbours) return std::nullopt;
-    if (!fitPlane(patch.own, o.max_planarity_ratio, max_var, &own_mean, &own_n)) return std::nullopt;
+    if (!fitPlane(patch.own, o.max_planarity_ratio, max_var, &own_mean, &own_n))
+      return std::nullopt;
     if (std::abs(own_n.dot(n)) < std::cos(o.max_normal_angle_rad)) return std::nullopt;
   }
   // The residual's plane: through the centroid of the nearest neighbours of the other
@@ -511,7 +513,8 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
   double dt = o.estimate_time_offset ? o.initial_time_offset_s : 0.0;
   double drift[2] = {0.0, 0.0};
   const bool with_drift = o.estimate_track_drift;
-  if (!rays.empty()) model.t_mid_us = 0.5 * (double(rays.front().utime) + double(rays.back().utime));
+  if (!rays.empty())
+    model.t_mid_us = 0.5 * (double(rays.front().utime) + double(rays.back().utime));
 
   std::vector<int> all(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) all[i] = int(i);
@@ -601,13 +604,18 @@ void addTargetEdges(const Scan2D& scan, int s, const Eigen::Matrix3d& R_nom,
       continue;
     }
     size_t j = i;  // the run [i, j]
-    while (j + 1 < n && valid(j + 1) && std::abs(scan.ranges_m[j + 1] - scan.ranges_m[j]) < o.edge_jump_m) ++j;
-    const bool closed = j + 1 < n && valid(j + 1) && scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
+    while (j + 1 < n && valid(j + 1) &&
+           std::abs(scan.ranges_m[j + 1] - scan.ranges_m[j]) < o.edge_jump_m)
+      ++j;
+    const bool closed =
+        j + 1 < n && valid(j + 1) && scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
     const double r_i = scan.ranges_m[i], r_j = scan.ranges_m[j];
-    const double extent =
-        (rotating::pointInLidar(r_i, scan.rayAngle(i)) - rotating::pointInLidar(r_j, scan.rayAngle(j))).norm();
-    if (closed && j >= i + 2 && extent >= o.target_min_extent_m && extent <= o.target_max_extent_m &&
-        std::min(r_i, r_j) >= o.min_range_m && std::max(r_i, r_j) <= o.max_edge_range_m) {
+    const double extent = (rotating::pointInLidar(r_i, scan.rayAngle(i)) -
+                           rotating::pointInLidar(r_j, scan.rayAngle(j)))
+                              .norm();
+    if (closed && j >= i + 2 && extent >= o.target_min_extent_m &&
+        extent <= o.target_max_extent_m && std::min(r_i, r_j) >= o.min_range_m &&
+        std::max(r_i, r_j) <= o.max_edge_range_m) {
       rays->push_back(edge(i, i - 1));
       rays->push_back(edge(j, j + 1));
     }
@@ -634,9 +642,10 @@ int addEdgePairs(const Round& rd, double match_m, const MountingCalibrationOptio
     if (j < 0 || nearestOther(j) != int(k)) continue;
     if (!o.opposite_sides_only && j < int(k)) continue;
     *ss += (w.p[k] - w.p[j]).squaredNorm();
-    problem->AddResidualBlock(PointPairCost::Create(&rd.model, rd.rays[w.ray[k]], rd.poses[w.ray[k]],
-                                                    rd.rays[w.ray[j]], rd.poses[w.ray[j]]),
-                              nullptr, rd.ang, rd.dt);
+    problem->AddResidualBlock(
+        PointPairCost::Create(&rd.model, rd.rays[w.ray[k]], rd.poses[w.ray[k]], rd.rays[w.ray[j]],
+                              rd.poses[w.ray[j]]),
+        nullptr, rd.ang, rd.dt);
     ++pairs;
   }
   return pairs;
@@ -647,8 +656,8 @@ MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const Po
                                       const MountingCalibrationOptions& o) {
   MountingCalibrationResult res;
   res.method = MountingMethod::kPaperPoints;
-  const Eigen::Matrix3d R_nom =
-      rotationXYZ(initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
+  const Eigen::Matrix3d R_nom = rotationXYZ(
+      initial.nominal_rpy_rad.x(), initial.nominal_rpy_rad.y(), initial.nominal_rpy_rad.z());
   std::vector<Ray> rays;
   for (size_t s = 0; s < scans.size(); ++s) addTargetEdges(scans[s], int(s), R_nom, o, &rays);
   Model model;
@@ -668,7 +677,8 @@ MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const Po
     if (w.p.size() < 2) break;
     ceres::Problem problem;
     double ss = 0.0;
-    const int pairs = addEdgePairs({rays, poses, w, model, ang, &dt, nullptr}, match_m, o, &problem, &ss);
+    const int pairs =
+        addEdgePairs({rays, poses, w, model, ang, &dt, nullptr}, match_m, o, &problem, &ss);
     if (pairs < o.min_point_pairs) {
       res.reason = "too few corresponding edge points of the two passes (" + std::to_string(pairs) +
                    " < " + std::to_string(o.min_point_pairs) + ")";
@@ -702,8 +712,8 @@ MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const Po
 
 }  // namespace
 
-MountingCalibrationResult calibrateMounting(const std::vector<Scan2D>& scans, const PoseTrack& track,
-                                            const LidarMounting& initial,
+MountingCalibrationResult calibrateMounting(const std::vector<Scan2D>& scans,
+                                            const PoseTrack& track, const LidarMounting& initial,
                                             const MountingCalibrationOptions& options) {
   MountingCalibrationResult fail;
   fail.method = options.method;
@@ -718,7 +728,8 @@ MountingCalibrationResult calibrateMounting(const std::vector<Scan2D>& scans, co
                   " s, less than min_pass_gap_s: no second pass";
     return fail;
   }
-  if (options.method == MountingMethod::kPaperPoints) return paperPoints(scans, track, initial, options);
+  if (options.method == MountingMethod::kPaperPoints)
+    return paperPoints(scans, track, initial, options);
   const Prepared prep = prepare(scans, initial, std::max(1, options.ray_stride));
   return pointToPlane(prep, track, initial, options);
 }

@@ -108,8 +108,8 @@ PlateCheck checkPlate(const std::vector<PlateRay>& rays, const PlateRegion& regi
     c.problem = "plate mixed with another object: " + ratio(c.in_front, c.expected) +
                 " plate rays end in front of it";
   } else if (c.on_plate < (6 * c.expected) / 10) {
-    c.problem = "plate partial or occluded: " + ratio(c.on_plate, c.expected) +
-                " expected rays hit it";
+    c.problem =
+        "plate partial or occluded: " + ratio(c.on_plate, c.expected) + " expected rays hit it";
   } else if (c.off_plate > (15 * c.on_plate) / 100) {
     c.problem = "plate points outside its expected extent: " + std::to_string(c.off_plate) +
                 " besides " + std::to_string(c.on_plate) + " on it";

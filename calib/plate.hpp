@@ -24,9 +24,9 @@ struct PlateRegion {
 
 struct PlateEstimate {
   bool found = false;
-  int points = 0;           // points in the region
-  double beta_rad = 0.0;    // middle line in O' (valid when found)
-  std::string reason;       // why not found
+  int points = 0;         // points in the region
+  double beta_rad = 0.0;  // middle line in O' (valid when found)
+  std::string reason;     // why not found
 };
 
 // Indices of the points of `cloud_Op` that lie in the region.

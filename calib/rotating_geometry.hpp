@@ -8,6 +8,7 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+
 #include "core/angles.hpp"
 
 namespace sweepmap {
@@ -42,7 +43,6 @@ inline double motorAngleFromIndex(long k, long K, double sweep_angle_rad) {
 inline double motorAngleFromTime(int64_t t_utime, int64_t t0_utime, double omega_rad_s) {
   return omega_rad_s * 1e-6 * static_cast<double>(t_utime - t0_utime);
 }
-
 
 // Eq. 10: phi_offset = alpha - beta, wrapped.
 inline double phiOffset(double alpha_rad, double beta_rad) {

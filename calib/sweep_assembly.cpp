@@ -28,8 +28,8 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   out.points_Op.reserve(total);
   for (const auto& scan : scans) {
     const double t_ray_s = 1e-9 * static_cast<double>(scan.time_increment_ns);
-    const double phi0 = rotating::motorAngleFromTime(scan.utime, out.first_ray_utime,
-                                                     window.omega_rad_s);
+    const double phi0 =
+        rotating::motorAngleFromTime(scan.utime, out.first_ray_utime, window.omega_rad_s);
     for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
       const double r = scan.ranges_m[i];
       if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none

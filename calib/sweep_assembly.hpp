@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "calib/plate.hpp"
-#include "rigs/rotating_lidar.hpp"
 #include "core/scan.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 
@@ -18,23 +18,23 @@ struct SweepWindow {
   int mode = 0;
   int64_t start_utime = 0;  // scans whose first ray is in [start, end) belong to the sweep
   int64_t end_utime = 0;
-  double omega_rad_s = 0.0;  // constant shaft speed over the window
+  double omega_rad_s = 0.0;    // constant shaft speed over the window
   bool accel_overlap = false;  // the motor's timing says a ramp overlapped the window
 };
 
 struct AssembledSweep {
   SweepWindow window;
   int scans = 0;
-  int64_t first_ray_utime = 0;              // phi_motor = 0 here: the instant frame O' is defined
-  std::vector<Eigen::Vector3f> points_Op;   // C_O'
-  std::vector<Eigen::Vector3f> points;      // C_O when corrected, else C_O'
-  std::vector<PlateRay> plate_rays;         // rays meeting the plate plane in the region
+  int64_t first_ray_utime = 0;             // phi_motor = 0 here: the instant frame O' is defined
+  std::vector<Eigen::Vector3f> points_Op;  // C_O'
+  std::vector<Eigen::Vector3f> points;     // C_O when corrected, else C_O'
+  std::vector<PlateRay> plate_rays;        // rays meeting the plate plane in the region
   PlateEstimate plate;
-  PlateCheck plate_check;                   // the estimate against the plate's shape
+  PlateCheck plate_check;  // the estimate against the plate's shape
   double alpha_rad = 0.0;
   double phi_offset_rad = 0.0;  // applied rotation (0 when not corrected)
   bool corrected = false;
-  std::string reason;           // why not corrected
+  std::string reason;  // why not corrected
 };
 
 // `scans` must be the valid scans of the window in time order. Rays with range 0 or

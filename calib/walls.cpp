@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+
 #include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
-
 
 // Orients a plane so that its normal points toward the origin (offset > 0).
 void orientTowardOrigin(WallPlaneFit* w) {
@@ -117,7 +117,8 @@ std::vector<WallPlaneFit> refitWalls(const std::vector<Eigen::Vector3f>& cloud,
 
 namespace {
 
-pcl::PointCloud<pcl::PointXYZ>::Ptr downsampled(const std::vector<Eigen::Vector3f>& cloud, double voxel_m) {
+pcl::PointCloud<pcl::PointXYZ>::Ptr downsampled(const std::vector<Eigen::Vector3f>& cloud,
+                                                double voxel_m) {
   auto full = pcl::make_shared<pcl::PointCloud<pcl::PointXYZ>>();
   full->reserve(cloud.size());
   for (const auto& p : cloud) {
@@ -137,9 +138,8 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr downsampled(const std::vector<Eigen::Vector3
 // Z within `eps_angle_rad`), largest first, each removed before the next; oriented toward
 // the origin. Stops at the first plane with fewer than `min_inliers` points.
 std::vector<WallPlaneFit> ransacPlanes(pcl::PointCloud<pcl::PointXYZ>::Ptr remaining,
-                                       pcl::SacModel model, double eps_angle_rad,
-                                       double distance_m, int max_planes, int min_inliers,
-                                       int max_iterations) {
+                                       pcl::SacModel model, double eps_angle_rad, double distance_m,
+                                       int max_planes, int min_inliers, int max_iterations) {
   std::vector<WallPlaneFit> planes;
   pcl::SACSegmentation<pcl::PointXYZ> seg;
   seg.setOptimizeCoefficients(true);
@@ -184,9 +184,10 @@ std::vector<WallPlaneFit> extractPlanes(const std::vector<Eigen::Vector3f>& clou
   using O = PlaneExtractionOptions::Orientation;
   // PARALLEL_PLANE: parallel to the axis (vertical walls); PERPENDICULAR_PLANE: normal
   // along the axis (floors, ceilings).
-  const pcl::SacModel model = options.orientation == O::kAny        ? pcl::SACMODEL_PLANE
-                              : options.orientation == O::kVertical ? pcl::SACMODEL_PARALLEL_PLANE
-                                                                    : pcl::SACMODEL_PERPENDICULAR_PLANE;
+  const pcl::SacModel model = options.orientation == O::kAny ? pcl::SACMODEL_PLANE
+                              : options.orientation == O::kVertical
+                                  ? pcl::SACMODEL_PARALLEL_PLANE
+                                  : pcl::SACMODEL_PERPENDICULAR_PLANE;
   std::vector<WallPlaneFit> planes =
       ransacPlanes(downsampled(cloud, options.voxel_m), model, options.max_tilt_deg * kDegToRad,
                    options.distance_threshold_m, options.max_planes, options.min_inliers,
@@ -213,11 +214,10 @@ std::vector<WallPlaneFit> verticalCandidates(const std::vector<Eigen::Vector3f>&
   auto remaining = withoutHorizontalSlabs(*down, options.voxel_m > 0 ? options.voxel_m : 0.05,
                                           options.horizontal_peak_factor);
   std::vector<WallPlaneFit> candidates;
-  for (const WallPlaneFit& w :
-       ransacPlanes(remaining, pcl::SACMODEL_PARALLEL_PLANE,
-                    std::asin(std::clamp(options.max_normal_z, 0.0, 1.0)),
-                    options.distance_threshold_m, options.max_planes, options.min_inliers,
-                    options.ransac_max_iterations)) {
+  for (const WallPlaneFit& w : ransacPlanes(remaining, pcl::SACMODEL_PARALLEL_PLANE,
+                                            std::asin(std::clamp(options.max_normal_z, 0.0, 1.0)),
+                                            options.distance_threshold_m, options.max_planes,
+                                            options.min_inliers, options.ransac_max_iterations)) {
     if (std::abs(w.normal.z()) <= options.max_normal_z) candidates.push_back(w);
   }
   return candidates;
@@ -306,8 +306,8 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
   }
   // Refit on the full-resolution cloud (indices into cloud_O; non-finite points never
   // come within the distance of a plane).
-  result.walls = refitWalls(cloud_O, orderedWalls(candidates, first, second),
-                            options.distance_threshold_m);
+  result.walls =
+      refitWalls(cloud_O, orderedWalls(candidates, first, second), options.distance_threshold_m);
   for (const auto& w : result.walls) {
     if (w.inliers < 3) {
       result.walls.clear();

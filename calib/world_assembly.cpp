@@ -15,7 +15,8 @@ std::optional<Pose2> PoseTrack::at(int64_t utime) const {
   if (hi->first == utime) return hi->second;
   if (hi == poses_.begin()) return std::nullopt;
   auto lo = std::prev(hi);
-  const double f = static_cast<double>(utime - lo->first) / static_cast<double>(hi->first - lo->first);
+  const double f =
+      static_cast<double>(utime - lo->first) / static_cast<double>(hi->first - lo->first);
   const Pose2& a = lo->second;
   const Pose2& b = hi->second;
   return Pose2{a.x_m + f * (b.x_m - a.x_m), a.y_m + f * (b.y_m - a.y_m),

@@ -20,7 +20,7 @@ namespace sweepmap {
 // A time-ordered track of planar poses; linear interpolation (heading along the shorter arc).
 class PoseTrack {
  public:
-  void add(int64_t utime, const Pose2& pose);  // later poses replace same-time ones
+  void add(int64_t utime, const Pose2& pose);    // later poses replace same-time ones
   std::optional<Pose2> at(int64_t utime) const;  // nothing outside [first, last]
   int64_t lastUtime() const { return poses_.empty() ? INT64_MIN : poses_.rbegin()->first; }
   void pruneBefore(int64_t utime);  // keeps one pose at or before utime

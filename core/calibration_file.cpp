@@ -76,7 +76,8 @@ CalibrationFileContent loadCalibrationFile(const std::string& path, const std::s
 }
 
 // Writes `header` (a comment) and the content to `path.tmp`, then renames over `path`.
-void writeCalibrationFile(const std::string& path, const std::string& header, const std::string& section,
+void writeCalibrationFile(const std::string& path, const std::string& header,
+                          const std::string& section,
                           const std::vector<std::pair<std::string, double>>& values,
                           const std::map<std::string, std::string>& source,
                           const std::vector<std::string>& logs) {
@@ -111,9 +112,9 @@ PlateCalibration loadPlateCalibration(const std::string& path) {
 }
 
 void writePlateCalibration(const std::string& path, const PlateCalibration& c) {
-  writeCalibrationFile(path,
-                       "Plate-angle calibration (Yuan 2021 Algorithm A1); read via plate.calibration_file",
-                       "plate", {{"alpha_deg", c.alpha_deg}}, c.source, c.logs);
+  writeCalibrationFile(
+      path, "Plate-angle calibration (Yuan 2021 Algorithm A1); read via plate.calibration_file",
+      "plate", {{"alpha_deg", c.alpha_deg}}, c.source, c.logs);
 }
 
 MountingCalibration loadMountingCalibration(const std::string& path) {
@@ -130,9 +131,11 @@ MountingCalibration loadMountingCalibration(const std::string& path) {
 
 void writeMountingCalibration(const std::string& path, const MountingCalibration& c) {
   writeCalibrationFile(
-      path, "Lidar mounting calibration (Miao 2022 section 4.2); read via mounting.calibration_file",
-      "mounting", {{"gamma_rad", c.gamma_rad}, {"beta_rad", c.beta_rad}, {"alpha_rad", c.alpha_rad}},
-      c.source, c.logs);
+      path,
+      "Lidar mounting calibration (Miao 2022 section 4.2); read via mounting.calibration_file",
+      "mounting",
+      {{"gamma_rad", c.gamma_rad}, {"beta_rad", c.beta_rad}, {"alpha_rad", c.alpha_rad}}, c.source,
+      c.logs);
 }
 
 }  // namespace sweepmap

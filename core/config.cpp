@@ -90,8 +90,8 @@ void ConfigSchema::add(const std::string& key, bool* value, const std::string& u
 
 void ConfigSchema::add(const std::string& key, std::string* value, const std::string& unit,
                        const std::string& help) {
-  addEntry({key, unit, help, [value](const std::string& t) { *value = t; },
-            [value] { return *value; }});
+  addEntry(
+      {key, unit, help, [value](const std::string& t) { *value = t; }, [value] { return *value; }});
 }
 
 void ConfigSchema::assign(const std::string& key, const std::string& text,
@@ -117,8 +117,7 @@ void ConfigSchema::loadString(const std::string& yaml_text, const std::string& s
   flatten(root, "", &flat, source);
   std::set<std::string> seen;
   for (const auto& [key, node] : flat) {
-    const std::string where =
-        source + ":" + std::to_string(node.Mark().line + 1);
+    const std::string where = source + ":" + std::to_string(node.Mark().line + 1);
     assign(key, node.as<std::string>(), where);
     seen.insert(key);
   }
@@ -155,7 +154,8 @@ void ConfigSchema::print(std::ostream& out, const ConfigSchema* defaults) const 
     out << std::left << std::setw(static_cast<int>(width)) << e.key << " = " << e.format();
     if (!e.unit.empty()) out << " [" << e.unit << "]";
     std::string def = e.default_text;
-    if (defaults && defaults->has(e.key)) def = defaults->entries_[defaults->index_.at(e.key)].default_text;
+    if (defaults && defaults->has(e.key))
+      def = defaults->entries_[defaults->index_.at(e.key)].default_text;
     out << "  # " << e.help << " (default: " << (def.empty() ? "\"\"" : def) << ")\n";
   }
 }

@@ -7,8 +7,8 @@ namespace sweepmap {
 namespace {
 
 constexpr uint32_t kSync = 0xEDA1DA01u;
-constexpr uint32_t kMaxChannelLength = 255;          // LCM's own limit for channel names
-constexpr uint32_t kMaxDataLength = 256u << 20;      // far above any LCM message
+constexpr uint32_t kMaxChannelLength = 255;      // LCM's own limit for channel names
+constexpr uint32_t kMaxDataLength = 256u << 20;  // far above any LCM message
 
 uint64_t readBE(const uint8_t* p, int n) {
   uint64_t v = 0;
@@ -48,7 +48,8 @@ bool EventLogReader::next(LogEvent* event) {
   const size_t got = std::fread(header, 1, sizeof header, file_);
   if (got == 0 && std::feof(file_)) return false;
   if (got != sizeof header) {
-    throw LogError(path_, offset_, "truncated event header (" + std::to_string(got) + " of 28 bytes)");
+    throw LogError(path_, offset_,
+                   "truncated event header (" + std::to_string(got) + " of 28 bytes)");
   }
   if (readBE(header, 4) != kSync) throw LogError(path_, offset_, "bad sync word (corrupt log)");
   const uint32_t channel_len = static_cast<uint32_t>(readBE(header + 20, 4));

@@ -13,10 +13,10 @@ namespace sweepmap {
 // beta about y, alpha about z) that calibration estimates, and the lidar's position.
 struct LidarMounting {
   Eigen::Vector3d nominal_rpy_rad = Eigen::Vector3d::Zero();  // roll, pitch, yaw
-  double gamma_rad = 0.0;  // about body x
-  double beta_rad = 0.0;   // about body y
-  double alpha_rad = 0.0;  // about body z
-  Eigen::Vector3d t_BL_m = Eigen::Vector3d::Zero();  // (l1, 0, h) in Miao 2022
+  double gamma_rad = 0.0;                                     // about body x
+  double beta_rad = 0.0;                                      // about body y
+  double alpha_rad = 0.0;                                     // about body z
+  Eigen::Vector3d t_BL_m = Eigen::Vector3d::Zero();           // (l1, 0, h) in Miao 2022
   Eigen::Isometry3d T_BL() const {
     Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
     T.linear() = rotationXYZ(gamma_rad, beta_rad, alpha_rad) *

@@ -2,7 +2,6 @@
 
 #include <stdexcept>
 
-
 namespace sweepmap {
 
 void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
@@ -89,12 +88,11 @@ void SimRigConfig::declare(ConfigSchema& s, const std::string& p) {
 }
 
 ScanMode scanMode(int mode) {
-  static const ScanMode kModes[] = {{1, 1.0, 4.5},   {2, 2.0, 2.25},   {3, 4.0, 1.125},
-                                    {4, 5.0, 0.9},   {5, 8.0, 0.5625}, {6, 10.0, 0.45},
+  static const ScanMode kModes[] = {{1, 1.0, 4.5},     {2, 2.0, 2.25},   {3, 4.0, 1.125},
+                                    {4, 5.0, 0.9},     {5, 8.0, 0.5625}, {6, 10.0, 0.45},
                                     {7, 16.0, 0.28125}};
   if (mode < 1 || mode > 7) throw std::out_of_range("scan mode must be 1..7");
   return kModes[mode - 1];
 }
-
 
 }  // namespace sweepmap

@@ -12,11 +12,11 @@
 namespace sweepmap {
 
 struct LidarConfig {
-  int beam_count = 1081;               // rays per scan
-  double angle_min_deg = -135.0;       // angle of ray 0, from Z_L toward Y_L
+  int beam_count = 1081;          // rays per scan
+  double angle_min_deg = -135.0;  // angle of ray 0, from Z_L toward Y_L
   double angle_increment_deg = 0.25;
   double scan_rate_hz = 40.0;
-  int steps_per_revolution = 1440;     // ray slots per mirror turn: sets the per-ray time
+  int steps_per_revolution = 1440;  // ray slots per mirror turn: sets the per-ray time
   double range_min_m = 0.06;
   double range_max_m = 10.0;
   void declare(ConfigSchema& s, const std::string& prefix);
@@ -24,39 +24,40 @@ struct LidarConfig {
 };
 
 struct MotorConfig {
-  int mode = 7;                        // scan mode 1..7 of Yuan 2021 Table 1
-  double sweep_angle_deg = 180.0;      // rotation during the lidar window
-  double accel_deg_s2 = 720.0;         // nominal ramp acceleration
-  double margin_s = 0.1;               // constant-speed time before the window opens and after it closes
-  double move_speed_deg_s = 90.0;      // speed of positioning and return moves
+  int mode = 7;                    // scan mode 1..7 of Yuan 2021 Table 1
+  double sweep_angle_deg = 180.0;  // rotation during the lidar window
+  double accel_deg_s2 = 720.0;     // nominal ramp acceleration
+  double margin_s = 0.1;  // constant-speed time before the window opens and after it closes
+  double move_speed_deg_s = 90.0;  // speed of positioning and return moves
   double homing_speed_deg_s = 20.0;
-  double homing_search_deg = 400.0;    // give up homing after this much travel
-  double home_angle_deg = 0.0;         // shaft angle at which the switch edge is defined
-  std::string action_sequence = "improved";  // improved (Fig. 2) | naive (lidar and motor start together)
+  double homing_search_deg = 400.0;  // give up homing after this much travel
+  double home_angle_deg = 0.0;       // shaft angle at which the switch edge is defined
+  std::string action_sequence =
+      "improved";  // improved (Fig. 2) | naive (lidar and motor start together)
   bool rehome_every_sweep = true;
-  double pause_s = 0.5;                // standstill between sweeps
-  double settle_s = 0.2;               // wait after a move's nominal end before the next
+  double pause_s = 0.5;   // standstill between sweeps
+  double settle_s = 0.2;  // wait after a move's nominal end before the next
   double status_rate_hz = 10.0;
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 
 struct GeometryConfig {
-  double lidar_offset_x_mm = 13.9;     // t_L^O' = (offset, 0, 0), Eq. 5-6
+  double lidar_offset_x_mm = 13.9;  // t_L^O' = (offset, 0, 0), Eq. 5-6
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 
 struct PlateConfig {
-  double alpha_deg = 30.0;             // angle of the plate's middle line from X (front)
+  double alpha_deg = 30.0;  // angle of the plate's middle line from X (front)
   // Calibration file (relative to the rig file) whose plate.alpha_deg replaces alpha_deg;
   // empty: use alpha_deg.
   std::string calibration_file;
-  double height_mm = -45.0;            // z of the plate's upper surface in frame O
+  double height_mm = -45.0;  // z of the plate's upper surface in frame O
   double region_inner_radius_mm = 62.5;
   double region_outer_radius_mm = 115.5;
-  double region_thickness_mm = 20.0;   // centred on height_mm
-  double hypotenuse_mm = 112.0;        // isosceles right triangle: legs 79.2 mm
-  double base_distance_mm = 54.75;     // hypotenuse to rotation axis
-  int min_points = 30;                 // fewer points: the sweep is left uncorrected
+  double region_thickness_mm = 20.0;  // centred on height_mm
+  double hypotenuse_mm = 112.0;       // isosceles right triangle: legs 79.2 mm
+  double base_distance_mm = 54.75;    // hypotenuse to rotation axis
+  int min_points = 30;                // fewer points: the sweep is left uncorrected
   // How beta is estimated: "centroid" (Yuan 2021: mean of the points in the region) or
   // "ray_plane" (each ray that meets the plate plane inside the region and whose range
   // agrees within range_gate_mm contributes its noise-free intersection point).
@@ -66,15 +67,15 @@ struct PlateConfig {
 };
 
 struct AssemblerConfig {
-  int chunk_points = 4000;             // points per SWEEP_CLOUD message (one UDP datagram)
-  int max_pending_scans = 4000;        // bounded scan buffer
-  bool correct_attitude = true;        // apply the plate correction (false: publish C_O')
+  int chunk_points = 4000;       // points per SWEEP_CLOUD message (one UDP datagram)
+  int max_pending_scans = 4000;  // bounded scan buffer
+  bool correct_attitude = true;  // apply the plate correction (false: publish C_O')
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 
 struct MapperConfig {
   double resolution_m = 0.05;
-  double max_range_m = 10.0;           // rays longer than this are cut (free space only)
+  double max_range_m = 10.0;  // rays longer than this are cut (free space only)
   double prob_hit = 0.7;
   double prob_miss = 0.4;
   double clamp_min = 0.12;
@@ -96,8 +97,8 @@ struct SimRigConfig {
   double start_delay_max_ms = 30.0;    // motor starts 0..max ms after its command
   double switch_response_ms = 2.0;     // mean response time of the photoelectric switch
   double switch_response_jitter_ms = 1.0;  // uniform +- jitter of the response time
-  double switch_hysteresis_deg = 0.3;  // edge moves by this when approached from the other side
-  double lidar_latency_ms = 50.0;      // a scan is delivered this long after its last ray
+  double switch_hysteresis_deg = 0.3;      // edge moves by this when approached from the other side
+  double lidar_latency_ms = 50.0;          // a scan is delivered this long after its last ray
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 
@@ -108,6 +109,5 @@ struct ScanMode {
   double gamma_deg;
 };
 ScanMode scanMode(int mode);  // throws std::out_of_range for a mode outside 1..7
-
 
 }  // namespace sweepmap

@@ -8,9 +8,9 @@
 namespace sweepmap {
 
 struct Scan2D {
-  int64_t utime = 0;              // time of the first ray [us]
-  int64_t seq = 0;                // device scan counter
-  double angle_min_rad = 0.0;     // angle of ray 0 in the lidar frame, from Z_L toward Y_L
+  int64_t utime = 0;           // time of the first ray [us]
+  int64_t seq = 0;             // device scan counter
+  double angle_min_rad = 0.0;  // angle of ray 0 in the lidar frame, from Z_L toward Y_L
   double angle_increment_rad = 0.0;
   int64_t time_increment_ns = 0;  // time between consecutive rays
   double range_min_m = 0.0;

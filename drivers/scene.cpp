@@ -48,16 +48,19 @@ void SceneConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "rig.y_m", &rig_y_m, "m", "rotation axis Y in the room");
   s.add(p + "rig.z_m", &rig_z_m, "m", "height of the lidar centre (origin of frame O)");
   s.add(p + "rig.yaw_deg", &rig_yaw_deg, "deg", "frame O's X from the room's X, about Z");
-  s.add(p + "target.enabled", &target_enabled, "", "calibration target: a board in front of a window");
+  s.add(p + "target.enabled", &target_enabled, "",
+        "calibration target: a board in front of a window");
   s.add(p + "target.wall", &target_wall, "", "wall of the window: x_min, x_max or y_min");
   s.add(p + "target.position_m", &target_position_m, "m",
         "window centre along the wall (room Y on x walls, room X on y_min)");
   s.add(p + "target.window_width_m", &target_window_width_m, "m", "window opening along the wall");
   s.add(p + "target.window_height_m", &target_window_height_m, "m", "window opening height");
   s.add(p + "target.window_sill_m", &target_window_sill_m, "m", "floor to the window's bottom");
-  s.add(p + "target.window_depth_m", &target_window_depth_m, "m", "wall plane to the recess's back");
+  s.add(p + "target.window_depth_m", &target_window_depth_m, "m",
+        "wall plane to the recess's back");
   s.add(p + "target.board_width_m", &target_board_width_m, "m", "board along the wall");
-  s.add(p + "target.board_height_m", &target_board_height_m, "m", "board height (centred on the window)");
+  s.add(p + "target.board_height_m", &target_board_height_m, "m",
+        "board height (centred on the window)");
   s.add(p + "target.board_thickness_m", &target_board_thickness_m, "m", "board thickness");
   s.add(p + "target.board_offset_m", &target_board_offset_m, "m",
         "wall plane to the board's front face, into the room (negative: inside the recess)");
@@ -72,7 +75,9 @@ class SceneChecks {
   void require(bool ok, const std::string& key, const std::string& why) const {
     if (!ok) throw ConfigError(source_ + ": key '" + key + "' " + why);
   }
-  void positive(double v, const std::string& key) const { require(v > 0.0, key, "must be positive"); }
+  void positive(double v, const std::string& key) const {
+    require(v > 0.0, key, "must be positive");
+  }
 
  private:
   const std::string& source_;
@@ -157,12 +162,12 @@ void checkRig(const SceneConfig& c, const SceneChecks& check) {
   check.require(c.rig_z_m > 0.0 && c.rig_z_m < c.room_height_m, "rig.z_m",
                 "must be between floor and ceiling");
   const double post = kPostSideM / 2;
-  const auto post_box = box(c.rig_x_m - post, c.rig_x_m + post, c.rig_y_m - post,
-                            c.rig_y_m + post, 0, c.room_height_m);
-  const auto table_box = box(c.table_center_x_m - c.table_length_m / 2,
-                             c.table_center_x_m + c.table_length_m / 2,
-                             c.table_center_y_m - c.table_width_m / 2,
-                             c.table_center_y_m + c.table_width_m / 2, 0, c.room_height_m);
+  const auto post_box = box(c.rig_x_m - post, c.rig_x_m + post, c.rig_y_m - post, c.rig_y_m + post,
+                            0, c.room_height_m);
+  const auto table_box =
+      box(c.table_center_x_m - c.table_length_m / 2, c.table_center_x_m + c.table_length_m / 2,
+          c.table_center_y_m - c.table_width_m / 2, c.table_center_y_m + c.table_width_m / 2, 0,
+          c.room_height_m);
   const auto cabinet_box = box(c.cabinet_center_x_m - c.cabinet_length_m / 2,
                                c.cabinet_center_x_m + c.cabinet_length_m / 2,
                                c.cabinet_center_y_m - c.cabinet_width_m / 2,
@@ -252,11 +257,11 @@ void addTarget(const SceneConfig& c, std::vector<SceneBox>* boxes) {
                                            c.target_window_depth_m + t)});
   const double bz = 0.5 * (wz0 + wz1);
   const double d0 = -c.target_board_offset_m;
-  boxes->push_back({"target_board",
-                    wallBox(c.target_position_m - c.target_board_width_m / 2,
-                            c.target_position_m + c.target_board_width_m / 2,
-                            bz - c.target_board_height_m / 2, bz + c.target_board_height_m / 2, d0,
-                            d0 + c.target_board_thickness_m)});
+  boxes->push_back(
+      {"target_board",
+       wallBox(c.target_position_m - c.target_board_width_m / 2,
+               c.target_position_m + c.target_board_width_m / 2, bz - c.target_board_height_m / 2,
+               bz + c.target_board_height_m / 2, d0, d0 + c.target_board_thickness_m)});
 }
 
 // The table (a top on four legs flush with its corners) and the cabinet.

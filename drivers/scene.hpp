@@ -50,8 +50,8 @@ struct SceneConfig {
   // thin board hung in front of it, centred on the window. Seen by a lidar, the board's
   // edges are range discontinuities against the recess behind it.
   bool target_enabled = false;
-  std::string target_wall = "x_min";   // x_min, x_max or y_min (y_max holds the door)
-  double target_position_m = 0.0;      // window centre along the wall (room Y for x walls, X for y_min)
+  std::string target_wall = "x_min";  // x_min, x_max or y_min (y_max holds the door)
+  double target_position_m = 0.0;  // window centre along the wall (room Y for x walls, X for y_min)
   double target_window_width_m = 1.2;  // along the wall
   double target_window_height_m = 1.0;
   double target_window_sill_m = 0.6;   // floor to the window's bottom
@@ -59,7 +59,8 @@ struct SceneConfig {
   double target_board_width_m = 0.6;   // along the wall
   double target_board_height_m = 0.5;
   double target_board_thickness_m = 0.02;
-  double target_board_offset_m = 0.1;  // wall plane to the board's front face, into the room (< 0: inside the recess)
+  double target_board_offset_m =
+      0.1;  // wall plane to the board's front face, into the room (< 0: inside the recess)
 
   void declare(ConfigSchema& s, const std::string& prefix);
   // Throws ConfigError naming `source` and the offending key if the scene is not a closed

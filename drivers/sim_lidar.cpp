@@ -3,11 +3,11 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+
 #include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
-
 
 double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();

@@ -4,13 +4,13 @@
 
 #include <algorithm>
 #include <cmath>
+
 #include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
 
 constexpr double kGravity = 9.80665;
-
 
 Eigen::Isometry3d planar(const Pose2& p) {
   Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -24,8 +24,9 @@ Eigen::Isometry3d planar(const Pose2& p) {
 void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "path", &path, "",
         "driven path: circle (calibration drive), loop (rounded rectangle) or file (path_file)");
-  s.add(p + "path_file", &path_file, "",
-        "path: file — YAML of start pose and segments in the room frame (relative to the rig file)");
+  s.add(
+      p + "path_file", &path_file, "",
+      "path: file — YAML of start pose and segments in the room frame (relative to the rig file)");
   s.add(p + "circle_radius_m", &circle_radius_m, "m", "circle path radius (Miao 2022: 0.83)");
   s.add(p + "circle_center_x_m", &circle_center_x_m, "m", "circle centre X in the room");
   s.add(p + "circle_center_y_m", &circle_center_y_m, "m", "circle centre Y in the room");
@@ -44,10 +45,12 @@ void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "slip_max_duration_s", &slip_max_duration_s, "s", "longest slip event");
   s.add(p + "slip_min_fraction", &slip_min_fraction, "",
         "least excess turning of the slipping wheel (fraction of its ground speed)");
-  s.add(p + "slip_max_fraction", &slip_max_fraction, "", "most excess turning of the slipping wheel");
+  s.add(p + "slip_max_fraction", &slip_max_fraction, "",
+        "most excess turning of the slipping wheel");
   s.add(p + "imu_rate_hz", &imu_rate_hz, "Hz", "IMU sample rate");
   s.add(p + "gyro_sigma_rad_s", &gyro_sigma_rad_s, "rad/s", "gyro white noise, each axis");
-  s.add(p + "gyro_bias_z_rad_s", &gyro_bias_z_rad_s, "rad/s", "constant z gyro bias (x, y unbiased)");
+  s.add(p + "gyro_bias_z_rad_s", &gyro_bias_z_rad_s, "rad/s",
+        "constant z gyro bias (x, y unbiased)");
   s.add(p + "accel_sigma_m_s2", &accel_sigma_m_s2, "m/s^2", "accelerometer white noise");
   s.add(p + "roll_error_deg", &roll_error_deg, "deg", "static roll error of the IMU attitude");
   s.add(p + "pitch_error_deg", &pitch_error_deg, "deg", "static pitch error of the IMU attitude");
@@ -57,8 +60,10 @@ void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "sample_rate_hz", &sample_rate_hz, "Hz", "lidar rays per second (X4: 5000)");
   s.add(p + "range_min_m", &range_min_m, "m", "shortest valid range (X4: 0.12)");
   s.add(p + "range_max_m", &range_max_m, "m", "longest valid range (X4: 10)");
-  s.add(p + "range_sigma_fraction", &range_sigma_fraction, "", "range noise sigma, fraction of the range");
-  s.add(p + "lidar_latency_ms", &lidar_latency_ms, "ms", "scan delivered this long after its last ray");
+  s.add(p + "range_sigma_fraction", &range_sigma_fraction, "",
+        "range noise sigma, fraction of the range");
+  s.add(p + "lidar_latency_ms", &lidar_latency_ms, "ms",
+        "scan delivered this long after its last ray");
   s.add(p + "gamma_true_rad", &gamma_true_rad, "rad", "true mounting error about body x");
   s.add(p + "beta_true_rad", &beta_true_rad, "rad", "true mounting error about body y");
   s.add(p + "alpha_true_rad", &alpha_true_rad, "rad", "true mounting error about body z");
@@ -69,15 +74,18 @@ void SimMobileConfig::validate(const std::string& source) const {
   const auto require = [&](bool ok, const std::string& key, const std::string& why) {
     if (!ok) throw ConfigError(source + ": key 'sim." + key + "' " + why);
   };
-  require(path == "circle" || path == "loop" || path == "file", "path", "must be circle, loop or file");
-  require(path != "file" || !path_file.empty(), "path_file", "must name a file when sim.path is file");
+  require(path == "circle" || path == "loop" || path == "file", "path",
+          "must be circle, loop or file");
+  require(path != "file" || !path_file.empty(), "path_file",
+          "must name a file when sim.path is file");
   require(circle_radius_m > 0, "circle_radius_m", "must be positive");
   require(loop_wall_clearance_m > 0, "loop_wall_clearance_m", "must be positive");
   require(loop_corner_radius_m > 0, "loop_corner_radius_m", "must be positive");
   require(speed_m_s > 0 && speed_m_s < 5, "speed_m_s", "must be in (0, 5)");
   require(accel_m_s2 > 0, "accel_m_s2", "must be positive");
   require(duration_s > 0 && duration_s <= 36000, "duration_s", "must be in (0, 36000]");
-  require(wheel_ticks_rate_hz > 0 && wheel_ticks_rate_hz <= 10000, "wheel_ticks_rate_hz", "must be in (0, 10000]");
+  require(wheel_ticks_rate_hz > 0 && wheel_ticks_rate_hz <= 10000, "wheel_ticks_rate_hz",
+          "must be in (0, 10000]");
   require(encoder_speed_sigma_fraction >= 0, "encoder_speed_sigma_fraction", "must be >= 0");
   require(slip_min_duration_s > 0 && slip_min_duration_s <= slip_max_duration_s,
           "slip_min_duration_s", "must be positive and <= slip_max_duration_s");
@@ -90,8 +98,10 @@ void SimMobileConfig::validate(const std::string& source) const {
   require(scan_rate_hz > 0 && scan_rate_hz <= 100, "scan_rate_hz", "must be in (0, 100]");
   require(sample_rate_hz >= 10 * scan_rate_hz && sample_rate_hz <= 1e6, "sample_rate_hz",
           "must give at least 10 rays per scan and at most 1e6 rays/s");
-  require(range_min_m > 0 && range_min_m < range_max_m, "range_min_m", "must be in (0, range_max_m)");
-  require(range_sigma_fraction >= 0 && range_sigma_fraction < 0.5, "range_sigma_fraction", "must be in [0, 0.5)");
+  require(range_min_m > 0 && range_min_m < range_max_m, "range_min_m",
+          "must be in (0, range_max_m)");
+  require(range_sigma_fraction >= 0 && range_sigma_fraction < 0.5, "range_sigma_fraction",
+          "must be in [0, 0.5)");
   require(lidar_latency_ms >= 0, "lidar_latency_ms", "must be >= 0");
   require(truth_rate_hz > 0 && truth_rate_hz <= 10000, "truth_rate_hz", "must be in (0, 10000]");
 }
@@ -137,7 +147,8 @@ MobilePath MobilePath::fromFile(const std::string& file) {
     } catch (const YAML::Exception&) {
       throw ConfigError("path file " + file + ": " + where + " '" + key + "' is not a number");
     }
-    if (!std::isfinite(v)) throw ConfigError("path file " + file + ": " + where + " '" + key + "' is not finite");
+    if (!std::isfinite(v))
+      throw ConfigError("path file " + file + ": " + where + " '" + key + "' is not finite");
     return v;
   };
   if (!root.IsMap() || !root["start"] || !root["segments"] || !root["segments"].IsSequence() ||
@@ -146,7 +157,8 @@ MobilePath MobilePath::fromFile(const std::string& file) {
   }
   for (const auto& kv : root) {
     const std::string key = kv.first.as<std::string>();
-    if (key != "start" && key != "segments") throw ConfigError("path file " + file + ": unknown key '" + key + "'");
+    if (key != "start" && key != "segments")
+      throw ConfigError("path file " + file + ": unknown key '" + key + "'");
   }
   double x = number(root["start"], "x_m", "start"), y = number(root["start"], "y_m", "start");
   double theta = number(root["start"], "heading_deg", "start") * kDegToRad;
@@ -155,11 +167,13 @@ MobilePath MobilePath::fromFile(const std::string& file) {
     const YAML::Node n = root["segments"][i];
     const std::string where = "segment " + std::to_string(i);
     const double length = number(n, "length_m", where);
-    if (!(length > 0)) throw ConfigError("path file " + file + ": " + where + " 'length_m' must be > 0");
+    if (!(length > 0))
+      throw ConfigError("path file " + file + ": " + where + " 'length_m' must be > 0");
     double curvature = 0.0;
     if (n["radius_m"]) {
       const double r = number(n, "radius_m", where);
-      if (std::abs(r) < 0.05) throw ConfigError("path file " + file + ": " + where + " '|radius_m|' must be >= 0.05");
+      if (std::abs(r) < 0.05)
+        throw ConfigError("path file " + file + ": " + where + " '|radius_m|' must be >= 0.05");
       curvature = 1.0 / r;
     }
     segments.push_back({x, y, theta, length, curvature});
@@ -183,7 +197,8 @@ const MobilePath::Segment& MobilePath::find(double s, double* local, int* lap) c
   const double laps = std::floor(s / length_);
   *lap = static_cast<int>(laps);
   double r = s - laps * length_;
-  size_t i = static_cast<size_t>(std::upper_bound(starts_.begin(), starts_.end(), r) - starts_.begin());
+  size_t i =
+      static_cast<size_t>(std::upper_bound(starts_.begin(), starts_.end(), r) - starts_.begin());
   i = i == 0 ? 0 : i - 1;
   *local = std::min(r - starts_[i], segments_[i].length);
   return segments_[i];
@@ -217,10 +232,15 @@ double MobilePath::curvatureAt(double s) const {
 SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
                      const Eigen::Vector3d& nominal_rpy_rad, const Eigen::Vector3d& t_BL_m,
                      const Scene& scene, uint64_t seed, int64_t start_utime)
-    : c_(config), wheels_(wheels), scene_(&scene), path_({{0, 0, 0, 1, 0}}), seed_(seed),
+    : c_(config),
+      wheels_(wheels),
+      scene_(&scene),
+      path_({{0, 0, 0, 1, 0}}),
+      seed_(seed),
       start_utime_(start_utime) {
   c_.validate("sim");
-  if (!(wheels.radius_m > 0) || !(wheels.ticks_per_revolution > 0) || !(wheels.wheel_distance_m > 0)) {
+  if (!(wheels.radius_m > 0) || !(wheels.ticks_per_revolution > 0) ||
+      !(wheels.wheel_distance_m > 0)) {
     throw ConfigError("sim: wheel radius, ticks per revolution and wheel distance must be > 0");
   }
   const SceneConfig& sc = scene.config();
@@ -237,8 +257,9 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
     s0_ = 0.0;
     const double driven = distanceAt(c_.duration_s);
     if (!path_.closed() && driven > path_.length()) {
-      throw ConfigError("sim: path file " + c_.path_file + " is open and " + std::to_string(path_.length()) +
-                        " m long, but the drive covers " + std::to_string(driven) + " m");
+      throw ConfigError("sim: path file " + c_.path_file + " is open and " +
+                        std::to_string(path_.length()) + " m long, but the drive covers " +
+                        std::to_string(driven) + " m");
     }
     for (double s = 0.0; s <= std::min(driven, path_.length()); s += 0.05) {
       const Pose2 p = path_.poseAt(s);
@@ -273,7 +294,8 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
       if (t >= c_.duration_s) break;
       SlipEvent e;
       e.start_s = t;
-      e.end_s = t + c_.slip_min_duration_s + u(rng) * (c_.slip_max_duration_s - c_.slip_min_duration_s);
+      e.end_s =
+          t + c_.slip_min_duration_s + u(rng) * (c_.slip_max_duration_s - c_.slip_min_duration_s);
       e.right = u(rng) < 0.5;
       e.fraction = c_.slip_min_fraction + u(rng) * (c_.slip_max_fraction - c_.slip_min_fraction);
       slips_.push_back(e);
@@ -392,10 +414,12 @@ Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng) const {
   scan.range_max_m = c_.range_max_m;
   scan.ranges_m.resize(static_cast<size_t>(rays_));
   for (int i = 0; i < rays_; ++i) {
-    const double t = 1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - start_utime_);
+    const double t =
+        1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - start_utime_);
     const Eigen::Isometry3d T_room_L = planar(roomPoseAt(t)) * T_BL_;
     const double ang = scan.rayAngle(static_cast<size_t>(i));
-    const Eigen::Vector3d dir = T_room_L.linear() * Eigen::Vector3d(0.0, std::sin(ang), std::cos(ang));
+    const Eigen::Vector3d dir =
+        T_room_L.linear() * Eigen::Vector3d(0.0, std::sin(ang), std::cos(ang));
     const auto hit = scene_->raycast(T_room_L.translation(), dir, c_.range_max_m);
     const double noise = n(*rng);
     double r = 0.0;

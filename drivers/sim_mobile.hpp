@@ -35,10 +35,10 @@
 namespace sweepmap {
 
 struct SimMobileConfig {
-  std::string path = "circle";         // "circle", "loop" or "file"
-  std::string path_file;               // path: file — YAML of segments (MobilePath::fromFile)
-  double circle_radius_m = 0.83;       // Miao 2022 calibration drive
-  double circle_center_x_m = -3.0;     // room frame
+  std::string path = "circle";      // "circle", "loop" or "file"
+  std::string path_file;            // path: file — YAML of segments (MobilePath::fromFile)
+  double circle_radius_m = 0.83;    // Miao 2022 calibration drive
+  double circle_center_x_m = -3.0;  // room frame
   double circle_center_y_m = 0.0;
   double loop_wall_clearance_m = 0.5;  // loop: rounded rectangle this far from the walls
   double loop_corner_radius_m = 0.5;
@@ -51,14 +51,14 @@ struct SimMobileConfig {
   double slip_mean_interval_s = 10.0;          // exponential; <= 0: no slip
   double slip_min_duration_s = 0.2;
   double slip_max_duration_s = 0.5;
-  double slip_min_fraction = 0.1;   // the slipping wheel turns this much faster
+  double slip_min_fraction = 0.1;  // the slipping wheel turns this much faster
   double slip_max_fraction = 0.3;
   // IMU (HI219-like).
   double imu_rate_hz = 200.0;
   double gyro_sigma_rad_s = 0.005;
   double gyro_bias_z_rad_s = 0.01;  // constant; x and y are unbiased
   double accel_sigma_m_s2 = 0.05;
-  double roll_error_deg = 0.3;      // static attitude errors of the IMU's own estimate
+  double roll_error_deg = 0.3;  // static attitude errors of the IMU's own estimate
   double pitch_error_deg = -0.2;
   double yaw_error_deg = 0.5;
   double attitude_sigma_deg = 0.05;
@@ -142,7 +142,8 @@ class SimMobile {
  public:
   // Throws ConfigError for an invalid configuration. The lidar sits at `t_BL_m` with the
   // nominal rotation (roll, pitch, yaw) `nominal_rpy_rad`, times the true error of `config`:
-  // R = R(gamma, beta, alpha) R(nominal), R(g, b, a) = Rz(a) Ry(b) Rx(g) (calib/world_assembly.hpp).
+  // R = R(gamma, beta, alpha) R(nominal), R(g, b, a) = Rz(a) Ry(b) Rx(g)
+  // (calib/world_assembly.hpp).
   SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
             const Eigen::Vector3d& nominal_rpy_rad, const Eigen::Vector3d& t_BL_m,
             const Scene& scene, uint64_t seed, int64_t start_utime);
@@ -168,7 +169,9 @@ class SimMobile {
   // One scan (index j) with the given noise generator; exposed for tests.
   Scan2D makeScan(int64_t j, std::mt19937_64* rng) const;
   int raysPerScan() const { return rays_; }
-  int64_t utimeAt(double t) const { return start_utime_ + static_cast<int64_t>(std::llround(t * 1e6)); }
+  int64_t utimeAt(double t) const {
+    return start_utime_ + static_cast<int64_t>(std::llround(t * 1e6));
+  }
 
  private:
   SimMobileConfig c_;

@@ -1,14 +1,14 @@
 #include "drivers/sim_stepper.hpp"
 
-#include "drivers/motion_profile.hpp"
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <iterator>
 #include <optional>
 #include <stdexcept>
+
 #include "core/angles.hpp"
+#include "drivers/motion_profile.hpp"
 
 namespace sweepmap {
 namespace {

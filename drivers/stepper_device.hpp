@@ -20,7 +20,7 @@ struct StepperCommand {
 };
 
 struct SwitchEdge {
-  int64_t utime = 0;   // when the device reported the edge [us]
+  int64_t utime = 0;     // when the device reported the edge [us]
   bool blocked = false;  // true: the shading sheet entered the beam
 };
 

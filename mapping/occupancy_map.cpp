@@ -4,12 +4,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
-#include <unordered_map>
-#include <unordered_set>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <unordered_map>
+#include <unordered_set>
 
 #include "core/atomic_file.hpp"
 
@@ -103,8 +103,8 @@ void markRay(const octomap::OcTree& tree, const octomap::point3d& origin,
     }
   }
   while (true) {
-    const int dim = t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2)
-                                         : (t_max[1] < t_max[2] ? 1 : 2);
+    const int dim =
+        t_max[0] < t_max[1] ? (t_max[0] < t_max[2] ? 0 : 2) : (t_max[1] < t_max[2] ? 1 : 2);
     key[dim] = static_cast<octomap::key_type>(key[dim] + step[dim]);
     t_max[dim] += t_delta[dim];
     if (key == end_key) break;
@@ -148,7 +148,8 @@ void finalizeRecurs(octomap::OcTree& tree, octomap::OcTreeNode* node, unsigned d
                     LeafCounts* c) {
   if (!tree.nodeHasChildren(node)) return countLeaf(tree, node, depth, c);
   for (unsigned i = 0; i < 8; ++i) {
-    if (tree.nodeChildExists(node, i)) finalizeRecurs(tree, tree.getNodeChild(node, i), depth + 1, c);
+    if (tree.nodeChildExists(node, i))
+      finalizeRecurs(tree, tree.getNodeChild(node, i), depth + 1, c);
   }
   if (depth > 0 && tree.pruneNode(node)) {
     c->leaves -= 7;  // eight leaves became one; the voxels they stand for are the same
@@ -402,7 +403,7 @@ MapStats OccupancyMap::Impl::statsFrom(const LeafCounts& counts) const {
   using Base = octomap::OcTreeBaseImpl<octomap::OcTreeNode, octomap::AbstractOccupancyOcTree>;
   const size_t inner = tree.size() - static_cast<size_t>(counts.leaves);
   s.memory_bytes = static_cast<int64_t>(sizeof(Base) + tree.memoryUsageNode() * tree.size() +
-                                        inner * sizeof(octomap::OcTreeNode * [8]));
+                                        inner * sizeof(octomap::OcTreeNode* [8]));
   return s;
 }
 

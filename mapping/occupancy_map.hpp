@@ -29,8 +29,8 @@ struct MapStats {
 
 // How the rays of one cloud are cast.
 enum class InsertMode {
-  kDiscretized,  // one ray per distinct endpoint voxel, to its centre (default; see .cpp)
-  kEveryRay,     // one ray per point, to the exact point
+  kDiscretized,         // one ray per distinct endpoint voxel, to its centre (default; see .cpp)
+  kEveryRay,            // one ray per point, to the exact point
   kOctomapDiscretized,  // octomap's own discretized insertion (reference for kDiscretized)
 };
 
@@ -72,7 +72,8 @@ class OccupancyMap {
   // What it saves is the whole-tree passes (updateInnerOccupancy, prune), which dominate
   // for small clouds such as the single scans of rig B. A cloud with a non-finite origin or
   // one outside the map is not inserted (and not counted): its index goes to `rejected`.
-  void insertClouds(const std::vector<SensorCloud>& clouds, std::vector<size_t>* rejected = nullptr);
+  void insertClouds(const std::vector<SensorCloud>& clouds,
+                    std::vector<size_t>* rejected = nullptr);
 
   // Kept up to date by every insertion (the same pass that updates the inner nodes); for a
   // loaded map it walks every leaf.

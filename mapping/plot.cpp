@@ -199,7 +199,8 @@ void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
 
   std::ostringstream s = scriptStream();
   writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
-  s << "set xlabel " << quoted(options.x_label) << "\nset ylabel " << quoted(options.y_label) << "\n"
+  s << "set xlabel " << quoted(options.x_label) << "\nset ylabel " << quoted(options.y_label)
+    << "\n"
     << "set size ratio -1\n"  // one metre is as long on both axes
     << "set key outside right top\n";
   writeRange(s, "x", options.x_range_m);

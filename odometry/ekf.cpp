@@ -65,7 +65,8 @@ bool OdometryEkf::add(const Measurement& m) {
   // Measurements apply in (time, kind) order, wheels after gyro and yaw at equal times,
   // yaw after gyro, so the result does not depend on arrival order.
   const auto after = [](const Measurement& a, const Measurement& b) {
-    return a.utime > b.utime || (a.utime == b.utime && static_cast<int>(a.kind) > static_cast<int>(b.kind));
+    return a.utime > b.utime ||
+           (a.utime == b.utime && static_cast<int>(a.kind) > static_cast<int>(b.kind));
   };
   while (!history_.empty() && after(history_.back().m, m)) {
     count(history_.back(), -1);
@@ -140,7 +141,8 @@ bool OdometryEkf::update(const Eigen::VectorXd& y, const Eigen::MatrixXd& H,
   if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
   const double d2 = y.dot(ldlt.solve(y));
   if (!std::isfinite(d2) || d2 > gate) return false;
-  const Eigen::MatrixXd K = cov_ * H.transpose() * ldlt.solve(Eigen::MatrixXd::Identity(S.rows(), S.cols()));
+  const Eigen::MatrixXd K =
+      cov_ * H.transpose() * ldlt.solve(Eigen::MatrixXd::Identity(S.rows(), S.cols()));
   const EkfState next = state_ + K * y;
   const EkfCov I_KH = EkfCov::Identity() - K * H;
   const EkfCov next_cov = I_KH * cov_ * I_KH.transpose() + K * R * K.transpose();  // Joseph form
@@ -155,13 +157,14 @@ bool OdometryEkf::apply(const Measurement& m) {
   if (m.kind == Kind::kWheels) {
     const BodyTwist t = twistFromWheels(m.a, m.b, config_.wheel_distance_m);
     const auto sigma = [&](double v) {
-      return std::max(config_.wheel_speed_sigma_min_m_s, config_.wheel_speed_sigma_fraction * std::abs(v));
+      return std::max(config_.wheel_speed_sigma_min_m_s,
+                      config_.wheel_speed_sigma_fraction * std::abs(v));
     };
     const double sl = sigma(m.a), sr = sigma(m.b);
     const double wd = config_.wheel_distance_m;
     Eigen::Matrix2d R;  // (v, w) = A (v_l, v_r): R = A diag(sl^2, sr^2) A^T
-    R << 0.25 * (sl * sl + sr * sr), 0.5 * (sr * sr - sl * sl) / wd,
-        0.5 * (sr * sr - sl * sl) / wd, (sl * sl + sr * sr) / (wd * wd);
+    R << 0.25 * (sl * sl + sr * sr), 0.5 * (sr * sr - sl * sl) / wd, 0.5 * (sr * sr - sl * sl) / wd,
+        (sl * sl + sr * sr) / (wd * wd);
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, 6);
     H(0, kV) = 1.0;
     H(1, kW) = 1.0;

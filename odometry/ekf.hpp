@@ -33,14 +33,14 @@ struct EkfConfig {
   double turn_accel_psd = 1.0;               // (rad/s^2)^2/Hz
   double bias_psd = 1e-7;                    // (rad/s)^2/s, gyro bias random walk
   double initial_bias_sigma_rad_s = 0.02;
-  double gate_chi2_wheels = 13.82;           // 2 dof, p = 0.999
-  double gate_chi2_gyro = 10.83;             // 1 dof, p = 0.999
-  double yaw_sigma_rad = 0.0;                // IMU yaw noise; 0: yaw not fused
-  double gate_chi2_yaw = 10.83;              // 1 dof, p = 0.999
-  double history_s = 1.0;                    // late measurements within this are re-ordered
-  double max_speed_m_s = 5.0;                // beyond: absurd input
+  double gate_chi2_wheels = 13.82;  // 2 dof, p = 0.999
+  double gate_chi2_gyro = 10.83;    // 1 dof, p = 0.999
+  double yaw_sigma_rad = 0.0;       // IMU yaw noise; 0: yaw not fused
+  double gate_chi2_yaw = 10.83;     // 1 dof, p = 0.999
+  double history_s = 1.0;           // late measurements within this are re-ordered
+  double max_speed_m_s = 5.0;       // beyond: absurd input
   double max_turn_rate_rad_s = 20.0;
-  double trusted_theta_sigma_rad = 0.2;      // beyond: not trusted
+  double trusted_theta_sigma_rad = 0.2;  // beyond: not trusted
 };
 
 using EkfState = Eigen::Matrix<double, 6, 1>;
@@ -67,9 +67,9 @@ class OdometryEkf {
   struct Counters {
     int64_t wheels = 0, gyro = 0, yaw = 0;  // fused
     int64_t gated_wheels = 0, gated_gyro = 0, gated_yaw = 0;
-    int64_t invalid = 0;                 // non-finite or absurd
-    int64_t reordered = 0;               // late, re-applied in order
-    int64_t too_old = 0;                 // older than the history
+    int64_t invalid = 0;    // non-finite or absurd
+    int64_t reordered = 0;  // late, re-applied in order
+    int64_t too_old = 0;    // older than the history
   };
   const Counters& counters() const { return counters_; }
 

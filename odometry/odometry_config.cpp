@@ -13,7 +13,8 @@ void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
         "wheel speed noise floor");
   s.add(p + "gyro_sigma_rad_s", &ekf.gyro_sigma_rad_s, "rad/s", "gyro white noise");
   s.add(p + "accel_psd", &ekf.accel_psd, "(m/s^2)^2/Hz", "random-walk acceleration");
-  s.add(p + "turn_accel_psd", &ekf.turn_accel_psd, "(rad/s^2)^2/Hz", "random-walk turn acceleration");
+  s.add(p + "turn_accel_psd", &ekf.turn_accel_psd, "(rad/s^2)^2/Hz",
+        "random-walk turn acceleration");
   s.add(p + "bias_psd", &ekf.bias_psd, "(rad/s)^2/s", "gyro bias random walk");
   s.add(p + "initial_bias_sigma_rad_s", &ekf.initial_bias_sigma_rad_s, "rad/s",
         "prior on the gyro bias");

@@ -1,6 +1,7 @@
 // Differential-drive wheel odometry (Miao 2022, Eq. 2-5): from the two wheel speeds the
 // body's speed v and turn rate w, integrated as
-//   x_k = x_{k-1} + v dt cos(theta),  y_k = y_{k-1} + v dt sin(theta),  theta_k = theta_{k-1} + w dt.
+//   x_k = x_{k-1} + v dt cos(theta),  y_k = y_{k-1} + v dt sin(theta),  theta_k = theta_{k-1} + w
+//   dt.
 #pragma once
 
 #include <cmath>

@@ -136,8 +136,6 @@ void AssemblerNode::publishSweep(int64_t now_utime, const SweepWindow& window, O
   if (observer_) observer_(sweep);
 }
 
-void AssemblerNode::finish(int64_t now_utime, Outbox& out) {
-  assembleReady(now_utime, true, out);
-}
+void AssemblerNode::finish(int64_t now_utime, Outbox& out) { assembleReady(now_utime, true, out); }
 
 }  // namespace sweepmap

@@ -8,8 +8,8 @@
 #include <functional>
 
 #include "calib/sweep_assembly.hpp"
-#include "rigs/rotating_lidar.hpp"
 #include "processes/node.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 
@@ -34,7 +34,7 @@ class AssemblerNode : public Node {
   void publishSweep(int64_t now_utime, const SweepWindow& window, Outbox& out);
 
   RotatingLidarConfig rig_;
-  std::deque<Scan2D> scans_;      // valid scans, strictly increasing utime
+  std::deque<Scan2D> scans_;         // valid scans, strictly increasing utime
   std::deque<SweepWindow> windows_;  // closed windows, by start time
   int64_t last_window_end_ = INT64_MIN;
   // Arrival time minus stamp of the scans (see assembler_node.cpp).

@@ -9,23 +9,25 @@ constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf
 
 namespace channels {
 
-constexpr const char* kLidarScan = "LIDAR_SCAN";      // lidar_scan_t, raw
-constexpr const char* kMotorState = "MOTOR_STATE";    // motor_state_t
-constexpr const char* kMotorSwitch = "MOTOR_SWITCH";  // switch_event_t, raw
-constexpr const char* kScanWindow = "SCAN_WINDOW";    // scan_window_t
-constexpr const char* kSweepCloud = "SWEEP_CLOUD";    // cloud_chunk_t
-constexpr const char* kSweepStatus = "SWEEP_STATUS";  // sweep_status_t
-constexpr const char* kMapStats = "MAP_STATS";        // map_stats_t
-constexpr const char* kMapSave = "MAP_SAVE";          // map_save_t
-constexpr const char* kWheelTicks = "WHEEL_TICKS";    // wheel_ticks_t, raw (rig B)
-constexpr const char* kImu = "IMU";                   // imu_t, raw (rig B)
-constexpr const char* kOdometryPose = "ODOMETRY_POSE";  // pose2d_t, EKF
+constexpr const char* kLidarScan = "LIDAR_SCAN";          // lidar_scan_t, raw
+constexpr const char* kMotorState = "MOTOR_STATE";        // motor_state_t
+constexpr const char* kMotorSwitch = "MOTOR_SWITCH";      // switch_event_t, raw
+constexpr const char* kScanWindow = "SCAN_WINDOW";        // scan_window_t
+constexpr const char* kSweepCloud = "SWEEP_CLOUD";        // cloud_chunk_t
+constexpr const char* kSweepStatus = "SWEEP_STATUS";      // sweep_status_t
+constexpr const char* kMapStats = "MAP_STATS";            // map_stats_t
+constexpr const char* kMapSave = "MAP_SAVE";              // map_save_t
+constexpr const char* kWheelTicks = "WHEEL_TICKS";        // wheel_ticks_t, raw (rig B)
+constexpr const char* kImu = "IMU";                       // imu_t, raw (rig B)
+constexpr const char* kOdometryPose = "ODOMETRY_POSE";    // pose2d_t, EKF
 constexpr const char* kWheelOdometry = "WHEEL_ODOMETRY";  // pose2d_t, wheels alone
-constexpr const char* kTruthShaft = "TRUTH_SHAFT";    // truth_shaft_t, simulation only
-constexpr const char* kTruthRig = "TRUTH_RIG";        // truth_rig_t, simulation only
-constexpr const char* kTruthSweep = "TRUTH_SWEEP";    // truth_sweep_t, simulation only
-constexpr const char* kTruthPose = "TRUTH_POSE";      // pose2d_t, true body pose (rig B simulation only)
-constexpr const char* kTruthMounting = "TRUTH_MOUNTING";  // truth_mounting_t (rig B simulation only)
+constexpr const char* kTruthShaft = "TRUTH_SHAFT";        // truth_shaft_t, simulation only
+constexpr const char* kTruthRig = "TRUTH_RIG";            // truth_rig_t, simulation only
+constexpr const char* kTruthSweep = "TRUTH_SWEEP";        // truth_sweep_t, simulation only
+constexpr const char* kTruthPose =
+    "TRUTH_POSE";  // pose2d_t, true body pose (rig B simulation only)
+constexpr const char* kTruthMounting =
+    "TRUTH_MOUNTING";  // truth_mounting_t (rig B simulation only)
 // Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
 
 }  // namespace channels

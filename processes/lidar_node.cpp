@@ -31,8 +31,8 @@ std::vector<std::string> TruthFollowerNode::subscriptions() const {
 
 void TruthFollowerNode::handle(const Message& msg, Outbox& out) {
   truth_shaft_t m;
-  if (!decodeMessage(msg, &m) || !std::isfinite(m.angle_rad) ||
-      !std::isfinite(m.velocity_rad_s) || !std::isfinite(m.accel_rad_s2)) {
+  if (!decodeMessage(msg, &m) || !std::isfinite(m.angle_rad) || !std::isfinite(m.velocity_rad_s) ||
+      !std::isfinite(m.accel_rad_s2)) {
     reportError("invalid", "malformed truth_shaft_t");
     return;
   }

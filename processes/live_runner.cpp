@@ -1,12 +1,11 @@
 #include "processes/live_runner.hpp"
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
 #include <deque>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -20,7 +19,8 @@ void onSignal(int) { g_stop = true; }
 
 class Inbox {
  public:
-  Inbox(size_t capacity, size_t capacity_bytes) : capacity_(capacity), capacity_bytes_(capacity_bytes) {}
+  Inbox(size_t capacity, size_t capacity_bytes)
+      : capacity_(capacity), capacity_bytes_(capacity_bytes) {}
   void push(Message m, bool wake) {
     std::lock_guard<std::mutex> lock(mutex_);
     if (queue_.size() >= capacity_ || bytes_ + m.data.size() > capacity_bytes_) {

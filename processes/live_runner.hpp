@@ -25,7 +25,7 @@ struct LiveOptions {
   // instead of two thread switches per message (which dominate the cost of a cheap node
   // such as the odometry's). Results do not change: nodes never read the wall clock for them.
   bool wake_on_message = true;
-  size_t queue_capacity = 10000;          // messages
+  size_t queue_capacity = 10000;            // messages
   size_t queue_capacity_bytes = 64u << 20;  // and bytes (a Pi has little memory)
   // Polled after every tick: return true to stop (e.g. the motor has done its sweeps).
   std::function<bool()> should_stop;

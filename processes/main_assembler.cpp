@@ -2,7 +2,6 @@
 // SWEEP_CLOUD (chunks) + SWEEP_STATUS; mobile_lidar: LIDAR_SCAN + ODOMETRY_POSE ->
 // SWEEP_CLOUD (one world-frame chunk per scan).
 #include <lcm/lcm-cpp.hpp>
-
 #include <memory>
 
 #include "processes/assembler_node.hpp"
@@ -12,12 +11,13 @@
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
-  CLI::App app{"sweepmap-assembler: what it assembles follows the rig's kind. rotating_lidar: "
-               "builds 3D sweeps from the scans of each lidar window, corrects their attitude "
-               "with the triangular plate (Yuan 2021 Eq. 4-10) and publishes them in chunks on "
-               "SWEEP_CLOUD. mobile_lidar: transforms every scan to the world frame with the "
-               "pose (assembler.pose_channel) interpolated at each ray's time and the mounting "
-               "(Miao 2022 Eq. 11-14), one chunk per scan"};
+  CLI::App app{
+      "sweepmap-assembler: what it assembles follows the rig's kind. rotating_lidar: "
+      "builds 3D sweeps from the scans of each lidar window, corrects their attitude "
+      "with the triangular plate (Yuan 2021 Eq. 4-10) and publishes them in chunks on "
+      "SWEEP_CLOUD. mobile_lidar: transforms every scan to the world frame with the "
+      "pose (assembler.pose_channel) interpolated at each ray's time and the mounting "
+      "(Miao 2022 Eq. 11-14), one chunk per scan"};
   CommonOptions common;
   addCommonOptions(app, common);
   CLI11_PARSE(app, argc, argv);

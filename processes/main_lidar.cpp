@@ -12,8 +12,9 @@
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
-  CLI::App app{"sweepmap-lidar: publishes the lidar's raw 2D scans with their timing on "
-               "LIDAR_SCAN"};
+  CLI::App app{
+      "sweepmap-lidar: publishes the lidar's raw 2D scans with their timing on "
+      "LIDAR_SCAN"};
   CommonOptions common;
   bool sim = false;
   std::string scene_path;

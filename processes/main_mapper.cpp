@@ -7,10 +7,11 @@
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
-  CLI::App app{"sweepmap-mapper: inserts assembled sweeps (rotating_lidar rigs) or world-frame "
-               "scans (mobile_lidar rigs, in mapper.batch_s batches) "
-               "into an OctoMap OcTree, publishes MAP_STATS, saves the map (.bt, atomically) on "
-               "MAP_SAVE and on shutdown"};
+  CLI::App app{
+      "sweepmap-mapper: inserts assembled sweeps (rotating_lidar rigs) or world-frame "
+      "scans (mobile_lidar rigs, in mapper.batch_s batches) "
+      "into an OctoMap OcTree, publishes MAP_STATS, saves the map (.bt, atomically) on "
+      "MAP_SAVE and on shutdown"};
   CommonOptions common;
   std::string save_path = "map.bt";
   addCommonOptions(app, common);

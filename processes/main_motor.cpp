@@ -11,9 +11,10 @@
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
-  CLI::App app{"sweepmap-motor: drives the encoder-less stepper (homing on the photoelectric "
-               "switch, the 7 scan modes, the improved action sequence of Yuan 2021 Fig. 2) and "
-               "publishes MOTOR_STATE, MOTOR_SWITCH and SCAN_WINDOW"};
+  CLI::App app{
+      "sweepmap-motor: drives the encoder-less stepper (homing on the photoelectric "
+      "switch, the 7 scan modes, the improved action sequence of Yuan 2021 Fig. 2) and "
+      "publishes MOTOR_STATE, MOTOR_SWITCH and SCAN_WINDOW"};
   CommonOptions common;
   bool sim = false;
   uint64_t seed = 1;

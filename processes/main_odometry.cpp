@@ -7,9 +7,10 @@
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
-  CLI::App app{"sweepmap-odometry: wheel odometry (Miao 2022 Eq. 2-5) and its EKF fusion with "
-               "the IMU gyro (bias estimated, slip gated, late messages re-ordered); publishes "
-               "WHEEL_ODOMETRY and ODOMETRY_POSE after every wheel reading"};
+  CLI::App app{
+      "sweepmap-odometry: wheel odometry (Miao 2022 Eq. 2-5) and its EKF fusion with "
+      "the IMU gyro (bias estimated, slip gated, late messages re-ordered); publishes "
+      "WHEEL_ODOMETRY and ODOMETRY_POSE after every wheel reading"};
   CommonOptions common;
   addCommonOptions(app, common);
   CLI11_PARSE(app, argc, argv);

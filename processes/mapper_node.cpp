@@ -92,14 +92,14 @@ void MapperNode::insert(int64_t now_utime, SweepKey key, Outbox& out) {
   if (it == pending_.end()) return;
   std::vector<Eigen::Vector3f> points;
   for (const auto& [index, xyz] : it->second.chunks) {
-    for (size_t i = 0; i + 2 < xyz.size(); i += 3) points.emplace_back(xyz[i], xyz[i + 1], xyz[i + 2]);
+    for (size_t i = 0; i + 2 < xyz.size(); i += 3)
+      points.emplace_back(xyz[i], xyz[i + 1], xyz[i + 2]);
   }
   if (static_cast<int>(it->second.chunks.size()) != it->second.chunk_count) {
     ++incomplete_;
-    reportError("incomplete_sweeps",
-                "sweep " + std::to_string(sweep_id) + " inserted with " +
-                    std::to_string(it->second.chunks.size()) + " of " +
-                    std::to_string(it->second.chunk_count) + " chunks");
+    reportError("incomplete_sweeps", "sweep " + std::to_string(sweep_id) + " inserted with " +
+                                         std::to_string(it->second.chunks.size()) + " of " +
+                                         std::to_string(it->second.chunk_count) + " chunks");
   }
   const Eigen::Vector3f it_origin = it->second.origin;
   pending_.erase(it);

@@ -12,11 +12,10 @@
 // per batch. Batches depend on message content only, so live and offline runs agree.
 #pragma once
 
+#include <Eigen/Core>
 #include <map>
 #include <memory>
 #include <set>
-
-#include <Eigen/Core>
 
 #include "core/rig_components.hpp"
 #include "mapping/occupancy_map.hpp"

@@ -20,17 +20,28 @@ int64_t us(double seconds) { return static_cast<int64_t>(std::llround(seconds * 
 
 const char* phaseName(MotorController::Phase p) {
   switch (p) {
-    case MotorController::Phase::kIdle: return "idle";
-    case MotorController::Phase::kHomingLeave: return "homing-leave";
-    case MotorController::Phase::kHomingSeek: return "homing-seek";
-    case MotorController::Phase::kHomingStop: return "homing-stop";
-    case MotorController::Phase::kPositioning: return "positioning";
-    case MotorController::Phase::kAccelerating: return "accelerating";
-    case MotorController::Phase::kScanning: return "scanning";
-    case MotorController::Phase::kDecelerating: return "decelerating";
-    case MotorController::Phase::kReturning: return "returning";
-    case MotorController::Phase::kDone: return "done";
-    case MotorController::Phase::kFault: return "fault";
+    case MotorController::Phase::kIdle:
+      return "idle";
+    case MotorController::Phase::kHomingLeave:
+      return "homing-leave";
+    case MotorController::Phase::kHomingSeek:
+      return "homing-seek";
+    case MotorController::Phase::kHomingStop:
+      return "homing-stop";
+    case MotorController::Phase::kPositioning:
+      return "positioning";
+    case MotorController::Phase::kAccelerating:
+      return "accelerating";
+    case MotorController::Phase::kScanning:
+      return "scanning";
+    case MotorController::Phase::kDecelerating:
+      return "decelerating";
+    case MotorController::Phase::kReturning:
+      return "returning";
+    case MotorController::Phase::kDone:
+      return "done";
+    case MotorController::Phase::kFault:
+      return "fault";
   }
   return "?";
 }
@@ -149,9 +160,10 @@ void MotorController::advancePhase(int64_t now, Outbox& out) {
     case Phase::kHomingLeave:
     case Phase::kHomingSeek:
       if (std::abs(commandedAngle(now) - seek_start_) > rig_.motor.homing_search_deg * kDegToRad) {
-        fault(now, "home switch not found within " +
-                       std::to_string(rig_.motor.homing_search_deg) + " deg",
-              out);
+        fault(
+            now,
+            "home switch not found within " + std::to_string(rig_.motor.homing_search_deg) + " deg",
+            out);
       }
       break;
     case Phase::kHomingStop:
@@ -204,9 +216,8 @@ void MotorController::startSweep(int64_t now, Outbox& out) {
   const double accel = rig_.motor.accel_deg_s2 * kDegToRad;
   ++sweep_id_;
   command(now, {StepperCommand::Kind::kRun, omega_, accel, 0.0});
-  window_start_ = rig_.motor.action_sequence == "naive"
-                      ? now
-                      : motion_end_ + us(rig_.motor.margin_s);
+  window_start_ =
+      rig_.motor.action_sequence == "naive" ? now : motion_end_ + us(rig_.motor.margin_s);
   window_end_ = window_start_ + window_us_;
   enter(now, now >= window_start_ ? Phase::kScanning : Phase::kAccelerating, out);
 }
@@ -248,17 +259,35 @@ void MotorController::publishState(int64_t now, Outbox& out) {
   motor_state_t m;
   m.utime = now;
   switch (phase_) {
-    case Phase::kIdle: m.state = motor_state_t::IDLE; break;
+    case Phase::kIdle:
+      m.state = motor_state_t::IDLE;
+      break;
     case Phase::kHomingLeave:
     case Phase::kHomingSeek:
-    case Phase::kHomingStop: m.state = motor_state_t::HOMING; break;
-    case Phase::kPositioning: m.state = motor_state_t::POSITIONING; break;
-    case Phase::kAccelerating: m.state = motor_state_t::ACCELERATING; break;
-    case Phase::kScanning: m.state = motor_state_t::SCANNING; break;
-    case Phase::kDecelerating: m.state = motor_state_t::DECELERATING; break;
-    case Phase::kReturning: m.state = motor_state_t::RETURNING; break;
-    case Phase::kDone: m.state = motor_state_t::DONE; break;
-    case Phase::kFault: m.state = motor_state_t::FAULT; break;
+    case Phase::kHomingStop:
+      m.state = motor_state_t::HOMING;
+      break;
+    case Phase::kPositioning:
+      m.state = motor_state_t::POSITIONING;
+      break;
+    case Phase::kAccelerating:
+      m.state = motor_state_t::ACCELERATING;
+      break;
+    case Phase::kScanning:
+      m.state = motor_state_t::SCANNING;
+      break;
+    case Phase::kDecelerating:
+      m.state = motor_state_t::DECELERATING;
+      break;
+    case Phase::kReturning:
+      m.state = motor_state_t::RETURNING;
+      break;
+    case Phase::kDone:
+      m.state = motor_state_t::DONE;
+      break;
+    case Phase::kFault:
+      m.state = motor_state_t::FAULT;
+      break;
   }
   m.homed = homed_;
   m.mode = rig_.motor.mode;

@@ -12,10 +12,10 @@
 // switch edge at homing.
 #pragma once
 
-#include "rigs/rotating_lidar.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "drivers/stepper_device.hpp"
 #include "processes/node.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 
@@ -36,7 +36,8 @@ class MotorController : public Node {
   };
 
   // `sweeps`: number of 3D sweeps to make, 0 = until stopped. `start_utime`: time origin.
-  MotorController(const RotatingLidarConfig& rig, StepperDevice* device, int sweeps, int64_t start_utime);
+  MotorController(const RotatingLidarConfig& rig, StepperDevice* device, int sweeps,
+                  int64_t start_utime);
   std::vector<std::string> subscriptions() const override { return {}; }
 
   Phase phase() const { return phase_; }
@@ -74,11 +75,11 @@ class MotorController : public Node {
   StepperDevice* device_;
   int sweeps_wanted_;
   Phase phase_ = Phase::kIdle;
-  ShaftTrajectory nominal_;      // controller's open-loop model, device step frame
-  double home_offset_ = 0.0;     // angle = nominal + offset (set by homing)
+  ShaftTrajectory nominal_;   // controller's open-loop model, device step frame
+  double home_offset_ = 0.0;  // angle = nominal + offset (set by homing)
   bool homed_ = false;
-  int64_t motion_end_ = 0;       // nominal end of the last command
-  int64_t phase_until_ = 0;      // when the current phase's wait ends
+  int64_t motion_end_ = 0;   // nominal end of the last command
+  int64_t phase_until_ = 0;  // when the current phase's wait ends
   double seek_start_ = 0.0;
   int64_t window_start_ = 0;
   int64_t window_end_ = 0;

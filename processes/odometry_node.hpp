@@ -7,12 +7,11 @@
 
 #include <optional>
 
-#include "odometry/odometry_config.hpp"
 #include "odometry/ekf.hpp"
+#include "odometry/odometry_config.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {
-
 
 class OdometryNode : public Node {
  public:

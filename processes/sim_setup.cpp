@@ -4,8 +4,8 @@
 
 namespace sweepmap {
 
-truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config, const Scene& scene,
-                         int64_t utime) {
+truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config,
+                         const Scene& scene, int64_t utime) {
   truth_rig_t m;
   m.utime = utime;
   const Eigen::Isometry3d T = scene.T_room_rig();

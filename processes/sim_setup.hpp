@@ -3,8 +3,8 @@
 
 #include <cstdint>
 
-#include "rigs/rotating_lidar.hpp"
 #include "drivers/scene.hpp"
+#include "rigs/rotating_lidar.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 
 namespace sweepmap {
@@ -18,7 +18,7 @@ constexpr int64_t kSimEpochUtime = 1700000000000000LL;
 inline uint64_t stepperSeed(uint64_t seed) { return seed * 2 + 1; }
 inline uint64_t lidarSeed(uint64_t seed) { return seed * 2 + 2; }
 
-truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config, const Scene& scene,
-                         int64_t utime);
+truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config,
+                         const Scene& scene, int64_t utime);
 
 }  // namespace sweepmap

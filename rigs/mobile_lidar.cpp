@@ -36,7 +36,8 @@ LidarMounting MountingConfig::toMounting() const {
 }
 
 void WorldAssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
-  s.add(p + "pose_channel", &pose_channel, "", "pose stream: ODOMETRY_POSE (EKF) or WHEEL_ODOMETRY");
+  s.add(p + "pose_channel", &pose_channel, "",
+        "pose stream: ODOMETRY_POSE (EKF) or WHEEL_ODOMETRY");
   s.add(p + "beam_count", &beam_count, "", "expected rays per scan (0: any)");
   s.add(p + "max_pose_wait_s", &max_pose_wait_s, "s",
         "assemble a scan with the poses there are after this long");
@@ -65,13 +66,15 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   checkRigKind(path, c.rig, "mobile_lidar");
   if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
       !(c.odometry.ekf.wheel_distance_m > 0)) {
-    throw ConfigError(path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
+    throw ConfigError(
+        path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
   }
   if (!(c.mapper.batch_s >= 0.0 && c.mapper.batch_s <= 3600.0)) {
     throw ConfigError(path + ": key 'mapper.batch_s' must be in [0, 3600]");
   }
   if (c.assembler.pose_channel != "ODOMETRY_POSE" && c.assembler.pose_channel != "WHEEL_ODOMETRY") {
-    throw ConfigError(path + ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
+    throw ConfigError(path +
+                      ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
   }
   if (!c.mounting.calibration_file.empty()) {
     std::filesystem::path calib(c.mounting.calibration_file);

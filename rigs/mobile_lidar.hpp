@@ -34,7 +34,8 @@ struct MountingConfig {
 struct WorldAssemblerConfig {
   std::string pose_channel = "ODOMETRY_POSE";  // or WHEEL_ODOMETRY
   int beam_count = 0;                          // expected rays per scan; 0 = any
-  double max_pose_wait_s = 2.0;  // a scan whose pose does not come within this is assembled with what is there
+  double max_pose_wait_s =
+      2.0;  // a scan whose pose does not come within this is assembled with what is there
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 

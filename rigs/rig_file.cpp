@@ -126,8 +126,7 @@ Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& ove
 template <class T>
 const T& requireKind(const Rig& rig, const std::string& what) {
   if (const T* c = std::get_if<T>(&rig.config)) return *c;
-  const RigKind wanted = static_cast<RigKind>(
-      decltype(rig.config)(std::in_place_type<T>).index());
+  const RigKind wanted = static_cast<RigKind>(decltype(rig.config)(std::in_place_type<T>).index());
   throw ConfigError(rig.path + " is a " + rig.kindName() + " rig; " + what + " needs a " +
                     rigKindName(wanted) + " rig");
 }

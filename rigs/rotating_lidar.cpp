@@ -49,7 +49,8 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   require(rig.motor.homing_speed_deg_s > 0, "motor.homing_speed_deg_s", "must be > 0");
   require(rig.motor.homing_search_deg > 0, "motor.homing_search_deg", "must be > 0");
   require(rig.motor.margin_s >= 0, "motor.margin_s", "must be >= 0");
-  require(rig.motor.settle_s >= 0 && rig.motor.pause_s >= 0, "motor.settle_s", "and pause_s must be >= 0");
+  require(rig.motor.settle_s >= 0 && rig.motor.pause_s >= 0, "motor.settle_s",
+          "and pause_s must be >= 0");
   require(rig.motor.status_rate_hz > 0, "motor.status_rate_hz", "must be > 0");
   require(rig.plate.region_inner_radius_mm >= 0 &&
               rig.plate.region_outer_radius_mm > rig.plate.region_inner_radius_mm,
@@ -63,8 +64,10 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   require(rig.mapper.resolution_m >= 0.005, "mapper.resolution_m", "must be >= 0.005");
   require(rig.mapper.max_range_m > 0 && rig.mapper.max_range_m <= 100, "mapper.max_range_m",
           "must be in (0, 100]");
-  require(rig.mapper.prob_hit > 0.5 && rig.mapper.prob_hit < 1, "mapper.prob_hit", "must be in (0.5, 1)");
-  require(rig.mapper.prob_miss > 0 && rig.mapper.prob_miss < 0.5, "mapper.prob_miss", "must be in (0, 0.5)");
+  require(rig.mapper.prob_hit > 0.5 && rig.mapper.prob_hit < 1, "mapper.prob_hit",
+          "must be in (0.5, 1)");
+  require(rig.mapper.prob_miss > 0 && rig.mapper.prob_miss < 0.5, "mapper.prob_miss",
+          "must be in (0, 0.5)");
   require(rig.mapper.clamp_min > 0 && rig.mapper.clamp_min < rig.mapper.clamp_max &&
               rig.mapper.clamp_max < 1,
           "mapper.clamp_max", "needs 0 < clamp_min < clamp_max < 1");

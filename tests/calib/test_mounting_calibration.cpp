@@ -50,10 +50,11 @@ class NoiseFreeDrive : public ::testing::Test {
 
   void expectTruth(const MountingCalibrationResult& r, double tol_rad) const {
     ASSERT_TRUE(r.ok) << r.reason;
-    std::cerr << mountingMethodName(r.method) << ": error gamma " << r.gamma_rad - truth_[0] << ", beta "
-              << r.beta_rad - truth_[1] << ", alpha " << r.alpha_rad - truth_[2] << " rad, time offset "
-              << r.time_offset_s << " s, residual " << r.residual_before_m << " -> " << r.residual_after_m
-              << " m, " << r.correspondences << " correspondences, " << r.iterations << " iterations\n";
+    std::cerr << mountingMethodName(r.method) << ": error gamma " << r.gamma_rad - truth_[0]
+              << ", beta " << r.beta_rad - truth_[1] << ", alpha " << r.alpha_rad - truth_[2]
+              << " rad, time offset " << r.time_offset_s << " s, residual " << r.residual_before_m
+              << " -> " << r.residual_after_m << " m, " << r.correspondences << " correspondences, "
+              << r.iterations << " iterations\n";
     EXPECT_NEAR(r.gamma_rad, truth_[0], tol_rad);
     EXPECT_NEAR(r.beta_rad, truth_[1], tol_rad);
     EXPECT_NEAR(r.alpha_rad, truth_[2], tol_rad);

@@ -40,11 +40,11 @@ PlateRegion paperRegion() {
 TEST(PlateRegion, SemiRingBounds) {
   const PlateRegion r = paperRegion();
   EXPECT_TRUE(r.contains({0.09f, 0.0f, -0.045f}));
-  EXPECT_FALSE(r.contains({-0.09f, 0.0f, -0.045f}));   // other half
-  EXPECT_FALSE(r.contains({0.05f, 0.0f, -0.045f}));    // inside inner radius
-  EXPECT_FALSE(r.contains({0.12f, 0.0f, -0.045f}));    // beyond outer radius
-  EXPECT_FALSE(r.contains({0.09f, 0.0f, -0.030f}));    // above the slab (+-10 mm)
-  EXPECT_TRUE(r.contains({0.0f, 0.09f, -0.054f}));     // on the cut, inside the slab
+  EXPECT_FALSE(r.contains({-0.09f, 0.0f, -0.045f}));  // other half
+  EXPECT_FALSE(r.contains({0.05f, 0.0f, -0.045f}));   // inside inner radius
+  EXPECT_FALSE(r.contains({0.12f, 0.0f, -0.045f}));   // beyond outer radius
+  EXPECT_FALSE(r.contains({0.09f, 0.0f, -0.030f}));   // above the slab (+-10 mm)
+  EXPECT_TRUE(r.contains({0.0f, 0.09f, -0.054f}));    // on the cut, inside the slab
 }
 
 class CentroidAtDensity : public ::testing::TestWithParam<int> {};
@@ -110,7 +110,8 @@ RayScan scanPlate(double beta, double phi_step_deg, double noise_m, unsigned see
     const Eigen::Matrix3d R = rotating::rotZ(phi * kDeg);
     for (double theta = -135; theta <= 135; theta += 0.25) {
       const Eigen::Vector3d origin = R * Eigen::Vector3d(d, 0, 0);
-      const Eigen::Vector3d dir = R * Eigen::Vector3d(0, std::sin(theta * kDeg), std::cos(theta * kDeg));
+      const Eigen::Vector3d dir =
+          R * Eigen::Vector3d(0, std::sin(theta * kDeg), std::cos(theta * kDeg));
       if (dir.z() >= 0) continue;
       const double t = z / dir.z();
       if (!insidePlate((origin + t * dir).head<2>(), beta)) continue;

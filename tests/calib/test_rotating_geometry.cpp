@@ -15,8 +15,8 @@ void expectNear(const Eigen::Vector3d& a, const Eigen::Vector3d& b, double tol =
 }
 
 TEST(RotatingGeometry, Eq4PointInLidarFrame) {
-  expectNear(pointInLidar(2.0, 0.0), {0, 0, 2});            // middle of the sector: Z_L
-  expectNear(pointInLidar(2.0, 90 * kDeg), {0, 2, 0});      // toward Y_L
+  expectNear(pointInLidar(2.0, 0.0), {0, 0, 2});        // middle of the sector: Z_L
+  expectNear(pointInLidar(2.0, 90 * kDeg), {0, 2, 0});  // toward Y_L
   expectNear(pointInLidar(1.0, -135 * kDeg), {0, -std::sqrt(0.5), -std::sqrt(0.5)});
 }
 

@@ -50,9 +50,9 @@ TEST_F(SweepAssemblyTest, PointsUseEachRaysOwnTime) {
 
 TEST_F(SweepAssemblyTest, SkipsNoReturnAndOutOfLimitRays) {
   Scan2D a = scan(0, 2.0f);
-  a.ranges_m[0] = 0.0f;    // no return
-  a.ranges_m[1] = 0.01f;   // below range_min
-  a.ranges_m[2] = 12.0f;   // beyond range_max
+  a.ranges_m[0] = 0.0f;   // no return
+  a.ranges_m[1] = 0.01f;  // below range_min
+  a.ranges_m[2] = 12.0f;  // beyond range_max
   const AssembledSweep s = assembleSweep({a}, window_, rig_);
   EXPECT_EQ(s.points_Op.size(), 2u);
 }

@@ -19,7 +19,9 @@ namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-std::string sourcePath(const std::string& rel) { return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel; }
+std::string sourcePath(const std::string& rel) {
+  return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel;
+}
 
 // What `sweepmap sim --rig <rig> --scene <scene> --mode <mode> --sweeps 1 --seed <seed> --out
 // LOG` writes, made in this process through the same library calls (same seed, same log).
@@ -35,8 +37,8 @@ std::string simulatedLog(const std::string& name, const std::string& rig_path,
   options.seed = seed;
   options.sweeps = 1;
   EventLogWriter log(log_path);
-  const SimRunResult r = simulateRig(
-      setup, options, [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
+  const SimRunResult r =
+      simulateRig(setup, options, [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
   log.close();
   if (!r.ok) throw std::runtime_error("simulation failed: " + r.summary);
   return log_path;

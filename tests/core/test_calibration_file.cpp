@@ -17,7 +17,8 @@ class CalibrationFileTest : public ::testing::Test {
  protected:
   void SetUp() override {
     dir_ = fs::temp_directory_path() /
-           ("sweepmap_calib_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+           ("sweepmap_calib_" +
+            std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
     fs::remove_all(dir_);
     fs::create_directories(dir_);
   }
@@ -75,7 +76,6 @@ TEST_F(CalibrationFileTest, RejectsBadFiles) {
   EXPECT_NO_THROW(loadPlateCalibration(write("plate: {alpha_deg: 30}\n")));
 }
 
-
 TEST_F(CalibrationFileTest, MountingRoundTripAndNoTemporaryLeft) {
   MountingCalibration c;
   c.gamma_rad = 0.0355123456789;
@@ -92,7 +92,6 @@ TEST_F(CalibrationFileTest, MountingRoundTripAndNoTemporaryLeft) {
   EXPECT_DOUBLE_EQ(r.alpha_rad, c.alpha_rad);
   EXPECT_EQ(r.logs, c.logs);
   EXPECT_EQ(r.source.at("tool"), "sweepmap calib mounting");
-
 }
 
 TEST_F(CalibrationFileTest, MountingRejectsBadFilesNamingTheKey) {
@@ -105,12 +104,16 @@ TEST_F(CalibrationFileTest, MountingRejectsBadFilesNamingTheKey) {
     }
     return std::string();
   };
-  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: 0}\n").find("mounting.alpha_rad"), std::string::npos);
-  EXPECT_NE(error("mounting: {gamma_rad: x, beta_rad: 0, alpha_rad: 0}\n").find("mounting.gamma_rad"),
+  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: 0}\n").find("mounting.alpha_rad"),
             std::string::npos);
-  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: .nan, alpha_rad: 0}\n").find("mounting.beta_rad"),
-            std::string::npos);
-  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: 0, alpha_rad: 0, delta_rad: 0}\n").find("mounting.delta_rad"),
+  EXPECT_NE(
+      error("mounting: {gamma_rad: x, beta_rad: 0, alpha_rad: 0}\n").find("mounting.gamma_rad"),
+      std::string::npos);
+  EXPECT_NE(
+      error("mounting: {gamma_rad: 0, beta_rad: .nan, alpha_rad: 0}\n").find("mounting.beta_rad"),
+      std::string::npos);
+  EXPECT_NE(error("mounting: {gamma_rad: 0, beta_rad: 0, alpha_rad: 0, delta_rad: 0}\n")
+                .find("mounting.delta_rad"),
             std::string::npos);
   EXPECT_NE(error("plate: {alpha_deg: 30}\n").find("'plate'"), std::string::npos);
   EXPECT_NE(error("mounting: [1\n").find("m.yaml"), std::string::npos);

@@ -102,7 +102,7 @@ TEST(RotatingLidarConfig, ShippedRigFilesLoad) {
 TEST(RotatingLidarConfig, ScanModesMatchTable1) {
   for (int m = 1; m <= 7; ++m) {
     const ScanMode s = scanMode(m);
-    const double n = 180.0 / s.gamma_deg;  // Eq. 1
+    const double n = 180.0 / s.gamma_deg;                      // Eq. 1
     EXPECT_NEAR(n / 40.0, s.period_s, 1e-12) << "mode " << m;  // Eq. 2 at 40 Hz
   }
   EXPECT_THROW(scanMode(0), std::out_of_range);

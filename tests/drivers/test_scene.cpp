@@ -192,7 +192,6 @@ TEST_F(SceneFileTest, RejectsImpossibleScenesNamingTheKey) {
   EXPECT_NE(loadError(kSceneFile, {"room.width_m=0"}).find("room.width_m"), std::string::npos);
 }
 
-
 // The lab's calibration target (config/scene_lab.yaml): a board 0.1 m in front of a window
 // recessed 0.3 m into the -X wall.
 TEST(SceneTarget, RaycastHitsTheBoardTheRecessAndTheWallAtAnalyticDistances) {
@@ -208,20 +207,23 @@ TEST(SceneTarget, RaycastHitsTheBoardTheRecessAndTheWallAtAnalyticDistances) {
   const Eigen::Vector3d at_board(x0, c.target_position_m, window_mid_z);
   EXPECT_NEAR(*scene.raycast(at_board, toward, 20.0), x0 - wall_x - c.target_board_offset_m, 1e-12);
   // Inside the window, beside the board: the recess's back.
-  const Eigen::Vector3d beside(x0, c.target_position_m + (c.target_board_width_m + c.target_window_width_m) / 4,
-                               window_mid_z);
+  const Eigen::Vector3d beside(
+      x0, c.target_position_m + (c.target_board_width_m + c.target_window_width_m) / 4,
+      window_mid_z);
   EXPECT_NEAR(*scene.raycast(beside, toward, 20.0), x0 - wall_x + c.target_window_depth_m, 1e-12);
   // Above the window: the wall.
-  const Eigen::Vector3d above(x0, c.target_position_m, c.target_window_sill_m + c.target_window_height_m + 0.1);
+  const Eigen::Vector3d above(x0, c.target_position_m,
+                              c.target_window_sill_m + c.target_window_height_m + 0.1);
   EXPECT_NEAR(*scene.raycast(above, toward, 20.0), x0 - wall_x, 1e-12);
   // Below the window: the wall.
   const Eigen::Vector3d below(x0, c.target_position_m, c.target_window_sill_m - 0.1);
   EXPECT_NEAR(*scene.raycast(below, toward, 20.0), x0 - wall_x, 1e-12);
   // Slanted: a ray to the board's centre from elsewhere hits it at the distance to its face.
   const Eigen::Vector3d from(-2.0, 1.0, 0.3);
-  const Eigen::Vector3d face_centre(wall_x + c.target_board_offset_m, c.target_position_m, window_mid_z);
-  EXPECT_NEAR(*scene.raycast(from, (face_centre - from).normalized(), 20.0), (face_centre - from).norm(),
-              1e-9);
+  const Eigen::Vector3d face_centre(wall_x + c.target_board_offset_m, c.target_position_m,
+                                    window_mid_z);
+  EXPECT_NEAR(*scene.raycast(from, (face_centre - from).normalized(), 20.0),
+              (face_centre - from).norm(), 1e-9);
   const auto board = scene.targetBoard();
   ASSERT_TRUE(board.has_value());
   EXPECT_NEAR(board->max().x(), wall_x + c.target_board_offset_m, 1e-12);
@@ -237,7 +239,8 @@ TEST(SceneTarget, RaycastHitsTheBoardTheRecessAndTheWallAtAnalyticDistances) {
 TEST_F(SceneFileTest, RejectsABadTargetNamingTheKey) {
   const std::string lab = std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml";
   EXPECT_NE(loadError(lab, {"target.wall=y_max"}).find("target.wall"), std::string::npos);
-  EXPECT_NE(loadError(lab, {"target.board_width_m=2"}).find("target.board_width_m"), std::string::npos);
+  EXPECT_NE(loadError(lab, {"target.board_width_m=2"}).find("target.board_width_m"),
+            std::string::npos);
   EXPECT_NE(loadError(lab, {"target.position_m=2.4"}).find("target.position_m"), std::string::npos);
   EXPECT_NE(loadError(lab, {"target.board_offset_m=-0.5"}).find("target.board_offset_m"),
             std::string::npos);

@@ -12,7 +12,9 @@ namespace {
 
 constexpr int64_t kStart = 1'000'000;
 
-SceneConfig labScene() { return loadScene(std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml"); }
+SceneConfig labScene() {
+  return loadScene(std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml");
+}
 
 PlateConfig plate() { return PlateConfig{}; }
 
@@ -39,7 +41,7 @@ TEST(MobilePath, CircleAndRoundedRectangleAreClosedAndContinuous) {
   EXPECT_NEAR(p1.x_m, p0.x_m, 1e-9);
   EXPECT_NEAR(p1.y_m, p0.y_m, 1e-9);
   EXPECT_NEAR(p1.theta_rad - p0.theta_rad, 2 * M_PI, 1e-9);  // unwrapped
-  const Pose2 q = c.poseAt(c.length() / 4);                   // quarter turn: rightmost point
+  const Pose2 q = c.poseAt(c.length() / 4);                  // quarter turn: rightmost point
   EXPECT_NEAR(q.x_m, -3.0 + 0.83, 1e-9);
   EXPECT_NEAR(q.y_m, 0.0, 1e-9);
 

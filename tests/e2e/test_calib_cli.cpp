@@ -13,8 +13,8 @@
 #include <fstream>
 
 #include "core/calibration_file.hpp"
-#include "rigs/rotating_lidar.hpp"
 #include "rigs/mobile_lidar.hpp"
+#include "rigs/rotating_lidar.hpp"
 #include "tests/e2e/test_support.hpp"
 
 extern char** environ;
@@ -148,7 +148,6 @@ TEST(CalibCli, HelpDescribesTheGroupAndTheCommand) {
   }
 }
 
-
 // ---------------------------------------------------------------------------------------
 // calib mounting (rig B).
 
@@ -158,16 +157,18 @@ const std::string kRigB = sourcePath("config/rig_b.yaml");
 // laps, as the paper experiment's), slip and noise on, true mounting error (0.0355, 0.0126,
 // -0.0058) rad; the rig file believes (0, 0, 0).
 std::string circleLog() {
-  return cachedSimMobileLog("circle_calibration", {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml"),
-                                                   "--set", "sim.duration_s=120"});
+  return cachedSimMobileLog("circle_calibration",
+                            {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml"),
+                             "--set", "sim.duration_s=120"});
 }
 
 TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
   const std::string log = circleLog();
   const fs::path dir = scratchDir("calib_cli_mounting");
   const fs::path out = dir / "mounting_calibration.yaml";
-  const int rc = runSplit({"calib", "mounting", "--log", log, "--rig", kRigB, "--out", out.string(), "--json"},
-                          dir / "stdout.json", dir / "stderr.txt");
+  const int rc =
+      runSplit({"calib", "mounting", "--log", log, "--rig", kRigB, "--out", out.string(), "--json"},
+               dir / "stdout.json", dir / "stderr.txt");
   ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
   const nlohmann::json j = readJson(dir / "stdout.json");
   std::cerr << readFile(dir / "stderr.txt");
@@ -209,22 +210,26 @@ TEST(CalibCli, MountingBadInputsFailClearly) {
     return runSplit(a, dir / (label + ".out"), dir / (label + ".err"));
   };
   // Missing log.
-  EXPECT_EQ(run({"--log", (dir / "nope.lcmlog").string(), "--rig", kRigB, "--out", out.string()}, "missing"), 2);
+  EXPECT_EQ(run({"--log", (dir / "nope.lcmlog").string(), "--rig", kRigB, "--out", out.string()},
+                "missing"),
+            2);
   EXPECT_NE(readFile(dir / "missing.err").find("nope.lcmlog"), std::string::npos);
   // Corrupt log: bytes that are no LCM log.
   std::ofstream(dir / "corrupt.lcmlog") << std::string(4096, 'x');
-  EXPECT_NE(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string()}, "corrupt"), 0);
+  EXPECT_NE(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string()},
+                "corrupt"),
+            0);
   EXPECT_FALSE(readFile(dir / "corrupt.err").empty());
   // A bad rig key names the key.
-  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(), "--set",
-                 "mounting.gama_rad=1"},
+  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(),
+                 "--set", "mounting.gama_rad=1"},
                 "badkey"),
             2);
   EXPECT_NE(readFile(dir / "badkey.err").find("mounting.gama_rad"), std::string::npos)
       << readFile(dir / "badkey.err");
   // A missing calibration file named by the rig.
-  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(), "--set",
-                 "mounting.calibration_file=absent.yaml"},
+  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(),
+                 "--set", "mounting.calibration_file=absent.yaml"},
                 "badcalib"),
             2);
   EXPECT_NE(readFile(dir / "badcalib.err").find("absent.yaml"), std::string::npos);

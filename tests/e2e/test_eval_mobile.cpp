@@ -1,5 +1,5 @@
-// `sweepmap eval` of a mobile_lidar rig: the paper's experiment for rig B (calibration circle + lab loop)
-// against the simulator's truth, and bad input (corrupt and truncated logs).
+// `sweepmap eval` of a mobile_lidar rig: the paper's experiment for rig B (calibration circle + lab
+// loop) against the simulator's truth, and bad input (corrupt and truncated logs).
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -17,7 +17,8 @@ class EvalMobilePaper : public ::testing::Test {
   void SetUp() override {
     // By name: the rig and its default scene are found in the install tree, not the
     // working directory (the tests run in the build tree, which has no config/ folder).
-    const CachedRun run = cachedRun("eval_mobile_paper", {"eval", "--experiment", "paper", "--rig", "rig_b"});
+    const CachedRun run =
+        cachedRun("eval_mobile_paper", {"eval", "--experiment", "paper", "--rig", "rig_b"});
     dir_ = run.out;
     ASSERT_EQ(run.status, 0) << readFile(run.output);
     report_ = readJson(dir_ / "report.json");
@@ -53,7 +54,8 @@ TEST_F(EvalMobilePaper, EkfBeatsWheelOdometryByAtLeastTwoOnTheLoopWithSlip) {
   const double odo = report_["trajectory_rmse_m"]["odometry"].get<double>();
   const double ekf = report_["trajectory_rmse_m"]["ekf"].get<double>();
   EXPECT_GE(odo, 2.0 * ekf) << "odometry " << odo << " m, EKF " << ekf << " m";
-  EXPECT_GT(report_["trajectory"]["wheel_readings_gated"].get<int>(), 0) << "slip is caught by the gate";
+  EXPECT_GT(report_["trajectory"]["wheel_readings_gated"].get<int>(), 0)
+      << "slip is caught by the gate";
 }
 
 TEST_F(EvalMobilePaper, RoomDimensionsWithinTenMillimetres) {
@@ -76,9 +78,10 @@ TEST_F(EvalMobilePaper, CeilingNormalDensityAndFigures) {
   EXPECT_GT(n[2].get<double>(), 0.999);
   EXPECT_GT(report_["density_D_m"].get<double>(), 0.0);
   EXPECT_LT(report_["density_D_m"].get<double>(), 0.1);
-  for (const char* f : {"trajectory.png", "trajectory_error.png", "top_view.png", "side_view_xz.png",
-                        "side_view_yz.png", "deviation_ceiling.png", "deviation_walls.png",
-                        "loop_closure.png", "circle_ghost_before.png", "circle_ghost_after.png"}) {
+  for (const char* f :
+       {"trajectory.png", "trajectory_error.png", "top_view.png", "side_view_xz.png",
+        "side_view_yz.png", "deviation_ceiling.png", "deviation_walls.png", "loop_closure.png",
+        "circle_ghost_before.png", "circle_ghost_after.png"}) {
     EXPECT_TRUE(fs::exists(dir_ / f)) << f;
   }
   EXPECT_TRUE(fs::exists(dir_ / "report.md"));
@@ -88,10 +91,11 @@ TEST_F(EvalMobilePaper, CeilingNormalDensityAndFigures) {
 TEST(EvalMobile, TruncatedLogIsReportedAndWhatCameBeforeIsEvaluated) {
   const auto dir = scratchDir("eval_mobile_truncated");
   const std::string log = (dir / "drive.lcmlog").string();
-  ASSERT_EQ(sweepmap({"sim", "--rig", sourcePath("config/rig_b.yaml"), "--scene",
-                      sourcePath("config/scene_lab.yaml"), "--set", "sim.duration_s=12", "--out", log},
-                     dir / "sim.txt"),
-            0);
+  ASSERT_EQ(
+      sweepmap({"sim", "--rig", sourcePath("config/rig_b.yaml"), "--scene",
+                sourcePath("config/scene_lab.yaml"), "--set", "sim.duration_s=12", "--out", log},
+               dir / "sim.txt"),
+      0);
   const std::string bytes = readFile(log);
   {
     std::ofstream f(log, std::ios::binary | std::ios::trunc);
@@ -117,11 +121,12 @@ TEST(EvalMobile, MissingLogAndBadConfigAreClearErrors) {
             0);
   EXPECT_NE(readFile(dir / "missing.txt").find("nope.lcmlog"), std::string::npos);
   EXPECT_EQ(sweepmap({"eval", "--experiment", "paper", "--rig", sourcePath("config/rig_b.yaml"),
-                      "--scene", sourcePath("config/scene_lab.yaml"), "--set", "odometry.no_such_key=1", "--out",
-                      (dir / "o").string()},
+                      "--scene", sourcePath("config/scene_lab.yaml"), "--set",
+                      "odometry.no_such_key=1", "--out", (dir / "o").string()},
                      dir / "badkey.txt"),
             2);
-  EXPECT_NE(readFile(dir / "badkey.txt").find("no_such_key"), std::string::npos) << readFile(dir / "badkey.txt");
+  EXPECT_NE(readFile(dir / "badkey.txt").find("no_such_key"), std::string::npos)
+      << readFile(dir / "badkey.txt");
 }
 
 }  // namespace

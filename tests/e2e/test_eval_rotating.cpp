@@ -1,5 +1,5 @@
-// `sweepmap eval` of a rotating_lidar rig: the pieces (E_map distance, deviation statistics, wall-point
-// selection) on hand cases, and the command end to end on a small simulated paper
+// `sweepmap eval` of a rotating_lidar rig: the pieces (E_map distance, deviation statistics,
+// wall-point selection) on hand cases, and the command end to end on a small simulated paper
 // experiment, on simulated logs with truth, and on a log without any rig-A sweep.
 #include <gtest/gtest.h>
 
@@ -130,18 +130,17 @@ void expectFiguresExistAndReferenced(const fs::path& dir, const nlohmann::json& 
   // Every PNG in the directory is in report.md.
   for (const auto& e : fs::directory_iterator(dir)) {
     if (e.path().extension() != ".png") continue;
-    EXPECT_NE(md.find("](" + e.path().filename().string() + ")"), std::string::npos)
-        << e.path();
+    EXPECT_NE(md.find("](" + e.path().filename().string() + ")"), std::string::npos) << e.path();
   }
 }
 
 // The paper's experiment, small: 2 sweeps per mode, 10 mode-7 sweeps for alpha.
 TEST(EvalRotating, SmallPaperExperiment) {
   const fs::path dir = scratchDir("eval_paper_small");
-  const int rc = sweepmap({"eval", "--experiment", "paper", "--rig", kRig, "--scene",
-                           kScene, "--sweeps-per-mode", "2", "--calib-sweeps", "10", "--seed",
-                           "1", "--out", dir.string()},
-                          dir / "stderr.txt");
+  const int rc = sweepmap(
+      {"eval", "--experiment", "paper", "--rig", kRig, "--scene", kScene, "--sweeps-per-mode", "2",
+       "--calib-sweeps", "10", "--seed", "1", "--out", dir.string()},
+      dir / "stderr.txt");
   ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
   const auto report = readJson(dir / "report.json");
   EXPECT_EQ(report["sweeps"].get<int>(), 14);
@@ -206,28 +205,31 @@ TEST(EvalRotating, SmallPaperExperiment) {
   EXPECT_DOUBLE_EQ(exp["simulator"]["sim.alpha_true_deg"].get<double>(), 29.3598);
   EXPECT_EQ(exp["seeds"]["mode7.lcmlog"].get<int>(), 8);
 
-  for (const char* png : {"fig8_top_view_mode1.png", "fig9_phi_error.png",
-                          "fig10_phi_error_stats.png", "fig11_map_error_mode1.png",
-                          "figA2_wall_deviations_mode7.png", "fig_alpha_calibration_cost.png",
-                          "fig_alpha_calibration_alpha.png", "fig1_naive_top_view.png",
-                          "fig1_shape_deviations.png"}) {
+  for (const char* png :
+       {"fig8_top_view_mode1.png", "fig9_phi_error.png", "fig10_phi_error_stats.png",
+        "fig11_map_error_mode1.png", "figA2_wall_deviations_mode7.png",
+        "fig_alpha_calibration_cost.png", "fig_alpha_calibration_alpha.png",
+        "fig1_naive_top_view.png", "fig1_shape_deviations.png"}) {
     EXPECT_TRUE(isPng(dir / png)) << png;
   }
   expectFiguresExistAndReferenced(dir, report);
 }
 
 std::vector<std::string> simArgs(int mode, int sweeps, int seed) {
-  return {"--rig", kRig, "--scene", kScene, "--mode", std::to_string(mode), "--sweeps",
-          std::to_string(sweeps), "--seed", std::to_string(seed)};
+  return {"--rig",    kRig,
+          "--scene",  kScene,
+          "--mode",   std::to_string(mode),
+          "--sweeps", std::to_string(sweeps),
+          "--seed",   std::to_string(seed)};
 }
 
 TEST(EvalRotating, LogsWithTruth) {
   const std::string mode7 = cachedSimLog("eval_mode7x1", simArgs(7, 1, 21));
   const std::string mode1 = cachedSimLog("eval_mode1x2", simArgs(1, 2, 22));
   const fs::path dir = scratchDir("eval_logs_truth");
-  const int rc = sweepmap({"eval", "--logs", mode1, mode7, "--rig", kRig, "--out",
-                           dir.string(), "--no-plots"},
-                          dir / "stderr.txt");
+  const int rc =
+      sweepmap({"eval", "--logs", mode1, mode7, "--rig", kRig, "--out", dir.string(), "--no-plots"},
+               dir / "stderr.txt");
   ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
   const auto report = readJson(dir / "report.json");
   EXPECT_EQ(report["sweeps"].get<int>(), 3);
@@ -250,10 +252,11 @@ TEST(EvalRotating, LogsWithTruth) {
 // report that says so (no truth, no phi_error, no alpha).
 TEST(EvalRotating, LogWithoutSweepsReportsAndFails) {
   const std::string log = std::string(SWEEPMAP_SHARED_DIR) + "/data/real/lcm_example.lcmlog";
-  if (!fs::exists(log)) GTEST_SKIP() << log << " not present (../shared is not beside this checkout)";
+  if (!fs::exists(log))
+    GTEST_SKIP() << log << " not present (../shared is not beside this checkout)";
   const fs::path dir = scratchDir("eval_no_sweeps");
-  const int rc = sweepmap({"eval", "--logs", log, "--rig", kRig, "--out", dir.string()},
-                          dir / "stderr.txt");
+  const int rc =
+      sweepmap({"eval", "--logs", log, "--rig", kRig, "--out", dir.string()}, dir / "stderr.txt");
   EXPECT_EQ(rc, 1);
   EXPECT_NE(readFile(dir / "stderr.txt").find("no sweeps"), std::string::npos)
       << readFile(dir / "stderr.txt");
@@ -271,8 +274,7 @@ TEST(EvalRotating, UsageErrors) {
   const fs::path dir = scratchDir("eval_usage");
   EXPECT_EQ(sweepmap({"eval", "--rig", kRig, "--out", dir.string()}), 2);
   EXPECT_NE(sweepmap({"eval", "--experiment", "other", "--rig", kRig, "--out", dir.string()}), 0);
-  EXPECT_NE(sweepmap({"eval", "--logs", (dir / "missing.lcmlog").string(), "--out",
-                      dir.string()}),
+  EXPECT_NE(sweepmap({"eval", "--logs", (dir / "missing.lcmlog").string(), "--out", dir.string()}),
             0);
 }
 

@@ -16,7 +16,8 @@ namespace {
 const std::string kData = std::string(SWEEPMAP_SHARED_DIR) + "/data/real/breezyslam_exp2.dat";
 
 TEST(ImportBreezySlam, RealRecordingBecomesRawMessages) {
-  if (!fs::exists(kData)) GTEST_SKIP() << kData << " not present (../shared is not beside this checkout)";
+  if (!fs::exists(kData))
+    GTEST_SKIP() << kData << " not present (../shared is not beside this checkout)";
   const auto dir = scratchDir("import_breezyslam");
   const std::string log = (dir / "exp2.lcmlog").string();
   ASSERT_EQ(sweepmap({"import", "breezyslam", kData, "--out", log}, dir / "out.txt"), 0)
@@ -78,7 +79,8 @@ namespace {
 // The imported recording through sweepmap-odometry's EKF (wheels alone: no IMU on this
 // robot), the world-frame assembler and the mapper.
 TEST(ReplayMobile, BreezySlamRecordingBecomesAMap) {
-  if (!fs::exists(kData)) GTEST_SKIP() << kData << " not present (../shared is not beside this checkout)";
+  if (!fs::exists(kData))
+    GTEST_SKIP() << kData << " not present (../shared is not beside this checkout)";
   const auto dir = scratchDir("replay_mobile");
   const std::string log = (dir / "exp2.lcmlog").string();
   ASSERT_EQ(sweepmap({"import", "breezyslam", kData, "--out", log}), 0);

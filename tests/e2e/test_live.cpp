@@ -59,9 +59,11 @@ TEST_F(LiveTest, LiveCloudsEqualOfflineReplayOfTheirLog) {
   ProcessGroup procs;
   const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", log},
                                    (dir / "logger.txt").string());
-  const pid_t assembler = procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
-  const pid_t lidar = procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}),
-                                  (dir / "lidar.txt").string());
+  const pid_t assembler =
+      procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t lidar =
+      procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}),
+                  (dir / "lidar.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
   const pid_t motor = procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}),
                                   (dir / "motor.txt").string());
@@ -84,8 +86,8 @@ TEST_F(LiveTest, LiveCloudsEqualOfflineReplayOfTheirLog) {
   int sweeps = 0;
   for (const auto& [key, bytes] : live) {
     ASSERT_TRUE(offline.count(key)) << "sweep " << key.first << " chunk " << key.second;
-    EXPECT_TRUE(bytes == offline.at(key)) << "sweep " << key.first << " chunk " << key.second
-                                          << " differs between live and offline";
+    EXPECT_TRUE(bytes == offline.at(key))
+        << "sweep " << key.first << " chunk " << key.second << " differs between live and offline";
     sweeps += key.second == 0;
   }
   EXPECT_EQ(sweeps, 2);
@@ -99,12 +101,14 @@ TEST_F(LiveTest, LogplayerIntoLiveProcessesMatchesReplay) {
             0);
   const std::string rec = (dir / "recorded.lcmlog").string();
   ProcessGroup procs;
-  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
-                                              "SWEEP_.*|MAP_STATS", rec},
-                                   (dir / "logger.txt").string());
-  const pid_t assembler = procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
-  const pid_t mapper = procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}),
-                                   (dir / "mapper.txt").string());
+  const pid_t logger = procs.start(
+      "logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c", "SWEEP_.*|MAP_STATS", rec},
+      (dir / "logger.txt").string());
+  const pid_t assembler =
+      procs.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper =
+      procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}),
+                  (dir / "mapper.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
   const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
                                    (dir / "logplayer.txt").string());
@@ -145,13 +149,17 @@ TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
     return args;
   };
   ProcessGroup procs;
-  const pid_t logger = procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
-                                              "ODOMETRY_POSE|WHEEL_ODOMETRY|SWEEP_CLOUD", rec},
+  const pid_t logger = procs.start("logger",
+                                   {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
+                                    "ODOMETRY_POSE|WHEEL_ODOMETRY|SWEEP_CLOUD", rec},
                                    (dir / "logger.txt").string());
-  const pid_t odometry = procs.start("odometry", procB("odometry", {}), (dir / "odometry.txt").string());
-  const pid_t assembler = procs.start("assembler", procB("assembler", {}), (dir / "assembler.txt").string());
-  const pid_t mapper = procs.start("mapper", procB("mapper", {"--save", (dir / "live_map.bt").string()}),
-                                   (dir / "mapper.txt").string());
+  const pid_t odometry =
+      procs.start("odometry", procB("odometry", {}), (dir / "odometry.txt").string());
+  const pid_t assembler =
+      procs.start("assembler", procB("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper =
+      procs.start("mapper", procB("mapper", {"--save", (dir / "live_map.bt").string()}),
+                  (dir / "mapper.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
   const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
                                    (dir / "logplayer.txt").string());
@@ -166,13 +174,14 @@ TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
   EXPECT_EQ(procs.stop(logger, 10.0), 0);
 
   const auto offline_dir = dir / "offline";
-  ASSERT_EQ(sweepmap({"replay", sim_log, "--rig", rig_b, "--out", offline_dir.string(),
-                      "--no-plots"},
-                     dir / "replay.txt"),
-            0)
+  ASSERT_EQ(
+      sweepmap({"replay", sim_log, "--rig", rig_b, "--out", offline_dir.string(), "--no-plots"},
+               dir / "replay.txt"),
+      0)
       << readFile(dir / "replay.txt");
   const std::string derived = (offline_dir / "derived.lcmlog").string();
-  for (const char* channel : {channels::kOdometryPose, channels::kWheelOdometry, channels::kSweepCloud}) {
+  for (const char* channel :
+       {channels::kOdometryPose, channels::kWheelOdometry, channels::kSweepCloud}) {
     const auto live = readChannel(rec, channel);
     const auto offline = readChannel(derived, channel);
     ASSERT_FALSE(offline.empty()) << channel;
@@ -190,13 +199,13 @@ TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
 // processes; the live mapper's map equals the replay of the recorded log, byte for byte.
 TEST_F(LiveTest, RigBDemoLiveMapEqualsReplayedMap) {
   const auto dir = scratchDir("demo_rig_b");
-  ASSERT_EQ(sweepmap({"demo", "--rig", "rig_b", "--set", "sim.duration_s=8", "--seed", "3",
-                      "--out", dir.string()},
+  ASSERT_EQ(sweepmap({"demo", "--rig", "rig_b", "--set", "sim.duration_s=8", "--seed", "3", "--out",
+                      dir.string()},
                      dir / "demo.txt"),
             0)
       << readFile(dir / "demo.txt");
-  for (const char* f : {"devices.lcmlog", "demo.lcmlog", "cloud.pcd", "map.bt", "live_map.bt",
-                        "summary.json"}) {
+  for (const char* f :
+       {"devices.lcmlog", "demo.lcmlog", "cloud.pcd", "map.bt", "live_map.bt", "summary.json"}) {
     EXPECT_TRUE(fs::exists(dir / f)) << f;
   }
   EXPECT_GT(readJson(dir / "summary.json")["scans"].get<int>(), 40);

@@ -22,8 +22,15 @@ namespace {
 
 std::vector<std::string> simArgs(const std::string& out, const std::string& seed,
                                  const std::vector<std::string>& sets = {}) {
-  std::vector<std::string> a = {"sim", "--rig", sourcePath("config/rig_b.yaml"), "--scene",
-                                sourcePath("config/scene_lab.yaml"), "--seed", seed, "--out", out};
+  std::vector<std::string> a = {"sim",
+                                "--rig",
+                                sourcePath("config/rig_b.yaml"),
+                                "--scene",
+                                sourcePath("config/scene_lab.yaml"),
+                                "--seed",
+                                seed,
+                                "--out",
+                                out};
   for (const auto& s : sets) {
     a.push_back("--set");
     a.push_back(s);
@@ -42,7 +49,8 @@ std::vector<pose2d_t> poses(const std::string& log, const std::string& channel) 
 
 double pathLength(const std::vector<pose2d_t>& p) {
   double l = 0;
-  for (size_t i = 1; i < p.size(); ++i) l += std::hypot(p[i].x_m - p[i - 1].x_m, p[i].y_m - p[i - 1].y_m);
+  for (size_t i = 1; i < p.size(); ++i)
+    l += std::hypot(p[i].x_m - p[i - 1].x_m, p[i].y_m - p[i - 1].y_m);
   return l;
 }
 
@@ -83,17 +91,18 @@ TEST(SimMobile, ReplayMobileTwiceIsByteIdentical) {
 TEST(SimMobile, DrivesAPathFromAFile) {
   const auto dir = scratchDir("sim_mobile_path_file");
   const std::string log = (dir / "file.lcmlog").string();
-  ASSERT_EQ(sweepmap(simArgs(log, "2", {"sim.duration_s=20", "sim.path=file",
-                                        "sim.path_file=path_lab_table.yaml"}),
-                     dir / "o.txt"),
-            0)
+  ASSERT_EQ(
+      sweepmap(simArgs(log, "2",
+                       {"sim.duration_s=20", "sim.path=file", "sim.path_file=path_lab_table.yaml"}),
+               dir / "o.txt"),
+      0)
       << readFile(dir / "o.txt");
   // The truth follows the file: start heading +X, a left turn of 0.5 m radius after 3 m.
   const auto truth = poses(log, channels::kTruthPose);
   ASSERT_GT(truth.size(), 1000u);
   double max_y = -1e9;
   for (const auto& p : truth) max_y = std::max(max_y, p.y_m);  // world = start pose
-  EXPECT_GT(max_y, 0.3);  // it turned left
+  EXPECT_GT(max_y, 0.3);                                       // it turned left
   EXPECT_NEAR(pathLength(truth), 0.2 * (20 - 0.4), 1e-3);
   // A path that leaves the room, an open path shorter than the drive, a bad segment.
   const auto write = [&](const std::string& name, const std::string& text) {
@@ -101,28 +110,41 @@ TEST(SimMobile, DrivesAPathFromAFile) {
     return (dir / name).string();
   };
   const std::string out = (dir / "x.lcmlog").string();
-  const std::string wall = write("wall.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: 20}\n");
-  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + wall}), dir / "w.txt"), 2);
-  EXPECT_NE(readFile(dir / "w.txt").find("leaves the room"), std::string::npos) << readFile(dir / "w.txt");
-  const std::string open_path = write("open.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: 2}\n");
-  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + open_path}), dir / "o2.txt"), 2);
-  EXPECT_NE(readFile(dir / "o2.txt").find("is open"), std::string::npos) << readFile(dir / "o2.txt");
-  const std::string bad = write("bad.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: -1}\n");
-  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + bad}), dir / "b.txt"), 2);
-  EXPECT_NE(readFile(dir / "b.txt").find("segment 0 'length_m'"), std::string::npos) << readFile(dir / "b.txt");
+  const std::string wall = write(
+      "wall.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: 20}\n");
+  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + wall}), dir / "w.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "w.txt").find("leaves the room"), std::string::npos)
+      << readFile(dir / "w.txt");
+  const std::string open_path =
+      write("open.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: 2}\n");
+  EXPECT_EQ(
+      sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + open_path}), dir / "o2.txt"),
+      2);
+  EXPECT_NE(readFile(dir / "o2.txt").find("is open"), std::string::npos)
+      << readFile(dir / "o2.txt");
+  const std::string bad =
+      write("bad.yaml", "start: {x_m: 0, y_m: 0, heading_deg: 0}\nsegments:\n  - {length_m: -1}\n");
+  EXPECT_EQ(sweepmap(simArgs(out, "1", {"sim.path=file", "sim.path_file=" + bad}), dir / "b.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "b.txt").find("segment 0 'length_m'"), std::string::npos)
+      << readFile(dir / "b.txt");
 }
 
 TEST(SimMobile, BadConfigurationIsAConfigError) {
   const auto dir = scratchDir("sim_mobile_bad");
-  EXPECT_EQ(sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.path=figure8"}), dir / "o.txt"), 2);
+  EXPECT_EQ(
+      sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.path=figure8"}), dir / "o.txt"), 2);
   EXPECT_NE(readFile(dir / "o.txt").find("sim.path"), std::string::npos) << readFile(dir / "o.txt");
-  EXPECT_EQ(sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.no_such_key=1"}), dir / "p.txt"), 2);
+  EXPECT_EQ(
+      sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.no_such_key=1"}), dir / "p.txt"), 2);
 }
 
 TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
   const auto dir = scratchDir("sim_mobile_circle");
   const std::string log = (dir / "circle.lcmlog").string();
-  ASSERT_EQ(sweepmap(simArgs(log, "1", {"sim.path=circle", "sim.duration_s=60"}), dir / "sim.txt"), 0)
+  ASSERT_EQ(sweepmap(simArgs(log, "1", {"sim.path=circle", "sim.duration_s=60"}), dir / "sim.txt"),
+            0)
       << readFile(dir / "sim.txt");
   const std::string sim_out = readFile(dir / "sim.txt");
   std::smatch m;
@@ -186,8 +208,9 @@ TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
             << " m, EKF " << l_ekf << " m, wheels " << l_odo << " m; final position error EKF "
             << e_ekf << " m, wheel odometry " << e_odo << " m; final heading error EKF "
             << std::remainder(ekf.back().theta_rad - t_end.theta_rad, 2 * M_PI) << " rad, wheels "
-            << std::remainder(odo.back().theta_rad - t_end.theta_rad, 2 * M_PI) << " rad; EKF gyro bias "
-            << ekf.back().gyro_bias_rad_s << " rad/s (true " << t_end.gyro_bias_rad_s << ")\n";
+            << std::remainder(odo.back().theta_rad - t_end.theta_rad, 2 * M_PI)
+            << " rad; EKF gyro bias " << ekf.back().gyro_bias_rad_s << " rad/s (true "
+            << t_end.gyro_bias_rad_s << ")\n";
   EXPECT_NEAR(l_truth, 0.2 * (60 - 0.4), 1e-3);
   EXPECT_NEAR(l_ekf, l_truth, 0.05 * l_truth);
   EXPECT_LT(e_ekf, e_odo);

@@ -18,9 +18,11 @@ const std::string kScene = sourcePath("config/scene_conference_room.yaml");
 
 std::vector<std::string> simArgs(int mode, int sweeps, int seed,
                                  const std::vector<std::string>& sets = {}) {
-  std::vector<std::string> a = {"--rig", kRig, "--scene", kScene, "--mode", std::to_string(mode),
-                                "--sweeps", std::to_string(sweeps), "--seed",
-                                std::to_string(seed)};
+  std::vector<std::string> a = {"--rig",    kRig,
+                                "--scene",  kScene,
+                                "--mode",   std::to_string(mode),
+                                "--sweeps", std::to_string(sweeps),
+                                "--seed",   std::to_string(seed)};
   for (const auto& s : sets) a.insert(a.end(), {"--set", s});
   return a;
 }
@@ -119,8 +121,8 @@ TEST(Determinism, ReplayTwiceIsByteIdentical) {
   EXPECT_GT(summary["map"]["occupied_voxels"].get<int64_t>(), 1000);
   EXPECT_EQ(summary["map"]["resolution_m"].get<double>(), 0.05);
   for (const auto& s : summary["sweeps"]) {
-    for (const char* key : {"id", "mode", "points", "plate_points", "phi_offset_deg", "corrected",
-                            "phi_error_deg"}) {
+    for (const char* key :
+         {"id", "mode", "points", "plate_points", "phi_offset_deg", "corrected", "phi_error_deg"}) {
       EXPECT_TRUE(s.contains(key)) << key;
     }
   }
@@ -191,7 +193,8 @@ TEST(BadInput, ConfigWithUnknownOrMissingKeyRejected) {
   const auto dir = scratchDir("badconfig");
   std::string rig = readFile(kRig);
   std::ofstream(dir / "unknown.yaml") << rig << "extra_key: 1\n";
-  const std::string pos = rig.find("  beam_count: 1081\n") != std::string::npos ? "  beam_count: 1081\n" : "";
+  const std::string pos =
+      rig.find("  beam_count: 1081\n") != std::string::npos ? "  beam_count: 1081\n" : "";
   ASSERT_FALSE(pos.empty());
   std::string missing = rig;
   missing.erase(missing.find(pos), pos.size());
@@ -215,11 +218,12 @@ TEST(BadInput, ConfigWithUnknownOrMissingKeyRejected) {
 
 TEST(Interop, ReplaysLogWrittenByLcmTools) {
   const std::string log = std::string(SWEEPMAP_SHARED_DIR) + "/data/real/lcm_example.lcmlog";
-  if (!fs::exists(log)) GTEST_SKIP() << log << " not present (../shared is not beside this checkout)";
+  if (!fs::exists(log))
+    GTEST_SKIP() << log << " not present (../shared is not beside this checkout)";
   const auto dir = scratchDir("lcm_example");
-  ASSERT_EQ(sweepmap({"replay", log, "--rig", kRig, "--out", (dir / "out").string()},
-                     dir / "replay.txt"),
-            0)
+  ASSERT_EQ(
+      sweepmap({"replay", log, "--rig", kRig, "--out", (dir / "out").string()}, dir / "replay.txt"),
+      0)
       << readFile(dir / "replay.txt");
   const auto summary = readJson(dir / "out" / "summary.json");
   EXPECT_EQ(summary["events"].get<int>(), 10);
@@ -232,9 +236,9 @@ TEST(Tool, PrintConfigListsEveryKeyWithUnits) {
   ASSERT_EQ(sweepmap({"sim", "--rig", kRig, "--scene", kScene, "--print-config"}, dir / "cfg.txt"),
             0);
   const std::string text = readFile(dir / "cfg.txt");
-  for (const char* key : {"lidar.beam_count", "motor.mode", "plate.alpha_deg",
-                          "sim.range_noise_sigma_mm", "sim.alpha_true_deg", "mapper.resolution_m",
-                          "scene.room.length_m", "scene.rig.yaw_deg"}) {
+  for (const char* key :
+       {"lidar.beam_count", "motor.mode", "plate.alpha_deg", "sim.range_noise_sigma_mm",
+        "sim.alpha_true_deg", "mapper.resolution_m", "scene.room.length_m", "scene.rig.yaw_deg"}) {
     EXPECT_NE(text.find(key), std::string::npos) << key;
   }
   EXPECT_NE(text.find("[mm]"), std::string::npos);
@@ -253,9 +257,9 @@ TEST(Tool, SpyPutsTheTypesJarOnItsClassPath) {
 // folder: the rig and scene files are found in the install tree (bin/../share/sweepmap).
 TEST(Tool, SimAndReplayAnyRigByNameFromAnotherDirectory) {
   const auto dir = scratchDir("rig_names");
-  ASSERT_EQ(sweepmapIn(dir, {"sim", "--rig", "rig_a", "--mode", "1", "--sweeps", "1", "--out",
-                             "a.lcmlog"},
-                       dir / "sim_a.txt"),
+  ASSERT_EQ(sweepmapIn(
+                dir, {"sim", "--rig", "rig_a", "--mode", "1", "--sweeps", "1", "--out", "a.lcmlog"},
+                dir / "sim_a.txt"),
             0)
       << readFile(dir / "sim_a.txt");
   EXPECT_NE(readFile(dir / "sim_a.txt").find("rotating_lidar"), std::string::npos);
@@ -265,16 +269,16 @@ TEST(Tool, SimAndReplayAnyRigByNameFromAnotherDirectory) {
       << readFile(dir / "replay_a.txt");
   EXPECT_EQ(readJson(dir / "a" / "summary.json")["sweeps"].size(), 1u);
 
-  ASSERT_EQ(sweepmapIn(dir, {"sim", "--rig", "rig_b", "--set", "sim.duration_s=4", "--out",
-                             "b.lcmlog"},
-                       dir / "sim_b.txt"),
-            0)
+  ASSERT_EQ(
+      sweepmapIn(dir, {"sim", "--rig", "rig_b", "--set", "sim.duration_s=4", "--out", "b.lcmlog"},
+                 dir / "sim_b.txt"),
+      0)
       << readFile(dir / "sim_b.txt");
   EXPECT_NE(readFile(dir / "sim_b.txt").find("mobile_lidar"), std::string::npos);
-  ASSERT_EQ(sweepmapIn(dir, {"replay", "b.lcmlog", "--rig", "mobile_lidar", "--no-plots", "--out",
-                             "b"},
-                       dir / "replay_b.txt"),
-            0)
+  ASSERT_EQ(
+      sweepmapIn(dir, {"replay", "b.lcmlog", "--rig", "mobile_lidar", "--no-plots", "--out", "b"},
+                 dir / "replay_b.txt"),
+      0)
       << readFile(dir / "replay_b.txt");
   EXPECT_GT(readJson(dir / "b" / "summary.json")["scans"].get<int>(), 0);
 }

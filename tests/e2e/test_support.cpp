@@ -15,8 +15,12 @@ extern char** environ;
 namespace sweepmap {
 namespace test {
 
-std::string sourcePath(const std::string& rel) { return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel; }
-std::string binPath(const std::string& name) { return std::string(SWEEPMAP_BINARY_DIR) + "/bin/" + name; }
+std::string sourcePath(const std::string& rel) {
+  return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel;
+}
+std::string binPath(const std::string& name) {
+  return std::string(SWEEPMAP_BINARY_DIR) + "/bin/" + name;
+}
 
 fs::path scratchDir(const std::string& name) {
   const fs::path p = fs::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / name;
@@ -85,8 +89,7 @@ std::string binaryStamp() {
 }
 
 // Runs `make` once per stamp under an exclusive lock on `dir/.lock`.
-void onceUnderLock(const fs::path& dir, const std::string& key,
-                   const std::function<void()>& make) {
+void onceUnderLock(const fs::path& dir, const std::string& key, const std::function<void()>& make) {
   fs::create_directories(dir);
   const int fd = ::open((dir / ".lock").c_str(), O_CREAT | O_RDWR, 0644);
   ::flock(fd, LOCK_EX);

@@ -203,9 +203,10 @@ TEST_F(BoxRoomTest, InsertCloudsEqualsInsertCloudOneByOne) {
   EXPECT_EQ(a.free_voxels, b.free_voxels);
   EXPECT_EQ(a.memory_bytes, b.memory_bytes);
   EXPECT_GT(a.occupied_voxels, 100);
-  for (const auto& [name, map] : {std::pair<const char*, const OccupancyMap*>{"one.bt", &one_by_one},
-                                  {"batched.bt", &batched},
-                                  {"two.bt", &two_batches}}) {
+  for (const auto& [name, map] :
+       {std::pair<const char*, const OccupancyMap*>{"one.bt", &one_by_one},
+        {"batched.bt", &batched},
+        {"two.bt", &two_batches}}) {
     map->saveBinaryAtomic((dir / name).string());
   }
   // The one-pass inner update, pruning and counting equal OctoMap's own passes.
@@ -242,7 +243,8 @@ TEST_F(BoxRoomTest, TouchedRegionsOnlyMatchOctomapOverManyBatches) {
       SensorCloud c{syntheticRoomSweep(spec), spec.sensor_m};
       if (batch >= 12 && batch < 20) {  // an obstacle in the middle of the (pruned) free space
         for (float y = 0.5f; y < 1.2f; y += 0.05f) {
-          for (float z = 0.5f; z < 1.2f; z += 0.05f) c.points_m.push_back(offset + Eigen::Vector3f(3.55f, y, z));
+          for (float z = 0.5f; z < 1.2f; z += 0.05f)
+            c.points_m.push_back(offset + Eigen::Vector3f(3.55f, y, z));
         }
       }
       clouds.push_back(std::move(c));

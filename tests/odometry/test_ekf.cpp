@@ -1,7 +1,7 @@
 #include <gtest/gtest.h>
 
-#include <algorithm>
 #include <Eigen/Cholesky>
+#include <algorithm>
 #include <random>
 
 #include "odometry/ekf.hpp"
@@ -88,8 +88,8 @@ TEST(OdometryEkf, NeesWithinChiSquareBounds) {
       sum_theta += e[2] * e[2] / P(2, 2);
     }
     const double nees = sum / runs;
-    std::cout << "mean NEES at " << at_s << " s: " << nees << " (heading alone "
-              << sum_theta / runs << ")\n";
+    std::cout << "mean NEES at " << at_s << " s: " << nees << " (heading alone " << sum_theta / runs
+              << ")\n";
     EXPECT_GT(nees, 2.32) << "too pessimistic at " << at_s << " s";
     EXPECT_LT(nees, 3.77) << "overconfident at " << at_s << " s";
   }
@@ -112,7 +112,8 @@ TEST(OdometryEkf, SlipIsRejectedByTheGate) {
   const Pose2 truth = clean.truth.back().second;
   const double ekf_err = std::abs(ekf.pose().theta_rad - truth.theta_rad);
   const double odo_err = std::abs(odo.theta_rad - truth.theta_rad);
-  std::cout << "heading error after slip: odometry " << odo_err << " rad, EKF " << ekf_err << " rad\n";
+  std::cout << "heading error after slip: odometry " << odo_err << " rad, EKF " << ekf_err
+            << " rad\n";
   EXPECT_LT(ekf_err, 0.2 * odo_err);
 }
 
@@ -138,7 +139,7 @@ TEST(OdometryEkf, BadInputRejectedAndStateStaysFinite) {
   EXPECT_FALSE(ekf.addWheels(20000, std::nan(""), 0.2));
   EXPECT_FALSE(ekf.addGyro(20000, std::numeric_limits<double>::infinity()));
   EXPECT_FALSE(ekf.addWheels(30000, 500.0, 0.2));  // absurd speed
-  EXPECT_FALSE(ekf.addGyro(30000, 1e3));            // absurd rate
+  EXPECT_FALSE(ekf.addGyro(30000, 1e3));           // absurd rate
   EXPECT_EQ(ekf.counters().invalid, 4);
   EXPECT_TRUE(ekf.addWheels(5000000, 0.2, 0.2));
   EXPECT_FALSE(ekf.addWheels(1000, 0.2, 0.2));  // far older than the history
@@ -175,8 +176,11 @@ TEST(OdometryEkf, ImuYawBoundsTheHeadingDriftOfABiasedNoisyGyro) {
       const Pose2& t = d.truth[k++].second;
       // An IMU reports its yaw wrapped to (-pi, pi]; the gate (p = 0.999) rejects a few.
       fused.addYaw(s.utime + 1000, std::remainder(t.theta_rad + offset + n(rng), 2 * M_PI));
-      max_err_gyro = std::max(max_err_gyro, std::abs(std::remainder(gyro_only.pose().theta_rad - t.theta_rad, 2 * M_PI)));
-      max_err_fused = std::max(max_err_fused, std::abs(std::remainder(fused.pose().theta_rad - t.theta_rad, 2 * M_PI)));
+      max_err_gyro =
+          std::max(max_err_gyro,
+                   std::abs(std::remainder(gyro_only.pose().theta_rad - t.theta_rad, 2 * M_PI)));
+      max_err_fused = std::max(
+          max_err_fused, std::abs(std::remainder(fused.pose().theta_rad - t.theta_rad, 2 * M_PI)));
     }
   }
   EXPECT_GT(fused.counters().yaw, 29900) << "gated " << fused.counters().gated_yaw;

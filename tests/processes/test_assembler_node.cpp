@@ -107,22 +107,22 @@ TEST_F(AssemblerNodeTest, BadInputIsCountedNotFatal) {
   std::vector<Message> msgs;
   msgs.push_back(scanMsg(0));
   Message garbage{0, channels::kLidarScan, {1, 2, 3, 4, 5}};
-  msgs.push_back(garbage);                                       // malformed bytes
+  msgs.push_back(garbage);  // malformed bytes
   Message truncated = scanMsg(1);
   truncated.data.resize(truncated.data.size() / 2);
-  msgs.push_back(truncated);                                     // truncated message
+  msgs.push_back(truncated);                                            // truncated message
   msgs.push_back(scanMsg(2, std::numeric_limits<float>::quiet_NaN()));  // NaN ranges
   msgs.push_back(scanMsg(3, std::numeric_limits<float>::infinity()));
-  msgs.push_back(scanMsg(4, 1e9f));                              // absurd range
+  msgs.push_back(scanMsg(4, 1e9f));  // absurd range
   {
     Scan2D s;
     s.utime = 1000000 + 25000 * 5;
     s.range_max_m = 10;
-    s.ranges_m.assign(3, 1.0f);                                  // wrong length
+    s.ranges_m.assign(3, 1.0f);  // wrong length
     msgs.push_back(encode(channels::kLidarScan, s.utime, toLcm(s)));
   }
-  msgs.push_back(scanMsg(0));                                    // repeated: out of order
-  msgs.push_back(windowMsg(0, 2000000, 1000000));                // ends before it starts
+  msgs.push_back(scanMsg(0));                      // repeated: out of order
+  msgs.push_back(windowMsg(0, 2000000, 1000000));  // ends before it starts
   Message bad_window{0, channels::kScanWindow, {0xff, 0xfe}};
   msgs.push_back(bad_window);
   msgs.push_back(scanMsg(6));

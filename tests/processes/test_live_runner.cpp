@@ -2,9 +2,8 @@
 // in order, whether the worker wakes for each message or only at its ticks.
 #include <gtest/gtest.h>
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <chrono>
+#include <lcm/lcm-cpp.hpp>
 #include <thread>
 
 #include "processes/live_runner.hpp"

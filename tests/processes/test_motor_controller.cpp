@@ -33,8 +33,9 @@ SimRigConfig exactDevice() {
 }
 
 // Runs the controller against a simulated stepper on a 1 ms virtual clock.
-ControllerRun runController(const RotatingLidarConfig& rig, int sweeps, uint64_t seed, SimStepper** keep = nullptr,
-                  std::unique_ptr<SimStepper>* owner = nullptr) {
+ControllerRun runController(const RotatingLidarConfig& rig, int sweeps, uint64_t seed,
+                            SimStepper** keep = nullptr,
+                            std::unique_ptr<SimStepper>* owner = nullptr) {
   const int64_t t0 = kSimEpochUtime;
   auto stepper = std::make_unique<SimStepper>(rig.motor, rig.sim, seed, 0.8, t0, nullptr);
   MotorController motor(rig, stepper.get(), sweeps, t0);
@@ -99,9 +100,8 @@ TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
         const double v_home = rig.motor.homing_speed_deg_s * kDeg;
         const double a = rig.motor.accel_deg_s2 * kDeg;
         const double bound = 0.030 * (omega + v_home) +
-                             0.11 * (omega * omega + v_home * v_home) / (2 * a) +
-                             0.003 * v_home + 0.5 * rig.sim.switch_hysteresis_deg * kDeg +
-                             0.1 * kDeg;
+                             0.11 * (omega * omega + v_home * v_home) / (2 * a) + 0.003 * v_home +
+                             0.5 * rig.sim.switch_hysteresis_deg * kDeg + 0.1 * kDeg;
         EXPECT_LT(std::abs(start_angle), bound) << "mode " << mode;
       }
     }
@@ -122,7 +122,8 @@ TEST(MotorController, NaiveSequenceOverlapsRamp) {
   EXPECT_TRUE(w.accel_overlap);
   EXPECT_EQ(w.action_sequence, int8_t{scan_window_t::NAIVE});
   // The shaft is still accelerating when the window opens.
-  EXPECT_LT(stepper->trajectory().velocityAt(w.start_utime + 10000), 0.5 * w.angular_velocity_rad_s);
+  EXPECT_LT(stepper->trajectory().velocityAt(w.start_utime + 10000),
+            0.5 * w.angular_velocity_rad_s);
 }
 
 TEST(MotorController, GoesThroughHomingScanningAndDone) {

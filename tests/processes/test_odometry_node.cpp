@@ -3,8 +3,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <sstream>
 #include <limits>
+#include <sstream>
 
 #include "core/calibration_file.hpp"
 #include "core/config.hpp"
@@ -82,9 +82,10 @@ TEST(OdometryNode, StraightDriveFromTicks) {
 
 TEST(OdometryNode, BadInputRejectedAndCounted) {
   OdometryNode node(config());
-  std::vector<Message> msgs = {ticks(1000000, 0, 0), ticks(1020000, 5, 5),
-                               ticks(1010000, 6, 6),          // back in time
-                               ticks(1040000, 100000, 5),     // absurd jump
+  std::vector<Message> msgs = {ticks(1000000, 0, 0),
+                               ticks(1020000, 5, 5),
+                               ticks(1010000, 6, 6),         // back in time
+                               ticks(1040000, 100000, 5),    // absurd jump
                                gyro(1050000, std::nan("")),  // NaN rate
                                gyro(1050000, 1e6),           // absurd rate
                                Message{0, channels::kWheelTicks, {1, 2, 3}},
@@ -98,11 +99,11 @@ TEST(OdometryNode, BadInputRejectedAndCounted) {
 
 TEST(OdometryNode, ShippedConfigLoads) {
   const OdometryConfig c =
-      loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml").odometry;
+      loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml")
+          .odometry;
   EXPECT_DOUBLE_EQ(c.wheel_radius_m, 0.077);
   EXPECT_FALSE(c.use_imu);
 }
-
 
 // mounting.calibration_file (relative to the rig file) replaces the rig's gamma/beta/alpha_rad.
 TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
@@ -128,7 +129,9 @@ TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
   EXPECT_DOUBLE_EQ(b.mounting.beta_rad, c.beta_rad);
   EXPECT_DOUBLE_EQ(b.mounting.alpha_rad, c.alpha_rad);
   // Without it the rig's own values stay.
-  EXPECT_DOUBLE_EQ(loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml").mounting.gamma_rad, 0.0);
+  EXPECT_DOUBLE_EQ(loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml")
+                       .mounting.gamma_rad,
+                   0.0);
   fs::remove(dir_ / "mounting.yaml");
   try {
     loadMobileLidarConfig((dir_ / "rig_b.yaml").string());

@@ -106,7 +106,8 @@ TEST(RigFile, AFileOfOneKindIsNotLoadedAsAnother) {
 TEST(RigFile, RequireKindNamesBothKinds) {
   const Rig a = loadRig(kRigA);
   EXPECT_NO_THROW(requireKind<RotatingLidarConfig>(a, "sweepmap-motor"));
-  const std::string e = configError([&] { requireKind<MobileLidarConfig>(a, "sweepmap-odometry"); });
+  const std::string e =
+      configError([&] { requireKind<MobileLidarConfig>(a, "sweepmap-odometry"); });
   EXPECT_NE(e.find("is a rotating_lidar rig"), std::string::npos) << e;
   EXPECT_NE(e.find("sweepmap-odometry needs a mobile_lidar rig"), std::string::npos) << e;
 }

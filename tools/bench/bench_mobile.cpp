@@ -1,9 +1,8 @@
-#include "tools/offline/runs.hpp"
 #include "tools/bench/bench_mobile.hpp"
 
-#include <sys/resource.h>
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -20,10 +19,11 @@
 #include "core/event_log.hpp"
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
+#include "tools/offline/replay_mobile.hpp"
+#include "tools/offline/runs.hpp"
+#include "tools/offline/sim_mobile.hpp"
 #include "tools/ops/netns.hpp"
 #include "tools/ops/process_group.hpp"
-#include "tools/offline/replay_mobile.hpp"
-#include "tools/offline/sim_mobile.hpp"
 
 namespace sweepmap {
 namespace {
@@ -123,7 +123,8 @@ std::string rateOverride(int imu_hz) { return "sim.imu_rate_hz=" + std::to_strin
 // OdometryNode (decode, wheel odometry, EKF, encode of both poses) over the simulated
 // stream, repeated until at least `min_s` of wall time has passed.
 void benchEkfInProcess(const RigBBenchOptions& o, std::ostream& out) {
-  out << "EKF in process (OdometryNode: decode, wheel odometry, EKF, encoded poses; 50 Hz wheels):\n";
+  out << "EKF in process (OdometryNode: decode, wheel odometry, EKF, encoded poses; 50 Hz "
+         "wheels):\n";
   for (int imu_hz : {100, 200, 400}) {
     const SimulatedLog log = simulate(o, {rateOverride(imu_hz), "sim.duration_s=60"}, "", false);
     int64_t messages = 0, updates = 0;
@@ -143,12 +144,11 @@ void benchEkfInProcess(const RigBBenchOptions& o, std::ostream& out) {
     } while (secondsSince(t0) < 1.0);
     const double wall_s = secondsSince(t0);
     const double per_log_s = wall_s / reps;
-    out << "  IMU " << std::setw(3) << imu_hz << " Hz: " << std::setprecision(0)
-        << updates / wall_s << " EKF updates/s, " << messages / wall_s << " messages/s, "
-        << std::setprecision(2) << wall_s / messages * 1e6 << " us/message; "
-        << log.result.duration_s << " s of input take " << per_log_s * 1e3 << " ms = "
-        << std::setprecision(3) << per_log_s / log.result.duration_s * 100.0
-        << " % of one core at real time\n"
+    out << "  IMU " << std::setw(3) << imu_hz << " Hz: " << std::setprecision(0) << updates / wall_s
+        << " EKF updates/s, " << messages / wall_s << " messages/s, " << std::setprecision(2)
+        << wall_s / messages * 1e6 << " us/message; " << log.result.duration_s
+        << " s of input take " << per_log_s * 1e3 << " ms = " << std::setprecision(3)
+        << per_log_s / log.result.duration_s * 100.0 << " % of one core at real time\n"
         << std::setprecision(2);
   }
 }
@@ -171,13 +171,15 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
   const std::string url = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=2097152";
   const std::string exe = (fs::path(o.bin_dir) / "sweepmap-odometry").string();
   for (int imu_hz : {100, 200, 400}) {
-    const std::string log_path = o.work + "/odometry_input_imu" + std::to_string(imu_hz) + ".lcmlog";
+    const std::string log_path =
+        o.work + "/odometry_input_imu" + std::to_string(imu_hz) + ".lcmlog";
     const SimulatedLog log =
         simulate(o, {rateOverride(imu_hz), "sim.duration_s=" + std::to_string(o.process_feed_s)},
                  log_path, true);
     ProcessGroup procs;
     const std::string odo_log = o.work + "/odometry_imu" + std::to_string(imu_hz) + ".txt";
-    const pid_t odometry = procs.start("odometry", {exe, "--rig", o.rig, "--lcm-url", url}, odo_log);
+    const pid_t odometry =
+        procs.start("odometry", {exe, "--rig", o.rig, "--lcm-url", url}, odo_log);
     std::this_thread::sleep_for(std::chrono::milliseconds(800));  // start-up (config, LCM)
     // Baseline: the same process idle (status at 1 Hz, waiting on its socket).
     const double idle_cpu0 = processCpuSeconds(odometry);
@@ -198,19 +200,19 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
     const double player_share = (cpuSeconds(RUSAGE_CHILDREN) - children_cpu0) / fed_s;
     procs.stop(odometry, 5.0);
     if (rc != 0 || cpu0 < 0) {
-      out << "  IMU " << imu_hz << " Hz: lcm-logplayer or sweepmap-odometry failed (see "
-          << o.work << ")\n";
+      out << "  IMU " << imu_hz << " Hz: lcm-logplayer or sweepmap-odometry failed (see " << o.work
+          << ")\n";
       continue;
     }
     out << "  IMU " << std::setw(3) << imu_hz << " Hz + 50 Hz wheels: " << std::setprecision(0)
-        << log.odometry_input.size() / fed_s << " messages/s for " << std::setprecision(1)
-        << fed_s << " s: sweepmap-odometry " << std::setprecision(2) << share * 100.0
-        << " % of one core, " << std::setprecision(0) << switches_per_s
+        << log.odometry_input.size() / fed_s << " messages/s for " << std::setprecision(1) << fed_s
+        << " s: sweepmap-odometry " << std::setprecision(2) << share * 100.0 << " % of one core, "
+        << std::setprecision(0) << switches_per_s
         << " thread switches/s (idle: " << std::setprecision(2) << idle_share * 100.0
         << " %; lcm-logplayer itself: " << player_share * 100.0 << " %)\n";
   }
-  out << "  (/proc counts CPU in clock ticks of " << 1000 / sysconf(_SC_CLK_TCK)
-      << " ms: +-" << std::setprecision(2) << 100.0 / sysconf(_SC_CLK_TCK) / o.process_feed_s
+  out << "  (/proc counts CPU in clock ticks of " << 1000 / sysconf(_SC_CLK_TCK) << " ms: +-"
+      << std::setprecision(2) << 100.0 / sysconf(_SC_CLK_TCK) / o.process_feed_s
       << " % over one run)\n";
 }
 
@@ -234,8 +236,8 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
     const SimulatedLog log = simulate(o, c.overrides, log_path, false);
     // The `sweepmap replay` command itself, so that its time includes start-up and its
     // peak RSS is its own.
-    std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path, "--rig", o.rig,
-                                     "--out", out_dir, "--no-plots"};
+    std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path, "--rig",
+                                     o.rig,          "--out",  out_dir,  "--no-plots"};
     for (const std::string& kv : c.overrides) args.insert(args.end(), {"--set", kv});
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());
@@ -243,7 +245,8 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
     const std::string log_txt = out_dir + ".txt";
-    posix_spawn_file_actions_addopen(&actions, 1, log_txt.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, 1, log_txt.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_adddup2(&actions, 1, 2);
     const auto t0 = Clock::now();
     pid_t child = -1;

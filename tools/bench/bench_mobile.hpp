@@ -13,11 +13,11 @@ struct RigBBenchOptions {
   std::string rig = "rig_b";  // path or name
   std::string scene = "scene_lab";
   std::string work = "build/bench";
-  std::string sweepmap_exe;          // the sweepmap executable (its replay is run as a command)
-  std::string bin_dir;               // where sweepmap-odometry is ("" = skip the process part)
-  double process_feed_s = 12.0;      // log time fed to sweepmap-odometry per IMU rate
-  double circle_s = 60.0;            // simulated circle for the replay
-  double loop_s = 130.0;             // simulated lab loop for the replay (one lap ~ 125 s)
+  std::string sweepmap_exe;      // the sweepmap executable (its replay is run as a command)
+  std::string bin_dir;           // where sweepmap-odometry is ("" = skip the process part)
+  double process_feed_s = 12.0;  // log time fed to sweepmap-odometry per IMU rate
+  double circle_s = 60.0;        // simulated circle for the replay
+  double loop_s = 130.0;         // simulated lab loop for the replay (one lap ~ 125 s)
 };
 
 // Returns 0; a part that cannot run (no network namespace) says why and is skipped.

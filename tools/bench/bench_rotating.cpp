@@ -29,8 +29,7 @@ int benchRotating(const RotatingBenchOptions& o, std::ostream& out) {
   std::filesystem::create_directories(o.work);
   for (int mode : {1, 7}) {
     SimOptions so;
-    const SimSetup setup =
-        loadSimSetup(o.rig, o.scene, {"motor.mode=" + std::to_string(mode)});
+    const SimSetup setup = loadSimSetup(o.rig, o.scene, {"motor.mode=" + std::to_string(mode)});
     so.rig = requireKind<RotatingLidarConfig>(setup.rig, "the rig-A bench");
     so.scene = setup.scene;
     so.sweeps = o.sweeps;
@@ -52,14 +51,13 @@ int benchRotating(const RotatingBenchOptions& o, std::ostream& out) {
     const ReplayResult rr = replayLog(ro, so.rig);
     const double replay_s = std::chrono::duration<double>(clock::now() - t0).count();
     const double scan_time_s = o.sweeps * scanMode(mode).period_s;
-    out << "mode " << mode << ": " << o.sweeps << " sweeps, "
-              << sr.simulated_us / 1e6 << " s simulated\n"
-              << "  simulation  " << sim_s << " s wall, real-time factor "
-              << sr.simulated_us / 1e6 / sim_s << "\n"
-              << "  replay      " << replay_s << " s wall, real-time factor "
-              << rr.log_duration_s / replay_s << " (log time), "
-              << scan_time_s / replay_s << " (scan-window time), "
-              << static_cast<int64_t>(rr.points / replay_s) << " points/s\n";
+    out << "mode " << mode << ": " << o.sweeps << " sweeps, " << sr.simulated_us / 1e6
+        << " s simulated\n"
+        << "  simulation  " << sim_s << " s wall, real-time factor "
+        << sr.simulated_us / 1e6 / sim_s << "\n"
+        << "  replay      " << replay_s << " s wall, real-time factor "
+        << rr.log_duration_s / replay_s << " (log time), " << scan_time_s / replay_s
+        << " (scan-window time), " << static_cast<int64_t>(rr.points / replay_s) << " points/s\n";
 
     // Plate correction of one sweep (beta, shape check, phi_offset, rotation of C_O'),
     // for both beta methods, on the first sweep of the log.
@@ -75,10 +73,11 @@ int benchRotating(const RotatingBenchOptions& o, std::ostream& out) {
         AssembledSweep work = *first;
         t0 = clock::now();
         for (int k = 0; k < reps; ++k) correctSweep(rig, &work);
-        const double ms = std::chrono::duration<double, std::milli>(clock::now() - t0).count() / reps;
+        const double ms =
+            std::chrono::duration<double, std::milli>(clock::now() - t0).count() / reps;
         out << "  plate correction (" << method << ") " << ms << " ms per sweep of "
-                  << first->points_Op.size() << " points, " << first->plate_rays.size()
-                  << " plate-plane rays (C_O rotation included)\n";
+            << first->points_Op.size() << " points, " << first->plate_rays.size()
+            << " plate-plane rays (C_O rotation included)\n";
       }
     }
   }

@@ -51,8 +51,7 @@ Runner addBenchCommand(CLI::App& app) {
                  "wall time)\n";
     for (const Rig& rig : rigs) {
       std::cout << "== " << rig.path << " (" << rig.kindName() << ")\n";
-      const std::string scene =
-          o->scene.empty() ? defaultSceneName(rig.kind()) : o->scene;
+      const std::string scene = o->scene.empty() ? defaultSceneName(rig.kind()) : o->scene;
       switch (rig.kind()) {
         case RigKind::kRotatingLidar: {
           RotatingBenchOptions b;

@@ -12,10 +12,10 @@ namespace {
 
 // `calib plate-angle`: its flags into a PlateAngleCalibRequest.
 CLI::App* addPlateAngle(CLI::App* calib, std::shared_ptr<PlateAngleCalibRequest> o) {
-  auto* plate = calib->add_subcommand(
-      "plate-angle",
-      "rotating_lidar rigs (rig A): calibrate the triangular plate's installation angle alpha (Yuan 2021 section 4.2, "
-      "Algorithm A1) from sweeps of a rectangular room");
+  auto* plate = calib->add_subcommand("plate-angle",
+                                      "rotating_lidar rigs (rig A): calibrate the triangular "
+                                      "plate's installation angle alpha (Yuan 2021 section 4.2, "
+                                      "Algorithm A1) from sweeps of a rectangular room");
   plate->footer(
       "Each corrected sweep's four walls are extracted (voxel grid, then RANSAC vertical planes: "
       "two facing pairs, perpendicular), and alpha minimises F_cost = 1/2 sum_m f_cost(alpha)^2 "
@@ -34,7 +34,9 @@ CLI::App* addPlateAngle(CLI::App* calib, std::shared_ptr<PlateAngleCalibRequest>
   plate->add_option("--logs", o->logs, "LCM logs of the room (sweepmap sim, lcm-logger)")
       ->required()
       ->expected(1, -1);
-  plate->add_option("--rig", o->rig, "rig file or name (rotating_lidar) the logs were recorded with")->required();
+  plate
+      ->add_option("--rig", o->rig, "rig file or name (rotating_lidar) the logs were recorded with")
+      ->required();
   plate->add_option("--out", o->out, "calibration file to write (YAML, atomically)")->required();
   plate->add_flag("--json", o->json, "print the result as JSON on stdout");
   plate->add_option("--set", o->sets, "override a rig config key: key=value (repeatable)");
@@ -48,13 +50,15 @@ CLI::App* addPlateAngle(CLI::App* calib, std::shared_ptr<PlateAngleCalibRequest>
 CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) {
   auto* mount = calib->add_subcommand(
       "mounting",
-      "mobile_lidar rigs (rig B): calibrate the lidar's 3-axis mounting error (gamma about body x, beta about y, "
+      "mobile_lidar rigs (rig B): calibrate the lidar's 3-axis mounting error (gamma about body x, "
+      "beta about y, "
       "alpha about z; Miao 2022 section 4.2) from a drive that sees the same surfaces twice "
       "(the circle of `sweepmap sim --rig rig_b`, a calibration target in view)");
   mount->footer(
       "The log's wheel and IMU messages are replayed through the odometry node (EKF) for the "
       "track; every lidar ray is placed in the world with the pose at its own time. On a circle a "
-      "place is seen by one half of the scan and, half a turn later, by the other: the two passes.\n\n"
+      "place is seen by one half of the scan and, half a turn later, by the other: the two "
+      "passes.\n\n"
       "Ours (the result written): Ceres over all overlapping points of the two passes, each "
       "point of one pass against the local plane of the other pass there (PCA of its neighbours; "
       "patches that are not flat to within the range noise, or where the point's own pass sees "
@@ -81,19 +85,25 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       "sweepmap calib mounting --log circle.lcmlog --rig rig_b --out "
       "config/mounting_calibration.yaml");
   mount->add_option("--log", m->log, "LCM log of the drive (sweepmap sim, lcm-logger)")->required();
-  mount->add_option("--rig", m->rig, "rig file or name (mobile_lidar) the log was recorded with")->required();
+  mount->add_option("--rig", m->rig, "rig file or name (mobile_lidar) the log was recorded with")
+      ->required();
   mount->add_option("--out", m->out, "calibration file to write (YAML, atomically)")->required();
   mount->add_flag("--json", m->json, "print the result as JSON on stdout");
   mount->add_option("--set", m->sets, "override a rig config key: key=value (repeatable)");
-  mount->add_option("--track", m->track, "poses: ekf (ODOMETRY_POSE replayed), wheels, truth (simulated logs)")
+  mount
+      ->add_option("--track", m->track,
+                   "poses: ekf (ODOMETRY_POSE replayed), wheels, truth (simulated logs)")
       ->capture_default_str()
       ->check(CLI::IsMember({"ekf", "wheels", "truth"}));
-  mount->add_flag("--time-offset", m->time_offset, "also estimate the lidar-to-odometry time offset (ours)");
+  mount->add_flag("--time-offset", m->time_offset,
+                  "also estimate the lidar-to-odometry time offset (ours)");
   mount->add_flag("--track-drift", m->track_drift,
-                  "also estimate a slow drift (world velocity) of the track's position (ours; odometry tracks)");
+                  "also estimate a slow drift (world velocity) of the track's position (ours; "
+                  "odometry tracks)");
   mount->add_flag("--no-paper", m->no_paper, "skip the paper's method");
-  mount->add_option("--min-pass-gap", m->min_pass_gap_s,
-                    "seconds between two observations of a place for them to be two passes")
+  mount
+      ->add_option("--min-pass-gap", m->min_pass_gap_s,
+                   "seconds between two observations of a place for them to be two passes")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   return mount;
@@ -105,7 +115,8 @@ Runner addCalibCommand(CLI::App& app) {
   auto* calib = app.add_subcommand(
       "calib",
       "Calibrate the rig from its own logs and write the result as a calibration file the rig "
-      "file points to. Subcommands by the rig's kind: plate-angle (rotating_lidar), mounting (mobile_lidar)");
+      "file points to. Subcommands by the rig's kind: plate-angle (rotating_lidar), mounting "
+      "(mobile_lidar)");
   calib->require_subcommand(1);
   auto o = std::make_shared<PlateAngleCalibRequest>();
   auto m = std::make_shared<MountingCalibRequest>();

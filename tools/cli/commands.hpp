@@ -3,10 +3,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-
 #include <functional>
 #include <string>
-
 
 namespace sweepmap {
 

@@ -25,8 +25,11 @@ Runner addDemoCommand(CLI::App& app) {
   cmd->add_option("--set", o->overrides,
                   "override a rig key for every process: key=value; mobile_lidar also takes "
                   "scene.<key> (repeatable)");
-  cmd->add_option("--mode", o->mode, "rotating_lidar: scan mode 1..7")->capture_default_str()->check(CLI::Range(1, 7));
-  cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: number of sweeps")->capture_default_str()
+  cmd->add_option("--mode", o->mode, "rotating_lidar: scan mode 1..7")
+      ->capture_default_str()
+      ->check(CLI::Range(1, 7));
+  cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: number of sweeps")
+      ->capture_default_str()
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "simulation seed")->capture_default_str();
   return [o]() {

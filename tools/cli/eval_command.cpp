@@ -45,12 +45,12 @@ Runner addEvalCommand(CLI::App& app) {
   auto q = std::make_shared<EvalRequest>();
   auto no_plots = std::make_shared<bool>(false);
   auto quiet = std::make_shared<bool>(false);
-  auto* logs = cmd->add_option("--logs,--log", q->logs,
-                               "LCM logs to evaluate (sweepmap sim, lcm-logger)")
-                   ->check(CLI::ExistingFile);
-  auto* exp = cmd->add_option("--experiment", q->experiment,
-                              "simulate and evaluate an experiment: paper")
-                  ->check(CLI::IsMember({"paper"}));
+  auto* logs =
+      cmd->add_option("--logs,--log", q->logs, "LCM logs to evaluate (sweepmap sim, lcm-logger)")
+          ->check(CLI::ExistingFile);
+  auto* exp =
+      cmd->add_option("--experiment", q->experiment, "simulate and evaluate an experiment: paper")
+          ->check(CLI::IsMember({"paper"}));
   logs->excludes(exp);
   cmd->add_option("--rig", q->rig, "rig file or name (rig_a, rig_b, a path): its kind decides")
       ->required();
@@ -60,15 +60,17 @@ Runner addEvalCommand(CLI::App& app) {
   cmd->add_option("--set", q->overrides,
                   "override a config key: key=value; scene keys as scene.<key> with --experiment "
                   "(repeatable)");
-  cmd->add_option("--seed", q->seed,
-                  "base seed (--experiment). rotating_lidar: mode m uses seed+m, the alpha log "
-                  "seed+100, the naive log seed+200; mobile_lidar: the circle seed, the loop seed+1")
+  cmd->add_option(
+         "--seed", q->seed,
+         "base seed (--experiment). rotating_lidar: mode m uses seed+m, the alpha log "
+         "seed+100, the naive log seed+200; mobile_lidar: the circle seed, the loop seed+1")
       ->capture_default_str();
   cmd->add_option("--sweeps-per-mode", q->sweeps_per_mode,
                   "rotating_lidar --experiment: sweeps per mode (default 5)")
       ->check(CLI::PositiveNumber);
-  cmd->add_option("--calib-sweeps", q->calib_sweeps,
-                  "rotating_lidar --experiment: mode-7 sweeps for the alpha calibration (default 50)")
+  cmd->add_option(
+         "--calib-sweeps", q->calib_sweeps,
+         "rotating_lidar --experiment: mode-7 sweeps for the alpha calibration (default 50)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--no-naive", q->no_naive,
                 "rotating_lidar --experiment: skip the naive-action-sequence sweeps of mode 1");

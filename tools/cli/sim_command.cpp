@@ -71,7 +71,8 @@ Runner addSimCommand(CLI::App& app) {
     SimRunResult r;
     try {
       EventLogWriter log(o->out);
-      r = simulateRig(setup, options, [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
+      r = simulateRig(setup, options,
+                      [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
       log.close();
     } catch (const ConfigError& e) {
       std::cerr << "config error: " << e.what() << "\n";

@@ -33,11 +33,10 @@ Runner addSpyCommand(CLI::App& app, const std::string& argv0) {
       std::cerr << "spy: " << jar << " not found: build the lcmtypes_jar target (needs javac)\n";
       return 2;
     }
-    const std::string cp =
-        "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:" + jar;
+    const std::string cp = "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:" + jar;
     setenv("CLASSPATH", cp.c_str(), 1);
-    std::vector<std::string> args = {"java", "-server", "-Djava.net.preferIPv4Stack=true",
-                                     "-Xmx128m", "-cp", cp, "lcm.spy.Spy"};
+    std::vector<std::string> args = {
+        "java", "-server", "-Djava.net.preferIPv4Stack=true", "-Xmx128m", "-cp", cp, "lcm.spy.Spy"};
     if (!url->empty()) args.push_back("--lcm-url=" + *url);
     if (*print_only) {
       for (const auto& a : args) std::cout << a << " ";

@@ -47,8 +47,10 @@ EvalRunResult evalRotating(const EvalRequest& q, const Rig& rig) {
 
 EvalRunResult evalMobile(const EvalRequest& q, const Rig& rig) {
   if (q.sweeps_per_mode > 0 || q.calib_sweeps > 0 || q.no_naive) {
-    throw ConfigError("--sweeps-per-mode, --calib-sweeps and --no-naive apply to rotating_lidar "
-                      "rigs; " + rig.path + " is a mobile_lidar rig");
+    throw ConfigError(
+        "--sweeps-per-mode, --calib-sweeps and --no-naive apply to rotating_lidar "
+        "rigs; " +
+        rig.path + " is a mobile_lidar rig");
   }
   EvalMobileResult r;
   if (!q.experiment.empty()) {

@@ -19,10 +19,10 @@
 namespace sweepmap {
 
 struct EvalRequest {
-  std::string rig;                 // path or name; its kind selects the evaluation
-  std::vector<std::string> logs;   // evaluate these logs (mobile_lidar: exactly one) ...
-  std::string experiment;          // ... or simulate this experiment ("paper")
-  std::string scene;               // --experiment: scene path or name ("" = the kind's default)
+  std::string rig;                // path or name; its kind selects the evaluation
+  std::vector<std::string> logs;  // evaluate these logs (mobile_lidar: exactly one) ...
+  std::string experiment;         // ... or simulate this experiment ("paper")
+  std::string scene;              // --experiment: scene path or name ("" = the kind's default)
   std::vector<std::string> overrides;
   std::string out_dir;
   uint64_t seed = 1;
@@ -37,9 +37,9 @@ struct EvalRequest {
 };
 
 struct EvalRunResult {
-  bool failed = false;   // corrupt log, nothing to evaluate: the report says why
-  std::string summary;   // one line for the user
-  std::string message;   // why it failed
+  bool failed = false;  // corrupt log, nothing to evaluate: the report says why
+  std::string summary;  // one line for the user
+  std::string message;  // why it failed
 };
 
 // Throws ConfigError for a bad rig, scene or an option the rig's kind does not take, and

@@ -24,8 +24,8 @@ namespace {
 
 namespace fs = std::filesystem;
 using eval::CircleCalibration;
-using eval::MobileEvaluation;
 using eval::fixed;
+using eval::MobileEvaluation;
 
 // --- one log ------------------------------------------------------------------------------
 
@@ -47,7 +47,8 @@ MobileEvaluation loadEvaluation(const EvalMobileOptions& o, EvalMobileResult* re
   }
   if (ev.log.scans.empty() || ev.log.ekf.size() == 0) {
     result->failed = true;
-    if (result->message.empty()) result->message = o.log_path + ": no valid scans or no odometry poses";
+    if (result->message.empty())
+      result->message = o.log_path + ": no valid scans or no odometry poses";
   }
   ev.pose_channel = o.rig.assembler.pose_channel;
   ev.mounting = o.rig.mounting.toMounting();
@@ -59,7 +60,8 @@ MobileEvaluation loadEvaluation(const EvalMobileOptions& o, EvalMobileResult* re
 void measure(const EvalMobileOptions& o, const fs::path& out, MobileEvaluation* ev) {
   ev->odometry = eval::trajectoryErrors(ev->log.wheels, ev->log.truth);
   ev->ekf = eval::trajectoryErrors(ev->log.ekf, ev->log.truth);
-  eval::progressLine(o.progress, "assembling " + std::to_string(ev->log.scans.size()) + " scans in the world frame");
+  eval::progressLine(o.progress, "assembling " + std::to_string(ev->log.scans.size()) +
+                                     " scans in the world frame");
   ev->cloud = assembleWorld(ev->log, ev->track(), ev->mounting, &ev->scan_of_point);
   writePcdBinary((out / "cloud.pcd").string(), ev->cloud);
   eval::progressLine(o.progress, "RANSAC planes");
@@ -97,8 +99,9 @@ EvalMobileResult evaluate(const EvalMobileOptions& o, const CircleCalibration* c
 // One of the paper's two runs (the calibration circle, r = 0.83 m, or one lap of the lab loop,
 // at 0.2 m/s), from the same rig and scene files, into DIR/logs/<name>.lcmlog; returns its
 // path, and the rig and scene it was simulated with.
-std::string simulateRun(const MobileExperimentOptions& o, const std::string& name, const std::string& path,
-                        double duration_s, uint64_t seed, MobileLidarConfig* rig, SceneConfig* scene) {
+std::string simulateRun(const MobileExperimentOptions& o, const std::string& name,
+                        const std::string& path, double duration_s, uint64_t seed,
+                        MobileLidarConfig* rig, SceneConfig* scene) {
   std::vector<std::string> overrides = o.overrides;
   overrides.push_back("sim.path=" + path);
   overrides.push_back("sim.duration_s=" + fixed(duration_s, 3));
@@ -108,7 +111,8 @@ std::string simulateRun(const MobileExperimentOptions& o, const std::string& nam
   so.scene = setup.scene;
   so.seed = seed;
   const std::string log_path = (fs::path(o.out_dir) / "logs" / (name + ".lcmlog")).string();
-  eval::progressLine(o.progress, "simulating the " + name + " (" + fixed(duration_s, 0) + " s) -> " + log_path);
+  eval::progressLine(o.progress,
+                     "simulating the " + name + " (" + fixed(duration_s, 0) + " s) -> " + log_path);
   EventLogWriter w(log_path);
   simulateMobile(so, [&](const Message& m) { w.write(m.utime, m.channel, m.data); });
   w.close();
@@ -143,7 +147,8 @@ void writeMountingCalibrationFile(const fs::path& out, const MountingCalibration
 
 // The calibration target's box in the world frame: the scene's room frame moved by
 // TRUTH_MOUNTING's start pose. None without a target or the truth.
-std::optional<Eigen::AlignedBox3d> targetInWorld(const SceneConfig& scene, const MobileLog& circle) {
+std::optional<Eigen::AlignedBox3d> targetInWorld(const SceneConfig& scene,
+                                                 const MobileLog& circle) {
   const auto board = Scene(scene, PlateConfig{}).targetBoard();
   if (!board || !circle.truth_mounting) return std::nullopt;
   const double* w = circle.truth_mounting->world_in_room;
@@ -155,9 +160,11 @@ std::optional<Eigen::AlignedBox3d> targetInWorld(const SceneConfig& scene, const
 
 // The circle's double walls before and after the calibration (Fig. 6-7) into
 // `calibration`, and their figures (and a close-up of the target); returns the figures drawn.
-std::vector<Figures::Entry> circleDoubleWalls(const MobileExperimentOptions& o, const MobileLog& circle,
-                                              const SceneConfig& scene, const LidarMounting& initial,
-                                              const LidarMounting& calibrated, CircleCalibration* calibration) {
+std::vector<Figures::Entry> circleDoubleWalls(const MobileExperimentOptions& o,
+                                              const MobileLog& circle, const SceneConfig& scene,
+                                              const LidarMounting& initial,
+                                              const LidarMounting& calibrated,
+                                              CircleCalibration* calibration) {
   eval::progressLine(o.progress, "double walls of the circle before and after calibration");
   const std::optional<Eigen::AlignedBox3d> target_world = targetInWorld(scene, circle);
   Figures figures(o.out_dir, o.plots);
@@ -180,10 +187,14 @@ EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions& o) {
   fs::create_directories(out / "logs");
   MobileLidarConfig circle_rig, loop_rig;
   SceneConfig scene;
-  const std::string circle_log = simulateRun(o, "circle", "circle", o.circle_duration_s, o.seed, &circle_rig, &scene);
-  const std::string loop_log = simulateRun(o, "loop", "loop", o.loop_duration_s, o.seed + 1, &loop_rig, &scene);
+  const std::string circle_log =
+      simulateRun(o, "circle", "circle", o.circle_duration_s, o.seed, &circle_rig, &scene);
+  const std::string loop_log =
+      simulateRun(o, "loop", "loop", o.loop_duration_s, o.seed + 1, &loop_rig, &scene);
 
-  eval::progressLine(o.progress, "calibrating the mounting from the circle (ours: point-to-plane; the paper's: target points)");
+  eval::progressLine(o.progress,
+                     "calibrating the mounting from the circle (ours: point-to-plane; the paper's: "
+                     "target points)");
   const MobileLog circle = loadMobileLog(circle_log, circle_rig);
   const LidarMounting initial = circle_rig.mounting.toMounting();
   CircleCalibration calibration = calibrateFromCircle(circle, initial);

@@ -21,15 +21,17 @@ namespace sweepmap {
 namespace {
 
 namespace fs = std::filesystem;
+using eval::fixed;
 using eval::Group;
 using eval::Method;
 using eval::MethodRigs;
 using eval::ReportInput;
-using eval::SweepRecord;
 using eval::Stopwatch;
-using eval::fixed;
+using eval::SweepRecord;
 
-void progressLine(const EvalSettings& s, const std::string& line) { eval::progressLine(s.progress, line); }
+void progressLine(const EvalSettings& s, const std::string& line) {
+  eval::progressLine(s.progress, line);
+}
 
 std::optional<double> firstAlphaTruth(const std::vector<eval::LogStatus>& logs) {
   for (const auto& l : logs) {
@@ -72,8 +74,11 @@ PaperRun startPaperRun(const PaperExperimentOptions& o) {
   if (o.sweeps_per_mode < 1) throw std::runtime_error("--sweeps-per-mode must be at least 1");
   if (o.calib_sweeps < 1) throw std::runtime_error("--calib-sweeps must be at least 1");
   const SimSetup setup = loadSimSetup(o.rig_path, o.scene_path, o.overrides);
-  PaperRun run{o, requireKind<RotatingLidarConfig>(setup.rig, "this experiment"), setup.scene,
-               fs::path(o.out_dir), {}};
+  PaperRun run{o,
+               requireKind<RotatingLidarConfig>(setup.rig, "this experiment"),
+               setup.scene,
+               fs::path(o.out_dir),
+               {}};
   fs::create_directories(run.out / "logs");
   run.in.inputs.rig = o.rig_path;
   run.in.inputs.overrides = o.overrides;
@@ -88,8 +93,8 @@ PaperRun startPaperRun(const PaperExperimentOptions& o) {
 }
 
 // Simulates `sweeps` sweeps of `mode` into DIR/logs/`file`; returns the log's path.
-std::string simulateLog(PaperRun& run, const std::string& file, int mode, const std::string& sequence,
-                        int sweeps, uint64_t seed) {
+std::string simulateLog(PaperRun& run, const std::string& file, int mode,
+                        const std::string& sequence, int sweeps, uint64_t seed) {
   const EvalSettings& s = run.o.settings;
   Stopwatch w;
   SimOptions so;
@@ -101,12 +106,15 @@ std::string simulateLog(PaperRun& run, const std::string& file, int mode, const 
   so.seed = seed;
   const std::string path = (run.out / "logs" / file).string();
   progressLine(s, "simulating " + file + ": mode " + std::to_string(mode) + ", " + sequence +
-                      " sequence, " + std::to_string(sweeps) + " sweeps, seed " + std::to_string(seed));
+                      " sequence, " + std::to_string(sweeps) + " sweeps, seed " +
+                      std::to_string(seed));
   EventLogWriter log(path);
-  const SimResult r = simulate(so, [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
+  const SimResult r =
+      simulate(so, [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
   log.close();
-  progressLine(s, "  " + std::to_string(r.sweeps_done) + " sweeps, " + fixed(r.simulated_us / 1e6, 1) +
-                      " s simulated in " + fixed(w.seconds(), 1) + " s");
+  progressLine(s, "  " + std::to_string(r.sweeps_done) + " sweeps, " +
+                      fixed(r.simulated_us / 1e6, 1) + " s simulated in " + fixed(w.seconds(), 1) +
+                      " s");
   if (r.motor_fault || r.sweeps_done != sweeps) {
     std::cerr << "eval: " << file << ": only " << r.sweeps_done << " of " << sweeps
               << " sweeps simulated" << (r.motor_fault ? " (motor fault)" : "") << "\n";
@@ -123,8 +131,9 @@ void calibrateAlphaFromLog(PaperRun& run, const std::string& calib_log) {
   std::map<int, Group> calib_groups;
   {
     Stopwatch w;
-    in.logs.push_back(eval::evaluateLog(calib_log, "alpha", eval::methodRigs(run.rig), run.o.settings,
-                                        false, [&](int mode) -> Group& { return calib_groups[mode]; }));
+    in.logs.push_back(eval::evaluateLog(calib_log, "alpha", eval::methodRigs(run.rig),
+                                        run.o.settings, false,
+                                        [&](int mode) -> Group& { return calib_groups[mode]; }));
     in.timings_s["evaluate_alpha_log"] = roundTo(w.seconds(), 6);
   }
   std::vector<const SweepRecord*> calib_records;
@@ -147,9 +156,10 @@ void calibrateAlphaFromLog(PaperRun& run, const std::string& calib_log) {
   in.alpha_eval_deg = in.alpha.lm.alpha_rad * kRadToDeg;
   in.alpha_eval_centroid_deg =
       in.alpha_centroid.done ? in.alpha_centroid.lm.alpha_rad * kRadToDeg : run.rig.plate.alpha_deg;
-  progressLine(run.o.settings, "alpha calibrated: " + fixed(in.alpha_eval_deg, 4) + " deg (ray_plane), " +
-                                   fixed(in.alpha_eval_centroid_deg, 4) + " deg (centroid), from " +
-                                   std::to_string(in.alpha.sweeps_used) + " sweeps");
+  progressLine(run.o.settings, "alpha calibrated: " + fixed(in.alpha_eval_deg, 4) +
+                                   " deg (ray_plane), " + fixed(in.alpha_eval_centroid_deg, 4) +
+                                   " deg (centroid), from " + std::to_string(in.alpha.sweeps_used) +
+                                   " sweeps");
 }
 
 // DIR/plate_calibration.yaml: the alpha of the default method.
@@ -178,7 +188,8 @@ void evaluateModes(PaperRun& run, const MethodRigs& rigs) {
   const EvalSettings& s = run.o.settings;
   for (int mode = 1; mode <= 7; ++mode) {
     const std::string file = "mode" + std::to_string(mode) + ".lcmlog";
-    const std::string path = simulateLog(run, file, mode, "improved", run.o.sweeps_per_mode, run.o.seed + mode);
+    const std::string path =
+        simulateLog(run, file, mode, "improved", run.o.sweeps_per_mode, run.o.seed + mode);
     Stopwatch w;
     run.in.logs.push_back(eval::evaluateLog(path, "mode", rigs, s, s.plots,
                                             [&](int m) -> Group& { return run.in.modes[m]; }));
@@ -218,8 +229,8 @@ EvalRotatingResult evalRotatingLogs(const EvalRotatingOptions& o) {
   in.inputs.rig = o.rig_path;
   in.inputs.overrides = o.overrides;
   for (size_t i = 0; i < o.logs.size(); ++i) {
-    progressLine(s, "log " + std::to_string(i + 1) + "/" + std::to_string(o.logs.size()) + ": " +
-                        o.logs[i]);
+    progressLine(
+        s, "log " + std::to_string(i + 1) + "/" + std::to_string(o.logs.size()) + ": " + o.logs[i]);
     in.logs.push_back(eval::evaluateLog(o.logs[i], "input", rigs, s, s.plots,
                                         [&](int mode) -> Group& { return in.modes[mode]; }));
   }

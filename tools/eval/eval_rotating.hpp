@@ -27,10 +27,10 @@ struct EvalSettings {
   double band_m = 0.10;
   double edge_trim_m = 0.15;
   double histogram_bin_mm = 2.0;
-  double within_mm = 40.0;           // UST-10LX accuracy: the paper's +-40 mm
-  double map_error_limit_m = 0.05;   // Eq. 21 standard: +-50 mm
-  double max_range_m = 10.0;         // UST-10LX range: d50 is capped here
-  double wall_voxel_m = 0.05;        // extractWalls downsampling
+  double within_mm = 40.0;          // UST-10LX accuracy: the paper's +-40 mm
+  double map_error_limit_m = 0.05;  // Eq. 21 standard: +-50 mm
+  double max_range_m = 10.0;        // UST-10LX range: d50 is capped here
+  double wall_voxel_m = 0.05;       // extractWalls downsampling
   // Fig. 8: points with z in this band (frame O), at most this many per sweep.
   double top_view_z_min_m = -0.3;
   double top_view_z_max_m = 1.0;
@@ -43,7 +43,7 @@ struct EvalRotatingOptions {
   std::vector<std::string> logs;
   std::string rig_path;                // for the report
   std::vector<std::string> overrides;  // for the report (already applied to `rig`)
-  RotatingLidarConfig rig;                       // plate.beta_method is replaced per method
+  RotatingLidarConfig rig;             // plate.beta_method is replaced per method
   std::string out_dir;
   EvalSettings settings;
 };
@@ -61,9 +61,9 @@ struct PaperExperimentOptions {
 };
 
 struct EvalRotatingResult {
-  int sweeps = 0;          // evaluated sweeps (modes, not counting alpha calibration logs)
-  bool failed = false;     // a log was unreadable/corrupt, or no sweep was found
-  std::string message;     // why it failed
+  int sweeps = 0;       // evaluated sweeps (modes, not counting alpha calibration logs)
+  bool failed = false;  // a log was unreadable/corrupt, or no sweep was found
+  std::string message;  // why it failed
   std::vector<std::string> figures;  // PNG file names written into out_dir
 };
 

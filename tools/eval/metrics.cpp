@@ -13,7 +13,8 @@ double mapErrorDistance(double phi_error_rad, double limit_m, double max_range_m
 }
 
 DeviationStats::DeviationStats(double bin, double range)
-    : bin_mm(bin), range_mm(range),
+    : bin_mm(bin),
+      range_mm(range),
       bins(static_cast<size_t>(std::max(1.0, std::round(2.0 * range / bin))), 0) {}
 
 void DeviationStats::add(double d_mm, double within_mm) {

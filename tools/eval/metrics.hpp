@@ -18,10 +18,10 @@ double mapErrorDistance(double phi_error_rad, double limit_m, double max_range_m
 struct DeviationStats {
   int64_t count = 0;
   double sum_sq_mm2 = 0.0;
-  int64_t within = 0;          // |deviation| <= within_mm
-  int64_t outside_range = 0;   // beyond the histogram range (kept out of the bins)
+  int64_t within = 0;         // |deviation| <= within_mm
+  int64_t outside_range = 0;  // beyond the histogram range (kept out of the bins)
   double bin_mm = 2.0;
-  double range_mm = 100.0;     // bins cover [-range, range]
+  double range_mm = 100.0;  // bins cover [-range, range]
   std::vector<int64_t> bins;
   DeviationStats() = default;
   DeviationStats(double bin_mm, double range_mm);

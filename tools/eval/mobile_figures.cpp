@@ -17,7 +17,8 @@ std::vector<Eigen::Vector3f> pathPoints(const PoseTrack& track, float z_m = 0.0f
   return out;
 }
 
-std::vector<Eigen::Vector3f> sideView(const std::vector<Eigen::Vector3f>& cloud, int horizontal_axis) {
+std::vector<Eigen::Vector3f> sideView(const std::vector<Eigen::Vector3f>& cloud,
+                                      int horizontal_axis) {
   std::vector<Eigen::Vector3f> out;
   out.reserve(cloud.size());
   for (const auto& p : cloud) out.emplace_back(p[horizontal_axis], p.z(), 0.0f);
@@ -43,7 +44,8 @@ void trajectoryFigure(const MobileEvaluation& ev, Figures* fig) {
   layers.push_back({"EKF", "blue", pathPoints(ev.log.ekf)});
   if (ev.hasTruth()) layers.push_back({"truth", "black", pathPoints(ev.log.truth)});
   PlotOptions po;
-  po.title = ev.hasTruth() ? "Trajectory: wheel odometry alone (red), EKF (blue, under the truth where it agrees), truth (black)"
+  po.title = ev.hasTruth() ? "Trajectory: wheel odometry alone (red), EKF (blue, under the truth "
+                             "where it agrees), truth (black)"
                            : "Trajectory: wheel odometry alone (red), EKF (blue)";
   po.point_size = 0.15;
   fig->add("trajectory.png", "The car's path in the world frame (its start pose).",
@@ -55,8 +57,9 @@ void trajectoryErrorFigure(const MobileEvaluation& ev, Figures* fig) {
   so.title = "Position error against the truth";
   so.x_label = "time [s]";
   so.y_label = "error [m]";
-  const std::vector<Series> s = {{"wheel odometry", ev.odometry.t_s, ev.odometry.error_m, "lines", "red"},
-                                 {"EKF", ev.ekf.t_s, ev.ekf.error_m, "lines", "blue"}};
+  const std::vector<Series> s = {
+      {"wheel odometry", ev.odometry.t_s, ev.odometry.error_m, "lines", "red"},
+      {"EKF", ev.ekf.t_s, ev.ekf.error_m, "lines", "blue"}};
   fig->add("trajectory_error.png",
            "Position error of wheel odometry alone and of the EKF; slip makes odometry drift.",
            [&](const std::string& png) { plotSeries(png, s, so); });
@@ -69,7 +72,10 @@ void topViewFigure(const MobileEvaluation& ev, Figures* fig) {
   po.z_band_m = PlotRange{0.05, 2.0};
   fig->add("top_view.png", "Top view (Fig. 11B): the cloud without floor and ceiling.",
            [&](const std::string& png) {
-             plotTopView(png, {{"cloud", "gray40", ev.cloud}, {"EKF path", "blue", pathPoints(ev.track(), 1.0f)}}, po);
+             plotTopView(png,
+                         {{"cloud", "gray40", ev.cloud},
+                          {"EKF path", "blue", pathPoints(ev.track(), 1.0f)}},
+                         po);
            });
 }
 
@@ -82,12 +88,14 @@ void sideViewFigure(const MobileEvaluation& ev, int axis, Figures* fig) {
   so.title = std::string("Side view of the cloud (") + (axis == 0 ? "x" : "y") + "-z)";
   const std::string file = std::string("side_view_") + (axis == 0 ? "xz" : "yz") + ".png";
   fig->add(file, "Side view: walls should stand vertical, floor and ceiling flat.",
-           [&](const std::string& png) { plotTopView(png, {{"cloud", "gray40", sideView(ev.cloud, axis)}}, so); });
+           [&](const std::string& png) {
+             plotTopView(png, {{"cloud", "gray40", sideView(ev.cloud, axis)}}, so);
+           });
 }
 
 // Fig. 9 for `name` ("ceiling" or "walls"): the deviations before and after calibration.
-void deviationComparisonFigure(const std::string& name, const DeviationStats& before, const DeviationStats& after,
-                               Figures* fig) {
+void deviationComparisonFigure(const std::string& name, const DeviationStats& before,
+                               const DeviationStats& after, Figures* fig) {
   SeriesPlotOptions so;
   so.title = "Fig. 9: deviations of the " + name + " points from their RANSAC plane";
   so.x_label = "deviation [mm]";
@@ -116,7 +124,8 @@ void deviationsFigure(const RoomMeasures& room, Figures* fig) {
 void loopClosureFigure(const MobileEvaluation& ev, Figures* fig) {
   const LoopClosure& lc = ev.loop;
   const size_t scans = ev.log.scans.size();
-  const std::vector<Eigen::Vector3f> pe = pointsOfScans(ev.cloud, ev.scan_of_point, lc.early, scans);
+  const std::vector<Eigen::Vector3f> pe =
+      pointsOfScans(ev.cloud, ev.scan_of_point, lc.early, scans);
   const std::vector<Eigen::Vector3f> pl = pointsOfScans(ev.cloud, ev.scan_of_point, lc.late, scans);
   PlotOptions po;
   po.point_size = 0.2;
@@ -126,7 +135,9 @@ void loopClosureFigure(const MobileEvaluation& ev, Figures* fig) {
   fig->add("loop_closure.png",
            "Fig. 11C-D: the walls seen where the drive comes back to its start, first pass "
            "against last pass; a double wall is the ghost.",
-           [&](const std::string& png) { plotTopView(png, {{"first pass", "blue", pe}, {"last pass", "red", pl}}, po); });
+           [&](const std::string& png) {
+             plotTopView(png, {{"first pass", "blue", pe}, {"last pass", "red", pl}}, po);
+           });
 }
 
 // The circle's plots: the halves' points at the lidar's height.
@@ -134,8 +145,10 @@ PlotOptions circlePlotOptions(const std::string& name, const HalfScanGhost& g) {
   PlotOptions po;
   po.point_size = 0.2;
   po.z_band_m = PlotRange{0.9, 1.1};
-  po.title = "Calibration circle, " + name + " calibration: left (blue) and right (red) halves of the scans, z 0.9-1.1 m; double wall " +
-             (g.walls.max_m ? fixed(1000.0 * *g.walls.max_m, 1) + " mm" : std::string("n/a"));
+  po.title =
+      "Calibration circle, " + name +
+      " calibration: left (blue) and right (red) halves of the scans, z 0.9-1.1 m; double wall " +
+      (g.walls.max_m ? fixed(1000.0 * *g.walls.max_m, 1) + " mm" : std::string("n/a"));
   return po;
 }
 
@@ -157,30 +170,34 @@ void drawMobileFigures(const MobileEvaluation& ev, Figures* fig) {
 
 void circleGhostFigure(const std::string& name, const HalfScanGhost& g, Figures* fig) {
   const PlotOptions po = circlePlotOptions(name, g);
-  fig->add("circle_ghost_" + name + ".png",
-           "Fig. 6-7: the calibration circle sees every wall with both halves of the scan; " + name +
-               " calibration" + (name == "before" ? ", the mounting error splits each wall in two (the ghost)."
-                                                  : ", the two halves coincide."),
-           [&](const std::string& png) {
-             plotTopView(png, {{"left halves", "blue", g.left}, {"right halves", "red", g.right}}, po);
-           });
+  fig->add(
+      "circle_ghost_" + name + ".png",
+      "Fig. 6-7: the calibration circle sees every wall with both halves of the scan; " + name +
+          " calibration" +
+          (name == "before" ? ", the mounting error splits each wall in two (the ghost)."
+                            : ", the two halves coincide."),
+      [&](const std::string& png) {
+        plotTopView(png, {{"left halves", "blue", g.left}, {"right halves", "red", g.right}}, po);
+      });
 }
 
-void targetGhostFigure(const std::string& name, const HalfScanGhost& g, const Eigen::AlignedBox3d& target_world,
-                       Figures* fig) {
+void targetGhostFigure(const std::string& name, const HalfScanGhost& g,
+                       const Eigen::AlignedBox3d& target_world, Figures* fig) {
   PlotOptions zo = circlePlotOptions(name, g);
   const Eigen::Vector3d c = target_world.center();
   zo.x_range_m = PlotRange{c.x() - 0.8, c.x() + 0.8};
   zo.y_range_m = PlotRange{c.y() - 0.8, c.y() + 0.8};
   zo.z_band_m = PlotRange{target_world.min().z(), target_world.max().z()};
   zo.point_size = 0.4;
-  zo.title = "Calibration target (board before a window), " + name + " calibration: left halves (blue), right halves (red)";
-  fig->add("target_ghost_" + name + ".png",
-           "Fig. 6-7, close up: the board in front of the window recess at the board's height, " + name +
-               " calibration" + (name == "before" ? ": two boards." : ": one board."),
-           [&](const std::string& png) {
-             plotTopView(png, {{"left halves", "blue", g.left}, {"right halves", "red", g.right}}, zo);
-           });
+  zo.title = "Calibration target (board before a window), " + name +
+             " calibration: left halves (blue), right halves (red)";
+  fig->add(
+      "target_ghost_" + name + ".png",
+      "Fig. 6-7, close up: the board in front of the window recess at the board's height, " + name +
+          " calibration" + (name == "before" ? ": two boards." : ": one board."),
+      [&](const std::string& png) {
+        plotTopView(png, {{"left halves", "blue", g.left}, {"right halves", "red", g.right}}, zo);
+      });
 }
 
 }  // namespace sweepmap::eval

@@ -35,7 +35,8 @@ TrajectoryErrors trajectoryErrors(const PoseTrack& estimate, const PoseTrack& tr
   return e;
 }
 
-Eigen::Vector3d inlierCentroid(const std::vector<Eigen::Vector3f>& cloud, const std::vector<int>& idx) {
+Eigen::Vector3d inlierCentroid(const std::vector<Eigen::Vector3f>& cloud,
+                               const std::vector<int>& idx) {
   Eigen::Vector3d c = Eigen::Vector3d::Zero();
   for (int i : idx) c += cloud[static_cast<size_t>(i)].cast<double>();
   return idx.empty() ? c : Eigen::Vector3d(c / static_cast<double>(idx.size()));
@@ -43,7 +44,9 @@ Eigen::Vector3d inlierCentroid(const std::vector<Eigen::Vector3f>& cloud, const 
 
 namespace {
 
-double signedDistance(const WallPlaneFit& p, const Eigen::Vector3d& x) { return p.normal.dot(x) + p.offset; }
+double signedDistance(const WallPlaneFit& p, const Eigen::Vector3d& x) {
+  return p.normal.dot(x) + p.offset;
+}
 
 // Distance of two near-parallel planes: the mean of each one's distance from the other's
 // inlier centroid (symmetric; exact for parallel planes).
@@ -66,7 +69,9 @@ RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud) {
   ho.max_planes = 4;
   const auto horizontal = extractPlanes(cloud, ho);
   // Height of a horizontal plane: z where it crosses the vertical through its centroid.
-  const auto height = [&](const WallPlaneFit& p) { return inlierCentroid(cloud, p.inlier_indices).z(); };
+  const auto height = [&](const WallPlaneFit& p) {
+    return inlierCentroid(cloud, p.inlier_indices).z();
+  };
   for (const WallPlaneFit& p : horizontal) {
     if (!r.floor || height(p) < height(*r.floor)) r.floor = p;
     if (!r.ceiling || height(p) > height(*r.ceiling)) r.ceiling = p;
@@ -92,8 +97,8 @@ RoomDims roomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud
 }
 
 // Deviations (mm) of the points near each plane, for the histograms of Fig. 9.
-DeviationStats deviations(const std::vector<Eigen::Vector3f>& cloud, const std::vector<WallPlaneFit>& planes,
-                          double edge_trim_m) {
+DeviationStats deviations(const std::vector<Eigen::Vector3f>& cloud,
+                          const std::vector<WallPlaneFit>& planes, double edge_trim_m) {
   std::vector<PlaneForDeviation> pd;
   for (const auto& p : planes) pd.push_back({p.normal, p.offset});
   DeviationStats stats(1.0, 50.0);
@@ -123,8 +128,8 @@ RoomMeasures measureRoom(const std::vector<Eigen::Vector3f>& cloud) {
 // --- the loop's ghost ------------------------------------------------------------------------
 
 std::vector<Eigen::Vector3f> pointsOfScans(const std::vector<Eigen::Vector3f>& cloud,
-                                           const std::vector<int>& scan_of_point, const std::vector<int>& scans,
-                                           size_t scan_count) {
+                                           const std::vector<int>& scan_of_point,
+                                           const std::vector<int>& scans, size_t scan_count) {
   std::vector<char> wanted(scan_count, 0);
   for (int j : scans) wanted[static_cast<size_t>(j)] = 1;
   std::vector<Eigen::Vector3f> out;
@@ -149,7 +154,9 @@ void findRevisits(const MobileLog& log, const PoseTrack& track, LoopClosure* lc)
   for (size_t j = 0; j < log.scans.size(); ++j) {
     if (!pose[j]) continue;
     for (size_t i = 0; i < j; ++i) {
-      if (!pose[i] || 1e-6 * static_cast<double>(log.scans[j].utime - log.scans[i].utime) < kMinGapS) continue;
+      if (!pose[i] ||
+          1e-6 * static_cast<double>(log.scans[j].utime - log.scans[i].utime) < kMinGapS)
+        continue;
       if (std::hypot(pose[j]->x_m - pose[i]->x_m, pose[j]->y_m - pose[i]->y_m) > kRadiusM) continue;
       if (std::abs(wrapAngle(pose[j]->theta_rad - pose[i]->theta_rad)) > kHeadingRad) continue;
       is_early[i] = 1;
@@ -163,8 +170,8 @@ void findRevisits(const MobileLog& log, const PoseTrack& track, LoopClosure* lc)
 }
 
 // Each vertical plane of the early pass, refitted in the late pass's points, and their distance.
-void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts, const std::vector<Eigen::Vector3f>& late_pts,
-                     LoopClosure* lc) {
+void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts,
+                     const std::vector<Eigen::Vector3f>& late_pts, LoopClosure* lc) {
   PlaneExtractionOptions po;
   po.orientation = PlaneExtractionOptions::Orientation::kVertical;
   po.voxel_m = 0.03;
@@ -175,10 +182,11 @@ void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts, const std::v
     // A far, noisy wall (1 % of 5 m) can come out of RANSAC as two parallel planes a few
     // centimetres apart, the second made of the first one's outliers: one surface, one plane.
     const Eigen::Vector3d c = inlierCentroid(early_pts, e.inlier_indices);
-    const bool seen = std::any_of(lc->planes.begin(), lc->planes.end(), [&](const LoopClosure::Plane& q) {
-      return std::abs(q.early.normal.dot(e.normal)) > std::cos(3.0 * M_PI / 180.0) &&
-             std::abs(signedDistance(q.early, c)) < 0.1;
-    });
+    const bool seen =
+        std::any_of(lc->planes.begin(), lc->planes.end(), [&](const LoopClosure::Plane& q) {
+          return std::abs(q.early.normal.dot(e.normal)) > std::cos(3.0 * M_PI / 180.0) &&
+                 std::abs(signedDistance(q.early, c)) < 0.1;
+        });
     if (seen) continue;
     const auto refit = refitWalls(late_pts, {e}, 0.1);
     if (refit.empty() || refit[0].inliers < 100) continue;
@@ -193,16 +201,20 @@ void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts, const std::v
 
 }  // namespace
 
-LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track, const std::vector<Eigen::Vector3f>& cloud,
+LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track,
+                        const std::vector<Eigen::Vector3f>& cloud,
                         const std::vector<int>& scan_of_point) {
   LoopClosure lc;
   findRevisits(log, track, &lc);
   if (lc.early.size() < 5 || lc.late.size() < 5) {
-    lc.reason = "the drive does not come back to a place it passed " + fixed(kMinGapS, 0) + " s earlier";
+    lc.reason =
+        "the drive does not come back to a place it passed " + fixed(kMinGapS, 0) + " s earlier";
     return lc;
   }
-  std::vector<Eigen::Vector3f> early_pts = pointsOfScans(cloud, scan_of_point, lc.early, log.scans.size());
-  const std::vector<Eigen::Vector3f> late_pts = pointsOfScans(cloud, scan_of_point, lc.late, log.scans.size());
+  std::vector<Eigen::Vector3f> early_pts =
+      pointsOfScans(cloud, scan_of_point, lc.early, log.scans.size());
+  const std::vector<Eigen::Vector3f> late_pts =
+      pointsOfScans(cloud, scan_of_point, lc.late, log.scans.size());
   matchPassPlanes(early_pts, late_pts, &lc);
   if (!lc.ghost_m) lc.reason = "no wall seen by both passes";
   lc.early_points = std::move(early_pts);
@@ -230,7 +242,8 @@ Scan2D scanHalf(const Scan2D& scan, bool left) {
 
 // The wall refitted in one half's points: a band wide enough to hold both copies of a
 // doubled wall, then the half's own inliers; none with fewer than 100 points.
-std::optional<WallPlaneFit> refitInHalf(const std::vector<Eigen::Vector3f>& half, const WallPlaneFit& w) {
+std::optional<WallPlaneFit> refitInHalf(const std::vector<Eigen::Vector3f>& half,
+                                        const WallPlaneFit& w) {
   const auto wide = refitWalls(half, {w}, 0.15);
   if (wide.empty() || wide[0].inliers < 100) return std::nullopt;
   const auto tight = refitWalls(half, wide, 0.03);
@@ -240,7 +253,8 @@ std::optional<WallPlaneFit> refitInHalf(const std::vector<Eigen::Vector3f>& half
 
 }  // namespace
 
-HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track, const LidarMounting& mounting) {
+HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track,
+                            const LidarMounting& mounting) {
   HalfScanGhost g;
   const Eigen::Isometry3d T_BL = mounting.T_BL();
   for (const Scan2D& s : log.scans) {

@@ -24,7 +24,8 @@ struct TrajectoryErrors {
 TrajectoryErrors trajectoryErrors(const PoseTrack& estimate, const PoseTrack& truth);
 
 // The centroid of the points `idx` of `cloud` (zero without any).
-Eigen::Vector3d inlierCentroid(const std::vector<Eigen::Vector3f>& cloud, const std::vector<int>& idx);
+Eigen::Vector3d inlierCentroid(const std::vector<Eigen::Vector3f>& cloud,
+                               const std::vector<int>& idx);
 
 // The room's planes found by RANSAC in a world-frame cloud.
 struct RoomPlanes {
@@ -58,16 +59,17 @@ struct LoopClosure {
   };
   std::vector<Plane> planes;
   std::vector<Eigen::Vector3f> early_points;  // the points the early planes index
-  std::optional<double> ghost_m;  // the largest distance among vertical planes
+  std::optional<double> ghost_m;              // the largest distance among vertical planes
   std::string reason;
 };
-LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track, const std::vector<Eigen::Vector3f>& cloud,
+LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track,
+                        const std::vector<Eigen::Vector3f>& cloud,
                         const std::vector<int>& scan_of_point);
 
 // The points of `cloud` from the scans `scans` (ascending), in cloud order.
 std::vector<Eigen::Vector3f> pointsOfScans(const std::vector<Eigen::Vector3f>& cloud,
-                                           const std::vector<int>& scan_of_point, const std::vector<int>& scans,
-                                           size_t scan_count);
+                                           const std::vector<int>& scan_of_point,
+                                           const std::vector<int>& scans, size_t scan_count);
 
 // The distances between the two copies of each wall seen twice.
 struct DoubleWalls {
@@ -84,6 +86,7 @@ struct HalfScanGhost {
   std::vector<Eigen::Vector3f> left, right;
   DoubleWalls walls;
 };
-HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track, const LidarMounting& mounting);
+HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track,
+                            const LidarMounting& mounting);
 
 }  // namespace sweepmap::eval

@@ -20,22 +20,29 @@ std::optional<double> times1000(const std::optional<double>& v) {
   return v ? std::optional<double>(1000.0 * *v) : std::nullopt;
 }
 
-json vectorJson(const Eigen::Vector3d& v) { return {roundTo(v.x(), 6), roundTo(v.y(), 6), roundTo(v.z(), 6)}; }
+json vectorJson(const Eigen::Vector3d& v) {
+  return {roundTo(v.x(), 6), roundTo(v.y(), 6), roundTo(v.z(), 6)};
+}
 
 json mountingJson(const LidarMounting& m) {
-  return {{"gamma_rad", roundTo(m.gamma_rad, 6)}, {"beta_rad", roundTo(m.beta_rad, 6)}, {"alpha_rad", roundTo(m.alpha_rad, 6)}};
+  return {{"gamma_rad", roundTo(m.gamma_rad, 6)},
+          {"beta_rad", roundTo(m.beta_rad, 6)},
+          {"alpha_rad", roundTo(m.alpha_rad, 6)}};
 }
 
 json planeJson(const WallPlaneFit& p, const std::vector<Eigen::Vector3f>& cloud) {
   const Eigen::Vector3d c = inlierCentroid(cloud, p.inlier_indices);
-  return {{"normal", {roundTo(p.normal.x(), 6), roundTo(p.normal.y(), 6), roundTo(p.normal.z(), 6)}},
-          {"offset_m", roundTo(p.offset, 6)},
-          {"centroid_m", {roundTo(c.x(), 6), roundTo(c.y(), 6), roundTo(c.z(), 6)}},
-          {"inliers", p.inliers},
-          {"rms_mm", roundTo(1000.0 * p.rms_m, 6)}};
+  return {
+      {"normal", {roundTo(p.normal.x(), 6), roundTo(p.normal.y(), 6), roundTo(p.normal.z(), 6)}},
+      {"offset_m", roundTo(p.offset, 6)},
+      {"centroid_m", {roundTo(c.x(), 6), roundTo(c.y(), 6), roundTo(c.z(), 6)}},
+      {"inliers", p.inliers},
+      {"rms_mm", roundTo(1000.0 * p.rms_m, 6)}};
 }
 
-json dimsJson(const RoomDims& d) { return {{"L1", nullable(d.L1)}, {"L2", nullable(d.L2)}, {"L3", nullable(d.L3)}}; }
+json dimsJson(const RoomDims& d) {
+  return {{"L1", nullable(d.L1)}, {"L2", nullable(d.L2)}, {"L3", nullable(d.L3)}};
+}
 
 json deviationJson(const DeviationStats& d) {
   return {{"points", d.count},
@@ -90,14 +97,16 @@ void addCircleCalibration(const CircleCalibration& c, json* r) {
 void addTrajectory(const MobileEvaluation& ev, json* r) {
   const TrajectoryErrors& e_odo = ev.odometry;
   const TrajectoryErrors& e_ekf = ev.ekf;
-  (*r)["trajectory_rmse_m"] = {{"odometry", nullable(e_odo.rmse_m)}, {"ekf", nullable(e_ekf.rmse_m)}};
-  (*r)["trajectory"] = {{"final_error_m", {{"odometry", nullable(e_odo.final_m)}, {"ekf", nullable(e_ekf.final_m)}}},
-                        {"max_error_m", {{"odometry", nullable(e_odo.max_m)}, {"ekf", nullable(e_ekf.max_m)}}},
-                        {"heading_rmse_mrad",
-                         {{"odometry", nullable(times1000(e_odo.heading_rmse_rad))},
-                          {"ekf", nullable(times1000(e_ekf.heading_rmse_rad))}}},
-                        {"wheel_readings_gated", ev.log.gated_wheel_readings},
-                        {"truth", ev.hasTruth()}};
+  (*r)["trajectory_rmse_m"] = {{"odometry", nullable(e_odo.rmse_m)},
+                               {"ekf", nullable(e_ekf.rmse_m)}};
+  (*r)["trajectory"] = {
+      {"final_error_m", {{"odometry", nullable(e_odo.final_m)}, {"ekf", nullable(e_ekf.final_m)}}},
+      {"max_error_m", {{"odometry", nullable(e_odo.max_m)}, {"ekf", nullable(e_ekf.max_m)}}},
+      {"heading_rmse_mrad",
+       {{"odometry", nullable(times1000(e_odo.heading_rmse_rad))},
+        {"ekf", nullable(times1000(e_ekf.heading_rmse_rad))}}},
+      {"wheel_readings_gated", ev.log.gated_wheel_readings},
+      {"truth", ev.hasTruth()}};
   if (e_odo.rmse_m && e_ekf.rmse_m && *e_ekf.rmse_m > 0) {
     (*r)["trajectory"]["rmse_ratio_odometry_over_ekf"] = roundTo(*e_odo.rmse_m / *e_ekf.rmse_m, 6);
   }
@@ -115,7 +124,8 @@ void addRoom(const MobileEvaluation& ev, json* r) {
   (*r)["planes"] = jp;
   if (ev.room.ceiling_up) {
     (*r)["ceiling_normal"] = vectorJson(*ev.room.ceiling_up);
-    (*r)["ceiling_tilt_mrad"] = roundTo(1000.0 * std::acos(std::clamp(ev.room.ceiling_up->z(), -1.0, 1.0)), 6);
+    (*r)["ceiling_tilt_mrad"] =
+        roundTo(1000.0 * std::acos(std::clamp(ev.room.ceiling_up->z(), -1.0, 1.0)), 6);
   } else {
     (*r)["ceiling_normal"] = nullptr;
   }
@@ -135,13 +145,15 @@ void addTruth(const MobileEvaluation& ev, json* r) {
   const auto err = [](const std::optional<double>& v, double t) {
     return v ? json(roundTo(1000.0 * (*v - t), 6)) : json(nullptr);
   };
-  (*r)["room_dims_error_mm"] = {{"L1", err(dims.L1, t1)}, {"L2", err(dims.L2, t2)}, {"L3", err(dims.L3, t3)}};
+  (*r)["room_dims_error_mm"] = {
+      {"L1", err(dims.L1, t1)}, {"L2", err(dims.L2, t2)}, {"L3", err(dims.L3, t3)}};
   const LidarMounting truth = trueMounting(*ev.log.truth_mounting);
   const LidarMounting& mounting = ev.mounting;
   (*r)["mounting_truth"] = mountingJson(truth);
-  (*r)["mounting_used_error_mrad"] = {{"gamma", roundTo(1000.0 * (mounting.gamma_rad - truth.gamma_rad), 6)},
-                                      {"beta", roundTo(1000.0 * (mounting.beta_rad - truth.beta_rad), 6)},
-                                      {"alpha", roundTo(1000.0 * (mounting.alpha_rad - truth.alpha_rad), 6)}};
+  (*r)["mounting_used_error_mrad"] = {
+      {"gamma", roundTo(1000.0 * (mounting.gamma_rad - truth.gamma_rad), 6)},
+      {"beta", roundTo(1000.0 * (mounting.beta_rad - truth.beta_rad), 6)},
+      {"alpha", roundTo(1000.0 * (mounting.alpha_rad - truth.alpha_rad), 6)}};
 }
 
 json beforeCalibrationJson(const LidarMounting& mounting, const RoomMeasures& rb) {
@@ -160,7 +172,9 @@ void addLoopClosure(const LoopClosure& lc, json* r) {
   jl["late_scans"] = lc.late.size();
   jl["planes"] = json::array();
   for (const auto& p : lc.planes) {
-    jl["planes"].push_back({{"normal", {roundTo(p.early.normal.x(), 6), roundTo(p.early.normal.y(), 6), roundTo(p.early.normal.z(), 6)}},
+    jl["planes"].push_back({{"normal",
+                             {roundTo(p.early.normal.x(), 6), roundTo(p.early.normal.y(), 6),
+                              roundTo(p.early.normal.z(), 6)}},
                             {"centroid_m", planeJson(p.early, lc.early_points)["centroid_m"]},
                             {"early_points", p.early.inliers},
                             {"late_points", p.late.inliers},
@@ -171,7 +185,8 @@ void addLoopClosure(const LoopClosure& lc, json* r) {
 }
 
 json reportJson(const MobileEvaluation& ev, const CircleCalibration* circle,
-                const std::vector<Figures::Entry>& figures, const std::vector<std::string>& figure_errors) {
+                const std::vector<Figures::Entry>& figures,
+                const std::vector<std::string>& figure_errors) {
   json r;
   r["log"] = ev.log_name;
   if (ev.log.log_error) r["log_error"] = ev.log.error;
@@ -187,7 +202,8 @@ json reportJson(const MobileEvaluation& ev, const CircleCalibration* circle,
   // The mounting's error against the truth: the experiment reports its calibration's; a log
   // evaluated on its own reports the mounting it was assembled with.
   if (!circle) {
-    r["mounting_error_mrad"] = r.contains("mounting_used_error_mrad") ? r["mounting_used_error_mrad"] : json(nullptr);
+    r["mounting_error_mrad"] =
+        r.contains("mounting_used_error_mrad") ? r["mounting_used_error_mrad"] : json(nullptr);
   }
   r["deviations"] = roomDeviationsJson(ev.room);
   if (ev.before) r["before_calibration"] = beforeCalibrationJson(*ev.before_mounting, *ev.before);
@@ -202,7 +218,8 @@ json reportJson(const MobileEvaluation& ev, const CircleCalibration* circle,
 // --- report.md ------------------------------------------------------------------------------
 
 // The key numbers of report.json, as it prints them.
-std::string reportMarkdown(const json& r, const MobileEvaluation& ev, const std::vector<Figures::Entry>& figures) {
+std::string reportMarkdown(const json& r, const MobileEvaluation& ev,
+                           const std::vector<Figures::Entry>& figures) {
   std::ostringstream md;
   md << "# Rig B evaluation: " << r["log"].get<std::string>() << "\n\n";
   md << "- scans " << ev.log.scans.size() << ", points " << ev.cloud.size() << ", poses from "
@@ -211,27 +228,31 @@ std::string reportMarkdown(const json& r, const MobileEvaluation& ev, const std:
      << r["trajectory_rmse_m"]["ekf"].dump() << " m\n";
   md << "- room dimensions L1, L2, L3: " << r["room_dims_m"].dump() << " m; error "
      << r["room_dims_error_mm"].dump() << " mm\n";
-  md << "- ceiling normal " << r["ceiling_normal"].dump() << "; density D " << r["density_D_m"].dump()
-     << " m; ghost where the loop closes " << r["ghost_mm"].dump() << " mm\n";
+  md << "- ceiling normal " << r["ceiling_normal"].dump() << "; density D "
+     << r["density_D_m"].dump() << " m; ghost where the loop closes " << r["ghost_mm"].dump()
+     << " mm\n";
   md << "- mounting (gamma, beta, alpha) " << r["mounting"].dump() << "; error against the truth "
      << r["mounting_error_mrad"].dump() << " mrad\n";
   if (r.contains("calibration")) {
     const json& c = r["calibration"];
-    md << "- calibration from the circle: ours " << c["ours"].value("error_mrad", json(nullptr)).dump()
-       << " mrad (residual " << c["ours"]["residual_before_m"].dump() << " -> " << c["ours"]["residual_after_m"].dump()
-       << " m), the paper's " << c["paper"].value("error_mrad", json(nullptr)).dump() << " mrad; circle double wall "
-       << c["circle_double_wall_mm"]["before"]["max_mm"].dump() << " mm before, "
-       << c["circle_double_wall_mm"]["after"]["max_mm"].dump() << " mm after\n";
+    md << "- calibration from the circle: ours "
+       << c["ours"].value("error_mrad", json(nullptr)).dump() << " mrad (residual "
+       << c["ours"]["residual_before_m"].dump() << " -> " << c["ours"]["residual_after_m"].dump()
+       << " m), the paper's " << c["paper"].value("error_mrad", json(nullptr)).dump()
+       << " mrad; circle double wall " << c["circle_double_wall_mm"]["before"]["max_mm"].dump()
+       << " mm before, " << c["circle_double_wall_mm"]["after"]["max_mm"].dump() << " mm after\n";
   }
   md << "\n";
-  for (const auto& f : figures) md << "![" << f.caption << "](" << f.file << ")\n\n" << f.caption << "\n\n";
+  for (const auto& f : figures)
+    md << "![" << f.caption << "](" << f.file << ")\n\n" << f.caption << "\n\n";
   return md.str();
 }
 
 }  // namespace
 
-void writeMobileReport(const fs::path& out, const MobileEvaluation& ev, const CircleCalibration* circle,
-                       const std::vector<Figures::Entry>& figures, const std::vector<std::string>& figure_errors) {
+void writeMobileReport(const fs::path& out, const MobileEvaluation& ev,
+                       const CircleCalibration* circle, const std::vector<Figures::Entry>& figures,
+                       const std::vector<std::string>& figure_errors) {
   const json r = reportJson(ev, circle, figures, figure_errors);
   writeFileAtomic((out / "report.json").string(), r.dump(2) + "\n");
   writeFileAtomic((out / "report.md").string(), reportMarkdown(r, ev, figures));

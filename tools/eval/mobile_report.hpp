@@ -51,6 +51,7 @@ void writeMobileReport(const std::filesystem::path& out, const MobileEvaluation&
                        const std::vector<std::string>& figure_errors);
 
 // report.json of an experiment whose calibration failed: the calibration alone.
-void writeCalibrationFailureReport(const std::filesystem::path& out, const CircleCalibration& circle);
+void writeCalibrationFailureReport(const std::filesystem::path& out,
+                                   const CircleCalibration& circle);
 
 }  // namespace sweepmap::eval

@@ -13,9 +13,12 @@ namespace {
 
 const char* methodColor(Method m) {
   switch (m) {
-    case Method::kRayPlane: return "#1f4fd8";
-    case Method::kCentroid: return "#1a9641";
-    case Method::kUncorrected: return "#d7191c";
+    case Method::kRayPlane:
+      return "#1f4fd8";
+    case Method::kCentroid:
+      return "#1a9641";
+    case Method::kUncorrected:
+      return "#d7191c";
   }
   return "";
 }
@@ -36,9 +39,9 @@ void topViewFigure(int mode, const Group& g, const EvalSettings& s, Figures* fig
              po.z_band_m = PlotRange{s.top_view_z_min_m, s.top_view_z_max_m};
              po.point_size = 0.2;
              po.max_points_per_layer = 300000;
-             plotTopView(png,
-                         {{"uncorrected C_O'", "red", g.top_Op}, {"corrected C_O", "blue", g.top_O}},
-                         po);
+             plotTopView(
+                 png, {{"uncorrected C_O'", "red", g.top_Op}, {"corrected C_O", "blue", g.top_O}},
+                 po);
            });
 }
 
@@ -139,7 +142,8 @@ std::vector<Series> phiStatsSeries(const ReportInput& in, bool corrected_only) {
 
 void phiStatsFigure(const ReportInput& in, Figures* fig) {
   const std::vector<Series> stats = phiStatsSeries(in, false);
-  const SeriesPlotOptions so = phiErrorAxes("Fig. 10: max / mean / min of phi_error per mode", "scan mode");
+  const SeriesPlotOptions so =
+      phiErrorAxes("Fig. 10: max / mean / min of phi_error per mode", "scan mode");
   fig->add("fig10_phi_error_stats.png",
            "Fig. 10: maximum, mean (with points) and minimum phi_error per mode; the band "
            "between max and min is the attitude uncertainty of the mode.",
@@ -178,11 +182,14 @@ Series mapErrorCurve(const EvalSettings& s, double phi_deg, const std::string& t
 // The +-limit lines of the E_map standard; only the upper one has a legend entry.
 Series mapErrorLimit(const EvalSettings& s, bool upper) {
   const double lim_mm = 1000.0 * s.map_error_limit_m;
-  if (upper) return {"+-" + fixed(lim_mm, 0) + " mm", {0.0, s.max_range_m}, {lim_mm, lim_mm}, "lines", "black"};
+  if (upper)
+    return {
+        "+-" + fixed(lim_mm, 0) + " mm", {0.0, s.max_range_m}, {lim_mm, lim_mm}, "lines", "black"};
   return {"", {0.0, s.max_range_m}, {-lim_mm, -lim_mm}, "lines", "black"};
 }
 
-SeriesPlotOptions mapErrorAxes(const EvalSettings& s, const std::string& title, const std::string& y_label) {
+SeriesPlotOptions mapErrorAxes(const EvalSettings& s, const std::string& title,
+                               const std::string& y_label) {
   SeriesPlotOptions fo;
   fo.title = title;
   fo.x_label = "distance d (m)";
@@ -205,16 +212,23 @@ void mapErrorFigure(int mode, const Group& g, const EvalSettings& s, Figures* fi
     ser.push_back(mapErrorCurve(s, r.mean, "ray_plane mean", color, "linespoints"));
     ser.push_back(mapErrorCurve(s, r.min, "ray_plane min", color, "lines"));
     const double d50 = mapErrorDistance(r.max_abs * kDegToRad, s.map_error_limit_m, s.max_range_m);
-    ser.push_back({"ray_plane: |E_map| <= " + fixed(lim_mm, 0) + " mm up to " + fixed(d50, 2) + " m",
-                   {d50, d50}, {-lim_mm, lim_mm}, "linespoints", color});
+    ser.push_back(
+        {"ray_plane: |E_map| <= " + fixed(lim_mm, 0) + " mm up to " + fixed(d50, 2) + " m",
+         {d50, d50},
+         {-lim_mm, lim_mm},
+         "linespoints",
+         color});
   }
   if (c.sweeps > 0) {
     const char* color = methodColor(Method::kCentroid);
     ser.push_back(mapErrorCurve(s, c.max, "centroid max", color, "lines"));
     ser.push_back(mapErrorCurve(s, c.min, "centroid min", color, "lines"));
     const double d50 = mapErrorDistance(c.max_abs * kDegToRad, s.map_error_limit_m, s.max_range_m);
-    ser.push_back({"centroid: up to " + fixed(d50, 2) + " m", {d50, d50}, {-lim_mm, lim_mm},
-                   "linespoints", color});
+    ser.push_back({"centroid: up to " + fixed(d50, 2) + " m",
+                   {d50, d50},
+                   {-lim_mm, lim_mm},
+                   "linespoints",
+                   color});
   }
   const SeriesPlotOptions fo = mapErrorAxes(
       s, "Fig. 11, mode " + std::to_string(mode) + ": E_map = d tan(phi_error)", "E_map (mm)");
@@ -271,7 +285,9 @@ void wallDeviationsFigure(int mode, const Group& g, const EvalSettings& s, Figur
            "Appendix B, mode " + std::to_string(mode) +
                ": histogram of the signed distances of wall points to their fitted planes; "
                "a narrow, normal-looking peak inside +-40 mm means the cloud's shape is right.",
-           [&](const std::string& png) { plotSeries(png, {h, lo, hi}, fo); });
+           [&](const std::string& png) {
+             plotSeries(png, {h, lo, hi}, fo);
+           });
 }
 
 // --- the alpha calibration (Algorithm A1) ---------------------------------------------------
@@ -317,8 +333,10 @@ void alphaFigure(const ReportInput& in, Figures* fig) {
   if (in.alpha_true_rad && !alpha.empty() && !alpha.front().x.empty()) {
     double k_max = 1;
     for (const auto& ser : alpha) k_max = std::max(k_max, ser.x.back());
-    alpha.push_back({"true alpha (simulator)", {0.0, k_max},
-                     {*in.alpha_true_rad * kRadToDeg, *in.alpha_true_rad * kRadToDeg}, "lines",
+    alpha.push_back({"true alpha (simulator)",
+                     {0.0, k_max},
+                     {*in.alpha_true_rad * kRadToDeg, *in.alpha_true_rad * kRadToDeg},
+                     "lines",
                      "black"});
   }
   SeriesPlotOptions fo;
@@ -353,10 +371,14 @@ void naiveTopViewFigure(const Group& nv, const EvalSettings& s, Figures* fig) {
 }
 
 // The deviation histogram as shares of the wall points (%).
-Series deviationShares(const DeviationStats& d, const std::string& label, const std::string& color) {
+Series deviationShares(const DeviationStats& d, const std::string& label,
+                       const std::string& color) {
   Series h{label + ": RMS " + fixed(d.rmsMm(), 1) + " mm, " + fixed(100 * d.shareWithin(), 1) +
                " % within +-40 mm",
-           {}, {}, "lines", color};
+           {},
+           {},
+           "lines",
+           color};
   for (size_t i = 0; i < d.bins.size(); ++i) {
     h.x.push_back(d.binCenterMm(i));
     h.y.push_back(d.count > 0 ? 100.0 * static_cast<double>(d.bins[i]) / d.count : 0.0);

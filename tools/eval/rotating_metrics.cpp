@@ -14,9 +14,12 @@ namespace sweepmap::eval {
 
 const char* methodKey(Method m) {
   switch (m) {
-    case Method::kRayPlane: return "ray_plane";
-    case Method::kCentroid: return "centroid";
-    case Method::kUncorrected: return "uncorrected";
+    case Method::kRayPlane:
+      return "ray_plane";
+    case Method::kCentroid:
+      return "centroid";
+    case Method::kUncorrected:
+      return "uncorrected";
   }
   return "";
 }
@@ -38,7 +41,8 @@ struct CentroidResult {
   double alpha_rad;
 };
 
-std::map<int64_t, CentroidResult> centroidPass(const std::string& path, const RotatingLidarConfig& rig) {
+std::map<int64_t, CentroidResult> centroidPass(const std::string& path,
+                                               const RotatingLidarConfig& rig) {
   std::map<int64_t, CentroidResult> centroid;
   forEachSweep(path, rig, [&](const AssembledSweep& sw, const SweepTruth&) {
     centroid[sw.window.sweep_id] = {sw.corrected, sw.reason, sw.phi_offset_rad, sw.alpha_rad};
@@ -47,7 +51,8 @@ std::map<int64_t, CentroidResult> centroidPass(const std::string& path, const Ro
 }
 
 // The record of a sweep assembled by ray_plane, with the centroid pass's result for it.
-SweepRecord sweepRecord(const std::string& log_name, const AssembledSweep& sw, const SweepTruth& truth,
+SweepRecord sweepRecord(const std::string& log_name, const AssembledSweep& sw,
+                        const SweepTruth& truth,
                         const std::map<int64_t, CentroidResult>& centroid) {
   SweepRecord r;
   r.log = log_name;
@@ -72,7 +77,8 @@ SweepRecord sweepRecord(const std::string& log_name, const AssembledSweep& sw, c
 }
 
 // The walls of the published cloud: their normals and the deviations of their points.
-void measureWalls(const std::vector<Eigen::Vector3f>& cloud, const EvalSettings& s, SweepRecord* r) {
+void measureWalls(const std::vector<Eigen::Vector3f>& cloud, const EvalSettings& s,
+                  SweepRecord* r) {
   WallExtractionOptions wo;
   wo.voxel_m = s.wall_voxel_m;
   const WallExtraction ex = extractWalls(cloud, wo);
@@ -110,9 +116,10 @@ void appendTopView(const std::vector<Eigen::Vector3f>& cloud, const EvalSettings
 
 // Adds the sweep's deviations and (with `top_views`) its top views to the group; called
 // before the sweep's record joins the group.
-void addToGroup(const AssembledSweep& sw, const SweepRecord& r, const EvalSettings& s, bool top_views,
-                Group* g) {
-  if (g->deviations.bins.empty()) g->deviations = DeviationStats(s.histogram_bin_mm, 1000.0 * s.band_m);
+void addToGroup(const AssembledSweep& sw, const SweepRecord& r, const EvalSettings& s,
+                bool top_views, Group* g) {
+  if (g->deviations.bins.empty())
+    g->deviations = DeviationStats(s.histogram_bin_mm, 1000.0 * s.band_m);
   g->deviations.merge(r.deviations);
   if (top_views) {
     appendTopView(sw.points_Op, s, &g->top_Op);
@@ -121,7 +128,8 @@ void addToGroup(const AssembledSweep& sw, const SweepRecord& r, const EvalSettin
   }
 }
 
-std::string sweepProgressLine(const std::string& log_name, const SweepRecord& r, const Stopwatch& watch) {
+std::string sweepProgressLine(const std::string& log_name, const SweepRecord& r,
+                              const Stopwatch& watch) {
   std::ostringstream line;
   line << log_name << ": sweep " << r.id << " (mode " << r.mode << ", " << r.points << " points)";
   if (const auto e = r.phiErrorRad(Method::kRayPlane)) {
@@ -149,8 +157,8 @@ LogStatus evaluateLog(const std::string& path, const std::string& role, const Me
   progressLine(s.progress, name + ": pass 2/2 (beta by ray_plane), walls  [" +
                                fixed(watch.seconds(), 1) + " s]");
 
-  const LogReadResult read = forEachSweep(
-      path, rigs.ray_plane, [&](const AssembledSweep& sw, const SweepTruth& truth) {
+  const LogReadResult read =
+      forEachSweep(path, rigs.ray_plane, [&](const AssembledSweep& sw, const SweepTruth& truth) {
         SweepRecord r = sweepRecord(name, sw, truth, centroid);
         measureWalls(sw.points, s, &r);
         Group& g = group_for(r.mode);

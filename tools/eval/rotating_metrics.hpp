@@ -50,16 +50,16 @@ struct SweepRecord {
   DeviationStats deviations;
 
   bool correctedBy(Method m) const {
-    return m == Method::kRayPlane ? corrected
-                                  : m == Method::kCentroid ? corrected_centroid : true;
+    return m == Method::kRayPlane ? corrected : m == Method::kCentroid ? corrected_centroid : true;
   }
   // phi_error of the cloud the method publishes (an uncorrected sweep keeps -phi_true).
   std::optional<double> phiErrorRad(Method m) const {
     if (!phi_true_rad) return std::nullopt;
     if (m == Method::kCentroid && !has_centroid) return std::nullopt;
-    const double offset = m == Method::kRayPlane   ? (corrected ? phi_offset_rad : 0.0)
-                          : m == Method::kCentroid ? (corrected_centroid ? phi_offset_centroid_rad : 0.0)
-                                                   : 0.0;
+    const double offset = m == Method::kRayPlane ? (corrected ? phi_offset_rad : 0.0)
+                          : m == Method::kCentroid
+                              ? (corrected_centroid ? phi_offset_centroid_rad : 0.0)
+                              : 0.0;
     return wrapAngle(offset - *phi_true_rad);
   }
 };

@@ -66,7 +66,10 @@ json settingsJson(const EvalSettings& s) {
 json logsJson(const std::vector<LogStatus>& logs) {
   json out = json::array();
   for (const auto& l : logs) {
-    json lj = {{"path", l.path}, {"role", l.role}, {"sweeps", l.sweeps}, {"events", l.events},
+    json lj = {{"path", l.path},
+               {"role", l.role},
+               {"sweeps", l.sweeps},
+               {"events", l.events},
                {"seconds", roundTo(l.seconds, 6)}};
     if (l.error) lj["error"] = l.message;
     if (!l.skipped_channels.empty()) lj["skipped_channels"] = l.skipped_channels;
@@ -78,9 +81,9 @@ json logsJson(const std::vector<LogStatus>& logs) {
 
 json phiStatsJson(const PhiStats& st) {
   if (st.sweeps == 0) return {{"sweeps", 0}, {"uncorrected_sweeps", st.uncorrected}};
-  return {{"sweeps", st.sweeps},          {"uncorrected_sweeps", st.uncorrected},
-          {"max", roundTo(st.max, 6)},         {"mean", roundTo(st.mean, 6)},
-          {"min", roundTo(st.min, 6)},         {"max_abs", roundTo(st.max_abs, 6)}};
+  return {{"sweeps", st.sweeps},       {"uncorrected_sweeps", st.uncorrected},
+          {"max", roundTo(st.max, 6)}, {"mean", roundTo(st.mean, 6)},
+          {"min", roundTo(st.min, 6)}, {"max_abs", roundTo(st.max_abs, 6)}};
 }
 
 json deviationJson(const DeviationStats& d, const EvalSettings& s, size_t sweeps) {
@@ -193,8 +196,8 @@ json alphaJson(const AlphaCalibration& a) {
   j["mean_e_atti_after"] = roundTo(a.e_atti_after, 6);
   json h = json::array();
   for (const auto& it : a.lm.history) {
-    h.push_back({{"k", it.k}, {"alpha_deg", it.alpha_rad * kRadToDeg}, {"cost", it.cost},
-                 {"mu", it.mu}});
+    h.push_back(
+        {{"k", it.k}, {"alpha_deg", it.alpha_rad * kRadToDeg}, {"cost", it.cost}, {"mu", it.mu}});
   }
   j["history"] = h;
   return j;
@@ -205,10 +208,12 @@ void addAlpha(const ReportInput& in, json* j) {
   json& r = *j;
   r["alpha_source"] = in.alpha_source;
   if (in.alpha.done) r["alpha_deg"] = roundTo(in.alpha.lm.alpha_rad * kRadToDeg, 6);
-  if (in.alpha_centroid.done) r["alpha_deg_centroid"] = roundTo(in.alpha_centroid.lm.alpha_rad * kRadToDeg, 6);
+  if (in.alpha_centroid.done)
+    r["alpha_deg_centroid"] = roundTo(in.alpha_centroid.lm.alpha_rad * kRadToDeg, 6);
   if (in.alpha_true_rad) {
     r["alpha_true_deg"] = roundTo(*in.alpha_true_rad * kRadToDeg, 6);
-    if (in.alpha.done) r["alpha_error_deg"] = roundTo((in.alpha.lm.alpha_rad - *in.alpha_true_rad) * kRadToDeg, 6);
+    if (in.alpha.done)
+      r["alpha_error_deg"] = roundTo((in.alpha.lm.alpha_rad - *in.alpha_true_rad) * kRadToDeg, 6);
     if (in.alpha_centroid.done) {
       r["alpha_error_deg_centroid"] =
           roundTo((in.alpha_centroid.lm.alpha_rad - *in.alpha_true_rad) * kRadToDeg, 6);
@@ -219,7 +224,8 @@ void addAlpha(const ReportInput& in, json* j) {
                             {"applied_to_evaluation", in.alpha_applied}};
   if (in.alpha_applied) {
     r["alpha_calibration"]["evaluated_with_alpha_deg"] = {
-        {"ray_plane", roundTo(in.alpha_eval_deg, 6)}, {"centroid", roundTo(in.alpha_eval_centroid_deg, 6)}};
+        {"ray_plane", roundTo(in.alpha_eval_deg, 6)},
+        {"centroid", roundTo(in.alpha_eval_centroid_deg, 6)}};
   }
 }
 
@@ -230,7 +236,8 @@ json shapeJson(const Group& naive, const std::map<int, Group>& modes, const Eval
   sh["naive"]["sweeps"] = json::array();
   for (const auto& r : naive.sweeps) sh["naive"]["sweeps"].push_back(sweepJson(r));
   const auto improved = modes.find(1);
-  if (improved != modes.end()) sh["improved"] = deviationJson(improved->second.deviations, s, improved->second.sweeps.size());
+  if (improved != modes.end())
+    sh["improved"] = deviationJson(improved->second.deviations, s, improved->second.sweeps.size());
   sh["naive_rms_mm"] = roundTo(naive.deviations.rmsMm(), 6);
   sh["naive_share_within_40mm"] = roundTo(naive.deviations.shareWithin(), 6);
   if (improved != modes.end()) {
@@ -240,8 +247,8 @@ json shapeJson(const Group& naive, const std::map<int, Group>& modes, const Eval
   return sh;
 }
 
-json reportJson(const ReportInput& in, const EvalSettings& s, bool has_truth, const Figures& figures,
-                const EvalRotatingResult& result) {
+json reportJson(const ReportInput& in, const EvalSettings& s, bool has_truth,
+                const Figures& figures, const EvalRotatingResult& result) {
   json j;
   j["tool"] = "sweepmap eval (rotating_lidar)";
   j["inputs"] = inputsJson(in.inputs);
@@ -289,8 +296,8 @@ void markdownAlpha(const ReportInput& in, std::ostream& md) {
     md << "- alpha not calibrated: " << in.alpha.reason << "\n";
     return;
   }
-  md << "- alpha (calibrated, " << in.alpha_source << "): "
-     << fixed(in.alpha.lm.alpha_rad * kRadToDeg, 4) << " deg with beta by ray_plane";
+  md << "- alpha (calibrated, " << in.alpha_source
+     << "): " << fixed(in.alpha.lm.alpha_rad * kRadToDeg, 4) << " deg with beta by ray_plane";
   if (in.alpha_centroid.done) {
     md << ", " << fixed(in.alpha_centroid.lm.alpha_rad * kRadToDeg, 4) << " deg by centroid";
   }
@@ -298,8 +305,8 @@ void markdownAlpha(const ReportInput& in, std::ostream& md) {
     md << "; true " << fixed(*in.alpha_true_rad * kRadToDeg, 4) << " deg (error "
        << fixed((in.alpha.lm.alpha_rad - *in.alpha_true_rad) * kRadToDeg, 4) << " deg)";
   }
-  md << "; LM: " << in.alpha.lm.iterations << " iterations, " << in.alpha.lm.stop_reason
-     << ", " << in.alpha.sweeps_used << " sweeps.\n";
+  md << "; LM: " << in.alpha.lm.iterations << " iterations, " << in.alpha.lm.stop_reason << ", "
+     << in.alpha.sweeps_used << " sweeps.\n";
   md << (in.alpha_applied ? "- The mode logs were evaluated with the calibrated alpha of each "
                             "method.\n"
                           : "- The logs were evaluated with the rig's alpha (plate.alpha_deg = " +
@@ -321,7 +328,8 @@ void markdownShape(const ReportInput& in, const EvalSettings& s, std::ostream& m
   md << ".\n";
 }
 
-void markdownModeTable(const ReportInput& in, const EvalSettings& s, bool has_truth, std::ostream& md) {
+void markdownModeTable(const ReportInput& in, const EvalSettings& s, bool has_truth,
+                       std::ostream& md) {
   md << "\n| mode | sweeps | phi_error uncorrected min / mean / max (deg) | max abs(phi_error) "
         "ray_plane / centroid (deg) | d50 ray_plane (m) | d50 centroid (m) | d50 uncorrected (m) "
         "| wall RMS (mm) | within +-40 mm |\n";
@@ -333,8 +341,9 @@ void markdownModeTable(const ReportInput& in, const EvalSettings& s, bool has_tr
       const PhiStats r = phiStats(g.sweeps, Method::kRayPlane);
       const PhiStats c = phiStats(g.sweeps, Method::kCentroid);
       md << fixed(u.min, 3) << " / " << fixed(u.mean, 3) << " / " << fixed(u.max, 3) << " | "
-         << (r.sweeps ? fixed(r.max_abs, 4) : "–") << " / " << (c.sweeps ? fixed(c.max_abs, 4) : "–")
-         << " | " << optFixed(reportedD50(g, Method::kRayPlane, s), 3) << " | "
+         << (r.sweeps ? fixed(r.max_abs, 4) : "–") << " / "
+         << (c.sweeps ? fixed(c.max_abs, 4) : "–") << " | "
+         << optFixed(reportedD50(g, Method::kRayPlane, s), 3) << " | "
          << optFixed(reportedD50(g, Method::kCentroid, s), 3) << " | "
          << optFixed(reportedD50(g, Method::kUncorrected, s), 3) << " | ";
     } else {
@@ -393,11 +402,14 @@ void noteFailure(const ReportInput& in, EvalRotatingResult* result) {
   if (result->sweeps > 0) return;
   std::string seen;
   for (const auto& l : in.logs) {
-    for (const auto& [channel, n] : l.skipped_channels) seen += (seen.empty() ? "" : ", ") + channel;
+    for (const auto& [channel, n] : l.skipped_channels)
+      seen += (seen.empty() ? "" : ", ") + channel;
   }
   result->failed = true;
-  result->message = "no sweeps in the logs: rig A's assembler needs LIDAR_SCAN and SCAN_WINDOW "
-                    "(channels found: " + (seen.empty() ? std::string("none") : seen) + ")";
+  result->message =
+      "no sweeps in the logs: rig A's assembler needs LIDAR_SCAN and SCAN_WINDOW "
+      "(channels found: " +
+      (seen.empty() ? std::string("none") : seen) + ")";
 }
 
 }  // namespace
@@ -413,7 +425,8 @@ EvalRotatingResult writeReport(const fs::path& out, const ReportInput& in, const
   drawFigures(in, s, has_truth, &figures);
   for (const auto& f : figures.files()) result.figures.push_back(f.file);
   noteFailure(in, &result);
-  writeFileAtomic((out / "report.json").string(), reportJson(in, s, has_truth, figures, result).dump(2) + "\n");
+  writeFileAtomic((out / "report.json").string(),
+                  reportJson(in, s, has_truth, figures, result).dump(2) + "\n");
   writeFileAtomic((out / "report.md").string(), reportMarkdown(in, s, has_truth, figures, result));
   return result;
 }

@@ -22,7 +22,8 @@ int64_t parseInt(const std::string& tok, const std::string& where) {
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != tok.size() || tok.empty()) throw std::runtime_error(where + ": not an integer: '" + tok + "'");
+  if (used != tok.size() || tok.empty())
+    throw std::runtime_error(where + ": not an integer: '" + tok + "'");
   return v;
 }
 
@@ -75,9 +76,10 @@ BreezySlamImport importBreezySlam(const std::string& in_path, const std::string&
     s.nranges = beams;
     s.ranges_m.resize(static_cast<size_t>(beams));
     for (int i = 0; i < beams; ++i) {
-      const int64_t mm = parseInt(toks[24 + static_cast<size_t>(i)],
-                                  at + " token " + std::to_string(25 + i));
-      if (mm < 0) throw std::runtime_error(at + " token " + std::to_string(25 + i) + ": negative range");
+      const int64_t mm =
+          parseInt(toks[24 + static_cast<size_t>(i)], at + " token " + std::to_string(25 + i));
+      if (mm < 0)
+        throw std::runtime_error(at + " token " + std::to_string(25 + i) + ": negative range");
       s.ranges_m[static_cast<size_t>(i)] = static_cast<float>(mm) * 1e-3f;
     }
     out.publish(channels::kLidarScan, utime, s);

@@ -15,7 +15,7 @@ namespace sweepmap {
 struct BreezySlamImport {
   int64_t lines = 0;
   int64_t scans = 0;
-  int beams = 0;        // ranges per scan
+  int beams = 0;  // ranges per scan
   int64_t first_utime = 0, last_utime = 0;
 };
 

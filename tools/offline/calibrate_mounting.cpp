@@ -104,9 +104,8 @@ void reportMethod(const MountingCalibRequest& o, const MountingCalibrationResult
               << ") mm/s";
   }
   std::cerr << "; residual RMS " << std::setprecision(4) << r.residual_before_m * 1e3 << " -> "
-            << r.residual_after_m * 1e3 << " mm over " << r.correspondences
-            << " correspondences, " << r.iterations << " iterations, " << std::setprecision(3)
-            << secs << " s\n";
+            << r.residual_after_m * 1e3 << " mm over " << r.correspondences << " correspondences, "
+            << r.iterations << " iterations, " << std::setprecision(3) << secs << " s\n";
   if (truth) {
     std::cerr << std::setprecision(3) << "    error vs truth: gamma "
               << (r.gamma_rad - truth->gamma_rad) * 1e3 << ", beta "

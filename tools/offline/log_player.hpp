@@ -24,10 +24,10 @@ struct LogPlayResult {
   int64_t events = 0;       // every event read, whatever its channel
   int64_t first_utime = 0;  // of the first and last event read
   int64_t last_utime = 0;
-  int64_t now_utime = 0;    // the bus's clock at the end: the latest event time
+  int64_t now_utime = 0;  // the bus's clock at the end: the latest event time
   std::map<std::string, int64_t> skipped_channels;  // neither input nor handled
-  bool log_error = false;   // truncated or corrupt log (everything before it was played)
-  std::string error;        // with the byte offset
+  bool log_error = false;  // truncated or corrupt log (everything before it was played)
+  std::string error;       // with the byte offset
 };
 
 class LogPlayer {

@@ -10,8 +10,8 @@
 #include <string>
 
 #include "calib/sweep_assembly.hpp"
-#include "rigs/rotating_lidar.hpp"
 #include "processes/node.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 
@@ -41,8 +41,9 @@ struct LogSweepOptions {
 };
 
 // Throws LogError if the log cannot be opened; a bad log later on is reported in the result.
-LogReadResult forEachSweep(const std::string& log_path, const RotatingLidarConfig& rig,
-                           const std::function<void(const AssembledSweep&, const SweepTruth&)>& on_sweep,
-                           const LogSweepOptions& options = {});
+LogReadResult forEachSweep(
+    const std::string& log_path, const RotatingLidarConfig& rig,
+    const std::function<void(const AssembledSweep&, const SweepTruth&)>& on_sweep,
+    const LogSweepOptions& options = {});
 
 }  // namespace sweepmap

@@ -14,7 +14,8 @@ namespace {
 
 void addPose(const Message& m, PoseTrack* track) {
   pose2d_t p;
-  if (decodeMessage(m, &p) && std::isfinite(p.x_m) && std::isfinite(p.y_m) && std::isfinite(p.theta_rad)) {
+  if (decodeMessage(m, &p) && std::isfinite(p.x_m) && std::isfinite(p.y_m) &&
+      std::isfinite(p.theta_rad)) {
     track->add(p.utime, {p.x_m, p.y_m, p.theta_rad});
   }
 }
@@ -73,7 +74,8 @@ std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack
 
 LidarMounting trueMounting(const truth_mounting_t& t) {
   LidarMounting m;
-  m.nominal_rpy_rad = Eigen::Vector3d(t.nominal_rpy_rad[0], t.nominal_rpy_rad[1], t.nominal_rpy_rad[2]);
+  m.nominal_rpy_rad =
+      Eigen::Vector3d(t.nominal_rpy_rad[0], t.nominal_rpy_rad[1], t.nominal_rpy_rad[2]);
   m.gamma_rad = t.gamma_true_rad;
   m.beta_rad = t.beta_true_rad;
   m.alpha_rad = t.alpha_true_rad;
@@ -81,7 +83,8 @@ LidarMounting trueMounting(const truth_mounting_t& t) {
   return m;
 }
 
-std::string mountingResultJsonText(const MountingCalibrationResult& r, const std::optional<LidarMounting>& truth) {
+std::string mountingResultJsonText(const MountingCalibrationResult& r,
+                                   const std::optional<LidarMounting>& truth) {
   nlohmann::json j = {{"method", mountingMethodName(r.method)},
                       {"ok", r.ok},
                       {"gamma_rad", r.gamma_rad},

@@ -17,10 +17,10 @@
 namespace sweepmap {
 
 struct MobileLog {
-  std::vector<Scan2D> scans;  // valid scans (validateScan), in log order
-  PoseTrack ekf;              // ODOMETRY_POSE, replayed
-  PoseTrack wheels;           // WHEEL_ODOMETRY, replayed
-  PoseTrack truth;            // TRUTH_POSE from the log (simulation only)
+  std::vector<Scan2D> scans;                       // valid scans (validateScan), in log order
+  PoseTrack ekf;                                   // ODOMETRY_POSE, replayed
+  PoseTrack wheels;                                // WHEEL_ODOMETRY, replayed
+  PoseTrack truth;                                 // TRUTH_POSE from the log (simulation only)
   std::optional<truth_mounting_t> truth_mounting;  // TRUTH_MOUNTING (simulation only)
   int64_t invalid_scans = 0;
   int64_t gated_wheel_readings = 0;

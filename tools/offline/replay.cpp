@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "calib/rotating_geometry.hpp"
+#include "core/angles.hpp"
 #include "core/atomic_file.hpp"
 #include "core/event_log.hpp"
 #include "mapping/cloud_io.hpp"
@@ -21,7 +22,6 @@
 #include "mapping/plot.hpp"
 #include "processes/mapper_node.hpp"
 #include "tools/offline/log_sweeps.hpp"
-#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
@@ -53,7 +53,8 @@ class ProgressBar {
 };
 
 // The JSON line of one sweep in summary.json.
-nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth, const std::string& file) {
+nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth,
+                         const std::string& file) {
   nlohmann::json j;
   j["id"] = s.window.sweep_id;
   j["file"] = file;
@@ -71,8 +72,7 @@ nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth, const
     // Frame O' is the lidar frame at the window's first ray: the true phi_offset is
     // the true shaft angle then (0 = X_L along the rig's front).
     j["phi_true_deg"] = roundTo(*truth.phi_true_rad * kRadToDeg, 6);
-    j["phi_error_deg"] =
-        roundTo(wrapAngle(s.phi_offset_rad - *truth.phi_true_rad) * kRadToDeg, 6);
+    j["phi_error_deg"] = roundTo(wrapAngle(s.phi_offset_rad - *truth.phi_true_rad) * kRadToDeg, 6);
   }
   return j;
 }

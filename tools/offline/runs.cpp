@@ -89,25 +89,26 @@ SimRunResult simulateRig(const SimSetup& setup, const SimRunOptions& options,
 
 ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
   return std::visit(
-      Overloaded{
-          [&](const RotatingLidarConfig& config) {
-            ReplayOptions o;
-            o.log_path = options.log_path;
-            o.out_dir = options.out_dir;
-            o.progress = options.progress;
-            o.plots = options.plots;
-            const ReplayResult r = replayLog(o, config);
-            std::ostringstream line;
-            line << r.events << " events, " << r.sweeps << " sweeps, " << r.points << " points";
-            return ReplayRunResult{line.str(), r.sweeps, 0, r.points, r.log_error, r.error};
-          },
-          [&](const MobileLidarConfig& config) {
-            const MobileReplayResult r =
-                replayMobileLog(options.log_path, config, options.out_dir, options.plots);
-            std::ostringstream line;
-            line << r.events << " events, " << r.scans << " scans, " << r.points << " points";
-            return ReplayRunResult{line.str(), 0, r.scans, r.points, r.log_error, r.error};
-          }},
+      Overloaded{[&](const RotatingLidarConfig& config) {
+                   ReplayOptions o;
+                   o.log_path = options.log_path;
+                   o.out_dir = options.out_dir;
+                   o.progress = options.progress;
+                   o.plots = options.plots;
+                   const ReplayResult r = replayLog(o, config);
+                   std::ostringstream line;
+                   line << r.events << " events, " << r.sweeps << " sweeps, " << r.points
+                        << " points";
+                   return ReplayRunResult{line.str(), r.sweeps, 0, r.points, r.log_error, r.error};
+                 },
+                 [&](const MobileLidarConfig& config) {
+                   const MobileReplayResult r =
+                       replayMobileLog(options.log_path, config, options.out_dir, options.plots);
+                   std::ostringstream line;
+                   line << r.events << " events, " << r.scans << " scans, " << r.points
+                        << " points";
+                   return ReplayRunResult{line.str(), 0, r.scans, r.points, r.log_error, r.error};
+                 }},
       rig.config);
 }
 

@@ -1,5 +1,4 @@
 #include "tools/offline/sim_mobile.hpp"
-#include "tools/offline/simulation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +13,7 @@
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
+#include "tools/offline/simulation.hpp"
 
 namespace sweepmap {
 
@@ -110,7 +110,8 @@ SimMobileResult simulateMobile(const SimMobileOptions& options,
   for (size_t i = 0; i < truth.size(); ++i) events.push_back({truth[i].utime, 0, i});
   for (size_t i = 0; i < ticks.size(); ++i) events.push_back({ticks[i].utime, 1, i});
   for (size_t i = 0; i < imu.size(); ++i) events.push_back({imu[i].utime, 2, i});
-  for (size_t i = 0; i < scans.size(); ++i) events.push_back({car.scanDeliveryUtime(scans[i]), 3, i});
+  for (size_t i = 0; i < scans.size(); ++i)
+    events.push_back({car.scanDeliveryUtime(scans[i]), 3, i});
   std::stable_sort(events.begin(), events.end(), [](const Stamped& a, const Stamped& b) {
     return a.utime != b.utime ? a.utime < b.utime : a.order < b.order;
   });

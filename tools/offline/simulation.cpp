@@ -65,8 +65,8 @@ SimResult simulate(const SimOptions& options, const std::function<void(const Mes
   publishTruthRig();
   // Enough for the sweeps with generous slack; a stuck controller ends the run.
   const ScanMode mode = scanMode(rig.motor.mode);
-  const int64_t limit_us = static_cast<int64_t>((60.0 + 3.0 * mode.period_s) * 1e6) *
-                           std::max(1, options.sweeps);
+  const int64_t limit_us =
+      static_cast<int64_t>((60.0 + 3.0 * mode.period_s) * 1e6) * std::max(1, options.sweeps);
   const int64_t drain_us = static_cast<int64_t>((rig.sim.lidar_latency_ms + 100.0) * 1000.0);
   int64_t done_at = -1;
   int64_t next_truth_rig = t0 + 1000000;

@@ -6,9 +6,9 @@
 #include <functional>
 #include <string>
 
-#include "rigs/rotating_lidar.hpp"
 #include "drivers/scene.hpp"
 #include "processes/node.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
 

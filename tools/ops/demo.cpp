@@ -109,8 +109,8 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   if (motor_rc != 0) std::cerr << "demo: motor ended with status " << motor_rc << "\n";
   pause(500);  // last scans delivered
   int failures = motor_rc != 0;
-  failures += run.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}},
-                              400);
+  failures +=
+      run.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 400);
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.sweeps != o.sweeps;
@@ -152,16 +152,16 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
   std::cout << "demo: playing the devices for "
             << std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s
             << " s; processes log to " << (run.out / "logs").string() << "\n";
-  const pid_t player = run.procs.start(
-      "lcm-logplayer",
-      {"lcm-logplayer", "--lcm-url=" + run.url,
-       "--regexp=WHEEL_TICKS|IMU|LIDAR_SCAN|TRUTH_POSE|TRUTH_MOUNTING", devices},
-      run.logFile("logplayer"));
+  const pid_t player =
+      run.procs.start("lcm-logplayer",
+                      {"lcm-logplayer", "--lcm-url=" + run.url,
+                       "--regexp=WHEEL_TICKS|IMU|LIDAR_SCAN|TRUTH_POSE|TRUTH_MOUNTING", devices},
+                      run.logFile("logplayer"));
   const double duration_s = std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s;
   int failures = run.procs.wait(player, duration_s * 2.0 + 60.0) != 0;
   pause(800);  // last poses and scans through
-  failures += run.stopInOrder(
-      {{odometry, 10.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 300);
+  failures +=
+      run.stopInOrder({{odometry, 10.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 300);
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.scans == 0;
@@ -190,11 +190,13 @@ int runDemo(const DemoOptions& o) {
   switch (rig.kind()) {
     case RigKind::kRotatingLidar: {
       if (rig_sets.size() != sets.size()) {
-        throw ConfigError("scene.<key> overrides are for mobile_lidar demos; give a rotating_lidar "
-                          "demo another --scene file");
+        throw ConfigError(
+            "scene.<key> overrides are for mobile_lidar demos; give a rotating_lidar "
+            "demo another --scene file");
       }
-      const std::string scene = fs::absolute(resolveConfigFile(
-          o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene)).string();
+      const std::string scene =
+          fs::absolute(resolveConfigFile(o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene))
+              .string();
       return rotatingDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
     }
     case RigKind::kMobileLidar:

@@ -21,8 +21,8 @@ struct DemoOptions {
   std::string scene;          // path or name; "" = the kind's default scene
   std::string out = "out";
   std::vector<std::string> overrides;  // rig keys for every process (and scene.<key>)
-  int mode = 7;               // rotating_lidar: scan mode
-  int sweeps = 3;             // rotating_lidar: 3D sweeps
+  int mode = 7;                        // rotating_lidar: scan mode
+  int sweeps = 3;                      // rotating_lidar: 3D sweeps
   uint64_t seed = 1;
 };
 

@@ -14,9 +14,9 @@ bool enterPrivateNetwork(std::string* why) {
     *why = std::string("unshare(CLONE_NEWNET): ") + std::strerror(errno);
     return false;
   }
-  for (const auto& cmd : {std::vector<std::string>{"ip", "link", "set", "lo", "up"},
-                          std::vector<std::string>{"ip", "route", "add", "224.0.0.0/4", "dev",
-                                                   "lo"}}) {
+  for (const auto& cmd :
+       {std::vector<std::string>{"ip", "link", "set", "lo", "up"},
+        std::vector<std::string>{"ip", "route", "add", "224.0.0.0/4", "dev", "lo"}}) {
     if (runCommand(cmd) != 0) {
       *why = "'" + cmd[0] + " " + cmd[1] + " " + cmd[2] + " ...' failed in the new namespace";
       return false;
