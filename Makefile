@@ -5,6 +5,8 @@
 #   make test-unit      - build only the unit tests and run them (ctest -L unit)
 #   make test-sanitize  - the unit tests under AddressSanitizer (with LeakSanitizer) and
 #                         UndefinedBehaviorSanitizer, in their own build tree: any report fails
+#   make format         - clang-format every C++ file in place (.clang-format)
+#   make format-check   - fail, listing them, when files are not formatted (part of make test)
 BUILD ?= build
 SANITIZE_BUILD ?= build-sanitize
 JOBS ?= 2
@@ -17,7 +19,10 @@ CTEST = ctest --output-on-failure -j$(JOBS) --timeout 900
 # stack trace of an undefined-behaviour report and keep leak checking on.
 SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
 
-.PHONY: all setup build demo test test-unit test-sanitize bench clean
+# Every tracked C++ source; generated lcm-gen headers live in the build tree, not here.
+FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
+
+.PHONY: all setup build demo test test-unit test-sanitize format format-check bench clean
 
 all: build
 
@@ -36,7 +41,7 @@ build: setup $(BUILD)/Makefile
 demo: build
 	$(BUILD)/bin/sweepmap demo --out out
 
-test: build
+test: build format-check
 	cd $(BUILD) && $(CTEST)
 	@$(MAKE) --no-print-directory test-sanitize
 
@@ -48,6 +53,14 @@ test-unit: setup $(BUILD)/Makefile
 test-sanitize: setup $(SANITIZE_BUILD)/Makefile
 	cmake --build $(SANITIZE_BUILD) -j$(JOBS) --target unit_tests
 	cd $(SANITIZE_BUILD) && $(SANITIZE_ENV) $(CTEST) -L unit
+
+format:
+	clang-format -i $(FORMAT_FILES)
+
+format-check: setup
+	@bad=$$(for f in $(FORMAT_FILES); do clang-format --dry-run --Werror "$$f" >/dev/null 2>&1 || echo "$$f"; done); \
+	if [ -n "$$bad" ]; then echo "format-check: not clang-formatted (run make format):"; echo "$$bad"; exit 1; fi; \
+	echo "format-check: $(words $(FORMAT_FILES)) files formatted"
 
 bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench
