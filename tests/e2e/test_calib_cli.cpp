@@ -157,9 +157,9 @@ const std::string kRigB = sourcePath("config/rig_b.yaml");
 // laps, as the paper experiment's), slip and noise on, true mounting error (0.0355, 0.0126,
 // -0.0058) rad; the rig file believes (0, 0, 0).
 std::string circleLog() {
-  return cachedSimMobileLog("circle_calibration",
-                            {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml"),
-                             "--set", "sim.duration_s=120"});
+  return cachedSimLog("circle_calibration",
+                      {"--rig", kRigB, "--scene", sourcePath("config/scene_lab.yaml"), "--set",
+                       "sim.duration_s=120"});
 }
 
 TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {

@@ -135,10 +135,6 @@ std::string cachedSimLog(const std::string& name, const std::vector<std::string>
   return cachedLog("sim", name, sim_args);
 }
 
-std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args) {
-  return cachedLog("sim", name, sim_args);
-}
-
 CachedRun cachedRun(const std::string& name, const std::vector<std::string>& args) {
   const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_cache" / name;
   CachedRun run{dir / "out", -1, dir / "output.txt"};

@@ -37,11 +37,9 @@ namespace sweepmap {
 namespace test {
 
 // A simulated log shared by the tests of one build: made once (under a file lock, so
-// parallel CTest processes wait for one another) with `sweepmap sim <args> --out LOG`,
-// and remade when the sweepmap binary changes.
+// parallel CTest processes wait for one another) with `sweepmap sim <args> --out LOG` (any
+// rig kind: the args name the rig), and remade when the sweepmap binary changes.
 std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args);
-// The same for a rig-B log (kept apart from cachedSimLog for the readers of the tests).
-std::string cachedSimMobileLog(const std::string& name, const std::vector<std::string>& sim_args);
 // `sweepmap <args> --out DIR` run once per build (as above) for every test process that asks:
 // DIR, the exit status and the command's output (stdout and stderr).
 struct CachedRun {
