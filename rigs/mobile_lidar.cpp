@@ -25,9 +25,9 @@ void MountingConfig::declare(ConfigSchema& s, const std::string& p) {
 }
 
 LidarMounting MountingConfig::toMounting() const {
-  constexpr double kDeg = kDegToRad;
   LidarMounting m;
-  m.nominal_rpy_rad = Eigen::Vector3d(nominal_roll_deg, nominal_pitch_deg, nominal_yaw_deg) * kDeg;
+  m.nominal_rpy_rad =
+      Eigen::Vector3d(nominal_roll_deg, nominal_pitch_deg, nominal_yaw_deg) * kDegToRad;
   m.gamma_rad = gamma_rad;
   m.beta_rad = beta_rad;
   m.alpha_rad = alpha_rad;

@@ -123,10 +123,24 @@ Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& ove
   return rig;
 }
 
+namespace {
+
+// The index of T among the variant's alternatives: the kind whose config type is T.
+template <class T, class... Ts>
+constexpr std::size_t alternativeIndex(const std::variant<Ts...>*) {
+  constexpr bool same[] = {std::is_same_v<T, Ts>...};
+  for (std::size_t i = 0; i < sizeof...(Ts); ++i) {
+    if (same[i]) return i;
+  }
+  return sizeof...(Ts);
+}
+
+}  // namespace
+
 template <class T>
 const T& requireKind(const Rig& rig, const std::string& what) {
   if (const T* c = std::get_if<T>(&rig.config)) return *c;
-  const RigKind wanted = static_cast<RigKind>(decltype(rig.config)(std::in_place_type<T>).index());
+  const auto wanted = static_cast<RigKind>(alternativeIndex<T>(&rig.config));
   throw ConfigError(rig.path + " is a " + rig.kindName() + " rig; " + what + " needs a " +
                     rigKindName(wanted) + " rig");
 }

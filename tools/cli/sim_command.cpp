@@ -44,15 +44,13 @@ Runner addSimCommand(CLI::App& app) {
   return [o, mode, sweeps]() {
     SimSetup setup;
     try {
-      const std::string rig_file = resolveRigFile(o->rig);
-      const RigKind kind = readRigKind(rig_file);
-      if (kind != RigKind::kRotatingLidar && (mode->count() || sweeps->count())) {
-        throw ConfigError("--mode and --sweeps apply to rotating_lidar rigs; " + rig_file +
-                          " is a " + rigKindName(kind) + " rig (its sim.* keys set the drive)");
+      setup = loadSimSetup(o->rig, o->scene, o->sets);
+      auto* rotating = std::get_if<RotatingLidarConfig>(&setup.rig.config);
+      if (!rotating && (mode->count() || sweeps->count())) {
+        throw ConfigError("--mode and --sweeps apply to rotating_lidar rigs; " + setup.rig.path +
+                          " is a " + setup.rig.kindName() + " rig (its sim.* keys set the drive)");
       }
-      std::vector<std::string> sets = o->sets;
-      if (o->mode > 0) sets.push_back("motor.mode=" + std::to_string(o->mode));
-      setup = loadSimSetup(rig_file, o->scene, sets);
+      if (rotating && o->mode > 0) rotating->motor.mode = o->mode;  // 1..7, checked above
     } catch (const std::exception& e) {
       std::cerr << "config error: " << e.what() << "\n";
       return 2;

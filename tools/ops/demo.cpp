@@ -10,6 +10,7 @@
 #include "processes/channels.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/offline/runs.hpp"
+#include "tools/offline/simulation.hpp"
 #include "tools/ops/netns.hpp"
 #include "tools/ops/process_group.hpp"
 
@@ -124,11 +125,13 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   return failures;
 }
 
-int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& sets) {
+// `rig_sets`: the overrides of the rig's keys, for the processes (the simulator also takes
+// the scene's, from o.overrides).
+int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& rig_sets) {
   // The devices: the simulated car's raw channels, simulated first, then played in real time.
   const std::string devices = (fs::absolute(o.out) / "devices.lcmlog").string();
   fs::create_directories(fs::absolute(o.out));
-  const SimSetup setup = loadSimSetup(rig.path, o.scene, sets);
+  const SimSetup setup = loadSimSetup(rig.path, o.scene, o.overrides);
   SimRunOptions so;
   so.seed = o.seed;
   SimRunResult sim;
@@ -139,10 +142,6 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
   }
   std::cout << "demo: simulated devices: " << sim.summary << " -> " << devices << "\n";
 
-  std::vector<std::string> rig_sets;  // the processes take the rig's keys, not the scene's
-  for (const auto& s : sets) {
-    if (s.rfind("scene.", 0) != 0) rig_sets.push_back(s);
-  }
   DemoRun run = prepare(o, rig, rig_sets);
   const pid_t logger = run.startLogger();
   const pid_t odometry = run.startProcess("odometry", {});
@@ -179,28 +178,26 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
 }  // namespace
 
 int runDemo(const DemoOptions& o) {
-  const RigKind kind = readRigKind(resolveRigFile(o.rig));
-  std::vector<std::string> sets = o.overrides;
-  if (kind == RigKind::kRotatingLidar) sets.push_back("motor.mode=" + std::to_string(o.mode));
-  std::vector<std::string> rig_sets;
-  for (const auto& s : sets) {
-    if (s.rfind("scene.", 0) != 0) rig_sets.push_back(s);
-  }
-  const Rig rig = loadRig(o.rig, rig_sets);
+  std::vector<std::string> rig_sets, scene_sets;
+  splitSimOverrides(o.overrides, &rig_sets, &scene_sets);
+  Rig rig = loadRig(o.rig, rig_sets);
   switch (rig.kind()) {
     case RigKind::kRotatingLidar: {
-      if (rig_sets.size() != sets.size()) {
+      if (!scene_sets.empty()) {
         throw ConfigError(
             "scene.<key> overrides are for mobile_lidar demos; give a rotating_lidar "
             "demo another --scene file");
       }
+      if (o.mode < 1 || o.mode > 7) throw ConfigError("--mode must be 1..7");
+      std::get<RotatingLidarConfig>(rig.config).motor.mode = o.mode;
+      rig_sets.push_back("motor.mode=" + std::to_string(o.mode));  // for the processes
       const std::string scene =
           fs::absolute(resolveConfigFile(o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene))
               .string();
       return rotatingDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
     }
     case RigKind::kMobileLidar:
-      return mobileDemo(o, rig, sets) == 0 ? 0 : 1;
+      return mobileDemo(o, rig, rig_sets) == 0 ? 0 : 1;
   }
   return 1;
 }
