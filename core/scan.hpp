@@ -18,8 +18,18 @@ struct Scan2D {
   // Range of each ray [m]; 0 means "no return". Everything else outside
   // [range_min_m, range_max_m] is invalid.
   std::vector<float> ranges_m;
+  // The device's own stamp of the scan, raw (SCIP: 24-bit millisecond counter); -1 = none.
+  int64_t device_stamp = -1;
+  // Empty, or one per ray: the device's intensity / reflectance reading (device units).
+  std::vector<float> intensities;
+  // Empty: ray i is at angle_min_rad + i * angle_increment_rad. Else one per ray: the angle
+  // the device measured for that ray (devices whose samples are not on a fixed grid).
+  std::vector<float> angles_rad;
 
-  double rayAngle(size_t i) const { return angle_min_rad + angle_increment_rad * double(i); }
+  double rayAngle(size_t i) const {
+    return angles_rad.empty() ? angle_min_rad + angle_increment_rad * double(i)
+                              : double(angles_rad[i]);
+  }
   int64_t rayUtime(size_t i) const {
     return utime + (time_increment_ns * static_cast<int64_t>(i)) / 1000;
   }

@@ -15,6 +15,11 @@ lidar_scan_t toLcm(const Scan2D& scan) {
   m.range_max_m = static_cast<float>(scan.range_max_m);
   m.nranges = static_cast<int32_t>(scan.ranges_m.size());
   m.ranges_m = scan.ranges_m;
+  m.device_stamp = scan.device_stamp;
+  m.nintensities = static_cast<int32_t>(scan.intensities.size());
+  m.intensities = scan.intensities;
+  m.nangles = static_cast<int32_t>(scan.angles_rad.size());
+  m.angles_rad = scan.angles_rad;
   return m;
 }
 
@@ -28,6 +33,9 @@ Scan2D fromLcm(const lidar_scan_t& m) {
   s.range_min_m = m.range_min_m;
   s.range_max_m = m.range_max_m;
   s.ranges_m = m.ranges_m;
+  s.device_stamp = m.device_stamp;
+  s.intensities = m.intensities;
+  s.angles_rad = m.angles_rad;
   return s;
 }
 

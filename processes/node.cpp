@@ -20,11 +20,18 @@ int64_t readInt32BE(const std::vector<uint8_t>& d, size_t at) {
 
 }  // namespace
 
-// lidar_scan_t: hash 8, utime 8, seq 8, five 4-byte fields, then nranges.
+// lidar_scan_t: hash 8, utime 8, seq 8, five 4-byte fields, nranges and its floats,
+// device_stamp 8, nintensities and its floats, nangles and its floats.
 template <>
 bool plausibleCounts<lidar_scan_t>(const Message& m) {
   const int64_t n = readInt32BE(m.data, 44);
-  return n >= 0 && 48 + 4 * static_cast<uint64_t>(n) <= m.data.size();
+  if (n < 0 || 48 + 4 * static_cast<uint64_t>(n) > m.data.size()) return false;
+  const size_t at_intensities = 48 + 4 * static_cast<size_t>(n) + 8;
+  const int64_t ni = readInt32BE(m.data, at_intensities);
+  if (ni < 0 || at_intensities + 4 + 4 * static_cast<uint64_t>(ni) > m.data.size()) return false;
+  const size_t at_angles = at_intensities + 4 + 4 * static_cast<size_t>(ni);
+  const int64_t na = readInt32BE(m.data, at_angles);
+  return na >= 0 && at_angles + 4 + 4 * static_cast<uint64_t>(na) <= m.data.size();
 }
 
 // cloud_chunk_t: hash 8, utime 8, sweep_id 8, four int32, frame string (length incl. NUL),

@@ -54,5 +54,40 @@ TEST(Messages, DoublesAndFloatsSurviveDecodingIntoFreshStructs) {
   EXPECT_EQ(roundTrip(c).phi_offset_rad, 0.01);
 }
 
+TEST(Messages, ScanIntensitiesAnglesAndDeviceStampRoundTrip) {
+  lidar_scan_t s{};
+  s.ranges_m = {1.5f, 0.0f};
+  s.nranges = 2;
+  s.device_stamp = 16777215;
+  s.intensities = {1200.0f, 0.0f};
+  s.nintensities = 2;
+  s.angles_rad = {-0.5f, 0.25f};
+  s.nangles = 2;
+  const lidar_scan_t r = roundTrip(s);
+  EXPECT_EQ(r.device_stamp, 16777215);
+  EXPECT_EQ(r.intensities, s.intensities);
+  EXPECT_EQ(r.angles_rad, s.angles_rad);
+}
+
+// A hostile count in either trailing array is refused before LCM would allocate it.
+TEST(Messages, ScanWithHugeTrailingCountIsRefused) {
+  lidar_scan_t s{};
+  s.ranges_m = {1.5f};
+  s.nranges = 1;
+  Outbox o;
+  o.publish("X", 0, s);
+  Message m = o.take().front();
+  const size_t at_nintensities = 48 + 4 + 8;
+  ASSERT_EQ(m.data.size(), at_nintensities + 4 + 4);
+  lidar_scan_t out{};
+  ASSERT_TRUE(decodeMessage(m, &out));
+  Message bad = m;
+  bad.data[at_nintensities] = 0x7f;  // nintensities = 2^31 - something
+  EXPECT_FALSE(decodeMessage(bad, &out));
+  bad = m;
+  bad.data[at_nintensities + 4] = 0x40;  // nangles
+  EXPECT_FALSE(decodeMessage(bad, &out));
+}
+
 }  // namespace
 }  // namespace sweepmap

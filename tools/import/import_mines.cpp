@@ -65,8 +65,9 @@ BreezySlamImport importBreezySlam(const std::string& in_path, const std::string&
     w.right_ticks = parseInt(toks[3], at + " token 4");
     out.publish(channels::kWheelTicks, utime, w);
 
-    lidar_scan_t s;
+    lidar_scan_t s{};  // no intensities, no per-ray angles
     s.utime = utime;
+    s.device_stamp = -1;
     s.seq = r.scans;
     s.angle_increment_rad = static_cast<float>(kUrg04lxStepRad);
     s.angle_min_rad = static_cast<float>(-0.5 * (beams - 1) * kUrg04lxStepRad);
