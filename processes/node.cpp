@@ -82,6 +82,10 @@ int64_t Node::counter(const std::string& name) const {
 
 void Node::reportError(const std::string& counter, const std::string& what) {
   count(counter);
+  reportEvent(what);
+}
+
+void Node::reportEvent(const std::string& what) {
   detail_ = what;
   // Rate limit by count (deterministic): the first 10, then every 1000th.
   ++errors_printed_;

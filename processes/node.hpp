@@ -91,6 +91,10 @@ class Node {
   virtual void handle(const Message& msg, Outbox& out) = 0;
   virtual void advance(int64_t now_utime, Outbox& out) {}
   void count(const std::string& name, int64_t n = 1) { counters_[name] += n; }
+  // For counters kept elsewhere (a device driver's): the status shows `value`.
+  void setCounter(const std::string& name, int64_t value) { counters_[name] = value; }
+  // An event worth telling (printed rate-limited, kept as the status detail), not counted.
+  void reportEvent(const std::string& what);
   // Reports bad input: counted under `counter`, printed rate-limited, kept as the status detail.
   void reportError(const std::string& counter, const std::string& what);
   void setFailed(const std::string& what);
