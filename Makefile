@@ -5,10 +5,16 @@
 #   make test-unit      - build only the unit tests and run them (ctest -L unit)
 #   make test-sanitize  - the unit tests under AddressSanitizer (with LeakSanitizer) and
 #                         UndefinedBehaviorSanitizer, in their own build tree: any report fails
+#   make fuzz           - each protocol decoder under libFuzzer (clang, ASan+UBSan) for
+#                         FUZZ_RUNS inputs (default 10 M) in build-fuzz/; new inputs that
+#                         reach new code are added to build-fuzz/corpus/
 #   make format         - clang-format every C++ file in place (.clang-format)
 #   make format-check   - fail, listing them, when files are not formatted (part of make test)
 BUILD ?= build
 SANITIZE_BUILD ?= build-sanitize
+FUZZ_BUILD ?= build-fuzz
+FUZZ_RUNS ?= 10000000
+FUZZ_PROTOCOLS = scip x4 rplidar
 JOBS ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 # -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable.
@@ -22,7 +28,7 @@ SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt
 # Every tracked C++ source; generated lcm-gen headers live in the build tree, not here.
 FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
 
-.PHONY: all setup build demo test test-unit test-sanitize format format-check bench clean
+.PHONY: all setup build demo test test-unit test-sanitize fuzz format format-check bench clean
 
 all: build
 
@@ -53,6 +59,24 @@ test-unit: setup $(BUILD)/Makefile
 test-sanitize: setup $(SANITIZE_BUILD)/Makefile
 	cmake --build $(SANITIZE_BUILD) -j$(JOBS) --target unit_tests
 	cd $(SANITIZE_BUILD) && $(SANITIZE_ENV) $(CTEST) -L unit
+
+# libFuzzer: -max_len 8192 covers several packets of every protocol; rss and per-input time
+# limits turn unbounded memory or a hang into a failure. Each run prints its final stats.
+fuzz: setup
+	cmake -S . -B $(FUZZ_BUILD) -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ \
+	      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DSWEEPMAP_FUZZ=ON -DSWEEPMAP_BUILD_TESTS=OFF
+	cmake --build $(FUZZ_BUILD) -j$(JOBS) --target fuzz_targets
+	@for p in $(FUZZ_PROTOCOLS); do \
+	  mkdir -p $(FUZZ_BUILD)/corpus/$$p; \
+	  echo "fuzz: $$p, $(FUZZ_RUNS) runs (log: $(FUZZ_BUILD)/fuzz_$$p.log)"; \
+	  start=$$(date +%s); \
+	  $(FUZZ_BUILD)/fuzz/fuzz_$$p -runs=$(FUZZ_RUNS) -max_len=8192 -rss_limit_mb=1024 \
+	    -timeout=5 -print_final_stats=1 $(FUZZ_BUILD)/corpus/$$p fuzz/corpus/$$p \
+	    > $(FUZZ_BUILD)/fuzz_$$p.log 2>&1; rc=$$?; \
+	  grep -E "^(stat::number_of_executed_units|stat::peak_rss_mb|Done)" $(FUZZ_BUILD)/fuzz_$$p.log; \
+	  echo "fuzz: $$p took $$(( $$(date +%s) - start )) s, exit $$rc"; \
+	  if [ $$rc -ne 0 ]; then tail -40 $(FUZZ_BUILD)/fuzz_$$p.log; exit $$rc; fi; \
+	done
 
 format:
 	clang-format -i $(FORMAT_FILES)

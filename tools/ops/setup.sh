@@ -9,6 +9,7 @@ packages=(
   libeigen3-dev libpcl-dev libceres-dev liboctomap-dev
   libgtest-dev libgmock-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   gnuplot-nox iproute2 util-linux clang-format
+  clang libclang-rt-14-dev
 )
 
 missing=()
