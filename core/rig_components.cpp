@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "core/device_uri.hpp"
+
 namespace sweepmap {
 
 void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
@@ -13,6 +15,25 @@ void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
         "ray slots per mirror turn (sets the time between rays)");
   s.add(p + "range_min_m", &range_min_m, "m", "shortest valid range");
   s.add(p + "range_max_m", &range_max_m, "m", "longest valid range");
+  s.add(p + "device", &device, "",
+        "the lidar to open: sim | scip://HOST[:PORT] | ydlidar:///dev/PORT | "
+        "rplidar:///dev/PORT[?baud=N]");
+}
+
+void LidarConfig::validate(const std::string& source, const std::string& p) const {
+  const auto require = [&](bool ok, const std::string& key, const std::string& what) {
+    if (!ok) throw ConfigError(source + ": key '" + p + key + "' " + what);
+  };
+  require(beam_count > 0, "beam_count", "must be > 0");
+  require(scan_rate_hz > 0, "scan_rate_hz", "must be > 0");
+  require(steps_per_revolution >= beam_count, "steps_per_revolution", "must be >= beam_count");
+  require(range_min_m >= 0 && range_max_m > range_min_m, "range_max_m",
+          "must exceed range_min_m >= 0");
+  try {
+    parseDeviceUri(device);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(source + ": key '" + p + "device': " + e.what());
+  }
 }
 
 void MotorConfig::declare(ConfigSchema& s, const std::string& p) {

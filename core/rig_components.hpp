@@ -19,7 +19,12 @@ struct LidarConfig {
   int steps_per_revolution = 1440;  // ray slots per mirror turn: sets the per-ray time
   double range_min_m = 0.06;
   double range_max_m = 10.0;
+  // Which lidar the lidar process opens (drivers/device_uri.hpp): sim | scip://HOST[:PORT] |
+  // ydlidar:///dev/PORT | rplidar:///dev/PORT[?baud=N]. `sweepmap-lidar --device` overrides.
+  std::string device = "sim";
   void declare(ConfigSchema& s, const std::string& prefix);
+  // Throws ConfigError naming `source` and the key.
+  void validate(const std::string& source, const std::string& prefix) const;
   double rayPeriodS() const { return 1.0 / (scan_rate_hz * steps_per_revolution); }
 };
 

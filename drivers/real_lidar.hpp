@@ -18,7 +18,7 @@
 #include <thread>
 #include <vector>
 
-#include "drivers/device_uri.hpp"
+#include "core/device_uri.hpp"
 #include "drivers/io/byte_stream.hpp"
 #include "drivers/lidar_device.hpp"
 #include "drivers/protocols/decoder.hpp"

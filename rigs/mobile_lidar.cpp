@@ -45,6 +45,7 @@ void WorldAssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
 
 void MobileLidarConfig::declare(ConfigSchema& s) {
   s.add("rig", &rig, "", "rig kind: mobile_lidar (a 2D lidar on a moving base, Miao 2022)");
+  lidar.declare(s, "lidar.");
   odometry.declare(s, "odometry.");
   mounting.declare(s, "mounting.");
   assembler.declare(s, "assembler.");
@@ -64,6 +65,7 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   s.loadFile(path);
   for (const auto& o : overrides) s.set(o);
   checkRigKind(path, c.rig, "mobile_lidar");
+  c.lidar.validate(path, "lidar.");
   if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
       !(c.odometry.ekf.wheel_distance_m > 0)) {
     throw ConfigError(

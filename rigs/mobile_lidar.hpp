@@ -41,6 +41,7 @@ struct WorldAssemblerConfig {
 
 struct MobileLidarConfig {
   std::string rig = "mobile_lidar";  // the kind, checked on load
+  LidarConfig lidar;  // the lidar as its driver sees it (360° scanners: a uniform ray grid)
   OdometryConfig odometry;
   MountingConfig mounting;
   WorldAssemblerConfig assembler;

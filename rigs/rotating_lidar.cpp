@@ -37,12 +37,7 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   const auto require = [&](bool ok, const char* key, const char* what) {
     if (!ok) throw ConfigError(path + ": key '" + key + "' " + what);
   };
-  require(rig.lidar.beam_count > 0, "lidar.beam_count", "must be > 0");
-  require(rig.lidar.scan_rate_hz > 0, "lidar.scan_rate_hz", "must be > 0");
-  require(rig.lidar.steps_per_revolution >= rig.lidar.beam_count, "lidar.steps_per_revolution",
-          "must be >= beam_count");
-  require(rig.lidar.range_min_m >= 0 && rig.lidar.range_max_m > rig.lidar.range_min_m,
-          "lidar.range_max_m", "must exceed range_min_m >= 0");
+  rig.lidar.validate(path, "lidar.");
   require(rig.motor.sweep_angle_deg > 0, "motor.sweep_angle_deg", "must be > 0");
   require(rig.motor.accel_deg_s2 > 0, "motor.accel_deg_s2", "must be > 0");
   require(rig.motor.move_speed_deg_s > 0, "motor.move_speed_deg_s", "must be > 0");

@@ -12,7 +12,7 @@
 #include <stdexcept>
 
 #include "drivers/clock_sync.hpp"
-#include "drivers/device_uri.hpp"
+#include "core/device_uri.hpp"
 #include "drivers/io/byte_stream.hpp"
 
 namespace sweepmap {

@@ -1,4 +1,4 @@
-#include "drivers/device_uri.hpp"
+#include "core/device_uri.hpp"
 
 #include <stdexcept>
 

@@ -1,0 +1,154 @@
+#include "tools/emulate/world.hpp"
+
+#include <cmath>
+#include <random>
+
+#include "core/config.hpp"
+#include "drivers/scene.hpp"
+#include "drivers/shaft_trajectory.hpp"
+#include "drivers/sim_lidar.hpp"
+#include "drivers/sim_mobile.hpp"
+#include "processes/channels.hpp"
+#include "processes/lidar_node.hpp"
+#include "processes/sim_setup.hpp"
+#include "processes/truth_sweep_node.hpp"
+#include "rigs/mobile_lidar.hpp"
+#include "rigs/rotating_lidar.hpp"
+#include "tools/offline/runs.hpp"
+
+namespace sweepmap {
+namespace {
+
+// Runs `inner` under the world's mutex: the server thread reads the shaft truth that the
+// LCM thread extends.
+class LockedNode : public Node {
+ public:
+  LockedNode(Node* inner, std::mutex* mutex) : Node(inner->name()), inner_(inner), mutex_(mutex) {}
+  std::vector<std::string> subscriptions() const override { return inner_->subscriptions(); }
+  void finish(int64_t now_utime, Outbox& out) override {
+    std::lock_guard<std::mutex> lock(*mutex_);
+    inner_->finish(now_utime, out);
+  }
+
+ protected:
+  void handle(const Message& msg, Outbox& out) override {
+    std::lock_guard<std::mutex> lock(*mutex_);
+    inner_->receive(msg, out);
+  }
+  void advance(int64_t now_utime, Outbox& out) override {
+    std::lock_guard<std::mutex> lock(*mutex_);
+    inner_->tick(now_utime, out);
+  }
+
+ private:
+  Node* inner_;
+  std::mutex* mutex_;
+};
+
+class RotatingWorld : public EmulatorWorld {
+ public:
+  RotatingWorld(const SimSetup& setup, const EmulatorWorldOptions& options, int64_t start_utime)
+      : rig_(std::get<RotatingLidarConfig>(setup.rig.config)),
+        scene_config_(setup.scene),
+        scene_(setup.scene, rig_.plate),
+        follow_(options.follow_lcm) {
+    LidarConfig timed = rig_.lidar;
+    timed.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
+    if (!follow_) truth_.apply(ShaftSegment{start_utime, 0.0, 0.0, 0.0});
+    lidar_ = std::make_unique<SimLidar>(timed, rig_.sim, rig_.plate, scene_, &truth_,
+                                        lidarSeed(options.seed), start_utime);
+    if (follow_) {
+      follower_ = std::make_unique<TruthFollowerNode>(&truth_);
+      truth_sweep_ = std::make_unique<TruthSweepNode>(&truth_, rig_.sim.alpha_true_deg * M_PI / 180.0);
+      locked_follower_ = std::make_unique<LockedNode>(follower_.get(), &mutex_);
+      locked_truth_sweep_ = std::make_unique<LockedNode>(truth_sweep_.get(), &mutex_);
+    }
+  }
+
+  ScanSource source() override {
+    return [this](int64_t now_us) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return lidar_->poll(now_us);
+    };
+  }
+  std::vector<Node*> nodes() override {
+    if (!follow_) return {};
+    return {locked_follower_.get(), locked_truth_sweep_.get()};
+  }
+  std::vector<Message> startMessages(int64_t now_us) override {
+    if (!follow_) return {};
+    Outbox out;
+    out.publish(channels::kTruthRig, now_us, makeTruthRig(rig_, scene_config_, scene_, now_us));
+    return out.take();
+  }
+
+ private:
+  RotatingLidarConfig rig_;
+  SceneConfig scene_config_;
+  Scene scene_;
+  bool follow_;
+  std::mutex mutex_;
+  ShaftTrajectory truth_;
+  std::unique_ptr<SimLidar> lidar_;
+  std::unique_ptr<TruthFollowerNode> follower_;
+  std::unique_ptr<TruthSweepNode> truth_sweep_;
+  std::unique_ptr<LockedNode> locked_follower_, locked_truth_sweep_;
+};
+
+class MobileWorld : public EmulatorWorld {
+ public:
+  MobileWorld(const SimSetup& setup, const EmulatorWorldOptions& options, int64_t start_utime)
+      : rig_(std::get<MobileLidarConfig>(setup.rig.config)),
+        scene_(setup.scene, PlateConfig{}),
+        rng_(options.seed * 8 + 3) {
+    SimMobileConfig sim = rig_.sim;
+    sim.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
+    sim.sample_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
+    WheelGeometry wheels;
+    wheels.radius_m = rig_.odometry.wheel_radius_m;
+    wheels.ticks_per_revolution = rig_.odometry.ticks_per_revolution;
+    wheels.wheel_distance_m = rig_.odometry.ekf.wheel_distance_m;
+    const LidarMounting nominal = rig_.mounting.toMounting();
+    car_ = std::make_unique<SimMobile>(sim, wheels, nominal.nominal_rpy_rad, nominal.t_BL_m,
+                                       scene_, options.seed, start_utime);
+  }
+
+  ScanSource source() override {
+    return [this](int64_t now_us) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      std::vector<Scan2D> out;
+      for (;;) {
+        if (!pending_) pending_ = car_->makeScan(next_++, &rng_);
+        if (car_->scanDeliveryUtime(*pending_) > now_us) break;
+        out.push_back(std::move(*pending_));
+        pending_.reset();
+      }
+      return out;
+    };
+  }
+
+ private:
+  MobileLidarConfig rig_;
+  Scene scene_;
+  std::mutex mutex_;
+  std::unique_ptr<SimMobile> car_;
+  std::mt19937_64 rng_;
+  int64_t next_ = 0;
+  std::optional<Scan2D> pending_;
+};
+
+}  // namespace
+
+std::unique_ptr<EmulatorWorld> makeEmulatorWorld(const EmulatorWorldOptions& options,
+                                                 int64_t start_utime) {
+  const SimSetup setup = loadSimSetup(options.rig, options.scene, options.overrides);
+  if (setup.rig.kind() == RigKind::kRotatingLidar) {
+    return std::make_unique<RotatingWorld>(setup, options, start_utime);
+  }
+  if (options.follow_lcm) {
+    throw std::runtime_error("--follow-lcm needs a rotating_lidar rig (the shaft's truth)");
+  }
+  return std::make_unique<MobileWorld>(setup, options, start_utime);
+}
+
+}  // namespace sweepmap

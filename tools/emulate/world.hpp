@@ -1,0 +1,48 @@
+// The simulated worlds behind the emulators, as scan sources on the emulator's clock.
+//  - rotating_lidar rigs (the UST-10LX of rig A): the simulated lidar on the simulated
+//    shaft. The shaft stands still at angle 0, or, with follow_lcm, follows TRUTH_SHAFT from
+//    a simulated stepper in another process (`sweepmap-motor --sim`); then the world also
+//    publishes TRUTH_RIG and TRUTH_SWEEP, as `sweepmap-lidar --sim` does.
+//  - mobile_lidar rigs (the X4 of rig B; RPLIDAR): the simulated car driving its path
+//    (then standing at its end), its 360° lidar's scans.
+// A device's scan timing follows its own oscillator: with a clock drift of p ppm the scans
+// come (1 + p·1e-6) times as often in true time, as a real mirror/motor timed by that
+// oscillator does.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+#include "processes/node.hpp"
+#include "tools/emulate/emulated_lidar.hpp"
+
+namespace sweepmap {
+
+struct EmulatorWorldOptions {
+  std::string rig;    // file or name
+  std::string scene;  // file or name; "" = the rig kind's default
+  std::vector<std::string> overrides;  // key=value (scene.* to the scene)
+  uint64_t seed = 1;
+  double clock_drift_ppm = 0.0;
+  bool follow_lcm = false;  // rotating rigs: follow TRUTH_SHAFT, publish truth
+};
+
+class EmulatorWorld {
+ public:
+  virtual ~EmulatorWorld() = default;
+  // Scans completed (delivered) by now_us, each once. Safe to call from any thread.
+  virtual ScanSource source() = 0;
+  // Nodes to run over LCM alongside the server (empty unless follow_lcm), and messages to
+  // publish once at start (TRUTH_RIG).
+  virtual std::vector<Node*> nodes() { return {}; }
+  virtual std::vector<Message> startMessages(int64_t now_us) { return {}; }
+};
+
+// Throws ConfigError / std::runtime_error naming the file and key.
+std::unique_ptr<EmulatorWorld> makeEmulatorWorld(const EmulatorWorldOptions& options,
+                                                 int64_t start_utime);
+
+}  // namespace sweepmap
