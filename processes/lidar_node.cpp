@@ -11,6 +11,10 @@ LidarNode::LidarNode(const LidarConfig& config, LidarDevice* device)
     : Node("lidar"), config_(config), device_(device) {}
 
 void LidarNode::advance(int64_t now_utime, Outbox& out) {
+  DeviceHealth health = device_->health();
+  for (const auto& [name, value] : health.counters) setCounter(name, value);
+  for (const std::string& e : health.events) reportEvent(e);
+  if (!health.fatal.empty() && !failed()) setFailed(health.fatal);
   for (const Scan2D& scan : device_->poll(now_utime)) {
     const std::string why = validateScan(scan, config_.beam_count);
     if (!why.empty()) {

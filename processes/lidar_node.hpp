@@ -1,5 +1,7 @@
 // sweepmap-lidar: polls a LidarDevice (real or simulated) and publishes every valid scan
-// raw on LIDAR_SCAN. Invalid device output is dropped and counted.
+// raw on LIDAR_SCAN. Invalid device output is dropped and counted. The device driver's
+// counters (checksum errors, resyncs, timeouts, reconnects, clock resets, ...) and events
+// go into the status; a device that cannot be used (identity mismatch) fails the node.
 #pragma once
 
 #include "core/rig_components.hpp"

@@ -1,6 +1,9 @@
-// sweepmap-lidar: publishes raw scans on LIDAR_SCAN.
+// sweepmap-lidar: opens the lidar the rig file names (lidar.device) or --device, and
+// publishes its raw scans on LIDAR_SCAN with the driver's counters on STATUS_LIDAR.
 #include <lcm/lcm-cpp.hpp>
 
+#include "core/device_uri.hpp"
+#include "drivers/real_lidar.hpp"
 #include "drivers/scene.hpp"
 #include "drivers/sim_lidar.hpp"
 #include "processes/channels.hpp"
@@ -10,31 +13,16 @@
 #include "processes/sim_setup.hpp"
 #include "processes/truth_sweep_node.hpp"
 
-int main(int argc, char** argv) {
-  using namespace sweepmap;
-  CLI::App app{
-      "sweepmap-lidar: publishes the lidar's raw 2D scans with their timing on "
-      "LIDAR_SCAN"};
-  CommonOptions common;
-  bool sim = false;
-  std::string scene_path;
-  uint64_t seed = 1;
-  addCommonOptions(app, common);
-  app.add_flag("--sim", sim, "simulated lidar in a simulated scene (follows TRUTH_SHAFT)");
-  app.add_option("--scene", scene_path,
-                 "scene file or name for --sim (default: scene_conference_room)");
-  app.add_option("--seed", seed, "simulation seed")->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
-  const std::optional<Rig> loaded = loadRigOrReport(common);
-  if (!loaded) return 2;
-  const auto* rig_config = rigOfKindOrReport<RotatingLidarConfig>(*loaded, "sweepmap-lidar");
+namespace sweepmap {
+namespace {
+
+// The simulated UST-10LX of a rotating rig, following the simulated shaft (TRUTH_SHAFT).
+int runSimulated(const CommonOptions& common, const Rig& loaded, const std::string& scene_name,
+                 uint64_t seed) {
+  const auto* rig_config = rigOfKindOrReport<RotatingLidarConfig>(loaded, "sweepmap-lidar --device sim");
   if (!rig_config) return 2;
   const RotatingLidarConfig& rig = *rig_config;
-  if (!sim) {
-    std::cerr << "sweepmap-lidar: no real lidar driver is built yet; use --sim\n";
-    return 2;
-  }
-  if (scene_path.empty()) scene_path = defaultSceneName(loaded->kind());
+  const std::string scene_path = scene_name.empty() ? defaultSceneName(loaded.kind()) : scene_name;
   SceneConfig scene_config;
   try {
     scene_config = loadScene(resolveConfigFile(scene_path));
@@ -43,7 +31,6 @@ int main(int argc, char** argv) {
     return 2;
   }
   const Scene scene(scene_config, rig.plate);
-
   lcm::LCM lcm(common.lcm_url);
   ShaftTrajectory truth;
   SimLidar device(rig.lidar, rig.sim, rig.plate, scene, &truth, lidarSeed(seed), wallUtime());
@@ -54,4 +41,61 @@ int main(int argc, char** argv) {
   lcm.publish(channels::kTruthRig, &truth_rig);
   installStopSignals();
   return runLive(lcm, {&follower, &node, &truth_sweep}, LiveOptions{});
+}
+
+// A real lidar: the driver's worker thread reads the device, the node publishes.
+int runDevice(const CommonOptions& common, const LidarConfig& lidar, const DeviceUri& uri) {
+  lcm::LCM lcm(common.lcm_url);
+  if (!lcm.good()) {
+    std::cerr << "sweepmap-lidar: cannot open LCM at '" << common.lcm_url << "'\n";
+    return 1;
+  }
+  std::unique_ptr<RealLidar> device = makeRealLidar(uri, lidar, RealLidarOptions{}, wallUtime);
+  LidarNode node(lidar, device.get());
+  device->start();
+  installStopSignals();
+  LiveOptions options;
+  options.should_stop = [&node] { return node.failed(); };
+  const int rc = runLive(lcm, {&node}, options);
+  // A device that is not the one the rig file describes: a configuration error, not a
+  // crash to restart from.
+  return node.failed() ? 3 : rc;
+}
+
+}  // namespace
+}  // namespace sweepmap
+
+int main(int argc, char** argv) {
+  using namespace sweepmap;
+  CLI::App app{
+      "sweepmap-lidar: opens the lidar (the rig file's lidar.device, or --device) and publishes "
+      "its raw 2D scans with their timing on LIDAR_SCAN; the driver's counters (checksum "
+      "errors, resyncs, timeouts, reconnects, clock resets) and last error on STATUS_LIDAR"};
+  CommonOptions common;
+  std::string device;
+  bool sim = false;
+  std::string scene_path;
+  uint64_t seed = 1;
+  addCommonOptions(app, common);
+  app.add_option("--device", device,
+                 "the lidar, overriding lidar.device: sim | scip://HOST[:PORT] (Hokuyo "
+                 "UST-10LX/20LX, SCIP 2.0 over TCP) | ydlidar:///dev/PORT (YDLIDAR X4) | "
+                 "rplidar:///dev/PORT[?baud=N] (RPLIDAR A1/A2)");
+  app.add_flag("--sim", sim, "same as --device sim: the simulated lidar (follows TRUTH_SHAFT)");
+  app.add_option("--scene", scene_path,
+                 "scene file or name for the simulated lidar (default: the rig kind's scene)");
+  app.add_option("--seed", seed, "simulation seed")->capture_default_str();
+  CLI11_PARSE(app, argc, argv);
+  const std::optional<Rig> loaded = loadRigOrReport(common);
+  if (!loaded) return 2;
+  if (sim) device = "sim";
+  DeviceUri uri;
+  try {
+    uri = parseDeviceUri(device.empty() ? loaded->lidar().device : device);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "sweepmap-lidar: " << e.what() << "\n";
+    return 2;
+  }
+  if (uri.protocol == DeviceProtocol::kSim) return runSimulated(common, *loaded, scene_path, seed);
+  return runDevice(common, loaded->lidar(), uri);
 }

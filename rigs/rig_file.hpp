@@ -22,6 +22,10 @@ struct Rig {
   std::variant<RotatingLidarConfig, MobileLidarConfig> config;
   RigKind kind() const { return static_cast<RigKind>(config.index()); }
   std::string kindName() const { return rigKindName(kind()); }
+  // The lidar section every kind has.
+  const LidarConfig& lidar() const {
+    return std::visit([](const auto& c) -> const LidarConfig& { return c.lidar; }, config);
+  }
 };
 
 // The folder of the default rig and scene files: $SWEEPMAP_CONFIG_DIR if set, else

@@ -32,6 +32,12 @@ Runner addDemoCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "simulation seed")->capture_default_str();
+  cmd->add_option("--devices", o->devices,
+                  "rotating_lidar: sim (the lidar process simulates the lidar) or emulated "
+                  "(`sweepmap emulate ust10lx` serves the same simulated lidar over SCIP 2.0 "
+                  "on 127.0.0.1:10940 and sweepmap-lidar drives it with the real driver)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"sim", "emulated"}));
   return [o]() {
     try {
       return runDemo(*o);

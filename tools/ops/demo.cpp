@@ -21,6 +21,9 @@ namespace fs = std::filesystem;
 
 void pause(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 
+// The emulated UST-10LX of `--devices emulated`: its factory port, on loopback.
+constexpr const char* kDemoEmulatorAddress = "127.0.0.1:10940";
+
 // What both kinds' demos share: the output folder, the LCM URL in a private network, the
 // process group with one log file per process, and the processes' common arguments.
 struct DemoRun {
@@ -96,8 +99,21 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   const pid_t logger = run.startLogger();
   const pid_t mapper = run.startProcess("mapper", {"--save", (run.out / "live_map.bt").string()});
   const pid_t assembler = run.startProcess("assembler", {});
-  const pid_t lidar =
-      run.startProcess("lidar", {"--sim", "--scene", scene, "--seed", std::to_string(o.seed)});
+  pid_t emulator = -1, lidar = -1;
+  if (o.devices == "emulated") {
+    // The simulated world behind a UST-10LX's protocol; it follows the simulated shaft and
+    // publishes the truth, as the simulated lidar process does.
+    std::vector<std::string> argv = {(run.bin / "sweepmap").string(), "emulate", "ust10lx",
+                                     "--listen", kDemoEmulatorAddress, "--follow-lcm",
+                                     "--rig", run.rig, "--scene", scene,
+                                     "--seed", std::to_string(o.seed), "--lcm-url", run.url};
+    for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
+    emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
+    pause(300);  // listening
+    lidar = run.startProcess("lidar", {"--device", std::string("scip://") + kDemoEmulatorAddress});
+  } else {
+    lidar = run.startProcess("lidar", {"--sim", "--scene", scene, "--seed", std::to_string(o.seed)});
+  }
   pause(700);  // subscribers ready
   const pid_t motor = run.startProcess(
       "motor", {"--sim", "--sweeps", std::to_string(o.sweeps), "--seed", std::to_string(o.seed)});
@@ -112,6 +128,7 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   int failures = motor_rc != 0;
   failures +=
       run.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 400);
+  if (emulator > 0) failures += run.procs.stop(emulator, 5.0) != 0;
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.sweeps != o.sweeps;
@@ -197,6 +214,10 @@ int runDemo(const DemoOptions& o) {
       return rotatingDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
     }
     case RigKind::kMobileLidar:
+      if (o.devices != "sim") {
+        throw ConfigError("--devices emulated is for rotating_lidar rigs so far; a mobile_lidar "
+                          "demo plays its simulated devices from a log");
+      }
       return mobileDemo(o, rig, rig_sets) == 0 ? 0 : 1;
   }
   return 1;

@@ -3,7 +3,9 @@
 // everything cleanly, replays the recorded log offline and leaves the log, clouds, maps and
 // pictures in one directory.
 //   rotating_lidar: sweepmap-motor and -lidar drive the simulated stepper and lidar;
-//     -assembler and -mapper build the sweeps and the map.
+//     -assembler and -mapper build the sweeps and the map. With devices "emulated" the
+//     lidar is `sweepmap emulate ust10lx` (the same simulated lidar behind the SCIP 2.0
+//     protocol on 127.0.0.1:10940) and sweepmap-lidar talks to it with the real driver.
 //   mobile_lidar: the simulated car's raw channels (WHEEL_TICKS, IMU, LIDAR_SCAN and its
 //     truth) are simulated into DIR/devices.lcmlog and played in real time by lcm-logplayer,
 //     standing in for the wheel board, IMU and lidar drivers; sweepmap-odometry, -assembler
@@ -24,6 +26,10 @@ struct DemoOptions {
   int mode = 7;                        // rotating_lidar: scan mode
   int sweeps = 3;                      // rotating_lidar: 3D sweeps
   uint64_t seed = 1;
+  // rotating_lidar: "sim" (sweepmap-lidar runs the simulated lidar in-process) or "emulated"
+  // (`sweepmap emulate ust10lx` serves the simulated lidar as a UST-10LX over loopback TCP
+  // and sweepmap-lidar drives it with the real SCIP 2.0 driver).
+  std::string devices = "sim";
 };
 
 // Returns the exit status: 0 when every process ended cleanly and the replay has the run.
