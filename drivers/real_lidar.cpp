@@ -16,6 +16,31 @@ void addCounters(DecoderCounters* total, const DecoderCounters& c) {
   total->device_errors += c.device_errors;
 }
 
+// Hands every chunk read to the tap before the session sees it.
+class TappedStream : public ByteStream {
+ public:
+  TappedStream(std::unique_ptr<ByteStream> inner, const RealLidarOptions& options,
+               std::function<int64_t()> now)
+      : inner_(std::move(inner)), tap_(options.tap), now_(std::move(now)) {}
+  size_t read(uint8_t* buffer, size_t capacity, int timeout_ms) override {
+    const size_t n = inner_->read(buffer, capacity, timeout_ms);
+    if (n > 0) tap_(now_(), buffer, n);
+    return n;
+  }
+  using ByteStream::write;
+  void write(const void* data, size_t size, int timeout_ms) override {
+    inner_->write(data, size, timeout_ms);
+  }
+  void setDtr(bool on) override { inner_->setDtr(on); }
+  int fd() const override { return inner_->fd(); }
+  std::string describe() const override { return inner_->describe(); }
+
+ private:
+  std::unique_ptr<ByteStream> inner_;
+  std::function<void(int64_t, const uint8_t*, size_t)> tap_;
+  std::function<int64_t()> now_;
+};
+
 }  // namespace
 
 RealLidar::RealLidar(const DeviceUri& uri, std::unique_ptr<LidarSession> session,
@@ -97,6 +122,7 @@ void RealLidar::run() {
       backoff_ms = std::min(2 * backoff_ms, options_.backoff_max_ms);
       continue;
     }
+    if (options_.tap) stream = std::make_unique<TappedStream>(std::move(stream), options_, now_);
     if (was_connected) {
       std::lock_guard<std::mutex> lock(mutex_);
       ++reconnects_;

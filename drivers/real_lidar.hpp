@@ -60,6 +60,9 @@ struct RealLidarOptions {
   int backoff_min_ms = 100;
   int backoff_max_ms = 1000;
   size_t max_queued_scans = 400;  // poll() not called: oldest scans dropped (counted)
+  // Called (worker thread) with every chunk read from the device, the start-up exchange
+  // included, and its receive time: `sweepmap capture` records them.
+  std::function<void(int64_t utime, const uint8_t* data, size_t size)> tap;
 };
 
 class RealLidar : public LidarDevice {

@@ -18,5 +18,8 @@ Runner addBenchCommand(CLI::App& app);
 Runner addCalibCommand(CLI::App& app);  // group: calib plate-angle, calib mounting
 Runner addEvalCommand(CLI::App& app);
 Runner addImportCommand(CLI::App& app);  // group: import breezyslam
+Runner addEmulateCommand(CLI::App& app);
+Runner addCaptureCommand(CLI::App& app);
+Runner addDecodeCommand(CLI::App& app);
 
 }  // namespace sweepmap

@@ -1,5 +1,5 @@
 // sweepmap: one tool, one subcommand per job (sim, replay, demo, spy, bench, calib, eval,
-// import); each serves every rig kind its rig file names.
+// import, emulate, capture, decode); each serves every rig kind its rig file names.
 #include <iostream>
 #include <map>
 
@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   add(sweepmap::addCalibCommand(app));
   add(sweepmap::addEvalCommand(app));
   add(sweepmap::addImportCommand(app));
+  add(sweepmap::addEmulateCommand(app));
+  add(sweepmap::addCaptureCommand(app));
+  add(sweepmap::addDecodeCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

@@ -1,0 +1,86 @@
+// `sweepmap capture` and `sweepmap decode`: raw device bytes to a file, and back to scans
+// (tools/devices/capture.hpp).
+#include <iostream>
+
+#include "core/config.hpp"
+#include "rigs/rig_file.hpp"
+#include "tools/cli/commands.hpp"
+#include "tools/devices/capture.hpp"
+
+namespace sweepmap {
+namespace {
+
+// The lidar the bytes should come from: the rig file's lidar section.
+LidarConfig expectedLidar(const std::string& rig, const std::vector<std::string>& sets) {
+  return loadRig(rig, sets).lidar();
+}
+
+}  // namespace
+
+Runner addCaptureCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "capture",
+      "Record a real lidar's raw byte stream with host receive times: connects as "
+      "sweepmap-lidar does (identifies the device and checks it against the rig file, starts "
+      "streaming) and writes every byte received, the start-up exchange included, to a "
+      "capture file for `sweepmap decode` (format: drivers/io/capture_file.hpp).");
+  auto o = std::make_shared<CaptureOptions>();
+  auto rig = std::make_shared<std::string>();
+  auto sets = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("uri", o->uri,
+                  "scip://HOST[:PORT] | ydlidar:///dev/PORT | rplidar:///dev/PORT[?baud=N]")
+      ->required();
+  cmd->add_option("--seconds", o->seconds, "how long to record after the first byte")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  cmd->add_option("--out", o->out, "capture file")->required();
+  cmd->add_option("--rig", *rig,
+                  "rig file or name whose lidar section the device must match (default: rig_a "
+                  "for scip, rig_b otherwise)");
+  cmd->add_option("--set", *sets, "override a rig key: key=value (repeatable)");
+  return [o, rig, sets]() {
+    try {
+      const std::string r =
+          !rig->empty() ? *rig : (o->uri.rfind("scip:", 0) == 0 ? "rig_a" : "rig_b");
+      return runCapture(*o, expectedLidar(r, *sets), std::cout);
+    } catch (const ConfigError& e) {
+      std::cerr << "config error: " << e.what() << "\n";
+      return 2;
+    }
+  };
+}
+
+Runner addDecodeCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "decode",
+      "Turn a capture (sweepmap capture) or any file of raw protocol bytes into LIDAR_SCAN "
+      "messages in an LCM log, with the driver's own decoder: every checksum error, resync "
+      "and bad reply is reported with its byte offset in the device's stream. Captures keep "
+      "their receive times; raw SCIP bytes are timed by the device's stamps, raw serial bytes "
+      "by their time on the line at the baud rate.");
+  auto o = std::make_shared<DecodeOptions>();
+  auto rig = std::make_shared<std::string>();
+  auto sets = std::make_shared<std::vector<std::string>>();
+  cmd->add_option("protocol", o->protocol, "scip | x4 | rplidar")
+      ->required()
+      ->check(CLI::IsMember({"scip", "x4", "rplidar"}));
+  cmd->add_option("file", o->in, "capture or raw bytes")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--out", o->out, "LCM log to write")->required();
+  cmd->add_option("--rig", *rig,
+                  "rig file or name of the lidar (ray grid, range limits; default: rig_a for "
+                  "scip, rig_b otherwise)");
+  cmd->add_option("--set", *sets, "override a rig key: key=value (repeatable)");
+  cmd->add_option("--baud", o->baud, "raw serial bytes: the line rate (default: the device's)");
+  return [o, rig, sets]() {
+    try {
+      const std::string r = !rig->empty() ? *rig : (o->protocol == "scip" ? "rig_a" : "rig_b");
+      const DecodeResult res = runDecode(*o, expectedLidar(r, *sets), std::cout);
+      return res.file_error.empty() ? 0 : 1;
+    } catch (const ConfigError& e) {
+      std::cerr << "config error: " << e.what() << "\n";
+      return 2;
+    }
+  };
+}
+
+}  // namespace sweepmap

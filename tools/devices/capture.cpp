@@ -1,0 +1,144 @@
+#include "tools/devices/capture.hpp"
+
+#include <chrono>
+#include <mutex>
+#include <ostream>
+#include <stdexcept>
+#include <thread>
+
+#include "core/device_uri.hpp"
+#include "core/event_log.hpp"
+#include "drivers/io/capture_file.hpp"
+#include "drivers/lidar_sessions.hpp"
+#include "processes/channels.hpp"
+#include "processes/convert.hpp"
+#include "processes/live_runner.hpp"
+#include "processes/node.hpp"
+
+namespace sweepmap {
+namespace {
+
+DeviceProtocol protocolOf(const std::string& name) {
+  if (name == "scip") return DeviceProtocol::kScip;
+  if (name == "x4") return DeviceProtocol::kYdlidarX4;
+  if (name == "rplidar") return DeviceProtocol::kRplidar;
+  throw std::runtime_error("unknown protocol '" + name + "' (scip, x4, rplidar)");
+}
+
+}  // namespace
+
+int runCapture(const CaptureOptions& o, const LidarConfig& expected, std::ostream& report) {
+  const DeviceUri uri = parseDeviceUri(o.uri);
+  if (uri.protocol == DeviceProtocol::kSim) {
+    throw std::runtime_error("capture needs a device URI, not sim");
+  }
+  CaptureWriter writer(o.out, o.uri);
+  std::mutex mutex;
+  std::string write_error;
+  int64_t first_utime = -1, last_utime = -1;
+  RealLidarOptions options;
+  options.tap = [&](int64_t utime, const uint8_t* data, size_t size) {
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!write_error.empty()) return;
+    try {
+      writer.append(utime, data, size);
+    } catch (const std::exception& e) {
+      write_error = e.what();
+    }
+    if (first_utime < 0) first_utime = utime;
+    last_utime = utime;
+  };
+  auto device = std::make_unique<RealLidar>(
+      uri, makeLidarSession(uri.protocol, expected, SessionOptions{}), options, wallUtime);
+  device->start();
+  installStopSignals();
+  const auto deadline_without_data =
+      std::chrono::steady_clock::now() + std::chrono::duration<double>(o.seconds + 10.0);
+  int64_t scans = 0;
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    scans += static_cast<int64_t>(device->poll(0).size());
+    DeviceHealth h = device->health();
+    for (const auto& e : h.events) report << "capture: " << e << "\n";
+    if (!h.fatal.empty()) {
+      report << "capture: " << h.fatal << "\n";
+      break;
+    }
+    std::lock_guard<std::mutex> lock(mutex);
+    if (!write_error.empty()) break;
+    if (stopRequested()) break;
+    if (first_utime >= 0 && wallUtime() - first_utime >= static_cast<int64_t>(o.seconds * 1e6)) break;
+    if (first_utime < 0 && std::chrono::steady_clock::now() > deadline_without_data) break;
+  }
+  // The worker stops before the file closes: no chunk is written after close.
+  const DeviceHealth h = device->health();
+  device.reset();
+  writer.close();
+  if (!write_error.empty()) {
+    report << "capture: " << write_error << "\n";
+    return 1;
+  }
+  report << "capture: " << writer.bytes() << " bytes in "
+         << (first_utime < 0 ? 0.0 : (last_utime - first_utime) * 1e-6) << " s, " << scans
+         << " scans -> " << o.out << "\n";
+  for (const auto& [name, value] : h.counters) {
+    if (value != 0) report << "  " << name << " " << value << "\n";
+  }
+  return writer.bytes() > 0 ? 0 : 1;
+}
+
+DecodeResult runDecode(const DecodeOptions& o, const LidarConfig& expected, std::ostream& report) {
+  const DeviceProtocol protocol = protocolOf(o.protocol);
+  const Capture capture = readCapture(o.in);
+  SessionOptions so;
+  so.time = capture.raw ? ScanTime::kStream : ScanTime::kArrival;
+  so.baud = o.baud;
+  if (!capture.raw) {
+    try {
+      const DeviceUri uri = parseDeviceUri(capture.uri);
+      if (uri.protocol != protocol) {
+        report << "decode: note: " << o.in << " was captured from " << capture.uri
+               << ", decoding as " << o.protocol << "\n";
+      }
+      if (uri.baud > 0 && so.baud == 0) so.baud = uri.baud;
+    } catch (const std::invalid_argument&) {
+    }
+  }
+  std::unique_ptr<LidarSession> session = makeLidarSession(protocol, expected, so);
+  EventLogWriter log(o.out);
+  DecodeResult r;
+  std::vector<Scan2D> scans;
+  std::vector<std::string> errors;
+  for (const CaptureChunk& chunk : capture.chunks) {
+    scans.clear();
+    errors.clear();
+    session->onBytes(chunk.bytes.data(), chunk.bytes.size(), chunk.utime, &scans, &errors);
+    r.bytes += static_cast<int64_t>(chunk.bytes.size());
+    for (const std::string& e : errors) {
+      if (r.errors < 1000) report << o.in << ": " << e << "\n";
+      ++r.errors;
+    }
+    for (const Scan2D& s : scans) {
+      const std::string why = validateScan(s, expected.beam_count);
+      if (!why.empty()) {
+        report << o.in << ": scan " << s.seq << " dropped: " << why << "\n";
+        ++r.errors;
+        continue;
+      }
+      Outbox out;
+      out.publish(channels::kLidarScan, s.utime, toLcm(s));
+      for (const Message& m : out.take()) log.write(m.utime, m.channel, m.data);
+      ++r.scans;
+    }
+  }
+  log.close();
+  r.file_error = capture.error;
+  const DecoderCounters c = session->decoderCounters();
+  report << "decode: " << r.bytes << " bytes, " << r.scans << " scans -> " << o.out << " ("
+         << c.checksum_errors << " checksum errors, " << c.resyncs << " resyncs, "
+         << c.discarded_bytes << " bytes skipped, " << c.device_errors << " device errors)\n";
+  if (!r.file_error.empty()) report << "decode: " << r.file_error << "\n";
+  return r;
+}
+
+}  // namespace sweepmap
