@@ -8,6 +8,8 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "core/config.hpp"
+#include "core/event_log.hpp"
+#include "processes/convert.hpp"
 #include "processes/live_runner.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/emulate/devices.hpp"
@@ -16,6 +18,8 @@
 
 namespace sweepmap {
 namespace {
+
+constexpr const char* kTruthLidarScanChannel = "TRUTH_LIDAR_SCAN";
 
 struct EmulateOptions {
   std::string model;
@@ -43,22 +47,23 @@ int runEmulate(const EmulateOptions& o) {
   const int64_t start = wallUtime();
   std::unique_ptr<EmulatorWorld> world = makeEmulatorWorld(wo, start);
 
-  // Truth for tests: each scan as the world made it, and the sensor counter at its first ray.
-  std::ofstream truth;
-  if (!o.truth.empty()) {
-    truth.open(o.truth);
-    if (!truth) throw ConfigError("cannot write --truth " + o.truth);
-    truth << "seq,first_ray_utime,counter_ms_at_first_ray\n";
-  }
+  // Truth: each scan as the world made it (true first-ray time, exact ranges), its
+  // device_stamp the sensor's counter at the first ray.
+  std::unique_ptr<EventLogWriter> truth;
+  if (!o.truth.empty()) truth = std::make_unique<EventLogWriter>(o.truth);
   int64_t power_on = start;
   ScanSource inner = world->source();
   ScanSource source = [&](int64_t now_us) {
     std::vector<Scan2D> scans = inner(now_us);
-    if (truth.is_open()) {
+    if (truth) {
       for (const Scan2D& s : scans) {
-        truth << s.seq << "," << s.utime << "," << o.clock.counterAt(power_on, s.utime) << "\n";
+        Scan2D t = s;
+        t.device_stamp = o.clock.counterAt(power_on, s.utime);
+        Outbox out;
+        out.publish(kTruthLidarScanChannel, s.utime, toLcm(t));
+        for (const Message& m : out.take()) truth->write(m.utime, m.channel, m.data);
       }
-      truth.flush();
+      truth->flush();
     }
     return scans;
   };
@@ -157,7 +162,8 @@ Runner addEmulateCommand(CLI::App& app) {
   cmd->add_option("--duration", o->server.duration_s, "stop after [s] (0: at SIGINT/SIGTERM)")
       ->capture_default_str();
   cmd->add_option("--truth", o->truth,
-                  "write each simulated scan's seq, first-ray time and sensor counter (CSV)");
+                  "LCM log of the world's scans as simulated (TRUTH_LIDAR_SCAN: true first-ray "
+                  "time, exact ranges, device_stamp = the sensor counter at the first ray)");
   return [o]() {
     try {
       return runEmulate(*o);
