@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "rigs/rig_file.hpp"
+#include "tools/bench/bench_devices.hpp"
 #include "tools/bench/bench_mobile.hpp"
 #include "tools/bench/bench_rotating.hpp"
 #include "tools/cli/commands.hpp"
@@ -18,14 +19,19 @@ Runner addBenchCommand(CLI::App& app) {
       "OctoMap) as real-time factors for modes 1 and 7, points per second, one sweep's plate "
       "correction and peak memory. mobile_lidar: EKF updates per second, the CPU share of the "
       "sweepmap-odometry process at 100/200/400 Hz IMU (private network namespace), and "
-      "`sweepmap replay` real-time factors on a circle and a lab loop. Prints figures; run on "
-      "an idle machine, compare ratios within one run");
+      "`sweepmap replay` real-time factors on a circle and a lab loop. Then the real-device "
+      "drivers: each protocol decoder's throughput (MB/s, scans/s, and as a multiple of the "
+      "device's own data rate) and the CPU share of sweepmap-lidar driving an emulated "
+      "UST-10LX at 40 Hz (--no-devices skips them). Prints figures; run on an idle machine, "
+      "compare ratios within one run");
   struct Opts {
     std::vector<std::string> rigs = {"rig_a", "rig_b"};
     std::string scene;
     std::string work = "build/bench";
     int sweeps = 2;
     double odometry_feed_s = RigBBenchOptions{}.process_feed_s;
+    bool no_devices = false;
+    double lidar_process_s = DevicesBenchOptions{}.process_s;
   };
   auto o = std::make_shared<Opts>();
   cmd->add_option("--rig", o->rigs, "rig files or names to bench (repeatable)")
@@ -35,6 +41,10 @@ Runner addBenchCommand(CLI::App& app) {
   cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: sweeps per mode")->capture_default_str();
   cmd->add_option("--odometry-feed-s", o->odometry_feed_s,
                   "mobile_lidar: log time fed to sweepmap-odometry per IMU rate")
+      ->capture_default_str();
+  cmd->add_flag("--no-devices", o->no_devices, "skip the decoders and the lidar process");
+  cmd->add_option("--lidar-process-s", o->lidar_process_s,
+                  "how long sweepmap-lidar's CPU share is measured")
       ->capture_default_str();
   return [o]() {
     namespace fs = std::filesystem;
@@ -78,6 +88,17 @@ Runner addBenchCommand(CLI::App& app) {
           break;
         }
       }
+    }
+    if (!o->no_devices) {
+      std::cout << "== real-device drivers\n";
+      DevicesBenchOptions d;
+      d.process_s = o->lidar_process_s;
+      std::error_code ec;
+      const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+      if (!ec && fs::exists(self.parent_path() / "sweepmap-lidar")) {
+        d.bin_dir = self.parent_path().string();
+      }
+      benchDevices(d, std::cout);
     }
     return 0;
   };

@@ -1,0 +1,20 @@
+// Real-device part of `sweepmap bench`: each protocol decoder's throughput (the driver's
+// session: decode + scan assembly + timing) against the device's own data rate, and the CPU
+// share of the real sweepmap-lidar process driving an emulated UST-10LX at 40 Hz over
+// loopback TCP (private network namespace). Prints figures; asserts nothing.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+namespace sweepmap {
+
+struct DevicesBenchOptions {
+  std::string bin_dir;         // sweepmap and sweepmap-lidar ("" = skip the process part)
+  double process_s = 10.0;     // how long the lidar process is measured
+  double decode_min_s = 1.0;   // each decoder runs at least this long
+};
+
+int benchDevices(const DevicesBenchOptions& options, std::ostream& out);
+
+}  // namespace sweepmap
