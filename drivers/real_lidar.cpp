@@ -170,10 +170,11 @@ void RealLidar::streamOnce(ByteStream& stream) {
   std::vector<std::string> errors;
   int64_t last_byte_utime = now_();
   int errors_in_a_row = 0;
+  bool first = true;  // decode what start() read ahead
   while (!stop_) {
-    const size_t n = stream.read(buffer.data(), buffer.size(), 100);
+    const size_t n = first ? 0 : stream.read(buffer.data(), buffer.size(), 100);
     const int64_t now = now_();
-    if (n == 0) {
+    if (n == 0 && !first) {
       if (now - last_byte_utime > int64_t{options_.read_timeout_ms} * 1000) {
         std::lock_guard<std::mutex> lock(mutex_);
         ++timeouts_;
@@ -182,6 +183,7 @@ void RealLidar::streamOnce(ByteStream& stream) {
       }
       continue;
     }
+    first = false;
     last_byte_utime = now;
     scans.clear();
     errors.clear();

@@ -41,7 +41,8 @@ class LidarSession {
   // `now` reads the host clock [us].
   virtual void start(ByteStream& stream, const std::function<int64_t()>& now) = 0;
   // Bytes that arrived complete at host time `arrival_utime`: finished scans → *scans,
-  // problems → *errors.
+  // problems → *errors. Called once with size 0 right after start(): bytes start() read
+  // beyond its replies (the stream's first data) are decoded then.
   virtual void onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                        std::vector<Scan2D>* scans, std::vector<std::string>* errors) = 0;
   // Best effort before closing on shutdown (stop the stream, motor off).

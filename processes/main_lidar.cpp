@@ -19,7 +19,8 @@ namespace {
 // The simulated UST-10LX of a rotating rig, following the simulated shaft (TRUTH_SHAFT).
 int runSimulated(const CommonOptions& common, const Rig& loaded, const std::string& scene_name,
                  uint64_t seed) {
-  const auto* rig_config = rigOfKindOrReport<RotatingLidarConfig>(loaded, "sweepmap-lidar --device sim");
+  const auto* rig_config =
+      rigOfKindOrReport<RotatingLidarConfig>(loaded, "sweepmap-lidar --device sim");
   if (!rig_config) return 2;
   const RotatingLidarConfig& rig = *rig_config;
   const std::string scene_path = scene_name.empty() ? defaultSceneName(loaded.kind()) : scene_name;

@@ -11,8 +11,8 @@
 #include <random>
 #include <stdexcept>
 
-#include "drivers/clock_sync.hpp"
 #include "core/device_uri.hpp"
+#include "drivers/clock_sync.hpp"
 #include "drivers/io/byte_stream.hpp"
 
 namespace sweepmap {

@@ -60,8 +60,8 @@ void benchDecoders(const DevicesBenchOptions& o, std::ostream& out) {
        "rig_a", "BM\nME0000108000000\n"},
       {"ydlidar (X4)", EmulatedModel::kX4, DeviceProtocol::kYdlidarX4, "rig_b",
        std::string("\xA5\x60", 2)},
-      {"rplidar (A1, standard scan)", EmulatedModel::kRplidarA1, DeviceProtocol::kRplidar,
-       "rig_b", std::string("\xA5\x20", 2)},
+      {"rplidar (A1, standard scan)", EmulatedModel::kRplidarA1, DeviceProtocol::kRplidar, "rig_b",
+       std::string("\xA5\x20", 2)},
   };
   out << "decoders (the driver's session: decode, scan assembly, timing; one thread):\n";
   for (const Protocol& p : protocols) {
@@ -71,8 +71,7 @@ void benchDecoders(const DevicesBenchOptions& o, std::ostream& out) {
     std::unique_ptr<EmulatedLidar> device =
         makeEmulatedLidar(p.model, syntheticScans(lidar), EmulatedClock{}, 0);
     std::string bytes;
-    device->receive(reinterpret_cast<const uint8_t*>(p.start.data()), p.start.size(), 1000,
-                    &bytes);
+    device->receive(reinterpret_cast<const uint8_t*>(p.start.data()), p.start.size(), 1000, &bytes);
     const size_t reply_bytes = bytes.size();
     for (int64_t t = 1000; t <= static_cast<int64_t>(stream_s * 1e6); t += 1000) {
       device->advance(t, &bytes);
@@ -124,15 +123,14 @@ void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
   const fs::path bin = o.bin_dir;
   const std::string url = kDefaultLcmUrl;
   ProcessGroup procs;
-  const pid_t emulator =
-      procs.start("emulator",
-                  {(bin / "sweepmap").string(), "emulate", "ust10lx", "--listen",
-                   "127.0.0.1:10940", "--rig", "rig_a"},
-                  "/dev/null");
+  const pid_t emulator = procs.start("emulator",
+                                     {(bin / "sweepmap").string(), "emulate", "ust10lx", "--listen",
+                                      "127.0.0.1:10940", "--rig", "rig_a"},
+                                     "/dev/null");
   std::this_thread::sleep_for(std::chrono::milliseconds(500));
   const pid_t lidar = procs.start("lidar",
-                                  {(bin / "sweepmap-lidar").string(), "--rig", "rig_a",
-                                   "--device", "scip://127.0.0.1:10940", "--lcm-url", url},
+                                  {(bin / "sweepmap-lidar").string(), "--rig", "rig_a", "--device",
+                                   "scip://127.0.0.1:10940", "--lcm-url", url},
                                   "/dev/null");
   std::this_thread::sleep_for(std::chrono::seconds(2));  // connected, clock anchored
   const double cpu0 = processCpuSeconds(lidar), emu0 = processCpuSeconds(emulator);

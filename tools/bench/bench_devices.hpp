@@ -10,9 +10,9 @@
 namespace sweepmap {
 
 struct DevicesBenchOptions {
-  std::string bin_dir;         // sweepmap and sweepmap-lidar ("" = skip the process part)
-  double process_s = 10.0;     // how long the lidar process is measured
-  double decode_min_s = 1.0;   // each decoder runs at least this long
+  std::string bin_dir;        // sweepmap and sweepmap-lidar ("" = skip the process part)
+  double process_s = 10.0;    // how long the lidar process is measured
+  double decode_min_s = 1.0;  // each decoder runs at least this long
 };
 
 int benchDevices(const DevicesBenchOptions& options, std::ostream& out);

@@ -19,12 +19,12 @@
 #include "core/event_log.hpp"
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
+#include "tools/bench/proc_stats.hpp"
 #include "tools/offline/replay_mobile.hpp"
 #include "tools/offline/runs.hpp"
 #include "tools/offline/sim_mobile.hpp"
 #include "tools/ops/netns.hpp"
 #include "tools/ops/process_group.hpp"
-#include "tools/bench/proc_stats.hpp"
 
 namespace sweepmap {
 namespace {

@@ -3,9 +3,8 @@
 #include <csignal>
 #include <fstream>
 #include <iostream>
-#include <thread>
-
 #include <lcm/lcm-cpp.hpp>
+#include <thread>
 
 #include "core/config.hpp"
 #include "core/event_log.hpp"
@@ -83,7 +82,8 @@ int runEmulate(const EmulateOptions& o) {
   }
   std::atomic<bool> server_stop{false};
   std::thread watcher([&] {
-    while (!server_stop && !stopRequested()) std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    while (!server_stop && !stopRequested())
+      std::this_thread::sleep_for(std::chrono::milliseconds(20));
     server_stop = true;
   });
   try {
@@ -127,7 +127,8 @@ Runner addEmulateCommand(CLI::App& app) {
   cmd->add_flag("--pty", o->server.pty, "x4, rplidar: serve on a new pseudo-terminal (default)");
   cmd->add_option("--link", o->server.pty_link,
                   "x4, rplidar: keep a symlink to the pty at this path (stable across hang-ups)");
-  cmd->add_option("--rig", o->world.rig, "rig file or name of the world (default: rig_a for "
+  cmd->add_option("--rig", o->world.rig,
+                  "rig file or name of the world (default: rig_a for "
                   "ust10lx, rig_b otherwise)");
   cmd->add_option("--scene", o->world.scene, "scene file or name (default: the rig kind's)");
   cmd->add_option("--set", o->world.overrides, "override a rig key: key=value (repeatable)");

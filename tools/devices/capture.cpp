@@ -67,7 +67,8 @@ int runCapture(const CaptureOptions& o, const LidarConfig& expected, std::ostrea
     std::lock_guard<std::mutex> lock(mutex);
     if (!write_error.empty()) break;
     if (stopRequested()) break;
-    if (first_utime >= 0 && wallUtime() - first_utime >= static_cast<int64_t>(o.seconds * 1e6)) break;
+    if (first_utime >= 0 && wallUtime() - first_utime >= static_cast<int64_t>(o.seconds * 1e6))
+      break;
     if (first_utime < 0 && std::chrono::steady_clock::now() > deadline_without_data) break;
   }
   // The worker stops before the file closes: no chunk is written after close.

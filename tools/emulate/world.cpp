@@ -59,7 +59,8 @@ class RotatingWorld : public EmulatorWorld {
                                         lidarSeed(options.seed), start_utime);
     if (follow_) {
       follower_ = std::make_unique<TruthFollowerNode>(&truth_);
-      truth_sweep_ = std::make_unique<TruthSweepNode>(&truth_, rig_.sim.alpha_true_deg * M_PI / 180.0);
+      truth_sweep_ =
+          std::make_unique<TruthSweepNode>(&truth_, rig_.sim.alpha_true_deg * M_PI / 180.0);
       locked_follower_ = std::make_unique<LockedNode>(follower_.get(), &mutex_);
       locked_truth_sweep_ = std::make_unique<LockedNode>(truth_sweep_.get(), &mutex_);
     }
@@ -109,8 +110,8 @@ class MobileWorld : public EmulatorWorld {
     wheels.ticks_per_revolution = rig_.odometry.ticks_per_revolution;
     wheels.wheel_distance_m = rig_.odometry.ekf.wheel_distance_m;
     const LidarMounting nominal = rig_.mounting.toMounting();
-    car_ = std::make_unique<SimMobile>(sim, wheels, nominal.nominal_rpy_rad, nominal.t_BL_m,
-                                       scene_, options.seed, start_utime);
+    car_ = std::make_unique<SimMobile>(sim, wheels, nominal.nominal_rpy_rad, nominal.t_BL_m, scene_,
+                                       options.seed, start_utime);
   }
 
   ScanSource source() override {

@@ -22,8 +22,8 @@
 namespace sweepmap {
 
 struct EmulatorWorldOptions {
-  std::string rig;    // file or name
-  std::string scene;  // file or name; "" = the rig kind's default
+  std::string rig;                     // file or name
+  std::string scene;                   // file or name; "" = the rig kind's default
   std::vector<std::string> overrides;  // key=value (scene.* to the scene)
   uint64_t seed = 1;
   double clock_drift_ppm = 0.0;

@@ -103,16 +103,27 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   if (o.devices == "emulated") {
     // The simulated world behind a UST-10LX's protocol; it follows the simulated shaft and
     // publishes the truth, as the simulated lidar process does.
-    std::vector<std::string> argv = {(run.bin / "sweepmap").string(), "emulate", "ust10lx",
-                                     "--listen", kDemoEmulatorAddress, "--follow-lcm",
-                                     "--rig", run.rig, "--scene", scene,
-                                     "--seed", std::to_string(o.seed), "--lcm-url", run.url};
+    std::vector<std::string> argv = {(run.bin / "sweepmap").string(),
+                                     "emulate",
+                                     "ust10lx",
+                                     "--listen",
+                                     kDemoEmulatorAddress,
+                                     "--follow-lcm",
+                                     "--rig",
+                                     run.rig,
+                                     "--scene",
+                                     scene,
+                                     "--seed",
+                                     std::to_string(o.seed),
+                                     "--lcm-url",
+                                     run.url};
     for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
     emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
     pause(300);  // listening
     lidar = run.startProcess("lidar", {"--device", std::string("scip://") + kDemoEmulatorAddress});
   } else {
-    lidar = run.startProcess("lidar", {"--sim", "--scene", scene, "--seed", std::to_string(o.seed)});
+    lidar =
+        run.startProcess("lidar", {"--sim", "--scene", scene, "--seed", std::to_string(o.seed)});
   }
   pause(700);  // subscribers ready
   const pid_t motor = run.startProcess(
@@ -215,8 +226,9 @@ int runDemo(const DemoOptions& o) {
     }
     case RigKind::kMobileLidar:
       if (o.devices != "sim") {
-        throw ConfigError("--devices emulated is for rotating_lidar rigs so far; a mobile_lidar "
-                          "demo plays its simulated devices from a log");
+        throw ConfigError(
+            "--devices emulated is for rotating_lidar rigs so far; a mobile_lidar "
+            "demo plays its simulated devices from a log");
       }
       return mobileDemo(o, rig, rig_sets) == 0 ? 0 : 1;
   }
