@@ -47,7 +47,7 @@ TEST(RigFile, KindComesFromTheFile) {
 }
 
 TEST(RigFile, EveryShippedRigFileLoads) {
-  for (const char* name : {"rig_a", "rig_b", "rig_b_mines_rover"}) {
+  for (const char* name : {"rig_a", "rig_b", "rig_b_mines_rover", "rig_a_ust10lx", "rig_b_x4"}) {
     EXPECT_NO_THROW(loadRig(name)) << name;
   }
 }
@@ -110,6 +110,33 @@ TEST(RigFile, RequireKindNamesBothKinds) {
       configError([&] { requireKind<MobileLidarConfig>(a, "sweepmap-odometry"); });
   EXPECT_NE(e.find("is a rotating_lidar rig"), std::string::npos) << e;
   EXPECT_NE(e.find("sweepmap-odometry needs a mobile_lidar rig"), std::string::npos) << e;
+}
+
+// The real-device examples are their simulated rig with another lidar.device, nothing else.
+TEST(RigFile, RealDeviceExamplesDifferOnlyInTheDevice) {
+  const auto yamlWithDevice = [](const std::string& name, const std::string& device) {
+    Rig rig = loadRig(name);
+    return std::visit(
+        [&](auto c) {
+          c.lidar.device = device;
+          ConfigSchema s;
+          c.declare(s);
+          return s.toYaml();
+        },
+        rig.config);
+  };
+  EXPECT_EQ(loadRig("rig_a_ust10lx").lidar().device, "scip://192.168.0.10:10940");
+  EXPECT_EQ(loadRig("rig_b_x4").lidar().device, "ydlidar:///dev/ttyUSB0");
+  EXPECT_EQ(yamlWithDevice("rig_a_ust10lx", "x"), yamlWithDevice("rig_a", "x"));
+  EXPECT_EQ(yamlWithDevice("rig_b_x4", "x"), yamlWithDevice("rig_b", "x"));
+}
+
+// A device URI that cannot be opened is a config error naming the file and the key.
+TEST(RigFile, BadDeviceUriIsAConfigError) {
+  const std::string e = configError([] { loadRig(kRigA, {"lidar.device=usb0"}); });
+  EXPECT_NE(e.find("rig_a.yaml: key 'lidar.device': device 'usb0': expected sim"),
+            std::string::npos)
+      << e;
 }
 
 }  // namespace
