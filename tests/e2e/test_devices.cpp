@@ -324,6 +324,35 @@ TEST_F(DevicesTest, CaptureThenDecode) {
   EXPECT_GE(scansIn(log2.string(), channels::kLidarScan).size(), scans.size() - 6);
 }
 
+// The main job with the lidar emulated over SCIP (sweepmap emulate ust10lx + the real driver)
+// against the same job with the lidar simulated in the lidar process, same seed: every sweep
+// corrected, and φ_error per sweep within 0.05° of the simulated path's.
+TEST_F(DevicesTest, EmulatedDemoMatchesTheSimulatedOne) {
+  prepare("demo");
+  std::map<std::string, nlohmann::json> summaries;
+  for (const std::string devices : {"sim", "emulated"}) {
+    const fs::path out = dir_ / devices;
+    ASSERT_EQ(sweepmap({"demo", "--mode", "1", "--sweeps", "3", "--seed", "5", "--devices", devices,
+                        "--out", out.string()},
+                       dir_ / (devices + ".txt")),
+              0)
+        << readFile(dir_ / (devices + ".txt"));
+    summaries[devices] = readJson(out / "summary.json");
+  }
+  const auto& sim = summaries["sim"]["sweeps"];
+  const auto& emu = summaries["emulated"]["sweeps"];
+  ASSERT_EQ(sim.size(), 3u);
+  ASSERT_EQ(emu.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    ASSERT_TRUE(emu[i]["corrected"].get<bool>()) << emu[i].dump();
+    const double a = sim[i]["phi_error_deg"].get<double>();
+    const double b = emu[i]["phi_error_deg"].get<double>();
+    std::cout << "sweep " << i << ": phi_error simulated " << a << " deg, emulated " << b
+              << " deg\n";
+    EXPECT_LE(std::fabs(a - b), 0.05);
+  }
+}
+
 }  // namespace
 }  // namespace test
 }  // namespace sweepmap
