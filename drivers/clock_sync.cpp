@@ -34,9 +34,12 @@ int64_t DeviceClockSync::unwrap(int64_t raw, bool* jumped) {
     if (raw < last_raw_) ++wraps_;
     unwrapped_ += step;
   } else {
-    // Backwards: the counter was reset or jumped; follow it (the residual check decides).
-    unwrapped_ -= modulus - step;
-    *jumped = true;
+    // Backwards. A little: a message stamped before the last one seen (a scan's stamp is its
+    // first ray, older than a TM1 answer sent just before the stream). A lot: the counter
+    // was reset or jumped; follow it at once.
+    const int64_t back = modulus - step;
+    unwrapped_ -= back;
+    *jumped = static_cast<double>(back) * options_.tick_us > options_.max_backstep_us;
   }
   last_raw_ = raw;
   return unwrapped_;

@@ -29,10 +29,11 @@ class DeviceClockSync {
     double tick_us = 1000.0;
     double bucket_s = 0.25;          // one envelope point (the minimum) per bucket of host time
     double window_s = 120.0;         // envelope points kept for the rate fit
-    double min_span_s = 5.0;         // fit the rate once the envelope spans this much
+    double min_span_s = 2.0;         // fit the rate once the envelope spans this much
     double max_early_us = 20000.0;   // arrival this much before the mapped stamp: a jump
     double max_late_us = 1000000.0;  // or this much after it (beyond any buffering)
     int jump_confirm = 3;
+    double max_backstep_us = 2000000.0;  // a counter going back further has been reset
   };
 
   DeviceClockSync() : DeviceClockSync(Options{}) {}

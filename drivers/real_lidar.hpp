@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/device_uri.hpp"
+#include "core/rig_components.hpp"
 #include "drivers/io/byte_stream.hpp"
 #include "drivers/lidar_device.hpp"
 #include "drivers/protocols/decoder.hpp"
@@ -106,8 +107,8 @@ class RealLidar : public LidarDevice {
   int64_t events_suppressed_ = 0;
 };
 
-// The driver for `uri`'s protocol, checked against what the rig file says of the lidar.
-struct LidarConfig;
+// The driver for `uri`'s protocol, checked against what the rig file says of the lidar
+// (drivers/lidar_sessions.cpp).
 std::unique_ptr<RealLidar> makeRealLidar(const DeviceUri& uri, const LidarConfig& expected,
                                          const RealLidarOptions& options,
                                          std::function<int64_t()> now);

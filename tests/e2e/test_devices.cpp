@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <thread>
 
 #include "processes/channels.hpp"
@@ -51,9 +52,9 @@ std::map<std::string, int64_t> lidarCounters(const std::string& log, std::string
 
 struct Match {
   size_t scans = 0, matched = 0;
-  double worst_time_us = 0.0;   // |driver first-ray time - truth|
-  double worst_range_m = 0.0;   // over rays with a return in both
-  double worst_angle_rad = 0.0; // per-ray angles (serial devices)
+  double worst_time_us = 0.0;    // |driver first-ray time - truth|
+  double worst_range_m = 0.0;    // over rays with a return in both
+  double worst_angle_rad = 0.0;  // per-ray angles (serial devices)
   size_t rays_compared = 0;
 };
 
@@ -71,6 +72,10 @@ Match compare(const std::vector<lidar_scan_t>& got, const std::vector<lidar_scan
     });
     if (std::llabs(it->utime - g.utime) > period_s * 0.5e6) continue;
     ++m.matched;
+    if (std::getenv("SWEEPMAP_TEST_VERBOSE")) {
+      std::cout << "  t " << (g.utime - t0) * 1e-6 << " s: time error " << (g.utime - it->utime)
+                << " us\n";
+    }
     m.worst_time_us = std::max(m.worst_time_us, std::fabs(double(it->utime - g.utime)));
     if (it->nranges != g.nranges) continue;
     for (int i = 0; i < g.nranges; ++i) {
@@ -100,11 +105,13 @@ class DevicesTest : public ::testing::Test {
   }
   pid_t emulator(const std::string& model, std::vector<std::string> args) {
     args.insert(args.begin(), {binPath("sweepmap"), "emulate", model});
-    return procs_.start("emulator", args, (dir_ / ("emulator_" + std::to_string(++n_) + ".txt")).string());
+    return procs_.start("emulator", args,
+                        (dir_ / ("emulator_" + std::to_string(++n_) + ".txt")).string());
   }
-  pid_t lidar(const std::string& rig, const std::string& device, std::vector<std::string> sets = {}) {
-    std::vector<std::string> argv = {binPath("sweepmap-lidar"), "--rig", rig, "--device", device,
-                                     "--lcm-url", kUrl};
+  pid_t lidar(const std::string& rig, const std::string& device,
+              std::vector<std::string> sets = {}) {
+    std::vector<std::string> argv = {
+        binPath("sweepmap-lidar"), "--rig", rig, "--device", device, "--lcm-url", kUrl};
     for (const auto& s : sets) argv.insert(argv.end(), {"--set", s});
     return procs_.start("lidar", argv, (dir_ / "lidar.txt").string());
   }
@@ -133,9 +140,9 @@ std::string DevicesTest::netns_why_;
 TEST_F(DevicesTest, ScipOverTcpWithDriftAndWrap) {
   prepare("scip");
   const pid_t log = logger();
-  const pid_t emu = emulator("ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a",
-                                         "--clock-start-ms", std::to_string(16777215 - 4000),
-                                         "--clock-drift-ppm", "100", "--truth", truth_});
+  const pid_t emu = emulator(
+      "ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a", "--clock-start-ms",
+                  std::to_string(16777215 - 4000), "--clock-drift-ppm", "100", "--truth", truth_});
   sleepS(0.5);
   const pid_t drv = lidar("rig_a", "scip://127.0.0.1:10940");
   sleepS(12.0);
@@ -207,8 +214,8 @@ TEST_F(DevicesTest, IdentityMismatchIsOneClearError) {
   prepare("mismatch");
   const pid_t emu = emulator("ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a"});
   sleepS(0.5);
-  const pid_t drv = lidar("rig_a", "scip://127.0.0.1:10940",
-                          {"lidar.beam_count=721", "lidar.angle_min_deg=-90"});
+  const pid_t drv =
+      lidar("rig_a", "scip://127.0.0.1:10940", {"lidar.beam_count=721", "lidar.angle_min_deg=-90"});
   EXPECT_EQ(procs_.wait(drv, 10.0), 3);
   procs_.stop(emu, 5.0);
   const std::string out = readFile(dir_ / "lidar.txt");
@@ -248,8 +255,8 @@ TEST_P(SerialDevicesTest, PtyStreamsAndComesBackAfterHangUp) {
   prepare(c.model);
   const std::string link = (dir_ / "tty").string();
   const pid_t log = logger();
-  std::vector<std::string> args = {"--link", link, "--rig", "rig_b", "--truth", truth_,
-                                   "--hangup-at", "5", "--down-s", "1"};
+  std::vector<std::string> args = {"--link", link,          "--rig", "rig_b",    "--truth",
+                                   truth_,   "--hangup-at", "5",     "--down-s", "1"};
   for (const auto& s : c.sets) args.insert(args.end(), {"--set", s});
   const pid_t emu = emulator(c.model, args);
   sleepS(0.5);
@@ -286,7 +293,9 @@ INSTANTIATE_TEST_SUITE_P(
                                   "lidar.angle_increment_deg=1", "lidar.steps_per_revolution=360",
                                   "lidar.scan_rate_hz=5.5", "sim.scan_rate_hz=5.5",
                                   "sim.sample_rate_hz=1980"},
-                                 1.0 / 5.5, 0.0003, 0.1 * M_PI / 180}),
+                                 1.0 / 5.5,
+                                 0.0003,
+                                 0.1 * M_PI / 180}),
     [](const auto& info) { return info.param.model; });
 
 // capture -> decode gives the scans the driver gave; a damaged capture is decoded up to the
@@ -317,7 +326,8 @@ TEST_F(DevicesTest, CaptureThenDecode) {
   const fs::path bad = dir_ / "bad.cap";
   std::ofstream(bad, std::ios::binary) << bytes;
   const fs::path log2 = dir_ / "bad.lcmlog";
-  EXPECT_EQ(sweepmap({"decode", "scip", bad.string(), "--out", log2.string()}, dir_ / "bad.txt"), 1);
+  EXPECT_EQ(sweepmap({"decode", "scip", bad.string(), "--out", log2.string()}, dir_ / "bad.txt"),
+            1);
   const std::string report = readFile(dir_ / "bad.txt");
   EXPECT_NE(report.find("byte "), std::string::npos) << report;
   EXPECT_NE(report.find("truncated record at byte"), std::string::npos) << report;

@@ -7,6 +7,7 @@
 
 #include "core/device_uri.hpp"
 #include "drivers/lidar_sessions.hpp"
+#include "processes/channels.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/bench/proc_stats.hpp"
 #include "tools/emulate/devices.hpp"

@@ -1,0 +1,266 @@
+#include "tools/emulate/scip_device.hpp"
+
+#include <cmath>
+
+#include "drivers/protocols/scip.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr int kAres = 1440, kAmin = 0, kAmax = 1080, kAfrt = 540;
+constexpr int kDmin = 20, kDmax = 30000, kScanRpm = 2400;
+constexpr uint32_t kNoEcho = 1;  // an error code below DMIN
+
+bool allDigits(const std::string& s) {
+  if (s.empty()) return false;
+  for (char c : s) {
+    if (c < '0' || c > '9') return false;
+  }
+  return true;
+}
+
+std::string infoLine(const std::string& key_value) {
+  // The checksum covers the characters before the ';'.
+  return key_value + ";" + scip::checksum(key_value) + "\n";
+}
+
+// Data split into 64-character blocks, each with its checksum and a line end.
+std::string blocks(const std::string& data) {
+  std::string out;
+  for (size_t at = 0; at < data.size(); at += 64) {
+    const std::string b = data.substr(at, 64);
+    out += b;
+    out.push_back(scip::checksum(b));
+    out.push_back('\n');
+  }
+  return out;
+}
+
+}  // namespace
+
+ScipDevice::ScipDevice(ScanSource source, const EmulatedClock& clock, int64_t power_on_us)
+    : source_(std::move(source)), clock_(clock), power_on_us_(power_on_us) {}
+
+uint32_t ScipDevice::counterAt(int64_t t_us) const {
+  return static_cast<uint32_t>(clock_.counterAt(power_on_us_, t_us));
+}
+
+void ScipDevice::reset(int64_t now_us) {
+  line_.clear();
+  laser_on_ = false;
+  adjust_mode_ = false;
+  streaming_ = false;
+}
+
+void ScipDevice::receive(const uint8_t* data, size_t size, int64_t now_us, std::string* out) {
+  for (size_t i = 0; i < size; ++i) {
+    const char c = static_cast<char>(data[i]);
+    if (c == '\n' || c == '\r') {
+      // CR, LF or CR LF end a command; an empty line is nothing.
+      if (!line_.empty()) command(line_, now_us, out);
+      line_.clear();
+      continue;
+    }
+    if (line_.size() < 256) line_.push_back(c);
+  }
+}
+
+void ScipDevice::command(const std::string& line, int64_t now_us, std::string* out) {
+  const auto reply = [&](const std::string& status, const std::string& body = "") {
+    *out += line + "\n" + scip::withChecksum(status) + "\n" + body + "\n";
+  };
+  if (line.size() < 2) {
+    reply("0C");
+    return;
+  }
+  const std::string cmd = line.substr(0, 2);
+  std::string params = line.substr(2), tag;
+  if (const size_t semi = params.find(';'); semi != std::string::npos) {
+    tag = params.substr(semi + 1);
+    params = params.substr(0, semi);
+    if (tag.size() > 16) {
+      reply("0G");
+      return;
+    }
+    for (char c : tag) {
+      if (c < 0x20 || c > 0x7e) {
+        reply("0H");
+        return;
+      }
+    }
+  }
+  if (cmd == "VV" || cmd == "PP" || cmd == "II") {
+    if (!params.empty()) {
+      reply("0C");
+      return;
+    }
+    std::string body;
+    if (cmd == "VV") {
+      body = infoLine("VEND:Hokuyo Automatic Co.,Ltd.") + infoLine("PROD:UST-10LX") +
+             infoLine("FIRM:1.1.3(2016-03-02)") + infoLine("PROT:SCIP 2.0") +
+             infoLine("SERI:H1612345");
+    } else if (cmd == "PP") {
+      body = infoLine("MODL:UST-10LX") + infoLine("DMIN:" + std::to_string(kDmin)) +
+             infoLine("DMAX:" + std::to_string(kDmax)) + infoLine("ARES:" + std::to_string(kAres)) +
+             infoLine("AMIN:" + std::to_string(kAmin)) + infoLine("AMAX:" + std::to_string(kAmax)) +
+             infoLine("AFRT:" + std::to_string(kAfrt)) +
+             infoLine("SCAN:" + std::to_string(kScanRpm));
+    } else {
+      char time[16];
+      std::snprintf(time, sizeof time, "%06X", counterAt(now_us));
+      body = infoLine("MODL:UST-10LX") +
+             infoLine(std::string("LASR:") + (laser_on_ ? "ON" : "OFF")) +
+             infoLine("SCSP:Initial(2400[rpm])") + infoLine("MESM:Measuring by Normal Mode") +
+             infoLine("SBPS:Ethernet 100 [Mbps]") + infoLine(std::string("TIME:") + time) +
+             infoLine("STAT:Stable 000 no error.");
+    }
+    reply("00", body);
+    return;
+  }
+  if (cmd == "BM") {
+    reply(laser_on_ ? "02" : "00");
+    laser_on_ = true;
+    return;
+  }
+  if (cmd == "QT") {
+    streaming_ = false;
+    laser_on_ = false;
+    reply("00");
+    return;
+  }
+  if (cmd == "RS" || cmd == "RT") {
+    streaming_ = false;
+    laser_on_ = false;
+    adjust_mode_ = false;
+    reply("00");
+    return;
+  }
+  if (cmd == "TM") {
+    if (params.size() != 1 || params[0] < '0' || params[0] > '2') {
+      reply("01");
+      return;
+    }
+    if (params[0] == '0') {
+      if (adjust_mode_) {
+        reply("02");
+        return;
+      }
+      streaming_ = false;  // no measurement while the time is being adjusted
+      adjust_mode_ = true;
+      reply("00");
+    } else if (params[0] == '1') {
+      if (!adjust_mode_) {
+        reply("03");
+        return;
+      }
+      reply("00", scip::withChecksum(scip::encodeValue(counterAt(now_us), 4)) + "\n");
+    } else {
+      if (!adjust_mode_) {
+        reply("03");
+        return;
+      }
+      adjust_mode_ = false;
+      reply("00");
+    }
+    return;
+  }
+  const bool stream = cmd == "MD" || cmd == "MS" || cmd == "ME";
+  const bool single = cmd == "GD" || cmd == "GS" || cmd == "GE";
+  if (!stream && !single) {
+    reply("0E");
+    return;
+  }
+  const size_t need = stream ? 13 : 10;
+  if (params.size() < need) {
+    reply("0C");
+    return;
+  }
+  if (params.size() > need) {
+    reply("0F");
+    return;
+  }
+  const std::string s_start = params.substr(0, 4), s_end = params.substr(4, 4),
+                    s_cluster = params.substr(8, 2);
+  if (!allDigits(s_start)) return reply("01");
+  if (!allDigits(s_end)) return reply("02");
+  if (!allDigits(s_cluster)) return reply("03");
+  const int start = std::stoi(s_start), end = std::stoi(s_end);
+  const int cluster = std::max(1, std::stoi(s_cluster));
+  if (start < kAmin || start > kAmax || end > kAmax) return reply("04");
+  if (end < start) return reply("05");
+  if (adjust_mode_) return reply("0B");
+  if (single) {
+    if (!laser_on_) return reply("10");
+    if (!latest_) return reply("0B");  // nothing measured yet: busy
+    *out += line + "\n" + scip::withChecksum("00") + "\n";
+    scanReply(*latest_, Request{cmd, start, end, cluster}, "", out);
+    return;
+  }
+  const std::string s_skip = params.substr(10, 1), s_count = params.substr(11, 2);
+  if (!allDigits(s_skip)) return reply("06");
+  if (!allDigits(s_count)) return reply("07");
+  reply("00");
+  streaming_ = true;
+  laser_on_ = true;  // MD/MS/ME switch the laser on
+  stream_command_ = cmd;
+  stream_tag_ = tag;
+  start_ = start;
+  end_ = end;
+  cluster_ = cluster;
+  skip_ = std::stoi(s_skip);
+  remaining_ = std::stoi(s_count);
+  unlimited_ = remaining_ == 0;
+  skipped_ = 0;
+}
+
+void ScipDevice::advance(int64_t now_us, std::string* out) {
+  for (Scan2D& scan : source_(now_us)) {
+    latest_ = std::move(scan);
+    if (!streaming_) continue;
+    if (skipped_ < skip_) {
+      ++skipped_;
+      continue;
+    }
+    skipped_ = 0;
+    if (!unlimited_) --remaining_;
+    char echo[32];
+    std::snprintf(echo, sizeof echo, "%s%04d%04d%02d%01d%02d", stream_command_.c_str(), start_,
+                  end_, cluster_, skip_, unlimited_ ? 0 : std::max(0, remaining_));
+    const std::string head = std::string(echo) + (stream_tag_.empty() ? "" : ";" + stream_tag_) +
+                             "\n" + scip::withChecksum("99") + "\n";
+    scanReply(*latest_, Request{stream_command_, start_, end_, cluster_}, head, out);
+    if (!unlimited_ && remaining_ <= 0) streaming_ = false;
+  }
+}
+
+void ScipDevice::scanReply(const Scan2D& scan, const Request& r, const std::string& head,
+                           std::string* out) {
+  const bool intensity = r.command == "ME" || r.command == "GE";
+  const int chars = (r.command == "MS" || r.command == "GS") ? 2 : 3;
+  *out += head;
+  // The stamp: the counter when the first requested step was measured.
+  const int64_t t_first = scan.rayUtime(static_cast<size_t>(r.start - kAmin));
+  *out += scip::withChecksum(scip::encodeValue(counterAt(t_first), 4)) + "\n";
+  std::string data;
+  for (int step = r.start; step <= r.end; step += r.cluster) {
+    // A cluster reports its nearest valid range (the sensor's documented grouping rule).
+    uint32_t mm = 0;
+    float r_best = 0.0f;
+    for (int k = step; k < std::min(step + r.cluster, r.end + 1); ++k) {
+      const auto i = static_cast<size_t>(k - kAmin);
+      const float r = i < scan.ranges_m.size() ? scan.ranges_m[i] : 0.0f;
+      if (r > 0.0f && (r_best == 0.0f || r < r_best)) r_best = r;
+    }
+    mm = r_best > 0.0f ? static_cast<uint32_t>(std::lround(r_best * 1000.0)) : kNoEcho;
+    if (mm < static_cast<uint32_t>(kDmin) || mm > static_cast<uint32_t>(kDmax)) mm = kNoEcho;
+    data += scip::encodeValue(mm, chars);
+    if (intensity) {
+      const uint32_t in =
+          mm == kNoEcho ? 0 : static_cast<uint32_t>(std::lround(20000.0 / (1.0 + r_best)));
+      data += scip::encodeValue(in, chars);
+    }
+  }
+  *out += blocks(data) + "\n";
+}
+
+}  // namespace sweepmap
