@@ -5,7 +5,9 @@
 #include <stdexcept>
 
 #include "drivers/clock_sync.hpp"
+#include "drivers/protocols/rplidar.hpp"
 #include "drivers/protocols/scip.hpp"
+#include "drivers/protocols/ydlidar.hpp"
 
 namespace sweepmap {
 namespace {
@@ -227,6 +229,372 @@ class ScipSession : public LidarSession {
   int64_t last_raw_ = 0, unwrapped_ = 0;
 };
 
+// ---- 360° serial lidars (YDLIDAR X4, RPLIDAR) -------------------------------------------
+
+// Samples (device angle, range, time) into scans on the rig's ray grid. A scan is one turn
+// from -180° to +180° in the lidar frame (device angles wrapped), so rays are in time
+// order; each ray keeps the sample nearest its grid angle, with that sample's own angle.
+class TurnAssembler {
+ public:
+  explicit TurnAssembler(const LidarConfig& grid) : grid_(grid) {}
+  void clear() {
+    current_.clear();
+    have_last_ = false;
+    partial_ = true;
+    rate_hz_ = 0.0;
+  }
+  void add(double device_deg, double distance_mm, float intensity, bool has_intensity,
+           int64_t utime, std::vector<Scan2D>* out) {
+    double theta = device_deg * M_PI / 180.0;
+    if (theta >= M_PI) theta -= 2.0 * M_PI;                     // [-180, 180): -180 starts a turn
+    if (have_last_ && theta < last_theta_ - M_PI) finish(out);  // a new turn
+    have_last_ = true;
+    last_theta_ = theta;
+    current_.push_back({theta, distance_mm * 1e-3, intensity, utime});
+    has_intensity_ = has_intensity;
+  }
+  int64_t partialTurns() const { return partial_turns_; }
+  // Turns per second of the last complete turn: the angle its samples cover over their time
+  // span (a gap between turns does not count). 0 until one is seen.
+  double turnRateHz() const { return rate_hz_; }
+
+ private:
+  struct Entry {
+    double theta, range_m;
+    float intensity;
+    int64_t utime;
+  };
+  void finish(std::vector<Scan2D>* out) {
+    if (partial_) {
+      // The turn the stream started in: incomplete, dropped.
+      partial_ = false;
+      ++partial_turns_;
+      current_.clear();
+      return;
+    }
+    // (A sample exactly at the grid's end, +180°, is the next turn's -180°.)
+    const int n = grid_.beam_count;
+    const double a0 = grid_.angle_min_deg * M_PI / 180.0;
+    const double inc = grid_.angle_increment_deg * M_PI / 180.0;
+    Scan2D s;
+    s.angle_min_rad = a0;
+    s.angle_increment_rad = inc;
+    s.range_min_m = grid_.range_min_m;
+    s.range_max_m = grid_.range_max_m;
+    s.seq = seq_++;
+    s.ranges_m.assign(static_cast<size_t>(n), 0.0f);
+    s.angles_rad.resize(static_cast<size_t>(n));
+    for (int i = 0; i < n; ++i)
+      s.angles_rad[static_cast<size_t>(i)] = static_cast<float>(a0 + inc * i);
+    if (has_intensity_) s.intensities.assign(static_cast<size_t>(n), 0.0f);
+    std::vector<double> best(static_cast<size_t>(n), 1e9);
+    int first_index = -1;
+    int64_t first_utime = 0;
+    std::vector<Entry> next;  // samples past the grid's end: the next turn's first ray
+    for (const Entry& e : current_) {
+      int i = static_cast<int>(std::lround((e.theta - a0) / inc));
+      if (i >= n && inc > 0) {
+        next.push_back(e);
+        next.back().theta -= 2.0 * M_PI;
+        continue;
+      }
+      i = ((i % n) + n) % n;
+      const auto k = static_cast<size_t>(i);
+      const double off = std::fabs(std::remainder(e.theta - (a0 + inc * i), 2.0 * M_PI));
+      if (first_index < 0) {
+        first_index = i;
+        first_utime = e.utime;
+      }
+      if (off >= best[k]) continue;
+      best[k] = off;
+      s.angles_rad[k] = static_cast<float>(e.theta);
+      const bool valid = e.range_m >= grid_.range_min_m && e.range_m <= grid_.range_max_m;
+      s.ranges_m[k] = valid ? static_cast<float>(e.range_m) : 0.0f;
+      if (has_intensity_) s.intensities[k] = e.intensity;
+    }
+    const double ray_s = grid_.rayPeriodS();
+    s.time_increment_ns = static_cast<int64_t>(std::llround(ray_s * 1e9));
+    s.utime = first_utime - static_cast<int64_t>(std::llround(first_index * ray_s * 1e6));
+    if (current_.size() > 1 && current_.back().utime > current_.front().utime) {
+      const double covered = current_.back().theta - current_.front().theta;
+      rate_hz_ =
+          covered / (2.0 * M_PI) / (1e-6 * double(current_.back().utime - current_.front().utime));
+    }
+    out->push_back(std::move(s));
+    current_ = std::move(next);
+  }
+
+  LidarConfig grid_;
+  std::vector<Entry> current_;
+  bool have_last_ = false, partial_ = true, has_intensity_ = false;
+  double last_theta_ = 0.0, rate_hz_ = 0.0;
+  int64_t seq_ = 0, partial_turns_ = 0;
+};
+
+// Host time of a stream offset: the chunk that holds it arrived at `arrival`, and a UART
+// delivers baud/10 bytes per second, so a byte `behind` bytes before the chunk's end left
+// the device that much earlier. Without receive times (a raw file): the line time alone.
+class LineClock {
+ public:
+  LineClock(ScanTime time, int baud) : time_(time), byte_us_(10e6 / baud) {}
+  void chunk(int64_t arrival, int64_t end_offset) {
+    arrival_ = arrival;
+    end_offset_ = end_offset;
+  }
+  int64_t at(int64_t offset) const {
+    if (time_ == ScanTime::kStream || arrival_ < 0) {
+      return static_cast<int64_t>(std::llround(static_cast<double>(offset) * byte_us_));
+    }
+    return arrival_ - static_cast<int64_t>(std::llround((end_offset_ - offset) * byte_us_));
+  }
+  double byteUs() const { return byte_us_; }
+
+ private:
+  ScanTime time_;
+  double byte_us_;
+  int64_t arrival_ = -1, end_offset_ = 0;
+};
+
+// What a model's datasheet says it measures [m].
+struct RangeSpec {
+  double min_m, max_m;
+};
+
+void checkRange(const LidarConfig& expected, const std::string& model, RangeSpec spec) {
+  if (expected.range_min_m < spec.min_m - 1e-9 || expected.range_max_m > spec.max_m + 1e-9) {
+    throw IdentityMismatch("range limits: the rig file says " + fmt(expected.range_min_m) + ".." +
+                           fmt(expected.range_max_m) + " m, the " + model + " measures " +
+                           fmt(spec.min_m) + ".." + fmt(spec.max_m) + " m");
+  }
+}
+
+void checkTurnRate(const LidarConfig& expected, const std::string& model, double rate_hz,
+                   int64_t turns) {
+  // After a few turns: a motor far from the rig's rate means another device or setting.
+  if (turns >= 5 && rate_hz > 0 &&
+      std::fabs(rate_hz - expected.scan_rate_hz) > 0.25 * expected.scan_rate_hz) {
+    throw IdentityMismatch("scan rate: the rig file says " + fmt(expected.scan_rate_hz) +
+                           " Hz, the " + model + " turns at " + fmt(rate_hz) + " Hz");
+  }
+}
+
+// Reads until `pred` accepts an event or 1 s passes; events after it are kept in *rest.
+template <class Decoder, class Event, class Pred>
+void awaitEvent(ByteStream& stream, const std::function<int64_t()>& now, Decoder& decoder,
+                std::vector<Event>* rest, const std::string& what, Pred pred) {
+  const int64_t deadline = now() + 1000000;
+  uint8_t buffer[4096];
+  while (now() < deadline) {
+    const size_t n = stream.read(buffer, sizeof buffer, 50);
+    std::vector<Event> events;
+    decoder.feed(buffer, n, &events);
+    for (size_t i = 0; i < events.size(); ++i) {
+      if (!pred(events[i])) continue;
+      rest->assign(events.begin() + static_cast<std::ptrdiff_t>(i) + 1, events.end());
+      return;
+    }
+  }
+  throw StreamError("no " + what + " within 1 s");
+}
+
+void drainQuiet(ByteStream& stream, const std::function<int64_t()>& now) {
+  uint8_t buffer[4096];
+  const int64_t deadline = now() + 2000000;
+  while (stream.read(buffer, sizeof buffer, 100) > 0) {
+    if (now() > deadline) throw StreamError("the device does not stop sending");
+  }
+}
+
+class X4Session : public LidarSession {
+ public:
+  X4Session(const LidarConfig& expected, const SessionOptions& options)
+      : expected_(expected),
+        line_(options.time, options.baud > 0 ? options.baud : kX4DefaultBaud),
+        turns_(expected) {}
+
+  void start(ByteStream& stream, const std::function<int64_t()>& now) override {
+    stream.setDtr(true);                       // M_EN: motor on
+    stream.write(std::string("\xA5\x65", 2));  // stop a scan left running (no reply)
+    drainQuiet(stream, now);
+    decoder_.reset();
+    turns_.clear();
+    pending_.clear();
+    seen_ = 0;
+    ydlidar::DeviceInfo info;
+    stream.write(std::string("\xA5\x90", 2));
+    awaitEvent(stream, now, decoder_, &pending_, "X4 device info", [&](const ydlidar::Event& e) {
+      if (const auto* i = std::get_if<ydlidar::DeviceInfo>(&e)) info = *i;
+      return std::holds_alternative<ydlidar::DeviceInfo>(e);
+    });
+    identity_ = "YDLIDAR model " + std::to_string(info.model) + " serial " + info.serial +
+                " firmware " + std::to_string(info.firmware_major) + "." +
+                std::to_string(info.firmware_minor);
+    if (info.model != ydlidar::kModelX4) {
+      throw IdentityMismatch("model: the rig file's device is an X4 (model code " +
+                             std::to_string(ydlidar::kModelX4) + "), the device reports model " +
+                             std::to_string(info.model));
+    }
+    identity_ = "X4 serial " + info.serial;
+    checkRange(expected_, "X4", {0.12, 10.0});
+    int status = 0, code = 0;
+    stream.write(std::string("\xA5\x91", 2));
+    awaitEvent(stream, now, decoder_, &pending_, "X4 health", [&](const ydlidar::Event& e) {
+      if (const auto* h = std::get_if<ydlidar::Health>(&e)) {
+        status = h->status;
+        code = h->error_code;
+        return true;
+      }
+      return false;
+    });
+    if (status == 2) throw StreamError("X4 health: error code " + std::to_string(code));
+    stream.write(std::string("\xA5\x60", 2));
+    awaitEvent(stream, now, decoder_, &pending_, "X4 scan start", [](const ydlidar::Event& e) {
+      return std::holds_alternative<ydlidar::ScanStart>(e);
+    });
+  }
+
+  void onBytes(const uint8_t* data, size_t size, int64_t arrival, std::vector<Scan2D>* scans,
+               std::vector<std::string>* errors) override {
+    std::vector<ydlidar::Event> events;
+    events.swap(pending_);
+    decoder_.feed(data, size, &events);
+    line_.chunk(arrival, decoder_.counters().bytes);
+    const double dt_us = expected_.rayPeriodS() * 1e6;
+    for (const ydlidar::Event& e : events) {
+      if (const auto* d = std::get_if<DecodeError>(&e)) {
+        errors->push_back(at(d->offset) + d->what);
+      } else if (const auto* h = std::get_if<ydlidar::Health>(&e)) {
+        if (h->status != 0) {
+          errors->push_back(at(h->offset) + "X4 health: status " + std::to_string(h->status) +
+                            ", error code " + std::to_string(h->error_code));
+        }
+      } else if (const auto* p = std::get_if<ydlidar::Packet>(&e)) {
+        // The packet left the device when its last sample was measured.
+        const int64_t sent = line_.at(p->offset);
+        const size_t n = p->samples.size();
+        for (size_t i = 0; i < n; ++i) {
+          const auto t = sent - static_cast<int64_t>(std::llround((n - 1 - i) * dt_us));
+          turns_.add(p->samples[i].angle_deg, p->samples[i].distance_mm, 0.0f, false, t, scans);
+        }
+      }
+    }
+    checkTurnRate(expected_, "X4", turns_.turnRateHz(),
+                  static_cast<int64_t>(scans->size()) + seen_);
+    seen_ += static_cast<int64_t>(scans->size());
+  }
+
+  void stop(ByteStream& stream) override {
+    stream.write(std::string("\xA5\x65", 2), 200);
+    stream.setDtr(false);
+  }
+  DecoderCounters decoderCounters() const override { return decoder_.counters(); }
+  std::string identity() const override { return identity_; }
+
+ private:
+  LidarConfig expected_;
+  LineClock line_;
+  TurnAssembler turns_;
+  ydlidar::Decoder decoder_;
+  std::vector<ydlidar::Event> pending_;
+  std::string identity_ = "YDLIDAR";
+  int64_t seen_ = 0;
+};
+
+class RplidarSession : public LidarSession {
+ public:
+  RplidarSession(const LidarConfig& expected, const SessionOptions& options)
+      : expected_(expected),
+        line_(options.time, options.baud > 0 ? options.baud : kRplidarDefaultBaud),
+        turns_(expected) {}
+
+  void start(ByteStream& stream, const std::function<int64_t()>& now) override {
+    stream.setDtr(false);  // the A1 adapter's MOTOCTL: DTR low runs the motor
+    stream.write(rplidar::request(rplidar::kCmdStop));
+    drainQuiet(stream, now);
+    decoder_.reset();
+    turns_.clear();
+    pending_.clear();
+    seen_ = 0;
+    rplidar::DeviceInfo info;
+    stream.write(rplidar::request(rplidar::kCmdInfo));
+    awaitEvent(stream, now, decoder_, &pending_, "RPLIDAR info", [&](const rplidar::Event& e) {
+      if (const auto* i = std::get_if<rplidar::DeviceInfo>(&e)) info = *i;
+      return std::holds_alternative<rplidar::DeviceInfo>(e);
+    });
+    const int family = info.model >> 4;  // 1: A1, 2: A2, 3: A3
+    const std::string name = family >= 1 && family <= 3 ? "A" + std::to_string(family) : "?";
+    identity_ = "RPLIDAR " + name + " (model " + std::to_string(info.model) + ") serial " +
+                info.serial + " firmware " + std::to_string(info.firmware_major) + "." +
+                std::to_string(info.firmware_minor);
+    if (family < 1 || family > 2) {
+      throw IdentityMismatch(
+          "model: the rig file's driver is for an RPLIDAR A1/A2 (standard "
+          "scan), the device reports model " +
+          std::to_string(info.model));
+    }
+    checkRange(expected_, "RPLIDAR " + name,
+               family == 1 ? RangeSpec{0.15, 12.0} : RangeSpec{0.15, 16.0});
+    int status = 0, code = 0;
+    stream.write(rplidar::request(rplidar::kCmdHealth));
+    awaitEvent(stream, now, decoder_, &pending_, "RPLIDAR health", [&](const rplidar::Event& e) {
+      if (const auto* h = std::get_if<rplidar::Health>(&e)) {
+        status = h->status;
+        code = h->error_code;
+        return true;
+      }
+      return false;
+    });
+    if (status == 2) {
+      // A protection stop: RESET clears it; the next connection tries again.
+      stream.write(rplidar::request(rplidar::kCmdReset));
+      throw StreamError("RPLIDAR health: error code " + std::to_string(code) + " (reset sent)");
+    }
+    stream.write(rplidar::request(rplidar::kCmdScan));
+    awaitEvent(stream, now, decoder_, &pending_, "RPLIDAR scan start", [](const rplidar::Event& e) {
+      return std::holds_alternative<rplidar::ScanStart>(e);
+    });
+  }
+
+  void onBytes(const uint8_t* data, size_t size, int64_t arrival, std::vector<Scan2D>* scans,
+               std::vector<std::string>* errors) override {
+    std::vector<rplidar::Event> events;
+    events.swap(pending_);
+    decoder_.feed(data, size, &events);
+    line_.chunk(arrival, decoder_.counters().bytes);
+    const auto sample_us = static_cast<int64_t>(std::llround(5 * line_.byteUs()));
+    for (const rplidar::Event& e : events) {
+      if (const auto* d = std::get_if<DecodeError>(&e)) {
+        errors->push_back(at(d->offset) + d->what);
+      } else if (const auto* batch = std::get_if<rplidar::Samples>(&e)) {
+        for (const rplidar::Sample& s : batch->samples) {
+          // Sent as soon as measured: its time is when its first byte left the device.
+          turns_.add(s.angle_deg, s.distance_mm, static_cast<float>(s.quality), true,
+                     line_.at(s.end_offset) - sample_us, scans);
+        }
+      }
+    }
+    checkTurnRate(expected_, "RPLIDAR", turns_.turnRateHz(),
+                  static_cast<int64_t>(scans->size()) + seen_);
+    seen_ += static_cast<int64_t>(scans->size());
+  }
+
+  void stop(ByteStream& stream) override {
+    stream.write(rplidar::request(rplidar::kCmdStop), 200);
+    stream.setDtr(true);  // motor off
+  }
+  DecoderCounters decoderCounters() const override { return decoder_.counters(); }
+  std::string identity() const override { return identity_; }
+
+ private:
+  LidarConfig expected_;
+  LineClock line_;
+  TurnAssembler turns_;
+  rplidar::Decoder decoder_;
+  std::vector<rplidar::Event> pending_;
+  std::string identity_ = "RPLIDAR";
+  int64_t seen_ = 0;
+};
+
 }  // namespace
 
 std::unique_ptr<LidarSession> makeLidarSession(DeviceProtocol protocol, const LidarConfig& expected,
@@ -235,8 +603,9 @@ std::unique_ptr<LidarSession> makeLidarSession(DeviceProtocol protocol, const Li
     case DeviceProtocol::kScip:
       return std::make_unique<ScipSession>(expected, options);
     case DeviceProtocol::kYdlidarX4:
+      return std::make_unique<X4Session>(expected, options);
     case DeviceProtocol::kRplidar:
-      throw std::invalid_argument(std::string(protocolName(protocol)) + ": driver not built yet");
+      return std::make_unique<RplidarSession>(expected, options);
     case DeviceProtocol::kSim:
       break;
   }

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "tools/emulate/scip_device.hpp"
+#include "tools/emulate/serial_devices.hpp"
 
 namespace sweepmap {
 
@@ -27,10 +28,11 @@ std::unique_ptr<EmulatedLidar> makeEmulatedLidar(EmulatedModel model, ScanSource
     case EmulatedModel::kUst10lx:
       return std::make_unique<ScipDevice>(std::move(source), clock, power_on_us);
     case EmulatedModel::kX4:
+      return std::make_unique<X4Device>(std::move(source));
     case EmulatedModel::kRplidarA1:
-      break;
+      return std::make_unique<RplidarDevice>(std::move(source));
   }
-  throw std::invalid_argument("this emulated lidar is not built yet");
+  throw std::invalid_argument("unknown emulated lidar");
 }
 
 }  // namespace sweepmap

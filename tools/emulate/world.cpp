@@ -120,7 +120,8 @@ class MobileWorld : public EmulatorWorld {
       std::vector<Scan2D> out;
       for (;;) {
         if (!pending_) pending_ = car_->makeScan(next_++, &rng_);
-        if (car_->scanDeliveryUtime(*pending_) > now_us) break;
+        // As the scan begins: a sample-streaming device sends each ray at its own time.
+        if (pending_->utime > now_us) break;
         out.push_back(std::move(*pending_));
         pending_.reset();
       }

@@ -4,7 +4,9 @@
 //    a simulated stepper in another process (`sweepmap-motor --sim`); then the world also
 //    publishes TRUTH_RIG and TRUTH_SWEEP, as `sweepmap-lidar --sim` does.
 //  - mobile_lidar rigs (the X4 of rig B; RPLIDAR): the simulated car driving its path
-//    (then standing at its end), its 360° lidar's scans.
+//    (then standing at its end), its 360° lidar's scans, each handed out as it begins (the
+//    path is scripted, so its rays are known ahead) for devices that send every sample at
+//    its own time.
 // A device's scan timing follows its own oscillator: with a clock drift of p ppm the scans
 // come (1 + p·1e-6) times as often in true time, as a real mirror/motor timed by that
 // oscillator does.

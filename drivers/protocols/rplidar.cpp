@@ -1,0 +1,247 @@
+#include "drivers/protocols/rplidar.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace sweepmap {
+namespace rplidar {
+namespace {
+
+constexpr size_t kDescriptor = 7;
+constexpr size_t kSample = 5;
+
+bool validSample(const uint8_t* p) {
+  const bool s = p[0] & 1, not_s = (p[0] >> 1) & 1;
+  return s != not_s && (p[1] & 1) == 1;
+}
+
+bool knownDescriptor(const uint8_t* p, uint32_t* length, int* mode, uint8_t* type) {
+  if (p[0] != 0xA5 || p[1] != 0x5A) return false;
+  const uint32_t word = static_cast<uint32_t>(p[2] | (p[3] << 8) | (p[4] << 16) | (p[5] << 24));
+  *length = word & 0x3FFFFFFF;
+  *mode = static_cast<int>(word >> 30);
+  *type = p[6];
+  return (*type == kTypeScan && *length == 5 && *mode == 1) ||
+         (*type == kTypeInfo && *length == 20 && *mode == 0) ||
+         (*type == kTypeHealth && *length == 3 && *mode == 0) ||
+         (*type == kTypeSampleRate && *length == 4 && *mode == 0);
+}
+
+std::string hex(const uint8_t* p, int n) {
+  std::string s;
+  for (int i = 0; i < n; ++i) {
+    char h[3];
+    std::snprintf(h, sizeof h, "%02X", p[i]);
+    s += h;
+  }
+  return s;
+}
+
+}  // namespace
+
+void Decoder::reset() {
+  counters_ = {};
+  buffer_.clear();
+  buffer_offset_ = 0;
+  scanning_ = false;
+  garbage_start_ = -1;
+  garbage_bytes_ = 0;
+}
+
+void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
+  counters_.bytes += static_cast<int64_t>(size);
+  buffer_.insert(buffer_.end(), data, data + size);
+  size_t at = 0;
+  Samples batch;
+  const auto flushBatch = [&] {
+    if (!batch.samples.empty()) out->push_back(std::move(batch));
+    batch = Samples{};
+  };
+  const auto flushGarbage = [&] {
+    if (garbage_bytes_ == 0) return;
+    flushBatch();
+    ++counters_.resyncs;
+    counters_.discarded_bytes += static_cast<int64_t>(garbage_bytes_);
+    out->push_back(DecodeError{garbage_start_, "RPLIDAR: " + std::to_string(garbage_bytes_) +
+                                                   " bytes skipped (bad start or check bits)"});
+    garbage_bytes_ = 0;
+  };
+  const auto skip = [&] {
+    if (garbage_bytes_ == 0) garbage_start_ = buffer_offset_ + static_cast<int64_t>(at);
+    ++garbage_bytes_;
+    ++at;
+  };
+  while (at < buffer_.size()) {
+    const size_t left = buffer_.size() - at;
+    const uint8_t* p = buffer_.data() + at;
+    const int64_t offset = buffer_offset_ + static_cast<int64_t>(at);
+    if (p[0] == 0xA5) {
+      if (left < kDescriptor) {
+        if (!scanning_ || left < 2 || p[1] == 0x5A) break;
+      } else {
+        uint32_t length = 0;
+        int mode = 0;
+        uint8_t type = 0;
+        if (knownDescriptor(p, &length, &mode, &type)) {
+          if (type != kTypeScan && left < kDescriptor + length) break;
+          flushGarbage();
+          flushBatch();
+          ++counters_.packets;
+          const uint8_t* c = p + kDescriptor;
+          if (type == kTypeScan) {
+            scanning_ = true;
+            out->push_back(ScanStart{offset});
+            at += kDescriptor;
+            continue;
+          }
+          scanning_ = false;
+          if (type == kTypeInfo) {
+            DeviceInfo i;
+            i.model = c[0];
+            i.firmware_minor = c[1];
+            i.firmware_major = c[2];
+            i.hardware = c[3];
+            i.serial = hex(c + 4, 16);
+            i.offset = offset;
+            out->push_back(i);
+          } else if (type == kTypeHealth) {
+            Health h;
+            h.status = c[0];
+            h.error_code = c[1] | (c[2] << 8);
+            h.offset = offset;
+            if (h.status != 0) ++counters_.device_errors;
+            out->push_back(h);
+          } else {
+            SampleRate r;
+            r.standard_us = c[0] | (c[1] << 8);
+            r.express_us = c[2] | (c[3] << 8);
+            r.offset = offset;
+            out->push_back(r);
+          }
+          at += kDescriptor + length;
+          continue;
+        }
+      }
+    }
+    if (!scanning_) {
+      skip();
+      continue;
+    }
+    if (left < kSample) break;
+    if (!validSample(p)) {
+      skip();
+      continue;
+    }
+    flushGarbage();
+    Sample s;
+    s.start = p[0] & 1;
+    s.quality = p[0] >> 2;
+    s.angle_deg = ((p[1] >> 1) | (p[2] << 7)) / 64.0;
+    s.distance_mm = (p[3] | (p[4] << 8)) / 4.0;
+    s.end_offset = offset + static_cast<int64_t>(kSample);
+    if (s.angle_deg >= 360.0) {
+      skip();  // angle_q6 beyond a turn: not a sample
+      continue;
+    }
+    ++counters_.packets;
+    batch.samples.push_back(s);
+    at += kSample;
+  }
+  flushBatch();
+  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
+  buffer_offset_ += static_cast<int64_t>(at);
+  if (buffer_.empty()) flushGarbage();
+}
+
+std::string request(uint8_t cmd, const std::string& payload) {
+  std::string s = {static_cast<char>(0xA5), static_cast<char>(cmd)};
+  if (!payload.empty()) {
+    s.push_back(static_cast<char>(payload.size()));
+    s += payload;
+    uint8_t x = 0;
+    for (char c : s) x ^= static_cast<uint8_t>(c);
+    s.push_back(static_cast<char>(x));
+  }
+  return s;
+}
+
+std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {
+  std::string s = "\xA5\x5A";
+  const uint32_t word = (length & 0x3FFFFFFF) | (static_cast<uint32_t>(mode) << 30);
+  for (int i = 0; i < 4; ++i) s.push_back(static_cast<char>((word >> (8 * i)) & 0xff));
+  s.push_back(static_cast<char>(type));
+  return s;
+}
+
+std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
+                       const std::string& serial16) {
+  std::string s = encodeDescriptor(20, 0, kTypeInfo);
+  s.push_back(static_cast<char>(model));
+  s.push_back(static_cast<char>(fw_minor));
+  s.push_back(static_cast<char>(fw_major));
+  s.push_back(static_cast<char>(hardware));
+  for (int i = 0; i < 16; ++i) s.push_back(i < static_cast<int>(serial16.size()) ? serial16[i] : 0);
+  return s;
+}
+
+std::string encodeHealth(int status, int error_code) {
+  std::string s = encodeDescriptor(3, 0, kTypeHealth);
+  s.push_back(static_cast<char>(status));
+  s.push_back(static_cast<char>(error_code & 0xff));
+  s.push_back(static_cast<char>(error_code >> 8));
+  return s;
+}
+
+std::string encodeSample(bool start, int quality, double angle_deg, double distance_mm) {
+  double a = std::fmod(angle_deg, 360.0);
+  if (a < 0) a += 360.0;
+  int q6 = static_cast<int>(std::lround(a * 64.0));
+  if (q6 >= 360 * 64) q6 -= 360 * 64;
+  const auto q2 = static_cast<uint16_t>(std::clamp(std::lround(distance_mm * 4.0), 0L, 65535L));
+  std::string s(5, '\0');
+  s[0] = static_cast<char>((std::clamp(quality, 0, 63) << 2) | ((start ? 0 : 1) << 1) |
+                           (start ? 1 : 0));
+  s[1] = static_cast<char>(((q6 & 0x7f) << 1) | 1);
+  s[2] = static_cast<char>((q6 >> 7) & 0xff);
+  s[3] = static_cast<char>(q2 & 0xff);
+  s[4] = static_cast<char>(q2 >> 8);
+  return s;
+}
+
+void RequestParser::feed(const uint8_t* data, size_t size, std::vector<Request>* out) {
+  buffer_.insert(buffer_.end(), data, data + size);
+  size_t at = 0;
+  while (at < buffer_.size()) {
+    if (buffer_[at] != 0xA5) {
+      ++at;
+      continue;
+    }
+    if (buffer_.size() - at < 2) break;
+    const uint8_t cmd = buffer_[at + 1];
+    // Commands with a payload have bit 7 set (EXPRESS_SCAN 0x82, SET_MOTOR_PWM 0xF0, ...).
+    if (cmd & 0x80) {
+      if (buffer_.size() - at < 3) break;
+      const size_t n = buffer_[at + 2];
+      if (buffer_.size() - at < 4 + n) break;
+      uint8_t x = 0;
+      for (size_t i = 0; i < 3 + n; ++i) x ^= buffer_[at + i];
+      if (x == buffer_[at + 3 + n]) {
+        out->push_back(
+            Request{cmd, std::string(buffer_.begin() + static_cast<std::ptrdiff_t>(at + 3),
+                                     buffer_.begin() + static_cast<std::ptrdiff_t>(at + 3 + n))});
+        at += 4 + n;
+      } else {
+        ++at;
+      }
+      continue;
+    }
+    out->push_back(Request{cmd, {}});
+    at += 2;
+  }
+  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
+  if (buffer_.size() > 1024) buffer_.clear();
+}
+
+}  // namespace rplidar
+}  // namespace sweepmap
