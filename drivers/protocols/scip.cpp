@@ -40,8 +40,9 @@ int parameterLength(const std::string& c) {
 bool validEcho(std::string_view line) {
   if (line.size() < 2 || !isCommandLetter(line[0]) || !isCommandLetter(line[1])) return false;
   const std::string c(line.substr(0, 2));
+  // An unknown command is echoed too (with status 0D/0E): any two capitals; the status line
+  // that must follow, with its checksum, keeps garbage from passing for a reply.
   const int n = parameterLength(c);
-  if (n < 0) return false;
   std::string_view rest = line.substr(2);
   const size_t semi = rest.find(';');
   std::string_view params = rest.substr(0, semi);
@@ -50,13 +51,23 @@ bool validEcho(std::string_view line) {
   // Error replies echo what was sent, however malformed: accept any printable parameters
   // of a plausible length, but a scan command's must be its own length (streams are the
   // bulk of the traffic and garbage must not pass for them).
-  if (isScanCommand(c) || c == "TM") {
-    return params.size() == static_cast<size_t>(n) &&
+  if (n >= 0 && (isScanCommand(c) || c == "TM")) {
+    // A malformed command is echoed as sent (with its error status): up to the full length.
+    return params.size() <= static_cast<size_t>(n) &&
            std::all_of(params.begin(), params.end(),
                        [](char ch) { return ch > 0x20 && ch < 0x7f; });
   }
   return params.size() <= 16 &&
          std::all_of(params.begin(), params.end(), [](char ch) { return ch >= 0x20 && ch < 0x7f; });
+}
+
+// A data line with its checksum; VV/PP/II lines' checksums cover the text before the ';'.
+bool bodyLineOk(const std::string& command, std::string_view text) {
+  if (text.size() < 2) return false;
+  std::string_view data = text.substr(0, text.size() - 1);
+  const bool info = command == "VV" || command == "PP" || command == "II";
+  if (info && !data.empty() && data.back() == ';') data.remove_suffix(1);
+  return checksum(data) == text.back();
 }
 
 bool validStatus(std::string_view line) {
@@ -203,7 +214,8 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
       std::string_view text(partial_);
       if (!text.empty() && text.back() == '\r') text.remove_suffix(1);  // CR LF
       if (partial_too_long_) {
-        discard(partial_offset_, partial_.size() + 1, "line longer than any reply's", out);
+        discard(partial_offset_, static_cast<size_t>(at - partial_offset_ + 1),
+                "line longer than any reply's", out);
         state_ = State::kEcho;
         body_.clear();
       } else {
@@ -278,9 +290,9 @@ void Decoder::line(std::string_view text, int64_t offset, std::vector<Event>* ou
         state_ = State::kEcho;
         return;
       }
-      // A lost LF LF: a line that fails as data but is the echo of a new reply.
-      if (text.size() >= 2 && checksum(text.substr(0, text.size() - 1)) != text.back() &&
-          validEcho(text)) {
+      // A lost LF LF: a line that fails as data but is the echo of a known command.
+      if (!bodyLineOk(echo_.substr(0, 2), text) && validEcho(text) &&
+          parameterLength(std::string(text.substr(0, 2))) >= 0) {
         ++counters_.checksum_errors;
         out->push_back(DecodeError{reply_offset_, "SCIP " + echo_.substr(0, 2) +
                                                       " reply: not terminated (lost line end)"});
