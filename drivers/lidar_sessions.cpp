@@ -198,6 +198,13 @@ class ScipSession : public LidarSession {
       return;
     }
     Scan2D s = scip::toScan2D(d, params_);
+    // The rig file's limits where they are narrower than the sensor's (a UST-10LX reports
+    // echoes to 30 m but is specified to 10 m), as the simulated lidar publishes them.
+    s.range_min_m = std::max(s.range_min_m, expected_.range_min_m);
+    s.range_max_m = std::min(s.range_max_m, expected_.range_max_m);
+    for (float& r : s.ranges_m) {
+      if (r < s.range_min_m || r > s.range_max_m) r = 0.0f;
+    }
     s.seq = seq_++;
     const double ray_s = 60.0 / params_.scan_rpm / params_.ares;
     s.time_increment_ns = static_cast<int64_t>(std::llround(ray_s * d.cluster * 1e9));

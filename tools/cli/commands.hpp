@@ -21,5 +21,6 @@ Runner addImportCommand(CLI::App& app);  // group: import breezyslam
 Runner addEmulateCommand(CLI::App& app);
 Runner addCaptureCommand(CLI::App& app);
 Runner addDecodeCommand(CLI::App& app);
+Runner addDumpCommand(CLI::App& app);
 
 }  // namespace sweepmap

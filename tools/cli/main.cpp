@@ -1,5 +1,5 @@
 // sweepmap: one tool, one subcommand per job (sim, replay, demo, spy, bench, calib, eval,
-// import, emulate, capture, decode); each serves every rig kind its rig file names.
+// import, emulate, capture, decode, dump); each serves every rig kind its rig file names.
 #include <iostream>
 #include <map>
 
@@ -21,6 +21,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addEmulateCommand(app));
   add(sweepmap::addCaptureCommand(app));
   add(sweepmap::addDecodeCommand(app));
+  add(sweepmap::addDumpCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

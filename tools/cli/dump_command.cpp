@@ -1,0 +1,27 @@
+// `sweepmap dump`: an LCM log's messages decoded (tools/offline/dump.hpp).
+#include <iostream>
+
+#include "tools/cli/commands.hpp"
+#include "tools/offline/dump.hpp"
+
+namespace sweepmap {
+
+Runner addDumpCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "dump",
+      "Print an LCM log's messages decoded, in log order: each with its log time, channel, type "
+      "and every field by its name in the .lcm files this build was made from (long arrays "
+      "shortened; --full prints them whole). --json: one JSON object per message per line "
+      "with \"channel\", \"log_utime\", \"type\" and the fields (arrays whole; NaN and "
+      "infinities as null). A message of no known type is shown with its size and first bytes. "
+      "A log that ends in a truncated or corrupt event: everything before it is printed, then "
+      "the error with its byte offset, and the exit status is 1.");
+  auto o = std::make_shared<DumpOptions>();
+  cmd->add_option("log", o->log, "LCM log file")->required()->check(CLI::ExistingFile);
+  cmd->add_option("--channel", o->channel, "only this channel (exact name)");
+  cmd->add_flag("--json", o->json, "one JSON object per message per line");
+  cmd->add_flag("--full", o->full, "print arrays whole");
+  return [o]() { return runDump(*o, std::cout, std::cerr); };
+}
+
+}  // namespace sweepmap

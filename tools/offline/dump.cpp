@@ -1,0 +1,149 @@
+#include "tools/offline/dump.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "core/event_log.hpp"
+#include "tools/offline/lcm_schema.hpp"
+
+namespace sweepmap {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// NaN and infinities have no JSON form: null.
+Json toJson(const LcmValue& v) {
+  switch (v.kind) {
+    case LcmValue::Kind::kInt:
+      return v.i;
+    case LcmValue::Kind::kDouble:
+      return std::isfinite(v.d) ? Json(v.d) : Json(nullptr);
+    case LcmValue::Kind::kString:
+      return v.s;
+    case LcmValue::Kind::kBool:
+      return v.i != 0;
+    case LcmValue::Kind::kArray: {
+      Json a = Json::array();
+      for (const LcmValue& e : v.items) a.push_back(toJson(e));
+      return a;
+    }
+    case LcmValue::Kind::kStruct: {
+      Json o = Json::object();
+      for (const auto& [k, f] : v.fields) o[k] = toJson(f);
+      return o;
+    }
+  }
+  return nullptr;
+}
+
+std::string scalar(const LcmValue& v) {
+  std::ostringstream s;
+  switch (v.kind) {
+    case LcmValue::Kind::kInt:
+      s << v.i;
+      break;
+    case LcmValue::Kind::kDouble:
+      s << std::setprecision(9) << v.d;
+      break;
+    case LcmValue::Kind::kString:
+      s << Json(v.s).dump();
+      break;
+    case LcmValue::Kind::kBool:
+      s << (v.i ? "true" : "false");
+      break;
+    default:
+      s << "?";
+  }
+  return s.str();
+}
+
+void human(const std::string& name, const LcmValue& v, const std::string& indent, bool full,
+           std::ostream& out) {
+  if (v.kind == LcmValue::Kind::kStruct) {
+    out << indent << name << ":\n";
+    for (const auto& [k, f] : v.fields) human(k, f, indent + "  ", full, out);
+    return;
+  }
+  if (v.kind != LcmValue::Kind::kArray) {
+    out << indent << name << " = " << scalar(v) << "\n";
+    return;
+  }
+  out << indent << name << "[" << v.items.size() << "] =";
+  const size_t shown = full ? v.items.size() : std::min<size_t>(v.items.size(), 8);
+  for (size_t i = 0; i < shown; ++i) {
+    const LcmValue& e = v.items[i];
+    if (e.kind == LcmValue::Kind::kArray || e.kind == LcmValue::Kind::kStruct) {
+      out << "\n";
+      human(name + "[" + std::to_string(i) + "]", e, indent + "  ", full, out);
+    } else {
+      out << " " << scalar(e);
+    }
+  }
+  if (shown < v.items.size()) out << " … (" << v.items.size() << " values; --full shows all)";
+  out << "\n";
+}
+
+std::string hexHead(const std::vector<uint8_t>& data, size_t n) {
+  std::ostringstream s;
+  for (size_t i = 0; i < std::min(n, data.size()); ++i) {
+    s << std::hex << std::setw(2) << std::setfill('0') << int(data[i]);
+  }
+  return s.str();
+}
+
+}  // namespace
+
+int runDump(const DumpOptions& o, std::ostream& out, std::ostream& err) {
+  const LcmSchema& schema = LcmSchema::builtIn();
+  EventLogReader reader(o.log);
+  LogEvent ev;
+  int status = 0;
+  for (;;) {
+    try {
+      if (!reader.next(&ev)) break;
+    } catch (const LogError& e) {
+      err << "sweepmap dump: " << e.what() << "\n";
+      status = 1;
+      break;
+    }
+    if (!o.channel.empty() && ev.channel != o.channel) continue;
+    LcmValue value;
+    const LcmStruct* type = nullptr;
+    std::string problem;
+    try {
+      type = schema.decode(ev.data.data(), ev.data.size(), &value);
+      if (!type) problem = "unknown type";
+    } catch (const LcmSchemaError& e) {
+      problem = e.what();
+    }
+    if (o.json) {
+      Json j = Json::object();
+      j["channel"] = ev.channel;
+      j["log_utime"] = ev.utime;
+      if (type && problem.empty()) {
+        j["type"] = type->package + "." + type->name;
+        for (const auto& [k, f] : value.fields) j[k] = toJson(f);
+      } else {
+        j["type"] = "unknown";
+        j["size"] = ev.data.size();
+        j["error"] = problem;
+        j["head_hex"] = hexHead(ev.data, 32);
+      }
+      out << j.dump() << "\n";
+    } else {
+      out << ev.utime << " " << ev.channel;
+      if (type && problem.empty()) {
+        out << " (" << type->package << "." << type->name << ", " << ev.data.size() << " bytes)\n";
+        for (const auto& [k, f] : value.fields) human(k, f, "  ", o.full, out);
+      } else {
+        out << " (" << problem << ", " << ev.data.size() << " bytes: " << hexHead(ev.data, 32)
+            << (ev.data.size() > 32 ? "…" : "") << ")\n";
+      }
+    }
+  }
+  return status;
+}
+
+}  // namespace sweepmap

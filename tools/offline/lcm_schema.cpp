@@ -1,0 +1,348 @@
+#include "tools/offline/lcm_schema.hpp"
+
+#include <cctype>
+#include <cstring>
+#include <functional>
+#include <set>
+
+namespace sweepmap {
+namespace {
+
+const std::set<std::string> kPrimitive = {"int8_t", "int16_t", "int32_t", "int64_t", "byte",
+                                          "float",  "double",  "string",  "boolean"};
+bool isIntegerType(const std::string& t) {
+  return t == "int8_t" || t == "int16_t" || t == "int32_t" || t == "int64_t" || t == "byte";
+}
+
+struct Token {
+  std::string text;
+  int line;
+  std::string comment;  // a // comment ending the token's line
+};
+
+// Identifiers, numbers (incl. signs, dots, exponents, hex), single punctuation; comments
+// dropped but a line's trailing // comment kept on the line's tokens.
+std::vector<Token> tokenize(const std::string& file, const std::string& text) {
+  std::vector<Token> out;
+  int line = 1;
+  size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '\n') {
+      ++line;
+      ++i;
+    } else if (std::isspace(static_cast<unsigned char>(c))) {
+      ++i;
+    } else if (text.compare(i, 2, "//") == 0) {
+      const size_t end = text.find('\n', i);
+      std::string comment =
+          text.substr(i + 2, end == std::string::npos ? std::string::npos : end - i - 2);
+      while (!comment.empty() && std::isspace(static_cast<unsigned char>(comment.front())))
+        comment.erase(0, 1);
+      for (auto it = out.rbegin(); it != out.rend() && it->line == line; ++it)
+        it->comment = comment;
+      i = end == std::string::npos ? text.size() : end;
+    } else if (text.compare(i, 2, "/*") == 0) {
+      const size_t end = text.find("*/", i + 2);
+      if (end == std::string::npos)
+        throw LcmSchemaError(file + ":" + std::to_string(line) + ": unterminated comment");
+      for (size_t k = i; k < end; ++k) line += text[k] == '\n';
+      i = end + 2;
+    } else if (std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.') {
+      size_t j = i + 1;
+      while (j < text.size() &&
+             (std::isalnum(static_cast<unsigned char>(text[j])) || text[j] == '_' ||
+              text[j] == '.' ||
+              ((text[j] == '-' || text[j] == '+') && (text[j - 1] == 'e' || text[j - 1] == 'E')))) {
+        ++j;
+      }
+      out.push_back({text.substr(i, j - i), line, ""});
+      i = j;
+    } else {
+      out.push_back({std::string(1, c), line, ""});
+      ++i;
+    }
+  }
+  return out;
+}
+
+// lcm-gen's hash (lcmgen.c): signed 64-bit arithmetic, the shift right arithmetic.
+int64_t hashUpdate(int64_t v, char c) {
+  const auto u = static_cast<uint64_t>(v);
+  return static_cast<int64_t>((u << 8) ^ static_cast<uint64_t>(v >> 55)) + c;
+}
+int64_t hashString(int64_t v, const std::string& s) {
+  v = hashUpdate(v, static_cast<char>(s.size()));
+  for (char c : s) v = hashUpdate(v, c);
+  return v;
+}
+
+bool isNumber(const std::string& s) {
+  return !s.empty() && std::all_of(s.begin(), s.end(), [](char c) {
+    return std::isdigit(static_cast<unsigned char>(c));
+  });
+}
+
+class Reader {
+ public:
+  Reader(const uint8_t* data, size_t size) : data_(data), size_(size) {}
+  size_t at() const { return at_; }
+  const uint8_t* take(size_t n, const std::string& what) {
+    if (n > size_ - at_) {
+      throw LcmSchemaError(what + " at byte " + std::to_string(at_) + ": needs " +
+                           std::to_string(n) + " bytes, " + std::to_string(size_ - at_) + " left");
+    }
+    const uint8_t* p = data_ + at_;
+    at_ += n;
+    return p;
+  }
+  uint64_t be(size_t n, const std::string& what) {
+    const uint8_t* p = take(n, what);
+    uint64_t v = 0;
+    for (size_t k = 0; k < n; ++k) v = (v << 8) | p[k];
+    return v;
+  }
+  size_t left() const { return size_ - at_; }
+
+ private:
+  const uint8_t* data_;
+  size_t size_;
+  size_t at_ = 0;
+};
+
+// The smallest encoded size of one element of `type` (for count checks).
+size_t minSize(const LcmSchema& schema, const std::string& type) {
+  if (type == "int8_t" || type == "byte" || type == "boolean") return 1;
+  if (type == "int16_t") return 2;
+  if (type == "int32_t" || type == "float" || type == "string") return 4;
+  if (type == "int64_t" || type == "double") return 8;
+  return 0;  // a struct: may be empty
+}
+
+}  // namespace
+
+LcmSchema::LcmSchema(const std::vector<std::pair<std::string, std::string>>& sources) {
+  for (const auto& [file, text] : sources) {
+    const std::vector<Token> t = tokenize(file, text);
+    size_t i = 0;
+    std::string package;
+    const auto where = [&](size_t k) {
+      return file + ":" +
+             std::to_string(k < t.size() ? t[k].line : (t.empty() ? 1 : t.back().line));
+    };
+    const auto expect = [&](const std::string& s) {
+      if (i >= t.size() || t[i].text != s) {
+        throw LcmSchemaError(where(i) + ": expected '" + s + "'" +
+                             (i < t.size() ? ", found '" + t[i].text + "'" : ""));
+      }
+      ++i;
+    };
+    while (i < t.size()) {
+      if (t[i].text == "package") {
+        ++i;
+        if (i >= t.size()) throw LcmSchemaError(where(i) + ": package name missing");
+        package = t[i++].text;
+        expect(";");
+        continue;
+      }
+      expect("struct");
+      if (i >= t.size()) throw LcmSchemaError(where(i) + ": struct name missing");
+      LcmStruct s;
+      s.package = package;
+      s.name = t[i++].text;
+      expect("{");
+      while (i < t.size() && t[i].text != "}") {
+        if (t[i].text == "const") {  // const TYPE NAME = VALUE [, NAME = VALUE]... ;
+          while (i < t.size() && t[i].text != ";") ++i;
+          expect(";");
+          continue;
+        }
+        LcmMember m;
+        m.type = t[i++].text;
+        if (m.type.find('.') != std::string::npos) m.type = m.type.substr(m.type.rfind('.') + 1);
+        if (i >= t.size()) throw LcmSchemaError(where(i) + ": member name missing");
+        m.comment = t[i].comment;
+        m.name = t[i++].text;
+        while (i < t.size() && t[i].text == "[") {
+          ++i;
+          if (i >= t.size()) throw LcmSchemaError(where(i) + ": array size missing");
+          m.dims.push_back(t[i++].text);
+          expect("]");
+        }
+        if (i < t.size() && t[i].text == ";" && m.comment.empty()) m.comment = t[i].comment;
+        expect(";");
+        for (const std::string& d : m.dims) {
+          if (isNumber(d)) continue;
+          const auto it = std::find_if(s.members.begin(), s.members.end(),
+                                       [&](const LcmMember& o) { return o.name == d; });
+          if (it == s.members.end() || !it->dims.empty() || !isIntegerType(it->type)) {
+            throw LcmSchemaError(where(i) + ": " + m.name + "[" + d +
+                                 "]: the size must be a number or an earlier integer member");
+          }
+        }
+        s.members.push_back(std::move(m));
+      }
+      expect("}");
+      // lcm-gen: member names, primitive type names, dimensions (mode: 0 const, 1 variable).
+      int64_t v = 0x12345678;
+      for (const LcmMember& m : s.members) {
+        v = hashString(v, m.name);
+        if (kPrimitive.count(m.type)) v = hashString(v, m.type);
+        v = hashUpdate(v, static_cast<char>(m.dims.size()));
+        for (const std::string& d : m.dims) {
+          v = hashUpdate(v, isNumber(d) ? 0 : 1);
+          v = hashString(v, d);
+        }
+      }
+      s.base_hash = v;
+      structs_.push_back(std::move(s));
+    }
+  }
+  // Fingerprints: the base hash plus those of the member structs, rotated left by one
+  // (lcm-gen's _computeHash; a type met again on the way in counts 0).
+  std::function<int64_t(const LcmStruct&, std::vector<const LcmStruct*>&)> compute =
+      [&](const LcmStruct& s, std::vector<const LcmStruct*>& parents) -> int64_t {
+    if (std::find(parents.begin(), parents.end(), &s) != parents.end()) return 0;
+    parents.push_back(&s);
+    uint64_t h = static_cast<uint64_t>(s.base_hash);
+    for (const LcmMember& m : s.members) {
+      if (kPrimitive.count(m.type)) continue;
+      const LcmStruct* inner = find(m.type);
+      if (!inner) throw LcmSchemaError(s.name + "." + m.name + ": unknown type " + m.type);
+      h += static_cast<uint64_t>(compute(*inner, parents));
+    }
+    parents.pop_back();
+    return static_cast<int64_t>((h << 1) + ((h >> 63) & 1));
+  };
+  for (size_t k = 0; k < structs_.size(); ++k) {
+    std::vector<const LcmStruct*> parents;
+    structs_[k].fingerprint = compute(structs_[k], parents);
+    by_fingerprint_[structs_[k].fingerprint] = k;
+  }
+}
+
+const LcmSchema& LcmSchema::builtIn() {
+  static const LcmSchema schema(lcmTypeSources());
+  return schema;
+}
+
+const LcmStruct* LcmSchema::find(const std::string& name) const {
+  const std::string bare =
+      name.find('.') == std::string::npos ? name : name.substr(name.rfind('.') + 1);
+  for (const LcmStruct& s : structs_) {
+    if (s.name == bare) return &s;
+  }
+  return nullptr;
+}
+
+const LcmStruct* LcmSchema::byFingerprint(int64_t fingerprint) const {
+  const auto it = by_fingerprint_.find(fingerprint);
+  return it == by_fingerprint_.end() ? nullptr : &structs_[it->second];
+}
+
+namespace {
+
+void decodeStruct(const LcmSchema& schema, const LcmStruct& s, Reader& r, LcmValue* out, int depth);
+
+LcmValue decodeOne(const LcmSchema& schema, const std::string& type, Reader& r,
+                   const std::string& what, int depth) {
+  LcmValue v;
+  if (type == "int8_t" || type == "byte" || type == "boolean") {
+    const uint64_t b = r.be(1, what);
+    v.kind = type == "boolean" ? LcmValue::Kind::kBool : LcmValue::Kind::kInt;
+    v.i = type == "int8_t" ? static_cast<int8_t>(b) : static_cast<int64_t>(b);
+  } else if (type == "int16_t") {
+    v.i = static_cast<int16_t>(r.be(2, what));
+  } else if (type == "int32_t") {
+    v.i = static_cast<int32_t>(r.be(4, what));
+  } else if (type == "int64_t") {
+    v.i = static_cast<int64_t>(r.be(8, what));
+  } else if (type == "float") {
+    const auto u = static_cast<uint32_t>(r.be(4, what));
+    float f;
+    std::memcpy(&f, &u, 4);
+    v.kind = LcmValue::Kind::kDouble;
+    v.d = f;
+  } else if (type == "double") {
+    const uint64_t u = r.be(8, what);
+    std::memcpy(&v.d, &u, 8);
+    v.kind = LcmValue::Kind::kDouble;
+  } else if (type == "string") {
+    const auto n = static_cast<int32_t>(r.be(4, what + " length"));
+    if (n < 1 || static_cast<size_t>(n) > r.left()) {
+      throw LcmSchemaError(what + " at byte " + std::to_string(r.at() - 4) + ": string length " +
+                           std::to_string(n) + " with " + std::to_string(r.left()) + " bytes left");
+    }
+    const uint8_t* p = r.take(static_cast<size_t>(n), what);
+    v.kind = LcmValue::Kind::kString;
+    v.s.assign(reinterpret_cast<const char*>(p), static_cast<size_t>(n - 1));
+  } else {
+    const LcmStruct* inner = schema.find(type);
+    if (!inner) throw LcmSchemaError(what + ": unknown type " + type);
+    if (depth > 16) throw LcmSchemaError(what + ": structs nested too deeply");
+    decodeStruct(schema, *inner, r, &v, depth + 1);
+  }
+  return v;
+}
+
+LcmValue decodeArray(const LcmSchema& schema, const LcmMember& m, const std::vector<int64_t>& dims,
+                     size_t k, Reader& r, const std::string& what, int depth) {
+  LcmValue v;
+  v.kind = LcmValue::Kind::kArray;
+  const int64_t n = dims[k];
+  // Never reserve more than the remaining bytes could hold.
+  size_t elem = minSize(schema, m.type);
+  for (size_t j = k + 1; j < dims.size(); ++j)
+    elem *= static_cast<size_t>(std::max<int64_t>(dims[j], 0));
+  if (n < 0 || (elem > 0 && static_cast<uint64_t>(n) > r.left() / elem)) {
+    throw LcmSchemaError(what + " at byte " + std::to_string(r.at()) + ": " + std::to_string(n) +
+                         " elements do not fit in the " + std::to_string(r.left()) + " bytes left");
+  }
+  v.items.reserve(static_cast<size_t>(n));
+  for (int64_t e = 0; e < n; ++e) {
+    v.items.push_back(k + 1 < dims.size() ? decodeArray(schema, m, dims, k + 1, r, what, depth)
+                                          : decodeOne(schema, m.type, r, what, depth));
+  }
+  return v;
+}
+
+void decodeStruct(const LcmSchema& schema, const LcmStruct& s, Reader& r, LcmValue* out,
+                  int depth) {
+  out->kind = LcmValue::Kind::kStruct;
+  for (const LcmMember& m : s.members) {
+    const std::string what = s.name + "." + m.name;
+    if (m.dims.empty()) {
+      out->fields.emplace_back(m.name, decodeOne(schema, m.type, r, what, depth));
+      continue;
+    }
+    std::vector<int64_t> dims;
+    for (const std::string& d : m.dims) {
+      if (isNumber(d)) {
+        dims.push_back(std::stoll(d));
+      } else {
+        const auto it = std::find_if(out->fields.begin(), out->fields.end(),
+                                     [&](const auto& f) { return f.first == d; });
+        dims.push_back(it == out->fields.end() ? 0 : it->second.i);
+      }
+    }
+    out->fields.emplace_back(m.name, decodeArray(schema, m, dims, 0, r, what, depth));
+  }
+}
+
+}  // namespace
+
+const LcmStruct* LcmSchema::decode(const uint8_t* data, size_t size, LcmValue* out) const {
+  Reader r(data, size);
+  const auto fingerprint = static_cast<int64_t>(r.be(8, "fingerprint"));
+  const LcmStruct* s = byFingerprint(fingerprint);
+  if (!s) return nullptr;
+  *out = LcmValue{};
+  decodeStruct(*this, *s, r, out, 0);
+  if (r.left() != 0) {
+    throw LcmSchemaError(s->name + ": " + std::to_string(r.left()) +
+                         " bytes left over after byte " + std::to_string(r.at()));
+  }
+  return s;
+}
+
+}  // namespace sweepmap
