@@ -78,7 +78,7 @@ int runEmulate(const EmulateOptions& o) {
     publishAll(*lcm, world->startMessages(wallUtime()));
     LiveOptions lo;
     lo.should_stop = [&stop] { return stop.load(); };
-    lcm_thread = std::thread([&] { runLive(*lcm, nodes, lo); });
+    lcm_thread = std::thread([&lcm, nodes, lo] { runLive(*lcm, nodes, lo); });
   }
   std::atomic<bool> server_stop{false};
   std::thread watcher([&] {

@@ -54,7 +54,9 @@ class RotatingWorld : public EmulatorWorld {
         follow_(options.follow_lcm) {
     LidarConfig timed = rig_.lidar;
     timed.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
-    if (!follow_) truth_.apply(ShaftSegment{start_utime, 0.0, 0.0, 0.0});
+    // The shaft stands still (at 0, or where the simulated stepper powers up, until its
+    // TRUTH_SHAFT segments arrive): a real lidar measures whether or not the motor turns.
+    truth_.apply(ShaftSegment{start_utime, follow_ ? kSimInitialShaftAngleRad : 0.0, 0.0, 0.0});
     lidar_ = std::make_unique<SimLidar>(timed, rig_.sim, rig_.plate, scene_, &truth_,
                                         lidarSeed(options.seed), start_utime);
     if (follow_) {
