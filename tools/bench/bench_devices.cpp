@@ -24,7 +24,8 @@ struct Protocol {
   EmulatedModel model;
   DeviceProtocol protocol;
   const char* rig;
-  std::string start;  // what the host sends to start the stream
+  std::string start;              // what the host sends to start the stream
+  std::vector<std::string> sets;  // the rig's lidar section for this device
 };
 
 // Synthetic scans on the rig's grid: a room-like range profile, every ray a return.
@@ -61,12 +62,18 @@ void benchDecoders(const DevicesBenchOptions& o, std::ostream& out) {
        "rig_a", "BM\nME0000108000000\n"},
       {"ydlidar (X4)", EmulatedModel::kX4, DeviceProtocol::kYdlidarX4, "rig_b",
        std::string("\xA5\x60", 2)},
-      {"rplidar (A1, standard scan)", EmulatedModel::kRplidarA1, DeviceProtocol::kRplidar, "rig_b",
-       std::string("\xA5\x20", 2)},
+      {"rplidar (A1, standard scan)",
+       EmulatedModel::kRplidarA1,
+       DeviceProtocol::kRplidar,
+       "rig_b",
+       std::string("\xA5\x20", 2),
+       // An A1: 360 samples per turn at 5.5 Hz (1980 samples/s), 0.15-12 m.
+       {"lidar.beam_count=360", "lidar.angle_min_deg=-180", "lidar.angle_increment_deg=1",
+        "lidar.steps_per_revolution=360", "lidar.scan_rate_hz=5.5", "lidar.range_min_m=0.15"}},
   };
   out << "decoders (the driver's session: decode, scan assembly, timing; one thread):\n";
   for (const Protocol& p : protocols) {
-    LidarConfig lidar = loadRig(p.rig).lidar();
+    LidarConfig lidar = loadRig(p.rig, p.sets).lidar();
     const double stream_s = 10.0;
     // The device's own bytes for 10 s of streaming.
     std::unique_ptr<EmulatedLidar> device =

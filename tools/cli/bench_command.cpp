@@ -31,6 +31,7 @@ Runner addBenchCommand(CLI::App& app) {
     int sweeps = 2;
     double odometry_feed_s = RigBBenchOptions{}.process_feed_s;
     bool no_devices = false;
+    bool only_devices = false;
     double lidar_process_s = DevicesBenchOptions{}.process_s;
   };
   auto o = std::make_shared<Opts>();
@@ -43,6 +44,7 @@ Runner addBenchCommand(CLI::App& app) {
                   "mobile_lidar: log time fed to sweepmap-odometry per IMU rate")
       ->capture_default_str();
   cmd->add_flag("--no-devices", o->no_devices, "skip the decoders and the lidar process");
+  cmd->add_flag("--only-devices", o->only_devices, "only the decoders and the lidar process");
   cmd->add_option("--lidar-process-s", o->lidar_process_s,
                   "how long sweepmap-lidar's CPU share is measured")
       ->capture_default_str();
@@ -59,7 +61,7 @@ Runner addBenchCommand(CLI::App& app) {
     std::cout << std::fixed << std::setprecision(2);
     std::cout << "sweepmap bench (one thread; real-time factor = simulated or logged time / "
                  "wall time)\n";
-    for (const Rig& rig : rigs) {
+    for (const Rig& rig : o->only_devices ? std::vector<Rig>{} : rigs) {
       std::cout << "== " << rig.path << " (" << rig.kindName() << ")\n";
       const std::string scene = o->scene.empty() ? defaultSceneName(rig.kind()) : o->scene;
       switch (rig.kind()) {
