@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "drivers/protocols/descriptor.hpp"
+
 namespace sweepmap {
 namespace rplidar {
 namespace {
@@ -17,11 +19,11 @@ bool validSample(const uint8_t* p) {
 }
 
 bool knownDescriptor(const uint8_t* p, uint32_t* length, int* mode, uint8_t* type) {
-  if (p[0] != 0xA5 || p[1] != 0x5A) return false;
-  const uint32_t word = static_cast<uint32_t>(p[2] | (p[3] << 8) | (p[4] << 16) | (p[5] << 24));
-  *length = word & 0x3FFFFFFF;
-  *mode = static_cast<int>(word >> 30);
-  *type = p[6];
+  Descriptor d;
+  if (!parseDescriptor(p, &d)) return false;
+  *length = d.length;
+  *mode = d.mode;
+  *type = d.type;
   return (*type == kTypeScan && *length == 5 && *mode == 1) ||
          (*type == kTypeInfo && *length == 20 && *mode == 0) ||
          (*type == kTypeHealth && *length == 3 && *mode == 0) ||
@@ -167,11 +169,7 @@ std::string request(uint8_t cmd, const std::string& payload) {
 }
 
 std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {
-  std::string s = "\xA5\x5A";
-  const uint32_t word = (length & 0x3FFFFFFF) | (static_cast<uint32_t>(mode) << 30);
-  for (int i = 0; i < 4; ++i) s.push_back(static_cast<char>((word >> (8 * i)) & 0xff));
-  s.push_back(static_cast<char>(type));
-  return s;
+  return sweepmap::encodeDescriptor(length, mode, type);
 }
 
 std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
@@ -186,11 +184,7 @@ std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
 }
 
 std::string encodeHealth(int status, int error_code) {
-  std::string s = encodeDescriptor(3, 0, kTypeHealth);
-  s.push_back(static_cast<char>(status));
-  s.push_back(static_cast<char>(error_code & 0xff));
-  s.push_back(static_cast<char>(error_code >> 8));
-  return s;
+  return encodeHealthReply(kTypeHealth, status, error_code);
 }
 
 std::string encodeSample(bool start, int quality, double angle_deg, double distance_mm) {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "drivers/protocols/descriptor.hpp"
+
 namespace sweepmap {
 namespace ydlidar {
 namespace {
@@ -73,10 +75,11 @@ void Decoder::parse(std::vector<Event>* out, bool) {
         continue;
       }
       if (left < kDescriptor) break;
-      const uint32_t word = static_cast<uint32_t>(p[2] | (p[3] << 8) | (p[4] << 16) | (p[5] << 24));
-      const uint32_t length = word & 0x3FFFFFFF;
-      const int mode = static_cast<int>(word >> 30);
-      const uint8_t type = p[6];
+      Descriptor descriptor;
+      parseDescriptor(p, &descriptor);
+      const uint32_t length = descriptor.length;
+      const int mode = descriptor.mode;
+      const uint8_t type = descriptor.type;
       if (type == kTypeScan && mode == 1) {
         flushGarbage();
         ++counters_.packets;
@@ -182,11 +185,7 @@ void Decoder::parse(std::vector<Event>* out, bool) {
 }
 
 std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {
-  std::string s = "\xA5\x5A";
-  const uint32_t word = (length & 0x3FFFFFFF) | (static_cast<uint32_t>(mode) << 30);
-  for (int i = 0; i < 4; ++i) s.push_back(static_cast<char>((word >> (8 * i)) & 0xff));
-  s.push_back(static_cast<char>(type));
-  return s;
+  return sweepmap::encodeDescriptor(length, mode, type);
 }
 
 std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
@@ -201,10 +200,7 @@ std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
 }
 
 std::string encodeHealth(int status, int error_code) {
-  std::string s = encodeDescriptor(3, 0, kTypeHealth);
-  s.push_back(static_cast<char>(status));
-  put16(&s, static_cast<uint16_t>(error_code));
-  return s;
+  return encodeHealthReply(kTypeHealth, status, error_code);
 }
 
 std::string encodePacket(bool ring_start, double first_raw_deg, double last_raw_deg,
