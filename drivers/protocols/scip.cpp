@@ -195,15 +195,32 @@ void Decoder::reset() {
   partial_too_long_ = false;
   state_ = State::kEcho;
   body_.clear();
+  garbage_bytes_ = 0;
 }
 
 void Decoder::discard(int64_t offset, size_t bytes, const std::string& why,
                       std::vector<Event>* out) {
   if (bytes == 0) return;
-  ++counters_.resyncs;
   counters_.discarded_bytes += static_cast<int64_t>(bytes);
-  out->push_back(
-      DecodeError{offset, "SCIP: " + why + " (" + std::to_string(bytes) + " bytes skipped)"});
+  // A run of bad lines (a reply whose line end was corrupted falls apart into many) is one
+  // resynchronisation and one error.
+  if (garbage_bytes_ > 0 && offset == garbage_offset_ + garbage_bytes_) {
+    garbage_bytes_ += static_cast<int64_t>(bytes);
+    return;
+  }
+  flushGarbage(out);
+  ++counters_.resyncs;
+  garbage_offset_ = offset;
+  garbage_bytes_ = static_cast<int64_t>(bytes);
+  garbage_why_ = why;
+}
+
+void Decoder::flushGarbage(std::vector<Event>* out) {
+  if (garbage_bytes_ == 0) return;
+  out->push_back(DecodeError{
+      garbage_offset_,
+      "SCIP: " + garbage_why_ + " (" + std::to_string(garbage_bytes_) + " bytes skipped)"});
+  garbage_bytes_ = 0;
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
@@ -234,10 +251,12 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
     }
     partial_.push_back(c);
   }
+  flushGarbage(out);
 }
 
 bool Decoder::startReply(std::string_view echo, int64_t offset, std::vector<Event>* out) {
   if (validEcho(echo)) {
+    flushGarbage(out);
     echo_ = std::string(echo);
     reply_offset_ = offset;
     state_ = State::kStatus;
@@ -247,6 +266,7 @@ bool Decoder::startReply(std::string_view echo, int64_t offset, std::vector<Even
   for (size_t k = 1; k + 2 <= echo.size(); ++k) {
     if (validEcho(echo.substr(k))) {
       discard(offset, k, "garbage before a reply", out);
+      flushGarbage(out);
       echo_ = std::string(echo.substr(k));
       reply_offset_ = offset + static_cast<int64_t>(k);
       state_ = State::kStatus;
@@ -375,7 +395,8 @@ void Decoder::finishReply(std::vector<Event>* out) {
       const auto in = hasIntensity(command) ? decodeValue(v.substr(static_cast<size_t>(w)))
                                             : std::optional<uint32_t>(0);
       if (!r || !in) {
-        ++counters_.device_errors;
+        // A flipped bit 6 passes SCIP's 6-bit checksum; a character out of range shows it.
+        ++counters_.checksum_errors;
         out->push_back(DecodeError{reply_offset_,
                                    where + ": invalid character in value " + std::to_string(i)});
         return;

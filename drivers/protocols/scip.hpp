@@ -81,6 +81,7 @@ class Decoder {
   bool startReply(std::string_view echo, int64_t offset, std::vector<Event>* out);
   void finishReply(std::vector<Event>* out);
   void discard(int64_t offset, size_t bytes, const std::string& why, std::vector<Event>* out);
+  void flushGarbage(std::vector<Event>* out);
 
   DecoderCounters counters_;
   std::string partial_;         // bytes of the current line
@@ -90,6 +91,8 @@ class Decoder {
   std::string echo_, status_;
   int64_t reply_offset_ = 0;
   std::vector<std::pair<std::string, int64_t>> body_;  // lines with their offsets
+  int64_t garbage_offset_ = 0, garbage_bytes_ = 0;     // the run of skipped bytes being counted
+  std::string garbage_why_;
 };
 
 // The sensor's parameters from PP.

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <thread>
 
+#include "drivers/io/capture_file.hpp"
 #include "processes/channels.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/process_status_t.hpp"
@@ -243,6 +244,38 @@ TEST_F(DevicesTest, RefusedConnectionIsOneLineThenRetries) {
   EXPECT_NE(out.find("streaming from"), std::string::npos) << out;
 }
 
+// Corrupted bytes and a stall from the emulator: the driver counts the bad replies and
+// resyncs, times out on the stall, reconnects, and keeps streaming good scans.
+TEST_F(DevicesTest, ScipSurvivesCorruptionAndAStall) {
+  prepare("scip_faults");
+  const pid_t log = logger();
+  const pid_t emu =
+      emulator("ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a", "--corrupt-rate",
+                           "0.00002", "--stall-at", "3", "--stall-s", "1.5"});
+  sleepS(0.5);
+  const pid_t drv = lidar("rig_a", "scip://127.0.0.1:10940");
+  sleepS(8.0);
+  EXPECT_EQ(procs_.stop(drv, 5.0), 0);
+  sleepS(0.3);
+  EXPECT_EQ(procs_.stop(log, 5.0), 0);
+  procs_.stop(emu, 5.0);
+  const auto got = scansIn(log_, channels::kLidarScan);
+  std::string detail;
+  const auto c = lidarCounters(log_, &detail);
+  std::cout << "faults: " << got.size() << " scans, " << c.at("checksum_errors")
+            << " checksum errors, " << c.at("resyncs") << " resyncs, " << c.at("timeouts")
+            << " timeouts, " << c.at("reconnects") << " reconnects\n";
+  EXPECT_GE(c.at("checksum_errors") + c.at("resyncs") + c.at("device_errors"), 1);
+  EXPECT_GE(c.at("timeouts"), 1);
+  EXPECT_GE(c.at("reconnects"), 1);
+  EXPECT_GT(got.size(), 150u);  // 8 s at 40 Hz less the stall, the reconnect, the bad scans
+  int64_t last = 0;
+  for (const auto& scan : got) {
+    EXPECT_GT(scan.utime, last);  // in order, no scan twice
+    last = scan.utime;
+  }
+}
+
 struct SerialCase {
   std::string model, scheme;
   std::vector<std::string> sets;  // the rig's lidar section for this device
@@ -321,6 +354,25 @@ TEST_F(DevicesTest, CaptureThenDecode) {
   EXPECT_GE(scans.size(), 70u);  // 2 s at 40 Hz
   for (size_t i = 1; i < scans.size(); ++i) {
     EXPECT_NEAR(double(scans[i].utime - scans[i - 1].utime), 25000.0, 2000.0);
+  }
+  // The same bytes without the capture's records (a raw dump of the stream): timed by the
+  // device's own stamps.
+  const Capture capture = readCapture(cap.string());
+  ASSERT_TRUE(capture.error.empty()) << capture.error;
+  std::string raw;
+  for (const CaptureChunk& c : capture.chunks) raw.append(c.bytes.begin(), c.bytes.end());
+  const fs::path raw_file = dir_ / "ust.raw";
+  std::ofstream(raw_file, std::ios::binary) << raw;
+  const fs::path raw_log = dir_ / "raw.lcmlog";
+  ASSERT_EQ(
+      sweepmap({"decode", "scip", raw_file.string(), "--out", raw_log.string()}, dir_ / "raw.txt"),
+      0)
+      << readFile(dir_ / "raw.txt");
+  const auto raw_scans = scansIn(raw_log.string(), channels::kLidarScan);
+  ASSERT_EQ(raw_scans.size(), scans.size());
+  for (size_t i = 1; i < raw_scans.size(); ++i) {
+    EXPECT_EQ(raw_scans[i].utime - raw_scans[i - 1].utime, 25000);  // the UST's own 25 ms
+    EXPECT_EQ(raw_scans[i].ranges_m, scans[i].ranges_m);
   }
   // Flip bytes in the middle and cut the file inside a record.
   std::string bytes = readFile(cap);
