@@ -16,8 +16,8 @@
 namespace sweepmap {
 
 struct CaptureChunk {
-  int64_t utime = -1;   // host receive time; -1 in a raw file
-  int64_t offset = 0;   // offset of the first byte in the device's byte stream
+  int64_t utime = -1;       // host receive time; -1 in a raw file
+  int64_t offset = 0;       // offset of the first byte in the device's byte stream
   int64_t file_offset = 0;  // where the record starts in the file
   std::vector<uint8_t> bytes;
 };
