@@ -1,6 +1,7 @@
 #include "tools/emulate/world.hpp"
 
 #include <cmath>
+#include <limits>
 #include <random>
 
 #include "core/config.hpp"
@@ -54,9 +55,17 @@ class RotatingWorld : public EmulatorWorld {
         follow_(options.follow_lcm) {
     LidarConfig timed = rig_.lidar;
     timed.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
-    // The shaft stands still (at 0, or where the simulated stepper powers up, until its
-    // TRUTH_SHAFT segments arrive): a real lidar measures whether or not the motor turns.
-    truth_.apply(ShaftSegment{start_utime, follow_ ? kSimInitialShaftAngleRad : 0.0, 0.0, 0.0});
+    if (follow_) {
+      // Until the simulated stepper's TRUTH_SHAFT arrives the shaft stands where it powers
+      // up, and a real lidar measures all the same: those scans come from a second simulated
+      // lidar, so that the main one draws its noise exactly as `sweepmap-lidar --device sim`
+      // does (from the first scan the shaft's truth covers): the same seed, the same noise.
+      idle_truth_.apply(ShaftSegment{start_utime, kSimInitialShaftAngleRad, 0.0, 0.0});
+      idle_ = std::make_unique<SimLidar>(timed, rig_.sim, rig_.plate, scene_, &idle_truth_,
+                                         lidarSeed(options.seed) + 1000003, start_utime);
+    } else {
+      truth_.apply(ShaftSegment{start_utime, 0.0, 0.0, 0.0});  // a shaft that stands still
+    }
     lidar_ = std::make_unique<SimLidar>(timed, rig_.sim, rig_.plate, scene_, &truth_,
                                         lidarSeed(options.seed), start_utime);
     if (follow_) {
@@ -71,7 +80,19 @@ class RotatingWorld : public EmulatorWorld {
   ScanSource source() override {
     return [this](int64_t now_us) {
       std::lock_guard<std::mutex> lock(mutex_);
-      return lidar_->poll(now_us);
+      std::vector<Scan2D> scans = lidar_->poll(now_us);
+      if (idle_) {
+        std::vector<Scan2D> idle = idle_->poll(now_us);
+        if (scans.empty() && truth_.empty()) scans = std::move(idle);
+      }
+      // Each scan time once, in order (the two lidars share their scan times).
+      std::vector<Scan2D> out;
+      for (Scan2D& s : scans) {
+        if (s.utime <= last_utime_) continue;
+        last_utime_ = s.utime;
+        out.push_back(std::move(s));
+      }
+      return out;
     };
   }
   std::vector<Node*> nodes() override {
@@ -91,8 +112,9 @@ class RotatingWorld : public EmulatorWorld {
   Scene scene_;
   bool follow_;
   std::mutex mutex_;
-  ShaftTrajectory truth_;
-  std::unique_ptr<SimLidar> lidar_;
+  ShaftTrajectory truth_, idle_truth_;
+  std::unique_ptr<SimLidar> lidar_, idle_;
+  int64_t last_utime_ = std::numeric_limits<int64_t>::min();
   std::unique_ptr<TruthFollowerNode> follower_;
   std::unique_ptr<TruthSweepNode> truth_sweep_;
   std::unique_ptr<LockedNode> locked_follower_, locked_truth_sweep_;

@@ -116,7 +116,9 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
                                      "--seed",
                                      std::to_string(o.seed),
                                      "--lcm-url",
-                                     run.url};
+                                     run.url,
+                                     "--truth",
+                                     (run.out / "emulator_truth.lcmlog").string()};
     for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
     emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
     pause(300);  // listening
