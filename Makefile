@@ -14,7 +14,7 @@ BUILD ?= build
 SANITIZE_BUILD ?= build-sanitize
 FUZZ_BUILD ?= build-fuzz
 FUZZ_RUNS ?= 10000000
-FUZZ_PROTOCOLS = scip x4 rplidar hi219
+FUZZ_PROTOCOLS = scip x4 rplidar hi219 wheelboard
 JOBS ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 # -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable.
