@@ -14,7 +14,9 @@ Runner addDemoCommand(CLI::App& app) {
       "network namespace with simulated devices, stop everything cleanly, replay the recorded "
       "log, and leave the log, clouds, maps and a PNG top view in the output directory. "
       "rotating_lidar: sweepmap-motor and -lidar (simulated stepper and lidar), -assembler, "
-      "-mapper make --sweeps 3D sweeps of the default room. mobile_lidar: the simulated car's "
+      "-mapper make --sweeps 3D sweeps of the default room (--devices emulated: the lidar is "
+      "`sweepmap emulate ust10lx` driven over SCIP by the real driver). mobile_lidar: the "
+      "simulated car's "
       "raw channels (DIR/devices.lcmlog) are played in real time by lcm-logplayer into "
       "sweepmap-odometry, -assembler and -mapper (the drive is the rig's sim.* keys: "
       "a 60 s circle for rig_b)");
