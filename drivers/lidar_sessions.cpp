@@ -56,7 +56,12 @@ class ScipSession : public LidarSession {
     check();
     // The sensor's clock against ours: TM1 exchanges narrow the offset down to about a
     // round trip (DeviceClockSync::anchor).
-    exchange(stream, now, "TM0");
+    // (A client that left the sensor in adjust mode: TM0 answers 02 "already on".)
+    const scip::Reply tm0 = exchange(stream, now, "TM0", false);
+    if (!tm0.ok && tm0.status != "02") {
+      throw StreamError("SCIP TM0: status " + tm0.status + " (" +
+                        scip::statusText("TM", tm0.status) + ")");
+    }
     for (int k = 0; k < 10; ++k) {
       const int64_t sent = now();
       const scip::Reply tm = exchange(stream, now, "TM1");
