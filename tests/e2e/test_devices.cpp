@@ -13,9 +13,12 @@
 #include <thread>
 
 #include "drivers/io/capture_file.hpp"
+#include "drivers/protocols/wheelboard.hpp"
 #include "processes/channels.hpp"
+#include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/process_status_t.hpp"
+#include "sweepmap/wheel_ticks_t.hpp"
 #include "tests/e2e/test_support.hpp"
 #include "tools/ops/netns.hpp"
 #include "tools/ops/process_group.hpp"
@@ -274,6 +277,56 @@ TEST_F(DevicesTest, ScipSurvivesCorruptionAndAStall) {
     EXPECT_GT(scan.utime, last);  // in order, no scan twice
     last = scan.utime;
   }
+}
+
+// Rig B's device bytes decoded offline: the HI219's manual frame into IMU (its own clock),
+// wheel board frames into WHEEL_TICKS (counts unwrapped past int32), garbage reported.
+TEST(DecodeRigBDevices, Hi219AndWheelBoardBytes) {
+  const fs::path dir = scratchDir("decode_rig_b");
+  std::string imu;
+  for (const char* h :
+       {"5A", "A5", "4C", "00", "6C", "51", "91", "00", "A0", "3B", "01", "A8", "02", "97",
+        "BD", "BB", "04", "00", "9C", "A0", "65", "3E", "A2", "26", "45", "3F", "5C", "E7",
+        "30", "3F", "E2", "D4", "5A", "C2", "E5", "9D", "A0", "C1", "EB", "23", "EE", "C2",
+        "78", "77", "99", "41", "AB", "AA", "D1", "C1", "AB", "2A", "0A", "C2", "8D", "E1",
+        "42", "42", "8F", "1D", "A8", "C1", "1E", "0C", "36", "C2", "E6", "E5", "5A", "3F",
+        "C1", "94", "9E", "3E", "B8", "C0", "9E", "BE", "BE", "DF", "8D", "BE"}) {
+    imu.push_back(static_cast<char>(std::stoi(h, nullptr, 16)));
+  }
+  std::ofstream(dir / "imu.raw", std::ios::binary) << imu << "junk" << imu;
+  ASSERT_EQ(sweepmap({"decode", "hi219", (dir / "imu.raw").string(), "--out",
+                      (dir / "imu.lcmlog").string()},
+                     dir / "imu.txt"),
+            0);
+  const auto samples = readChannel((dir / "imu.lcmlog").string(), channels::kImu);
+  ASSERT_EQ(samples.size(), 2u);
+  imu_t m;
+  ASSERT_TRUE(decodeMessage(samples[0], &m));
+  EXPECT_EQ(m.utime, 310205000);  // the IMU's own 310205 ms
+  EXPECT_NEAR(m.gyro_rad_s[2], -119.070 * M_PI / 180.0, 1e-5);
+  EXPECT_NE(readFile(dir / "imu.txt").find("byte 82: HI219: 4 bytes skipped"), std::string::npos)
+      << readFile(dir / "imu.txt");
+
+  std::string board;
+  for (int k = 0; k < 4; ++k) {
+    wheelboard::Ticks t;
+    t.seq = static_cast<uint16_t>(k);
+    t.time_us = 20000u * static_cast<uint32_t>(k);
+    t.left = static_cast<int32_t>(static_cast<uint32_t>(2147483600LL + 30 * k));  // wraps at k = 2
+    t.right = -5 * k;
+    board += wheelboard::encodeTicks(t);
+  }
+  std::ofstream(dir / "board.raw", std::ios::binary) << board;
+  ASSERT_EQ(sweepmap({"decode", "wheelboard", (dir / "board.raw").string(), "--out",
+                      (dir / "board.lcmlog").string()},
+                     dir / "board.txt"),
+            0);
+  const auto ticks = readChannel((dir / "board.lcmlog").string(), channels::kWheelTicks);
+  ASSERT_EQ(ticks.size(), 4u);
+  wheel_ticks_t w;
+  ASSERT_TRUE(decodeMessage(ticks[3], &w));
+  EXPECT_EQ(w.left_ticks, 2147483600LL + 90);
+  EXPECT_EQ(w.right_ticks, -15);
 }
 
 struct SerialCase {

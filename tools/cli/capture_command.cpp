@@ -54,16 +54,18 @@ Runner addDecodeCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "decode",
       "Turn a capture (sweepmap capture) or any file of raw protocol bytes into LIDAR_SCAN "
-      "messages in an LCM log, with the driver's own decoder: every checksum error, resync "
+      "messages in an LCM log (HI219 bytes into IMU, wheel board bytes into WHEEL_TICKS), with "
+      "the driver's own decoder: every checksum error, resync "
       "and bad reply is reported with its byte offset in the device's stream. Captures keep "
       "their receive times; raw SCIP bytes are timed by the device's stamps, raw serial bytes "
       "by their time on the line at the baud rate.");
   auto o = std::make_shared<DecodeOptions>();
   auto rig = std::make_shared<std::string>();
   auto sets = std::make_shared<std::vector<std::string>>();
-  cmd->add_option("protocol", o->protocol, "scip | x4 | rplidar")
+  cmd->add_option("protocol", o->protocol,
+                  "scip | x4 | rplidar (LIDAR_SCAN) | hi219 (IMU) | wheelboard (WHEEL_TICKS)")
       ->required()
-      ->check(CLI::IsMember({"scip", "x4", "rplidar"}));
+      ->check(CLI::IsMember({"scip", "x4", "rplidar", "hi219", "wheelboard"}));
   cmd->add_option("file", o->in, "capture or raw bytes")->required()->check(CLI::ExistingFile);
   cmd->add_option("--out", o->out, "LCM log to write")->required();
   cmd->add_option("--rig", *rig,

@@ -1,6 +1,7 @@
 #include "tools/devices/capture.hpp"
 
 #include <chrono>
+#include <cmath>
 #include <mutex>
 #include <ostream>
 #include <stdexcept>
@@ -10,10 +11,14 @@
 #include "core/event_log.hpp"
 #include "drivers/io/capture_file.hpp"
 #include "drivers/lidar_sessions.hpp"
+#include "drivers/protocols/hi219.hpp"
+#include "drivers/protocols/wheelboard.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/node.hpp"
+#include "sweepmap/imu_t.hpp"
+#include "sweepmap/wheel_ticks_t.hpp"
 
 namespace sweepmap {
 namespace {
@@ -88,7 +93,110 @@ int runCapture(const CaptureOptions& o, const LidarConfig& expected, std::ostrea
   return writer.bytes() > 0 ? 0 : 1;
 }
 
+namespace {
+
+// Host time of a frame that starts at stream `offset`: in a capture, its chunk's receive time
+// less the line time of the bytes after it in the chunk; in raw bytes, the line time alone.
+struct FrameClock {
+  double byte_us;
+  int64_t arrival = -1, chunk_end = 0;
+  int64_t at(int64_t offset) const {
+    if (arrival < 0) return static_cast<int64_t>(std::llround(double(offset) * byte_us));
+    return arrival - static_cast<int64_t>(std::llround(double(chunk_end - offset) * byte_us));
+  }
+};
+
+// Cumulative counts of a 32-bit counter that wraps.
+struct Unwrap32 {
+  bool have = false;
+  uint32_t last = 0;
+  int64_t value = 0;
+  int64_t operator()(uint32_t raw) {
+    value = have ? value + static_cast<int32_t>(raw - last) : static_cast<int32_t>(raw);
+    have = true;
+    last = raw;
+    return value;
+  }
+};
+
+// The rig-B devices: HI219 frames to IMU, wheel board frames to WHEEL_TICKS. IMU axes as
+// the IMU reports them (its mounting is the driver's business); Euler angles when the frame
+// has them, else NaN.
+DecodeResult decodeRigBDevice(const DecodeOptions& o, const Capture& capture,
+                              std::ostream& report) {
+  DecodeResult r;
+  EventLogWriter log(o.out);
+  FrameClock clock{10e6 / (o.baud > 0 ? o.baud : 115200)};
+  hi219::Decoder imu;
+  wheelboard::Decoder board;
+  Unwrap32 left, right;
+  const bool is_imu = o.protocol == "hi219";
+  for (const CaptureChunk& chunk : capture.chunks) {
+    clock.arrival = chunk.utime;
+    clock.chunk_end = chunk.offset + static_cast<int64_t>(chunk.bytes.size());
+    r.bytes += static_cast<int64_t>(chunk.bytes.size());
+    Outbox out;
+    const auto error = [&](const DecodeError& e) {
+      if (r.errors < 1000) report << o.in << ": byte " << e.offset << ": " << e.what << "\n";
+      ++r.errors;
+    };
+    if (is_imu) {
+      std::vector<hi219::Event> events;
+      imu.feed(chunk.bytes.data(), chunk.bytes.size(), &events);
+      for (const auto& e : events) {
+        if (const auto* d = std::get_if<DecodeError>(&e)) {
+          error(*d);
+          continue;
+        }
+        const auto& f = std::get<hi219::Frame>(e);
+        if (!f.has_gyro || !f.has_accel) continue;  // not a sample the odometry can use
+        imu_t m{};
+        m.utime = capture.raw && f.has_time ? int64_t{f.time_ms} * 1000 : clock.at(f.offset);
+        for (int k = 0; k < 3; ++k) {
+          m.gyro_rad_s[k] = f.gyro_rad_s[k];
+          m.accel_m_s2[k] = f.accel_m_s2[k];
+          m.rpy_rad[k] = f.has_euler ? f.rpy_rad[k] : std::nan("");
+        }
+        out.publish(channels::kImu, m.utime, m);
+        ++r.scans;
+      }
+    } else {
+      std::vector<wheelboard::Event> events;
+      board.feed(chunk.bytes.data(), chunk.bytes.size(), &events);
+      for (const auto& e : events) {
+        if (const auto* d = std::get_if<DecodeError>(&e)) {
+          error(*d);
+          continue;
+        }
+        const auto* t = std::get_if<wheelboard::Ticks>(&e);
+        if (!t) continue;
+        wheel_ticks_t m{};
+        m.utime = clock.at(t->offset);
+        m.left_ticks = left(static_cast<uint32_t>(t->left));
+        m.right_ticks = right(static_cast<uint32_t>(t->right));
+        out.publish(channels::kWheelTicks, m.utime, m);
+        ++r.scans;
+      }
+    }
+    for (const Message& m : out.take()) log.write(m.utime, m.channel, m.data);
+  }
+  log.close();
+  r.file_error = capture.error;
+  const DecoderCounters c = is_imu ? imu.counters() : board.counters();
+  report << "decode: " << r.bytes << " bytes, " << r.scans
+         << (is_imu ? " IMU samples" : " wheel readings") << " -> " << o.out << " ("
+         << c.checksum_errors << " CRC errors, " << c.resyncs << " resyncs"
+         << (is_imu ? "" : ", " + std::to_string(board.sequenceGaps()) + " frames lost") << ")\n";
+  if (!r.file_error.empty()) report << "decode: " << r.file_error << "\n";
+  return r;
+}
+
+}  // namespace
+
 DecodeResult runDecode(const DecodeOptions& o, const LidarConfig& expected, std::ostream& report) {
+  if (o.protocol == "hi219" || o.protocol == "wheelboard") {
+    return decodeRigBDevice(o, readCapture(o.in), report);
+  }
   const DeviceProtocol protocol = protocolOf(o.protocol);
   const Capture capture = readCapture(o.in);
   SessionOptions so;
