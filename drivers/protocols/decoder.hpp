@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace sweepmap {
 
@@ -26,6 +27,33 @@ struct DecoderCounters {
   int64_t resyncs = 0;          // times bytes were skipped to find the next packet start
   int64_t discarded_bytes = 0;  // bytes skipped while resynchronising
   int64_t device_errors = 0;    // replies that carry an error status or bad health
+};
+
+// The bytes a decoder skips while it looks for the next packet start: one resync and one
+// error per run of consecutive skipped bytes, reported when the run ends ("X: 4 bytes
+// skipped to the next frame", at the run's first byte).
+class SkippedRun {
+ public:
+  SkippedRun(std::string name, std::string why) : name_(std::move(name)), why_(std::move(why)) {}
+  void skip(int64_t offset, size_t n = 1) {
+    if (bytes_ == 0) start_ = offset;
+    bytes_ += static_cast<int64_t>(n);
+  }
+  bool empty() const { return bytes_ == 0; }
+  void clear() { bytes_ = 0; }
+  template <class Event>
+  void flush(DecoderCounters* counters, std::vector<Event>* out) {
+    if (bytes_ == 0) return;
+    ++counters->resyncs;
+    counters->discarded_bytes += bytes_;
+    out->push_back(
+        DecodeError{start_, name_ + ": " + std::to_string(bytes_) + " bytes skipped " + why_});
+    bytes_ = 0;
+  }
+
+ private:
+  std::string name_, why_;
+  int64_t start_ = 0, bytes_ = 0;
 };
 
 }  // namespace sweepmap

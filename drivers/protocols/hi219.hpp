@@ -59,8 +59,7 @@ class Decoder {
   DecoderCounters counters_;
   std::vector<uint8_t> buffer_;
   int64_t buffer_offset_ = 0;
-  int64_t garbage_start_ = -1;
-  size_t garbage_bytes_ = 0;
+  SkippedRun skipped_{"HI219", "to the next frame"};
 };
 
 // Device side (the emulator): a frame of the given payload, with its CRC.

@@ -47,8 +47,7 @@ void Decoder::reset() {
   buffer_.clear();
   buffer_offset_ = 0;
   scanning_ = false;
-  garbage_start_ = -1;
-  garbage_bytes_ = 0;
+  skipped_.clear();
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
@@ -61,17 +60,12 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
     batch = Samples{};
   };
   const auto flushGarbage = [&] {
-    if (garbage_bytes_ == 0) return;
+    if (skipped_.empty()) return;
     flushBatch();
-    ++counters_.resyncs;
-    counters_.discarded_bytes += static_cast<int64_t>(garbage_bytes_);
-    out->push_back(DecodeError{garbage_start_, "RPLIDAR: " + std::to_string(garbage_bytes_) +
-                                                   " bytes skipped (bad start or check bits)"});
-    garbage_bytes_ = 0;
+    skipped_.flush(&counters_, out);
   };
   const auto skip = [&] {
-    if (garbage_bytes_ == 0) garbage_start_ = buffer_offset_ + static_cast<int64_t>(at);
-    ++garbage_bytes_;
+    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at));
     ++at;
   };
   while (at < buffer_.size()) {

@@ -72,8 +72,7 @@ class Decoder {
   std::vector<uint8_t> buffer_;
   int64_t buffer_offset_ = 0;
   bool scanning_ = false;  // after a scan descriptor: 5-byte samples
-  int64_t garbage_start_ = -1;
-  size_t garbage_bytes_ = 0;
+  SkippedRun skipped_{"RPLIDAR", "(bad start or check bits)"};
 };
 
 // Host side.

@@ -48,17 +48,9 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
   counters_.bytes += static_cast<int64_t>(size);
   buffer_.insert(buffer_.end(), data, data + size);
   size_t at = 0;
-  const auto flushGarbage = [&] {
-    if (garbage_bytes_ == 0) return;
-    ++counters_.resyncs;
-    counters_.discarded_bytes += static_cast<int64_t>(garbage_bytes_);
-    out->push_back(DecodeError{garbage_start_, "wheel board: " + std::to_string(garbage_bytes_) +
-                                                   " bytes skipped to the next frame"});
-    garbage_bytes_ = 0;
-  };
+  const auto flushGarbage = [&] { skipped_.flush(&counters_, out); };
   const auto skip = [&] {
-    if (garbage_bytes_ == 0) garbage_start_ = buffer_offset_ + static_cast<int64_t>(at);
-    ++garbage_bytes_;
+    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at));
     ++at;
   };
   while (at < buffer_.size()) {

@@ -73,8 +73,7 @@ class Decoder {
   DecoderCounters counters_;
   std::vector<uint8_t> buffer_;
   int64_t buffer_offset_ = 0;
-  int64_t garbage_start_ = -1;
-  size_t garbage_bytes_ = 0;
+  SkippedRun skipped_{"wheel board", "to the next frame"};
   bool have_seq_[3] = {false, false, false};
   uint16_t last_seq_[3] = {0, 0, 0};
   int64_t gaps_ = 0;

@@ -38,8 +38,7 @@ void Decoder::reset() {
   counters_ = {};
   buffer_.clear();
   buffer_offset_ = 0;
-  garbage_start_ = -1;
-  garbage_bytes_ = 0;
+  skipped_.clear();
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
@@ -50,18 +49,9 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
 
 void Decoder::parse(std::vector<Event>* out, bool) {
   size_t at = 0;
-  const auto flushGarbage = [&] {
-    if (garbage_bytes_ == 0) return;
-    ++counters_.resyncs;
-    counters_.discarded_bytes += static_cast<int64_t>(garbage_bytes_);
-    out->push_back(DecodeError{garbage_start_, "YDLIDAR: " + std::to_string(garbage_bytes_) +
-                                                   " bytes skipped to the next packet"});
-    garbage_bytes_ = 0;
-    garbage_start_ = -1;
-  };
+  const auto flushGarbage = [&] { skipped_.flush(&counters_, out); };
   const auto skip = [&](size_t n) {
-    if (garbage_bytes_ == 0) garbage_start_ = buffer_offset_ + static_cast<int64_t>(at);
-    garbage_bytes_ += n;
+    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at), n);
     at += n;
   };
   while (at < buffer_.size()) {
@@ -145,7 +135,6 @@ void Decoder::parse(std::vector<Event>* out, bool) {
         ++counters_.checksum_errors;
         out->push_back(DecodeError{offset, "YDLIDAR packet (LSN " + std::to_string(lsn) +
                                                "): check code mismatch; packet dropped"});
-        garbage_start_ = -1;
         at += 1;
         ++counters_.resyncs;
         counters_.discarded_bytes += 1;
@@ -181,7 +170,7 @@ void Decoder::parse(std::vector<Event>* out, bool) {
   // a packet is at most 10 + 2 * 255 bytes).
   buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
   buffer_offset_ += static_cast<int64_t>(at);
-  if (garbage_bytes_ > 0 && buffer_.empty()) flushGarbage();
+  if (buffer_.empty()) flushGarbage();
 }
 
 std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {

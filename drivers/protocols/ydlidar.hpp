@@ -74,8 +74,7 @@ class Decoder {
   DecoderCounters counters_;
   std::vector<uint8_t> buffer_;
   int64_t buffer_offset_ = 0;  // stream offset of buffer_[0]
-  int64_t garbage_start_ = -1;
-  size_t garbage_bytes_ = 0;
+  SkippedRun skipped_{"YDLIDAR", "to the next packet"};
 };
 
 // Device side (the emulator): encoders. Angles in degrees [0, 360), raw (uncorrected).
