@@ -121,7 +121,11 @@ void DeviceClockSync::fitRate() {
   const EnvelopePoint& b = envelope_[hull[k + 1]];
   if (b.x_us <= a.x_us) return;
   // y = latency + rho * x (x from the anchor): with rho known, the mapping is exact at u0.
-  rho_ = (b.y_us - a.y_us) / (b.x_us - a.x_us);
+  const double rho = (b.y_us - a.y_us) / (b.x_us - a.x_us);
+  // No crystal is this far off: an edge this steep comes from arrivals held up (a loaded
+  // host at start-up) at the window's end; keep the previous estimate until it passes.
+  if (std::fabs(rho) > options_.max_rate_ppm * 1e-6) return;
+  rho_ = rho;
   latency_us_ = std::max(0.0, a.y_us - rho_ * a.x_us);
   have_latency_ = true;
 }

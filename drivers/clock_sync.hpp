@@ -34,6 +34,7 @@ class DeviceClockSync {
     double max_late_us = 1000000.0;  // or this much after it (beyond any buffering)
     int jump_confirm = 3;
     double max_backstep_us = 2000000.0;  // a counter going back further has been reset
+    double max_rate_ppm = 500.0;         // a fitted rate beyond this is not believed
   };
 
   DeviceClockSync() : DeviceClockSync(Options{}) {}
