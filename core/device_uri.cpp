@@ -31,6 +31,10 @@ const char* protocolName(DeviceProtocol protocol) {
       return "ydlidar";
     case DeviceProtocol::kRplidar:
       return "rplidar";
+    case DeviceProtocol::kHi219:
+      return "hi219";
+    case DeviceProtocol::kWheelBoard:
+      return "wheelboard";
   }
   return "?";
 }
@@ -42,8 +46,9 @@ DeviceUri parseDeviceUri(const std::string& text) {
   const size_t colon = text.find("://");
   if (colon == std::string::npos) {
     throw std::invalid_argument("device '" + text +
-                                "': expected sim, scip://HOST[:PORT], ydlidar:///dev/PORT or "
-                                "rplidar:///dev/PORT[?baud=N]");
+                                "': expected sim, scip://HOST[:PORT], ydlidar:///dev/PORT, "
+                                "rplidar:///dev/PORT, hi219:///dev/PORT or "
+                                "wheelboard:///dev/PORT (serial ones with [?baud=N])");
   }
   const std::string scheme = text.substr(0, colon);
   std::string rest = text.substr(colon + 3);
@@ -75,9 +80,20 @@ DeviceUri parseDeviceUri(const std::string& text) {
     uri.host = host;
     return uri;
   }
-  if (scheme == "ydlidar" || scheme == "rplidar") {
-    uri.protocol = scheme == "ydlidar" ? DeviceProtocol::kYdlidarX4 : DeviceProtocol::kRplidar;
-    uri.baud = scheme == "ydlidar" ? kX4DefaultBaud : kRplidarDefaultBaud;
+  if (scheme == "ydlidar" || scheme == "rplidar" || scheme == "hi219" || scheme == "wheelboard") {
+    if (scheme == "ydlidar") {
+      uri.protocol = DeviceProtocol::kYdlidarX4;
+      uri.baud = kX4DefaultBaud;
+    } else if (scheme == "rplidar") {
+      uri.protocol = DeviceProtocol::kRplidar;
+      uri.baud = kRplidarDefaultBaud;
+    } else if (scheme == "hi219") {
+      uri.protocol = DeviceProtocol::kHi219;
+      uri.baud = kHi219DefaultBaud;
+    } else {
+      uri.protocol = DeviceProtocol::kWheelBoard;
+      uri.baud = kWheelBoardDefaultBaud;
+    }
     if (rest.empty() || rest.front() != '/') {
       throw std::invalid_argument("device '" + text + "': expected " + scheme +
                                   ":///dev/PORT (an absolute path)");
@@ -100,7 +116,19 @@ DeviceUri parseDeviceUri(const std::string& text) {
     return uri;
   }
   throw std::invalid_argument("device '" + text + "': unknown scheme '" + scheme +
-                              "' (sim, scip, ydlidar, rplidar)");
+                              "' (sim, scip, ydlidar, rplidar, hi219, wheelboard)");
+}
+
+DeviceUri parseDeviceUriFor(const std::string& text, const std::vector<DeviceProtocol>& allowed) {
+  DeviceUri uri = parseDeviceUri(text);
+  if (uri.protocol == DeviceProtocol::kSim) return uri;
+  std::string names = "sim";
+  for (DeviceProtocol p : allowed) {
+    if (p == uri.protocol) return uri;
+    names += std::string(", ") + protocolName(p);
+  }
+  throw std::invalid_argument("device '" + text + "': a " + protocolName(uri.protocol) +
+                              " device does not belong here (this key takes " + names + ")");
 }
 
 }  // namespace sweepmap

@@ -30,7 +30,8 @@ void LidarConfig::validate(const std::string& source, const std::string& p) cons
   require(range_min_m >= 0 && range_max_m > range_min_m, "range_max_m",
           "must exceed range_min_m >= 0");
   try {
-    parseDeviceUri(device);
+    parseDeviceUriFor(
+        device, {DeviceProtocol::kScip, DeviceProtocol::kYdlidarX4, DeviceProtocol::kRplidar});
   } catch (const std::invalid_argument& e) {
     throw ConfigError(source + ": key '" + p + "device': " + e.what());
   }

@@ -1,21 +1,12 @@
-// A real lidar on a TCP socket or a serial port, behind LidarDevice.
-//
-// A worker thread owns the connection: open → session.start (stop a stream left running,
-// flush, identify and check the device against the rig file, start streaming) → read and
-// decode until a hang-up, a read timeout or a run of decode errors → close → back off →
-// open again. Blocking reads with timeouts: a dead descriptor is never polled in a loop.
-// The backoff starts at backoff_min_ms and doubles up to backoff_max_ms, so a device that
-// comes back streams again within backoff_max_ms + its start-up exchange.
-// poll() hands over the scans decoded so far; health() the counters and events.
+// A real lidar on a TCP socket or a serial port, behind LidarDevice: the connection worker of
+// drivers/stream_device.hpp with a LidarSession (the protocol's part) that turns bytes into
+// scans. poll() hands over the scans decoded so far; health() the counters and events.
 #pragma once
 
-#include <atomic>
 #include <functional>
 #include <memory>
 #include <mutex>
-#include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
 
 #include "core/device_uri.hpp"
@@ -23,15 +14,9 @@
 #include "drivers/io/byte_stream.hpp"
 #include "drivers/lidar_device.hpp"
 #include "drivers/protocols/decoder.hpp"
+#include "drivers/stream_device.hpp"
 
 namespace sweepmap {
-
-// The device is not the one the rig file describes: permanent, not retried.
-class IdentityMismatch : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
 // The protocol's part of a driver. Called from the driver's worker thread only.
 class LidarSession {
  public:
@@ -55,56 +40,40 @@ class LidarSession {
   virtual std::string identity() const = 0;
 };
 
-struct RealLidarOptions {
-  int connect_timeout_ms = 1000;
-  int read_timeout_ms = 1000;  // no byte this long while streaming: reconnect
-  int error_run = 20;          // this many decode errors with no scan between: reconnect
-  int backoff_min_ms = 100;
-  int backoff_max_ms = 1000;
+struct RealLidarOptions : StreamDeviceOptions {
   size_t max_queued_scans = 400;  // poll() not called: oldest scans dropped (counted)
-  // Called (worker thread) with every chunk read from the device, the start-up exchange
-  // included, and its receive time: `sweepmap capture` records them.
-  std::function<void(int64_t utime, const uint8_t* data, size_t size)> tap;
 };
 
-class RealLidar : public LidarDevice {
+class RealLidar : public LidarDevice, public StreamDevice {
  public:
-  using Opener = std::function<std::unique_ptr<ByteStream>()>;
   // Opens `uri` (scip: TCP, ydlidar/rplidar: serial) on each connection attempt.
   RealLidar(const DeviceUri& uri, std::unique_ptr<LidarSession> session,
             const RealLidarOptions& options, std::function<int64_t()> now);
   // Starts the worker thread.
-  void start();
+  void start() { startWorker(); }
   ~RealLidar() override;
 
   std::vector<Scan2D> poll(int64_t now_utime) override;
-  DeviceHealth health() override;
-  // Scans of the current connection's stream since start.
-  bool streaming() const { return streaming_.load(); }
+  DeviceHealth health() override { return StreamDevice::health(); }
+
+ protected:
+  void startSession(ByteStream& stream) override;
+  int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
+              std::vector<std::string>* errors) override;
+  void stopSession(ByteStream& stream) override { session_->stop(stream); }
+  DecoderCounters decoderCounters() const override { return session_->decoderCounters(); }
+  int64_t clockResets() const override { return session_->clockResets(); }
+  std::string identity() const override { return session_->identity(); }
+  const char* itemsName() const override { return "device_scans"; }
+  std::vector<std::pair<std::string, int64_t>> extraCounters() override;
 
  private:
-  void run();
-  void streamOnce(ByteStream& stream);
-  void event(const std::string& what);
-
-  DeviceUri uri_;
   std::unique_ptr<LidarSession> session_;
-  RealLidarOptions options_;
-  std::function<int64_t()> now_;
-  std::thread worker_;
-  std::atomic<bool> stop_{false};
-  std::atomic<bool> streaming_{false};
-
-  std::mutex mutex_;  // guards everything below
+  size_t max_queued_scans_;
+  std::vector<Scan2D> decoded_;  // worker only
+  std::mutex mutex_;             // guards the two below
   std::vector<Scan2D> queue_;
-  std::vector<std::string> events_;
-  std::string fatal_;
-  std::string last_event_;
-  DecoderCounters decoded_total_;  // of closed connections
-  DecoderCounters decoded_now_;    // of the current one
-  int64_t clock_resets_total_ = 0, clock_resets_now_ = 0;
-  int64_t scans_ = 0, timeouts_ = 0, reconnects_ = 0, connect_failures_ = 0, queue_drops_ = 0;
-  int64_t events_suppressed_ = 0;
+  int64_t queue_drops_ = 0;
 };
 
 // The driver for `uri`'s protocol, checked against what the rig file says of the lidar

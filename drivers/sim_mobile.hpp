@@ -29,6 +29,7 @@
 
 #include "core/config.hpp"
 #include "core/scan.hpp"
+#include "drivers/odometry_devices.hpp"
 #include "drivers/scene.hpp"
 #include "odometry/wheel_odometry.hpp"
 
@@ -113,14 +114,6 @@ class MobilePath {
   double turn_per_lap_ = 0.0;
 };
 
-struct WheelTicks {
-  int64_t utime;
-  int64_t left, right;
-};
-struct ImuSample {
-  int64_t utime;
-  double gyro[3], accel[3], rpy[3];
-};
 struct TruthPose {
   int64_t utime;
   Pose2 pose;  // body in W
@@ -169,6 +162,7 @@ class SimMobile {
   // One scan (index j) with the given noise generator; exposed for tests.
   Scan2D makeScan(int64_t j, std::mt19937_64* rng) const;
   int raysPerScan() const { return rays_; }
+  const SimMobileConfig& config() const { return c_; }
   int64_t utimeAt(double t) const {
     return start_utime_ + static_cast<int64_t>(std::llround(t * 1e6));
   }

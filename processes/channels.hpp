@@ -19,6 +19,7 @@ constexpr const char* kMapStats = "MAP_STATS";            // map_stats_t
 constexpr const char* kMapSave = "MAP_SAVE";              // map_save_t
 constexpr const char* kWheelTicks = "WHEEL_TICKS";        // wheel_ticks_t, raw (rig B)
 constexpr const char* kImu = "IMU";                       // imu_t, raw (rig B)
+constexpr const char* kWheelCmd = "WHEEL_CMD";            // wheel_cmd_t, to the wheel board
 constexpr const char* kOdometryPose = "ODOMETRY_POSE";    // pose2d_t, EKF
 constexpr const char* kWheelOdometry = "WHEEL_ODOMETRY";  // pose2d_t, wheels alone
 constexpr const char* kTruthShaft = "TRUTH_SHAFT";        // truth_shaft_t, simulation only

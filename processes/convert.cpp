@@ -139,4 +139,23 @@ ShaftSegment fromLcm(const truth_shaft_t& m) {
   return {m.start_utime, m.angle_rad, m.velocity_rad_s, m.accel_rad_s2};
 }
 
+imu_t toLcm(const ImuSample& s) {
+  imu_t m{};
+  m.utime = s.utime;
+  for (int k = 0; k < 3; ++k) {
+    m.gyro_rad_s[k] = s.gyro[k];
+    m.accel_m_s2[k] = s.accel[k];
+    m.rpy_rad[k] = s.rpy[k];
+  }
+  return m;
+}
+
+wheel_ticks_t toLcm(const WheelTicks& t) {
+  wheel_ticks_t m{};
+  m.utime = t.utime;
+  m.left_ticks = t.left;
+  m.right_ticks = t.right;
+  return m;
+}
+
 }  // namespace sweepmap

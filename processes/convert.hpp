@@ -6,12 +6,15 @@
 
 #include "calib/sweep_assembly.hpp"
 #include "core/scan.hpp"
+#include "drivers/odometry_devices.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
 #include "sweepmap/truth_shaft_t.hpp"
+#include "sweepmap/wheel_ticks_t.hpp"
 
 namespace sweepmap {
 
@@ -29,6 +32,9 @@ sweep_status_t toStatus(const AssembledSweep& sweep, int chunk_count);
 std::string validateChunk(const cloud_chunk_t& msg);
 
 truth_shaft_t toLcm(const ShaftSegment& segment, int64_t utime);
+
+imu_t toLcm(const ImuSample& sample);
+wheel_ticks_t toLcm(const WheelTicks& ticks);
 ShaftSegment fromLcm(const truth_shaft_t& msg);
 
 }  // namespace sweepmap

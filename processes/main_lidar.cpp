@@ -5,16 +5,43 @@
 #include "core/device_uri.hpp"
 #include "drivers/real_lidar.hpp"
 #include "drivers/scene.hpp"
+#include "drivers/sim_car_devices.hpp"
 #include "drivers/sim_lidar.hpp"
 #include "processes/channels.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/lidar_node.hpp"
 #include "processes/live_runner.hpp"
+#include "processes/sim_car.hpp"
 #include "processes/sim_setup.hpp"
 #include "processes/truth_sweep_node.hpp"
 
 namespace sweepmap {
 namespace {
+
+// The simulated X4 of a mobile rig on the simulated car (the car sweepmap-odometry --sim
+// simulates, given the same seed and start time).
+int runSimulatedCar(const CommonOptions& common, const Rig& loaded, const std::string& scene_name,
+                    uint64_t seed, int64_t start_utime) {
+  MobileLidarConfig rig = std::get<MobileLidarConfig>(loaded.config);
+  std::unique_ptr<SimMobile> car;
+  std::unique_ptr<Scene> scene;
+  try {
+    prepareSimMobileConfig(loaded.path, &rig);
+    scene = std::make_unique<Scene>(
+        loadScene(
+            resolveConfigFile(scene_name.empty() ? defaultSceneName(loaded.kind()) : scene_name)),
+        PlateConfig{});
+    car = makeSimCar(rig, *scene, seed, start_utime > 0 ? start_utime : wallUtime());
+  } catch (const std::exception& e) {
+    std::cerr << "config error: " << e.what() << "\n";
+    return 2;
+  }
+  lcm::LCM lcm(common.lcm_url);
+  SimCarLidar device(car.get());
+  LidarNode node(rig.lidar, &device);
+  installStopSignals();
+  return runLive(lcm, {&node}, LiveOptions{});
+}
 
 // The simulated UST-10LX of a rotating rig, following the simulated shaft (TRUTH_SHAFT).
 int runSimulated(const CommonOptions& common, const Rig& loaded, const std::string& scene_name,
@@ -82,10 +109,16 @@ int main(int argc, char** argv) {
                  "the lidar, overriding lidar.device: sim | scip://HOST[:PORT] (Hokuyo "
                  "UST-10LX/20LX, SCIP 2.0 over TCP) | ydlidar:///dev/PORT (YDLIDAR X4) | "
                  "rplidar:///dev/PORT[?baud=N] (RPLIDAR A1/A2)");
-  app.add_flag("--sim", sim, "same as --device sim: the simulated lidar (follows TRUTH_SHAFT)");
+  app.add_flag("--sim", sim,
+               "same as --device sim: the simulated lidar (rotating rigs: it follows "
+               "TRUTH_SHAFT; mobile rigs: on the simulated car)");
   app.add_option("--scene", scene_path,
                  "scene file or name for the simulated lidar (default: the rig kind's scene)");
   app.add_option("--seed", seed, "simulation seed")->capture_default_str();
+  int64_t sim_start_utime = 0;
+  app.add_option("--sim-start-utime", sim_start_utime,
+                 "mobile rigs: when the simulated car starts [us, wall clock]; 0 = now (give "
+                 "sweepmap-odometry --sim the same)");
   CLI11_PARSE(app, argc, argv);
   const std::optional<Rig> loaded = loadRigOrReport(common);
   if (!loaded) return 2;
@@ -97,6 +130,11 @@ int main(int argc, char** argv) {
     std::cerr << "sweepmap-lidar: " << e.what() << "\n";
     return 2;
   }
-  if (uri.protocol == DeviceProtocol::kSim) return runSimulated(common, *loaded, scene_path, seed);
+  if (uri.protocol == DeviceProtocol::kSim) {
+    if (loaded->kind() == RigKind::kMobileLidar) {
+      return runSimulatedCar(common, *loaded, scene_path, seed, sim_start_utime);
+    }
+    return runSimulated(common, *loaded, scene_path, seed);
+  }
   return runDevice(common, loaded->lidar(), uri);
 }

@@ -102,14 +102,27 @@ void Node::setFailed(const std::string& what) {
   std::cerr << name_ << ": FAILED: " << what << "\n";
 }
 
+void Node::setDegraded(const std::string& why) {
+  if (degraded_ == why) return;
+  degraded_ = why;
+  reportEvent(why);
+}
+
+void Node::clearDegraded(const std::string& what) {
+  if (degraded_.empty()) return;
+  degraded_.clear();
+  reportEvent(what);
+}
+
 void Node::publishStatus(int64_t now_utime, Outbox& out) {
   process_status_t s;
   s.utime = now_utime;
   s.process = name_;
   const bool errors = counter("errors") + counter("dropped") + counter("invalid") > 0;
-  s.health = failed_ ? process_status_t::FAILED
-                     : (errors ? process_status_t::DEGRADED : process_status_t::OK);
-  s.detail = detail_;
+  s.health =
+      failed_ ? process_status_t::FAILED
+              : (errors || !degraded_.empty() ? process_status_t::DEGRADED : process_status_t::OK);
+  s.detail = !failed_ && !degraded_.empty() ? degraded_ : detail_;
   for (const auto& [k, v] : counters_) {
     s.counter_names.push_back(k);
     s.counter_values.push_back(v);

@@ -98,12 +98,18 @@ class Node {
   // Reports bad input: counted under `counter`, printed rate-limited, kept as the status detail.
   void reportError(const std::string& counter, const std::string& what);
   void setFailed(const std::string& what);
+  // A lasting condition (not an error): the status says DEGRADED with `why` as its detail
+  // until clearDegraded(). Each change is reported once.
+  void setDegraded(const std::string& why);
+  void clearDegraded(const std::string& what);
+  bool degraded() const { return !degraded_.empty(); }
 
  private:
   std::string name_;
   std::map<std::string, int64_t> counters_;
   std::string detail_;
   bool failed_ = false;
+  std::string degraded_;
   int64_t next_status_utime_ = 0;
   int64_t errors_printed_ = 0;
 };

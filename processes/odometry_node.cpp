@@ -1,10 +1,13 @@
 #include "processes/odometry_node.hpp"
 
 #include <cmath>
+#include <utility>
 
 #include "processes/channels.hpp"
+#include "processes/convert.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 
 namespace sweepmap {
@@ -12,15 +15,85 @@ namespace sweepmap {
 OdometryNode::OdometryNode(const OdometryConfig& config)
     : Node("odometry"), config_(config), ekf_(config.ekf) {}
 
+OdometryNode::OdometryNode(const OdometryConfig& config, ImuDevice* imu, WheelDevice* wheels)
+    : OdometryNode(config) {
+  imu_device_ = imu;
+  wheel_device_ = wheels;
+}
+
 std::vector<std::string> OdometryNode::subscriptions() const {
+  if (wheel_device_) return {channels::kWheelCmd};
   return {channels::kWheelTicks, channels::kImu};
 }
 
 void OdometryNode::handle(const Message& msg, Outbox& out) {
+  if (msg.channel == channels::kWheelCmd) {
+    wheel_cmd_t c;
+    if (!decodeMessage(msg, &c) || !std::isfinite(c.v_m_s) || !std::isfinite(c.w_rad_s) ||
+        std::abs(c.v_m_s) > config_.ekf.max_speed_m_s ||
+        std::abs(c.w_rad_s) > config_.ekf.max_turn_rate_rad_s) {
+      reportError("invalid", "malformed or absurd wheel_cmd_t");
+      return;
+    }
+    if (wheel_device_) wheel_device_->command(msg.utime, c.v_m_s, c.w_rad_s);
+    count("wheel_commands");
+    return;
+  }
+  process(msg, out);
+}
+
+void OdometryNode::process(const Message& msg, Outbox& out) {
   if (msg.channel == channels::kWheelTicks) {
+    if (last_imu_rx_ < 0) last_imu_rx_ = msg.utime;  // the IMU's timeout starts with the wheels
+    last_wheels_rx_ = msg.utime;
     onTicks(msg, out);
   } else if (msg.channel == channels::kImu) {
+    last_imu_rx_ = msg.utime;
     onImu(msg);
+  }
+}
+
+void OdometryNode::advance(int64_t now_utime, Outbox& out) {
+  if (imu_device_ && wheel_device_) pollDevices(now_utime, out);
+  checkImu(now_utime);
+}
+
+void OdometryNode::pollDevices(int64_t now_utime, Outbox& out) {
+  for (const auto& [device, prefix] :
+       {std::pair<DeviceHealth, const char*>{imu_device_->health(), "imu_"},
+        std::pair<DeviceHealth, const char*>{wheel_device_->health(), "wheels_"}}) {
+    for (const auto& [name, value] : device.counters) setCounter(prefix + name, value);
+    for (const std::string& e : device.events) reportEvent(e);
+  }
+  // Both devices' samples in time order (the IMU's first at equal times), published raw and
+  // then processed in that order.
+  const std::vector<ImuSample> imu = imu_device_->poll(now_utime);
+  const std::vector<WheelTicks> wheels = wheel_device_->poll(now_utime);
+  Outbox raw;
+  size_t i = 0, w = 0;
+  while (i < imu.size() || w < wheels.size()) {
+    if (w >= wheels.size() || (i < imu.size() && imu[i].utime <= wheels[w].utime)) {
+      raw.publish(channels::kImu, now_utime, toLcm(imu[i++]));
+    } else {
+      raw.publish(channels::kWheelTicks, now_utime, toLcm(wheels[w++]));
+    }
+  }
+  for (Message& m : raw.take()) {
+    out.push(m);
+    process(m, out);
+  }
+}
+
+void OdometryNode::checkImu(int64_t now_utime) {
+  if (!config_.use_imu || last_wheels_rx_ < 0) return;
+  const bool wheels_alive = now_utime - last_wheels_rx_ <= kImuTimeoutUs;
+  const bool imu_silent = now_utime - last_imu_rx_ > kImuTimeoutUs;
+  if (wheels_alive && imu_silent) {
+    if (!degraded()) count("imu_outages");
+    setDegraded("no IMU sample for " + std::to_string(kImuTimeoutUs / 1000) +
+                " ms: EKF on wheels alone");
+  } else if (!imu_silent) {
+    clearDegraded("IMU samples again: EKF fuses the gyro");
   }
 }
 

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/calibration_file.hpp"
+#include "core/device_uri.hpp"
 #include "rigs/rig_kind.hpp"
 
 namespace sweepmap {
@@ -47,6 +48,11 @@ void MobileLidarConfig::declare(ConfigSchema& s) {
   s.add("rig", &rig, "", "rig kind: mobile_lidar (a 2D lidar on a moving base, Miao 2022)");
   lidar.declare(s, "lidar.");
   odometry.declare(s, "odometry.");
+  s.add("imu.device", &imu_device, "",
+        "the IMU sweepmap-odometry opens: sim | hi219:///dev/PORT[?baud=N] (HiPNUC HI219)");
+  s.add("wheels.device", &wheels_device, "",
+        "the wheel board sweepmap-odometry opens: sim | wheelboard:///dev/PORT[?baud=N] "
+        "(drivers/protocols/wheelboard.hpp)");
   mounting.declare(s, "mounting.");
   assembler.declare(s, "assembler.");
   mapper.declare(s, "mapper.");
@@ -66,6 +72,15 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   for (const auto& o : overrides) s.set(o);
   checkRigKind(path, c.rig, "mobile_lidar");
   c.lidar.validate(path, "lidar.");
+  const auto device = [&](const std::string& key, const std::string& value, DeviceProtocol p) {
+    try {
+      parseDeviceUriFor(value, {p});
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(path + ": key '" + key + "': " + e.what());
+    }
+  };
+  device("imu.device", c.imu_device, DeviceProtocol::kHi219);
+  device("wheels.device", c.wheels_device, DeviceProtocol::kWheelBoard);
   if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
       !(c.odometry.ekf.wheel_distance_m > 0)) {
     throw ConfigError(

@@ -43,6 +43,10 @@ struct MobileLidarConfig {
   std::string rig = "mobile_lidar";  // the kind, checked on load
   LidarConfig lidar;  // the lidar as its driver sees it (360° scanners: a uniform ray grid)
   OdometryConfig odometry;
+  // The odometry process's devices (core/device_uri.hpp); `sweepmap-odometry --imu-device /
+  // --wheels-device` override. sim: the simulated car's (sim.* below).
+  std::string imu_device = "sim";     // sim | hi219:///dev/ttyUSB1[?baud=N]
+  std::string wheels_device = "sim";  // sim | wheelboard:///dev/ttyACM0[?baud=N]
   MountingConfig mounting;
   WorldAssemblerConfig assembler;
   MapperConfig mapper;

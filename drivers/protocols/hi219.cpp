@@ -54,6 +54,7 @@ void Decoder::reset() {
 void Decoder::parsePayload(const uint8_t* p, size_t n, int64_t offset, std::vector<Event>* out) {
   Frame f;
   f.offset = offset;
+  f.size = static_cast<int64_t>(kHeader + n);
   size_t at = 0;
   const auto need = [&](size_t k) { return n - at >= k; };
   while (at < n) {

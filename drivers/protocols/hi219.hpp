@@ -44,6 +44,7 @@ struct Frame {
   double pressure_pa = 0.0;
   uint32_t time_ms = 0;  // the IMU's own clock (0x91)
   int64_t offset = 0;    // of the frame's first byte
+  int64_t size = 0;      // of the whole frame, header and CRC included
 };
 
 using Event = std::variant<Frame, DecodeError>;

@@ -41,6 +41,7 @@ namespace sweepmap {
 namespace wheelboard {
 
 constexpr uint8_t kTypeTicks = 0x01, kTypeSpeed = 0x02;
+constexpr int64_t kTicksFrameBytes = 22, kSpeedFrameBytes = 12;  // sync to CRC
 constexpr uint16_t kFlagWatchdog = 1 << 0, kFlagLeftEncoder = 1 << 1, kFlagRightEncoder = 1 << 2,
                    kFlagDriver = 1 << 3, kFlagBattery = 1 << 4;
 

@@ -4,6 +4,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <type_traits>
 
 #include "core/config.hpp"
 #include "rigs/rig_file.hpp"
@@ -112,13 +113,17 @@ TEST(RigFile, RequireKindNamesBothKinds) {
   EXPECT_NE(e.find("sweepmap-odometry needs a mobile_lidar rig"), std::string::npos) << e;
 }
 
-// The real-device examples are their simulated rig with another lidar.device, nothing else.
+// The real-device examples are their simulated rig with other devices, nothing else.
 TEST(RigFile, RealDeviceExamplesDifferOnlyInTheDevice) {
   const auto yamlWithDevice = [](const std::string& name, const std::string& device) {
     Rig rig = loadRig(name);
     return std::visit(
         [&](auto c) {
           c.lidar.device = device;
+          if constexpr (std::is_same_v<decltype(c), MobileLidarConfig>) {
+            c.imu_device = device;
+            c.wheels_device = device;
+          }
           ConfigSchema s;
           c.declare(s);
           return s.toYaml();
@@ -127,6 +132,9 @@ TEST(RigFile, RealDeviceExamplesDifferOnlyInTheDevice) {
   };
   EXPECT_EQ(loadRig("rig_a_ust10lx").lidar().device, "scip://192.168.0.10:10940");
   EXPECT_EQ(loadRig("rig_b_x4").lidar().device, "ydlidar:///dev/ttyUSB0");
+  const auto b = std::get<MobileLidarConfig>(loadRig("rig_b_x4").config);
+  EXPECT_EQ(b.imu_device, "hi219:///dev/ttyUSB1");
+  EXPECT_EQ(b.wheels_device, "wheelboard:///dev/ttyACM0");
   EXPECT_EQ(yamlWithDevice("rig_a_ust10lx", "x"), yamlWithDevice("rig_a", "x"));
   EXPECT_EQ(yamlWithDevice("rig_b_x4", "x"), yamlWithDevice("rig_b", "x"));
 }
@@ -137,6 +145,23 @@ TEST(RigFile, BadDeviceUriIsAConfigError) {
   EXPECT_NE(e.find("rig_a.yaml: key 'lidar.device': device 'usb0': expected sim"),
             std::string::npos)
       << e;
+}
+
+// Each device key takes its own kind of device.
+TEST(RigFile, DeviceOfTheWrongKindIsAConfigError) {
+  const std::string imu =
+      configError([] { loadRig("rig_b", {"imu.device=ydlidar:///dev/ttyUSB0"}); });
+  EXPECT_NE(imu.find("key 'imu.device': device 'ydlidar:///dev/ttyUSB0': a ydlidar device does "
+                     "not belong here (this key takes sim, hi219)"),
+            std::string::npos)
+      << imu;
+  const std::string wheels =
+      configError([] { loadRig("rig_b", {"wheels.device=hi219:///dev/ttyUSB1"}); });
+  EXPECT_NE(wheels.find("key 'wheels.device'"), std::string::npos) << wheels;
+  const std::string lidar =
+      configError([] { loadRig("rig_b", {"lidar.device=hi219:///dev/ttyUSB1"}); });
+  EXPECT_NE(lidar.find("key 'lidar.device'"), std::string::npos) << lidar;
+  EXPECT_NO_THROW(loadRig("rig_b", {"wheels.device=wheelboard:///dev/ttyACM1?baud=230400"}));
 }
 
 }  // namespace

@@ -1,9 +1,12 @@
 // `sweepmap emulate`: a simulated lidar behind its real protocol (tools/emulate/).
+#include <algorithm>
 #include <atomic>
 #include <csignal>
 #include <fstream>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
+#include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "core/config.hpp"
@@ -13,6 +16,7 @@
 #include "tools/cli/commands.hpp"
 #include "tools/emulate/devices.hpp"
 #include "tools/emulate/emulator_server.hpp"
+#include "tools/emulate/odometry_emulators.hpp"
 #include "tools/emulate/world.hpp"
 
 namespace sweepmap {
@@ -21,51 +25,101 @@ namespace {
 constexpr const char* kTruthLidarScanChannel = "TRUTH_LIDAR_SCAN";
 
 struct EmulateOptions {
-  std::string model;
+  std::string models;  // comma-separated
   ServerOptions server;
+  std::vector<std::string> links;  // one per model
+  std::string fault_device;        // the model the link faults apply to ("" = the first)
   EmulatorWorldOptions world;
   std::string lcm_url = "udpm://239.255.76.67:7667?ttl=0";
   EmulatedClock clock;
   LinkFaults faults;
   std::string truth;
+  int64_t start_utime = 0;
 };
 
-int runEmulate(const EmulateOptions& o) {
-  const EmulatedModel model = emulatedModel(o.model);
-  const bool serial = model != EmulatedModel::kUst10lx;
-  ServerOptions server = o.server;
-  if (serial && !server.listen.empty()) {
-    throw ConfigError(o.model + " is a serial device: use --pty, not --listen");
+bool isLidarModel(const std::string& m) { return m == "ust10lx" || m == "x4" || m == "rplidar"; }
+
+std::vector<std::string> splitModels(const std::string& list) {
+  std::vector<std::string> out;
+  size_t at = 0;
+  while (at <= list.size()) {
+    size_t comma = list.find(',', at);
+    if (comma == std::string::npos) comma = list.size();
+    const std::string m = list.substr(at, comma - at);
+    if (!isLidarModel(m) && m != "hi219" && m != "wheel-board") {
+      throw ConfigError("unknown device '" + m + "' (ust10lx, x4, rplidar, hi219, wheel-board)");
+    }
+    for (const std::string& seen : out) {
+      if (seen == m) throw ConfigError("device '" + m + "' given twice");
+    }
+    out.push_back(m);
+    at = comma + 1;
   }
-  if (!serial && server.pty) throw ConfigError("ust10lx speaks TCP: use --listen, not --pty");
-  if (serial) server.pty = true;
-  if (!serial && server.listen.empty()) server.listen = "127.0.0.1:10940";
+  int lidars = 0;
+  for (const std::string& m : out) lidars += isLidarModel(m);
+  if (lidars > 1) throw ConfigError("one lidar per emulator process");
+  return out;
+}
+
+int runEmulate(const EmulateOptions& o) {
+  const std::vector<std::string> models = splitModels(o.models);
+  const bool tcp = models.size() == 1 && models[0] == "ust10lx";
+  for (const std::string& m : models) {
+    if (m == "ust10lx" && models.size() > 1) {
+      throw ConfigError("ust10lx speaks TCP: serve it alone, with --listen");
+    }
+  }
+  if (!tcp && !o.server.listen.empty()) {
+    throw ConfigError(o.models + ": serial devices: use --pty, not --listen");
+  }
+  if (tcp && o.server.pty) throw ConfigError("ust10lx speaks TCP: use --listen, not --pty");
+  if (!o.links.empty() && o.links.size() != models.size()) {
+    throw ConfigError("--link: give one path per device (" + std::to_string(models.size()) + ")");
+  }
+  const std::string faulty = o.fault_device.empty() ? models[0] : o.fault_device;
+  if (std::find(models.begin(), models.end(), faulty) == models.end()) {
+    throw ConfigError("--fault-device '" + faulty + "' is not served here");
+  }
   EmulatorWorldOptions wo = o.world;
-  if (wo.rig.empty()) wo.rig = serial ? "rig_b" : "rig_a";
+  if (wo.rig.empty()) wo.rig = tcp ? "rig_a" : "rig_b";
   wo.clock_drift_ppm = o.clock.drift_ppm;
-  const int64_t start = wallUtime();
+  const int64_t start = o.start_utime > 0 ? o.start_utime : wallUtime();
   std::unique_ptr<EmulatorWorld> world = makeEmulatorWorld(wo, start);
 
   // Truth: each scan as the world made it (true first-ray time, exact ranges), its
   // device_stamp the sensor's counter at the first ray.
   std::unique_ptr<EventLogWriter> truth;
   if (!o.truth.empty()) truth = std::make_unique<EventLogWriter>(o.truth);
-  int64_t power_on = start;
-  ScanSource inner = world->source();
-  ScanSource source = [&](int64_t now_us) {
-    std::vector<Scan2D> scans = inner(now_us);
-    if (truth) {
-      for (const Scan2D& s : scans) {
-        Scan2D t = s;
-        t.device_stamp = o.clock.counterAt(power_on, s.utime);
-        Outbox out;
-        out.publish(kTruthLidarScanChannel, s.utime, toLcm(t));
-        for (const Message& m : out.take()) truth->write(m.utime, m.channel, m.data);
+  std::atomic<int64_t> lidar_power_on{start};
+  ScanSource source;
+  for (const std::string& m : models) {
+    if (!isLidarModel(m)) continue;
+    ScanSource inner = world->source();
+    source = [&, inner](int64_t now_us) {
+      std::vector<Scan2D> scans = inner(now_us);
+      if (truth) {
+        for (const Scan2D& s : scans) {
+          Scan2D t = s;
+          t.device_stamp = o.clock.counterAt(lidar_power_on, s.utime);
+          Outbox out;
+          out.publish(kTruthLidarScanChannel, s.utime, toLcm(t));
+          for (const Message& msg : out.take()) truth->write(msg.utime, msg.channel, msg.data);
+        }
+        truth->flush();
       }
-      truth->flush();
-    }
-    return scans;
-  };
+      return scans;
+    };
+  }
+  // The odometry devices' clocks: the sensor clock's offset and drift.
+  DeviceClockModel device_clock;
+  device_clock.offset_us = (static_cast<double>(o.clock.start_ms) + o.clock.offset_ms) * 1e3;
+  device_clock.drift_ppm = o.clock.drift_ppm;
+  ImuSource imu;
+  TicksSource ticks;
+  if (std::find(models.begin(), models.end(), "hi219") != models.end()) imu = world->imuSource();
+  if (std::find(models.begin(), models.end(), "wheel-board") != models.end()) {
+    ticks = world->ticksSource();
+  }
 
   std::unique_ptr<lcm::LCM> lcm;
   std::thread lcm_thread;
@@ -86,24 +140,61 @@ int runEmulate(const EmulateOptions& o) {
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     server_stop = true;
   });
-  try {
-    serveEmulator(
-        [&](int64_t now_us) {
-          power_on = now_us;
-          return makeEmulatedLidar(model, source, o.clock, now_us);
-        },
-        server, o.faults, wallUtime, server_stop, std::cout);
-  } catch (...) {
-    server_stop = true;
-    stop = true;
-    watcher.join();
-    if (lcm_thread.joinable()) lcm_thread.join();
-    throw;
+  // One server thread per device; the first failure stops them all.
+  std::mutex error_mutex;
+  std::exception_ptr error;
+  std::mutex info_mutex;
+  std::vector<std::thread> servers;
+  for (size_t i = 0; i < models.size(); ++i) {
+    const std::string model = models[i];
+    ServerOptions server = o.server;
+    if (!tcp) server.pty = true;
+    if (tcp && server.listen.empty()) server.listen = "127.0.0.1:10940";
+    if (!o.links.empty()) server.pty_link = o.links[i];
+    LinkFaults faults = o.faults;
+    if (model != faulty) faults = LinkFaults{};
+    const std::function<std::unique_ptr<EmulatedLidar>(int64_t)> make =
+        [&, model](int64_t now_us) -> std::unique_ptr<EmulatedLidar> {
+      if (model == "hi219") return std::make_unique<Hi219Device>(imu, device_clock, now_us);
+      if (model == "wheel-board") {
+        return std::make_unique<WheelBoardDevice>(ticks, device_clock, now_us);
+      }
+      lidar_power_on = now_us;
+      return makeEmulatedLidar(emulatedModel(model), source, o.clock, now_us);
+    };
+    servers.emplace_back([&, server, faults, make, model] {
+      try {
+        struct LineOut : std::streambuf {
+          std::mutex* m;
+          std::string prefix, line;
+          int overflow(int c) override {
+            if (c == '\n') {
+              std::lock_guard<std::mutex> lock(*m);
+              std::cout << prefix << line << std::endl;
+              line.clear();
+            } else if (c != EOF) {
+              line.push_back(static_cast<char>(c));
+            }
+            return c;
+          }
+        } buf;
+        buf.m = &info_mutex;
+        buf.prefix = models.size() > 1 ? model + ": " : "";
+        std::ostream out(&buf);
+        serveEmulator(make, server, faults, wallUtime, server_stop, out);
+      } catch (...) {
+        std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+        server_stop = true;
+      }
+    });
   }
+  for (std::thread& t : servers) t.join();
   server_stop = true;
   stop = true;
   watcher.join();
   if (lcm_thread.joinable()) lcm_thread.join();
+  if (error) std::rethrow_exception(error);
   return 0;
 }
 
@@ -112,21 +203,34 @@ int runEmulate(const EmulateOptions& o) {
 Runner addEmulateCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "emulate",
-      "Serve a simulated lidar behind its real protocol, for the real drivers: ust10lx (Hokuyo "
-      "UST-10LX, SCIP 2.0 over TCP, fed by a rotating_lidar world: the simulated lidar on a "
-      "shaft that stands still, or follows TRUTH_SHAFT with --follow-lcm), x4 (YDLIDAR X4) and "
-      "rplidar (RPLIDAR A1) on a pseudo-terminal (fed by a mobile_lidar world: the simulated "
-      "car's lidar). Prints the address or the pty path to open. Faults: sensor clock offset, "
+      "Serve simulated devices behind their real protocols, for the real drivers: ust10lx "
+      "(Hokuyo UST-10LX, SCIP 2.0 over TCP, fed by a rotating_lidar world: the simulated lidar "
+      "on a shaft that stands still, or follows TRUTH_SHAFT with --follow-lcm); on "
+      "pseudo-terminals, fed by a mobile_lidar world (the simulated car): x4 (YDLIDAR X4), "
+      "rplidar (RPLIDAR A1), hi219 (HiPNUC HI219 IMU) and wheel-board (our wheel board "
+      "protocol). Prints the address or the pty path to open. Faults: sensor clock offset, "
       "drift and start (the 24-bit wrap), corrupted bytes, a stall, a hang-up and return.");
   auto o = std::make_shared<EmulateOptions>();
-  cmd->add_option("model", o->model, "ust10lx | x4 | rplidar")
-      ->required()
-      ->check(CLI::IsMember({"ust10lx", "x4", "rplidar"}));
+  cmd->add_option("devices", o->models,
+                  "ust10lx | x4 | rplidar | hi219 | wheel-board, or several serial ones "
+                  "comma-separated (x4,hi219,wheel-board: rig B's three devices on one world, "
+                  "each on its own pty)")
+      ->required();
   cmd->add_option("--listen", o->server.listen,
                   "ust10lx: loopback HOST:PORT to serve on (default 127.0.0.1:10940)");
-  cmd->add_flag("--pty", o->server.pty, "x4, rplidar: serve on a new pseudo-terminal (default)");
-  cmd->add_option("--link", o->server.pty_link,
-                  "x4, rplidar: keep a symlink to the pty at this path (stable across hang-ups)");
+  cmd->add_flag("--pty", o->server.pty,
+                "serial devices: serve each on a new pseudo-terminal (default)");
+  cmd->add_option("--link", o->links,
+                  "serial devices: keep a symlink to each device's pty at this path (stable "
+                  "across hang-ups); one per device, in order")
+      ->delimiter(',');
+  cmd->add_option("--fault-device", o->fault_device,
+                  "the device the link faults below apply to (default: the first)");
+  cmd->add_flag("--publish-truth", o->world.publish_truth,
+                "mobile rigs: publish the car's TRUTH_POSE and TRUTH_MOUNTING on LCM");
+  cmd->add_option("--start-utime", o->start_utime,
+                  "when the simulated world starts [us, wall clock]; 0 = now")
+      ->capture_default_str();
   cmd->add_option("--rig", o->world.rig,
                   "rig file or name of the world (default: rig_a for "
                   "ust10lx, rig_b otherwise)");

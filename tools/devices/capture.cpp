@@ -11,8 +11,7 @@
 #include "core/event_log.hpp"
 #include "drivers/io/capture_file.hpp"
 #include "drivers/lidar_sessions.hpp"
-#include "drivers/protocols/hi219.hpp"
-#include "drivers/protocols/wheelboard.hpp"
+#include "drivers/odometry_drivers.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/live_runner.hpp"
@@ -95,88 +94,38 @@ int runCapture(const CaptureOptions& o, const LidarConfig& expected, std::ostrea
 
 namespace {
 
-// Host time of a frame that starts at stream `offset`: in a capture, its chunk's receive time
-// less the line time of the bytes after it in the chunk; in raw bytes, the line time alone.
-struct FrameClock {
-  double byte_us;
-  int64_t arrival = -1, chunk_end = 0;
-  int64_t at(int64_t offset) const {
-    if (arrival < 0) return static_cast<int64_t>(std::llround(double(offset) * byte_us));
-    return arrival - static_cast<int64_t>(std::llround(double(chunk_end - offset) * byte_us));
-  }
-};
-
-// Cumulative counts of a 32-bit counter that wraps.
-struct Unwrap32 {
-  bool have = false;
-  uint32_t last = 0;
-  int64_t value = 0;
-  int64_t operator()(uint32_t raw) {
-    value = have ? value + static_cast<int32_t>(raw - last) : static_cast<int32_t>(raw);
-    have = true;
-    last = raw;
-    return value;
-  }
-};
-
-// The rig-B devices: HI219 frames to IMU, wheel board frames to WHEEL_TICKS. IMU axes as
-// the IMU reports them (its mounting is the driver's business); Euler angles when the frame
-// has them, else NaN.
+// The rig-B devices: HI219 frames to IMU, wheel board frames to WHEEL_TICKS, by the drivers'
+// own sessions (drivers/odometry_drivers.hpp). IMU axes as the IMU reports them (its mounting
+// is the driver's business); Euler angles when the frame has them, else NaN.
 DecodeResult decodeRigBDevice(const DecodeOptions& o, const Capture& capture,
                               std::ostream& report) {
   DecodeResult r;
   EventLogWriter log(o.out);
-  FrameClock clock{10e6 / (o.baud > 0 ? o.baud : 115200)};
-  hi219::Decoder imu;
-  wheelboard::Decoder board;
-  Unwrap32 left, right;
   const bool is_imu = o.protocol == "hi219";
+  const int baud = o.baud > 0 ? o.baud : 115200;
+  Hi219Session imu(baud, capture.raw);
+  WheelBoardSession board(baud, capture.raw);
+  std::vector<ImuSample> samples;
+  std::vector<WheelTicks> ticks;
+  std::vector<std::string> errors;
   for (const CaptureChunk& chunk : capture.chunks) {
-    clock.arrival = chunk.utime;
-    clock.chunk_end = chunk.offset + static_cast<int64_t>(chunk.bytes.size());
     r.bytes += static_cast<int64_t>(chunk.bytes.size());
+    samples.clear();
+    ticks.clear();
+    errors.clear();
     Outbox out;
-    const auto error = [&](const DecodeError& e) {
-      if (r.errors < 1000) report << o.in << ": byte " << e.offset << ": " << e.what << "\n";
-      ++r.errors;
-    };
     if (is_imu) {
-      std::vector<hi219::Event> events;
-      imu.feed(chunk.bytes.data(), chunk.bytes.size(), &events);
-      for (const auto& e : events) {
-        if (const auto* d = std::get_if<DecodeError>(&e)) {
-          error(*d);
-          continue;
-        }
-        const auto& f = std::get<hi219::Frame>(e);
-        if (!f.has_gyro || !f.has_accel) continue;  // not a sample the odometry can use
-        imu_t m{};
-        m.utime = capture.raw && f.has_time ? int64_t{f.time_ms} * 1000 : clock.at(f.offset);
-        for (int k = 0; k < 3; ++k) {
-          m.gyro_rad_s[k] = f.gyro_rad_s[k];
-          m.accel_m_s2[k] = f.accel_m_s2[k];
-          m.rpy_rad[k] = f.has_euler ? f.rpy_rad[k] : std::nan("");
-        }
-        out.publish(channels::kImu, m.utime, m);
-        ++r.scans;
-      }
+      imu.onBytes(chunk.bytes.data(), chunk.bytes.size(), chunk.utime, &samples, &errors);
+      for (const ImuSample& s : samples) out.publish(channels::kImu, s.utime, toLcm(s));
+      r.scans += static_cast<int64_t>(samples.size());
     } else {
-      std::vector<wheelboard::Event> events;
-      board.feed(chunk.bytes.data(), chunk.bytes.size(), &events);
-      for (const auto& e : events) {
-        if (const auto* d = std::get_if<DecodeError>(&e)) {
-          error(*d);
-          continue;
-        }
-        const auto* t = std::get_if<wheelboard::Ticks>(&e);
-        if (!t) continue;
-        wheel_ticks_t m{};
-        m.utime = clock.at(t->offset);
-        m.left_ticks = left(static_cast<uint32_t>(t->left));
-        m.right_ticks = right(static_cast<uint32_t>(t->right));
-        out.publish(channels::kWheelTicks, m.utime, m);
-        ++r.scans;
-      }
+      board.onBytes(chunk.bytes.data(), chunk.bytes.size(), chunk.utime, &ticks, &errors);
+      for (const WheelTicks& t : ticks) out.publish(channels::kWheelTicks, t.utime, toLcm(t));
+      r.scans += static_cast<int64_t>(ticks.size());
+    }
+    for (const std::string& e : errors) {
+      if (r.errors < 1000) report << o.in << ": " << e << "\n";
+      ++r.errors;
     }
     for (const Message& m : out.take()) log.write(m.utime, m.channel, m.data);
   }
@@ -186,7 +135,7 @@ DecodeResult decodeRigBDevice(const DecodeOptions& o, const Capture& capture,
   report << "decode: " << r.bytes << " bytes, " << r.scans
          << (is_imu ? " IMU samples" : " wheel readings") << " -> " << o.out << " ("
          << c.checksum_errors << " CRC errors, " << c.resyncs << " resyncs"
-         << (is_imu ? "" : ", " + std::to_string(board.sequenceGaps()) + " frames lost") << ")\n";
+         << (is_imu ? "" : ", " + std::to_string(board.framesLost()) + " frames lost") << ")\n";
   if (!r.file_error.empty()) report << "decode: " << r.file_error << "\n";
   return r;
 }

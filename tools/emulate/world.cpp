@@ -7,10 +7,12 @@
 #include "core/config.hpp"
 #include "drivers/scene.hpp"
 #include "drivers/shaft_trajectory.hpp"
+#include "drivers/sim_car_devices.hpp"
 #include "drivers/sim_lidar.hpp"
 #include "drivers/sim_mobile.hpp"
 #include "processes/channels.hpp"
 #include "processes/lidar_node.hpp"
+#include "processes/sim_car.hpp"
 #include "processes/sim_setup.hpp"
 #include "processes/truth_sweep_node.hpp"
 #include "rigs/mobile_lidar.hpp"
@@ -126,16 +128,33 @@ class MobileWorld : public EmulatorWorld {
       : rig_(std::get<MobileLidarConfig>(setup.rig.config)),
         scene_(setup.scene, PlateConfig{}),
         rng_(options.seed * 8 + 3) {
-    SimMobileConfig sim = rig_.sim;
-    sim.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
-    sim.sample_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
-    WheelGeometry wheels;
-    wheels.radius_m = rig_.odometry.wheel_radius_m;
-    wheels.ticks_per_revolution = rig_.odometry.ticks_per_revolution;
-    wheels.wheel_distance_m = rig_.odometry.ekf.wheel_distance_m;
-    const LidarMounting nominal = rig_.mounting.toMounting();
-    car_ = std::make_unique<SimMobile>(sim, wheels, nominal.nominal_rpy_rad, nominal.t_BL_m, scene_,
-                                       options.seed, start_utime);
+    MobileLidarConfig timed = rig_;
+    timed.sim.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
+    timed.sim.sample_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
+    car_ = makeSimCar(timed, scene_, options.seed, start_utime);
+    imu_ = std::make_unique<SimImu>(car_.get());
+    wheels_ = std::make_unique<SimWheels>(car_.get());
+    if (options.publish_truth) {
+      truth_ = std::make_unique<SimCarTruthNode>(rig_, setup.scene, car_.get());
+      locked_truth_ = std::make_unique<LockedNode>(truth_.get(), &mutex_);
+    }
+  }
+
+  ImuSource imuSource() override {
+    return [this](int64_t now_us) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return imu_->poll(now_us);
+    };
+  }
+  TicksSource ticksSource() override {
+    return [this](int64_t now_us) {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return wheels_->poll(now_us);
+    };
+  }
+  std::vector<Node*> nodes() override {
+    if (!locked_truth_) return {};
+    return {locked_truth_.get()};
   }
 
   ScanSource source() override {
@@ -158,12 +177,23 @@ class MobileWorld : public EmulatorWorld {
   Scene scene_;
   std::mutex mutex_;
   std::unique_ptr<SimMobile> car_;
+  std::unique_ptr<SimImu> imu_;
+  std::unique_ptr<SimWheels> wheels_;
+  std::unique_ptr<SimCarTruthNode> truth_;
+  std::unique_ptr<LockedNode> locked_truth_;
   std::mt19937_64 rng_;
   int64_t next_ = 0;
   std::optional<Scan2D> pending_;
 };
 
 }  // namespace
+
+ImuSource EmulatorWorld::imuSource() {
+  throw std::runtime_error("an IMU needs a mobile_lidar rig (the simulated car)");
+}
+TicksSource EmulatorWorld::ticksSource() {
+  throw std::runtime_error("a wheel board needs a mobile_lidar rig (the simulated car)");
+}
 
 std::unique_ptr<EmulatorWorld> makeEmulatorWorld(const EmulatorWorldOptions& options,
                                                  int64_t start_utime) {

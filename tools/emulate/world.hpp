@@ -3,10 +3,11 @@
 //    shaft. The shaft stands still at angle 0, or, with follow_lcm, follows TRUTH_SHAFT from
 //    a simulated stepper in another process (`sweepmap-motor --sim`); then the world also
 //    publishes TRUTH_RIG and TRUTH_SWEEP, as `sweepmap-lidar --sim` does.
-//  - mobile_lidar rigs (the X4 of rig B; RPLIDAR): the simulated car driving its path
-//    (then standing at its end), its 360° lidar's scans, each handed out as it begins (the
-//    path is scripted, so its rays are known ahead) for devices that send every sample at
-//    its own time.
+//  - mobile_lidar rigs (the X4 of rig B; RPLIDAR; the HI219 and the wheel board): the simulated
+//    car driving its path (then standing at its end: the IMU and the board fall silent), its
+//    360° lidar's scans, each handed out as it begins (the path is scripted, so its rays are
+//    known ahead) for devices that send every sample at its own time; its IMU samples and
+//    encoder readings at their times. With publish_truth the world publishes the car's truth.
 // A device's scan timing follows its own oscillator: with a clock drift of p ppm the scans
 // come (1 + p·1e-6) times as often in true time, as a real mirror/motor timed by that
 // oscillator does.
@@ -20,6 +21,7 @@
 
 #include "processes/node.hpp"
 #include "tools/emulate/emulated_lidar.hpp"
+#include "tools/emulate/odometry_emulators.hpp"
 
 namespace sweepmap {
 
@@ -29,7 +31,8 @@ struct EmulatorWorldOptions {
   std::vector<std::string> overrides;  // key=value (scene.* to the scene)
   uint64_t seed = 1;
   double clock_drift_ppm = 0.0;
-  bool follow_lcm = false;  // rotating rigs: follow TRUTH_SHAFT, publish truth
+  bool follow_lcm = false;     // rotating rigs: follow TRUTH_SHAFT, publish truth
+  bool publish_truth = false;  // mobile rigs: publish TRUTH_POSE and TRUTH_MOUNTING on LCM
 };
 
 class EmulatorWorld {
@@ -37,6 +40,10 @@ class EmulatorWorld {
   virtual ~EmulatorWorld() = default;
   // Scans completed (delivered) by now_us, each once. Safe to call from any thread.
   virtual ScanSource source() = 0;
+  // mobile_lidar worlds: the car's IMU samples and encoder readings by now_us, each once.
+  // Throws std::runtime_error for a world without them.
+  virtual ImuSource imuSource();
+  virtual TicksSource ticksSource();
   // Nodes to run over LCM alongside the server (empty unless follow_lcm), and messages to
   // publish once at start (TRUTH_RIG).
   virtual std::vector<Node*> nodes() { return {}; }

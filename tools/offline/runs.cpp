@@ -3,6 +3,7 @@
 #include <sstream>
 #include <type_traits>
 
+#include "processes/sim_car.hpp"
 #include "tools/offline/replay.hpp"
 #include "tools/offline/replay_mobile.hpp"
 #include "tools/offline/sim_mobile.hpp"

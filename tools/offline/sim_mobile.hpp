@@ -35,8 +35,4 @@ struct SimMobileResult {
 SimMobileResult simulateMobile(const SimMobileOptions& options,
                                const std::function<void(const Message&)>& sink);
 
-// Resolves sim.path_file relative to the rig file and validates the simulation keys.
-// Throws ConfigError naming `rig_path` and the key.
-void prepareSimMobileConfig(const std::string& rig_path, MobileLidarConfig* rig);
-
 }  // namespace sweepmap

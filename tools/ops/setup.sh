@@ -10,6 +10,7 @@ packages=(
   libgtest-dev libgmock-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   gnuplot-nox iproute2 util-linux clang-format
   clang libclang-rt-14-dev
+  libgpiod-dev
 )
 
 missing=()

@@ -1,0 +1,289 @@
+#include "drivers/odometry_drivers.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+namespace sweepmap {
+namespace {
+
+DeviceClockSync::Options deviceClock(double tick_us) {
+  DeviceClockSync::Options o;
+  o.counter_bits = 32;
+  o.tick_us = tick_us;
+  return o;
+}
+
+// Appends `samples` to `queue`, dropping the oldest beyond `max` (counted in *drops).
+template <class T>
+void enqueue(std::vector<T>* queue, std::vector<T>* samples, size_t max, int64_t* drops) {
+  for (T& s : *samples) queue->push_back(std::move(s));
+  if (queue->size() > max) {
+    const size_t drop = queue->size() - max;
+    queue->erase(queue->begin(), queue->begin() + static_cast<std::ptrdiff_t>(drop));
+    *drops += static_cast<int64_t>(drop);
+  }
+}
+
+// Start-up of a device that streams on its own: flush what is buffered, then read until the
+// session decodes one item (kept in *read_ahead for the first onBytes), or throw.
+template <class Decode>
+void awaitFirstFrame(ByteStream& stream, int timeout_ms, const std::string& what,
+                     std::vector<uint8_t>* read_ahead, Decode decode) {
+  // What the port buffered before we opened it is stale: drop it (the device never pauses, so
+  // waiting for a quiet line would wait for ever).
+  std::vector<uint8_t> buffer(4096);
+  for (int i = 0; i < 16 && stream.read(buffer.data(), buffer.size(), 0) > 0; ++i) {
+  }
+  read_ahead->clear();
+  const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(timeout_ms);
+  while (std::chrono::steady_clock::now() < until) {
+    const size_t n = stream.read(buffer.data(), buffer.size(), 50);
+    if (n == 0) continue;
+    read_ahead->insert(read_ahead->end(), buffer.begin(), buffer.begin() + n);
+    if (decode(*read_ahead)) return;
+    if (read_ahead->size() > 64 * 1024) break;
+  }
+  throw StreamError("no valid " + what + " frame within " + std::to_string(timeout_ms) + " ms (" +
+                    std::to_string(read_ahead->size()) + " bytes read)");
+}
+
+}  // namespace
+
+// ---- HI219 ----
+
+Hi219Session::Hi219Session(int baud, bool raw) : clock_(deviceClock(1000.0)), raw_(raw) {
+  line_.byte_us = 10e6 / (baud > 0 ? baud : 115200);
+}
+
+void Hi219Session::reset() {
+  decoder_.reset();
+  clock_.clear();
+  fed_ = 0;
+}
+
+int Hi219Session::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
+                          std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
+  events_.clear();
+  decoder_.feed(data, size, &events_);
+  fed_ += static_cast<int64_t>(size);
+  line_.arrival = raw_ ? -1 : arrival_utime;
+  line_.chunk_end = fed_;
+  int n = 0;
+  for (const hi219::Event& e : events_) {
+    if (const auto* d = std::get_if<DecodeError>(&e)) {
+      errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
+      continue;
+    }
+    const auto& f = std::get<hi219::Frame>(e);
+    if (f.id >= 0) user_id_ = f.id;
+    if (!f.has_gyro || !f.has_accel) continue;  // not a sample the odometry can use
+    ImuSample s{};
+    if (f.has_time) {
+      if (raw_) {
+        s.utime = int64_t{f.time_ms} * 1000;
+      } else {
+        // The frame arrived complete at the receive time of its last byte.
+        const int64_t complete = line_.at(f.offset + f.size);
+        s.utime = clock_.observe(f.time_ms, complete);
+      }
+    } else {
+      s.utime = line_.at(f.offset);
+    }
+    for (int k = 0; k < 3; ++k) {
+      s.gyro[k] = f.gyro_rad_s[k];
+      s.accel[k] = f.accel_m_s2[k];
+      s.rpy[k] = f.has_euler ? f.rpy_rad[k] : std::numeric_limits<double>::quiet_NaN();
+    }
+    samples->push_back(s);
+    ++n;
+  }
+  return n;
+}
+
+Hi219Driver::Hi219Driver(const DeviceUri& uri, const OdometryDriverOptions& options,
+                         std::function<int64_t()> now)
+    : StreamDevice(uri, options, std::move(now)),
+      options_(options),
+      session_(uri.baud, /*raw=*/false) {}
+
+Hi219Driver::~Hi219Driver() { stopWorker(); }
+
+std::vector<ImuSample> Hi219Driver::poll(int64_t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<ImuSample> out;
+  out.swap(queue_);
+  return out;
+}
+
+void Hi219Driver::startSession(ByteStream& stream) {
+  awaitFirstFrame(stream, options_.identify_timeout_ms, "HI219", &read_ahead_,
+                  [](const std::vector<uint8_t>& bytes) {
+                    hi219::Decoder probe;
+                    std::vector<hi219::Event> events;
+                    probe.feed(bytes.data(), bytes.size(), &events);
+                    for (const auto& e : events) {
+                      if (std::holds_alternative<hi219::Frame>(e)) return true;
+                    }
+                    return false;
+                  });
+  session_.reset();
+}
+
+int Hi219Driver::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
+                         std::vector<std::string>* errors) {
+  decoded_.clear();
+  int n = 0;
+  if (size == 0 && !read_ahead_.empty()) {
+    n = session_.onBytes(read_ahead_.data(), read_ahead_.size(), arrival_utime, &decoded_, errors);
+    read_ahead_.clear();
+  } else {
+    n = session_.onBytes(data, size, arrival_utime, &decoded_, errors);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  enqueue(&queue_, &decoded_, options_.max_queued, &queue_drops_);
+  return n;
+}
+
+std::string Hi219Driver::identity() const {
+  const int id = session_.userId();
+  return id >= 0 ? "HI219 (user ID " + std::to_string(id) + ")" : "HI219";
+}
+
+std::vector<std::pair<std::string, int64_t>> Hi219Driver::extraCounters() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {{"queue_drops", queue_drops_}};
+}
+
+// ---- wheel board ----
+
+WheelBoardSession::WheelBoardSession(int baud, bool raw) : clock_(deviceClock(1.0)), raw_(raw) {
+  line_.byte_us = 10e6 / (baud > 0 ? baud : 115200);
+}
+
+void WheelBoardSession::reset() {
+  decoder_.reset();
+  clock_.clear();
+  fed_ = 0;
+  // The counts stay cumulative across a reconnect: a board that kept running continues
+  // where it was; one that restarted from 0 is a jump the odometry rejects once.
+}
+
+int WheelBoardSession::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
+                               std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
+  events_.clear();
+  decoder_.feed(data, size, &events_);
+  fed_ += static_cast<int64_t>(size);
+  line_.arrival = raw_ ? -1 : arrival_utime;
+  line_.chunk_end = fed_;
+  int n = 0;
+  for (const wheelboard::Event& e : events_) {
+    if (const auto* d = std::get_if<DecodeError>(&e)) {
+      errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
+      continue;
+    }
+    const auto* t = std::get_if<wheelboard::Ticks>(&e);
+    if (!t) continue;
+    WheelTicks w{};
+    if (raw_) {
+      w.utime = line_.at(t->offset);
+    } else {
+      const int64_t complete = line_.at(t->offset + wheelboard::kTicksFrameBytes);
+      w.utime = clock_.observe(t->time_us, complete);
+    }
+    w.left = left_(static_cast<uint32_t>(t->left));
+    w.right = right_(static_cast<uint32_t>(t->right));
+    w.flags = t->flags;
+    ticks->push_back(w);
+    ++n;
+  }
+  return n;
+}
+
+WheelBoardDriver::WheelBoardDriver(const DeviceUri& uri, const OdometryDriverOptions& options,
+                                   std::function<int64_t()> now)
+    : StreamDevice(uri, options, std::move(now)),
+      options_(options),
+      session_(uri.baud, /*raw=*/false) {}
+
+WheelBoardDriver::~WheelBoardDriver() { stopWorker(); }
+
+std::vector<WheelTicks> WheelBoardDriver::poll(int64_t) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<WheelTicks> out;
+  out.swap(queue_);
+  return out;
+}
+
+void WheelBoardDriver::command(int64_t, double v_m_s, double w_rad_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  commands_.emplace_back(v_m_s, w_rad_s);
+  while (commands_.size() > 16) commands_.pop_front();  // only the newest matter
+}
+
+void WheelBoardDriver::startSession(ByteStream& stream) {
+  awaitFirstFrame(stream, options_.identify_timeout_ms, "wheel board TICKS", &read_ahead_,
+                  [](const std::vector<uint8_t>& bytes) {
+                    wheelboard::Decoder probe;
+                    std::vector<wheelboard::Event> events;
+                    probe.feed(bytes.data(), bytes.size(), &events);
+                    for (const auto& e : events) {
+                      if (std::holds_alternative<wheelboard::Ticks>(e)) return true;
+                    }
+                    return false;
+                  });
+  session_.reset();
+  std::lock_guard<std::mutex> lock(mutex_);
+  frames_lost_total_ += frames_lost_now_;
+  frames_lost_now_ = 0;
+}
+
+int WheelBoardDriver::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
+                              std::vector<std::string>* errors) {
+  decoded_.clear();
+  int n = 0;
+  if (size == 0 && !read_ahead_.empty()) {
+    n = session_.onBytes(read_ahead_.data(), read_ahead_.size(), arrival_utime, &decoded_, errors);
+    read_ahead_.clear();
+  } else {
+    n = session_.onBytes(data, size, arrival_utime, &decoded_, errors);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  for (const WheelTicks& t : decoded_) {
+    const bool stopped = (t.flags & wheelboard::kFlagWatchdog) != 0;
+    if (stopped && !(last_flags_ & wheelboard::kFlagWatchdog)) ++watchdog_stops_;
+    last_flags_ = t.flags;
+  }
+  frames_lost_now_ = session_.framesLost();
+  enqueue(&queue_, &decoded_, options_.max_queued, &queue_drops_);
+  return n;
+}
+
+void WheelBoardDriver::service(ByteStream& stream, int64_t) {
+  std::deque<std::pair<double, double>> due;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    due.swap(commands_);
+  }
+  for (const auto& [v, w] : due) {
+    stream.write(wheelboard::encodeSpeed(tx_seq_++, v, w), 100);
+    std::lock_guard<std::mutex> lock(mutex_);
+    ++commands_sent_;
+  }
+}
+
+void WheelBoardDriver::stopSession(ByteStream& stream) {
+  // Leaving: stop the wheels now rather than after the board's watchdog.
+  stream.write(wheelboard::encodeSpeed(tx_seq_++, 0.0, 0.0), 100);
+}
+
+std::vector<std::pair<std::string, int64_t>> WheelBoardDriver::extraCounters() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {{"queue_drops", queue_drops_},
+          {"frames_lost", frames_lost_total_ + frames_lost_now_},
+          {"commands_sent", commands_sent_},
+          {"watchdog_stops", watchdog_stops_},
+          {"board_flags", last_flags_}};
+}
+
+}  // namespace sweepmap
