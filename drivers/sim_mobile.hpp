@@ -22,6 +22,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -159,8 +160,14 @@ class SimMobile {
   std::vector<TruthPose> truth() const;
   const std::vector<SlipEvent>& slips() const { return slips_; }
   int64_t scanDeliveryUtime(const Scan2D& scan) const;
-  // One scan (index j) with the given noise generator; exposed for tests.
+  // One scan (index j; j < 0: before the start, the car at rest) with the given noise
+  // generator.
   Scan2D makeScan(int64_t j, std::mt19937_64* rng) const;
+  // The index of the last scan begun at or before `utime` (negative before the start).
+  int64_t scanIndexAt(int64_t utime) const {
+    return static_cast<int64_t>(
+        std::floor(static_cast<double>(utime - start_utime_) * 1e-6 * c_.scan_rate_hz));
+  }
   int raysPerScan() const { return rays_; }
   const SimMobileConfig& config() const { return c_; }
   int64_t utimeAt(double t) const {

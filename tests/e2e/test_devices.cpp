@@ -1,9 +1,11 @@
-// The real lidar drivers end to end against the emulators, over loopback TCP (SCIP 2.0,
-// UST-10LX) and pseudo-terminals (YDLIDAR X4, RPLIDAR A1), in a private network namespace:
+// The real device drivers end to end against the emulators, over loopback TCP (SCIP 2.0,
+// UST-10LX) and pseudo-terminals (YDLIDAR X4, RPLIDAR A1; rig B's HI219 IMU and wheel board),
+// in a private network namespace:
 // emulator -> sweepmap-lidar -> LIDAR_SCAN -> lcm-logger, compared with the emulator's truth
 // (its simulated scans: true first-ray times and exact ranges). Also the clock sync across
 // the 24-bit wrap with drift, reconnection after the device comes back, the identity
-// check, and capture -> decode.
+// check, capture -> decode, and rig B live on its three emulated devices (EKF against the
+// truth, an IMU hang-up).
 #include <gtest/gtest.h>
 #include <signal.h>
 
@@ -41,10 +43,11 @@ std::vector<lidar_scan_t> scansIn(const std::string& log, const std::string& cha
   return out;
 }
 
-// The last STATUS_LIDAR counters in the log.
-std::map<std::string, int64_t> lidarCounters(const std::string& log, std::string* detail) {
+// The last counters of a process's status channel in the log.
+std::map<std::string, int64_t> statusCounters(const std::string& log, const std::string& channel,
+                                              std::string* detail) {
   std::map<std::string, int64_t> out;
-  for (const Message& m : readChannel(log, "STATUS_LIDAR")) {
+  for (const Message& m : readChannel(log, channel)) {
     process_status_t s;
     if (!decodeMessage(m, &s)) continue;
     out.clear();
@@ -52,6 +55,10 @@ std::map<std::string, int64_t> lidarCounters(const std::string& log, std::string
     if (detail) *detail = s.detail;
   }
   return out;
+}
+
+std::map<std::string, int64_t> lidarCounters(const std::string& log, std::string* detail) {
+  return statusCounters(log, "STATUS_LIDAR", detail);
 }
 
 struct Match {
@@ -485,6 +492,160 @@ TEST_F(DevicesTest, EmulatedDemoMatchesTheSimulatedOne) {
   }
   // The emulator's truth: every scan the driver published within 1 ms of the true time.
   EXPECT_TRUE(fs::exists(dir_ / "emulated" / "emulator_truth.lcmlog"));
+}
+
+// Offline, the same drive as `sweepmap sim` + `sweepmap replay`: the EKF's error against the
+// truth there is the bound for the live runs below.
+TrackError offlineEkfError(const fs::path& dir, const std::vector<std::string>& sets,
+                           const std::string& seed) {
+  const std::string log = (dir / "offline.lcmlog").string();
+  std::vector<std::string> sim = {"sim", "--rig", "rig_b", "--seed", seed, "--out", log};
+  for (const auto& s : sets) sim.insert(sim.end(), {"--set", s});
+  EXPECT_EQ(sweepmap(sim, dir / "offline_sim.txt"), 0) << readFile(dir / "offline_sim.txt");
+  std::vector<std::string> replay = {
+      "replay", log, "--rig", "rig_b", "--out", (dir / "offline").string(), "--no-plots"};
+  for (const auto& s : sets) replay.insert(replay.end(), {"--set", s});
+  EXPECT_EQ(sweepmap(replay, dir / "offline_replay.txt"), 0)
+      << readFile(dir / "offline_replay.txt");
+  return trackError(poses((dir / "offline" / "derived.lcmlog").string(), channels::kOdometryPose),
+                    poses(log, channels::kTruthPose));
+}
+
+// Rig B live on its emulated devices (`sweepmap demo --devices emulated`: X4, HI219 and wheel
+// board on pseudo-terminals, the real drivers in sweepmap-lidar and sweepmap-odometry): the
+// EKF's track against the emulator's truth within the offline tests' bounds (path length
+// within 5 %, final error below the wheels alone's, RMS error at most half the wheels'), its
+// largest error within 2 cm of the same drive's offline, and the replay of the recorded log
+// gives the live map.
+TEST_F(DevicesTest, RigBLiveOnEmulatedDevicesTracksTheTruth) {
+  prepare("rig_b_live");
+  const std::vector<std::string> sets = {"sim.duration_s=20"};
+  const fs::path out = dir_ / "demo";
+  ASSERT_EQ(sweepmap({"demo", "--rig", "rig_b", "--devices", "emulated", "--seed", "4", "--set",
+                      sets[0], "--out", out.string()},
+                     dir_ / "demo.txt"),
+            0)
+      << readFile(dir_ / "demo.txt");
+  const std::string log = (out / "demo.lcmlog").string();
+  const auto truth = poses(log, channels::kTruthPose);
+  const auto ekf = poses(log, channels::kOdometryPose);
+  const auto wheels = poses(log, channels::kWheelOdometry);
+  ASSERT_GT(truth.size(), 100u);
+  ASSERT_GT(ekf.size(), 100u);
+  const TrackError e_ekf = trackError(ekf, truth), e_wheels = trackError(wheels, truth);
+  const TrackError e_offline = offlineEkfError(dir_, sets, "4");
+  const double l_truth = pathLength(truth), l_ekf = pathLength(ekf);
+  std::cout << "rig B live, emulated devices, 20 s: path truth " << l_truth << " m, EKF " << l_ekf
+            << " m; EKF error max " << e_ekf.max_m * 1e3 << " mm, rms " << e_ekf.rms_m * 1e3
+            << " mm, final " << e_ekf.final_m * 1e3 << " mm over " << e_ekf.compared
+            << " poses; wheels alone rms " << e_wheels.rms_m * 1e3 << " mm, final "
+            << e_wheels.final_m * 1e3 << " mm; offline EKF max " << e_offline.max_m * 1e3
+            << " mm\n";
+  EXPECT_GT(e_ekf.compared, 0.9 * double(ekf.size()));
+  EXPECT_NEAR(l_ekf, l_truth, 0.05 * l_truth);
+  EXPECT_LT(e_ekf.final_m, e_wheels.final_m);
+  EXPECT_LE(2.0 * e_ekf.rms_m, e_wheels.rms_m);
+  EXPECT_LT(e_ekf.max_m, e_offline.max_m + 0.02);
+  // The drivers saw clean lines: no frame lost, no checksum error, no reconnect.
+  const auto c = statusCounters(log, "STATUS_ODOMETRY", nullptr);
+  for (const char* k : {"imu_checksum_errors", "imu_reconnects", "wheels_frames_lost",
+                        "wheels_checksum_errors", "wheels_reconnects"}) {
+    EXPECT_EQ(c.at(k), 0) << k;
+  }
+  EXPECT_GT(c.at("imu_imu_samples"), 200 * 20);
+  EXPECT_TRUE(readFile(out / "live_map.bt") == readFile(out / "map.bt"))
+      << "the live mapper's map differs from the replay of the recorded log";
+}
+
+// The IMU's pty hangs up 6 s into the drive and comes back 2 s later: the odometry says
+// DEGRADED ("EKF on wheels alone") meanwhile and goes on publishing poses from the wheels, the
+// driver reconnects (counted) and the gyro is fused again; the track stays within the
+// offline bound plus what 2 s of wheels alone add.
+TEST_F(DevicesTest, RigBImuHangUpDegradesThenRecovers) {
+  prepare("rig_b_imu_hangup");
+  const std::vector<std::string> sets = {"sim.duration_s=14"};
+  const std::string imu = (dir_ / "hi219").string(), board = (dir_ / "wheelboard").string();
+  const int64_t start_utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                                  std::chrono::system_clock::now().time_since_epoch())
+                                  .count() +
+                              1'500'000;
+  const pid_t log = logger();
+  const pid_t emu = emulator("hi219,wheel-board", {"--pty",
+                                                   "--link",
+                                                   imu,
+                                                   "--link",
+                                                   board,
+                                                   "--rig",
+                                                   "rig_b",
+                                                   "--set",
+                                                   sets[0],
+                                                   "--seed",
+                                                   "4",
+                                                   "--start-utime",
+                                                   std::to_string(start_utime),
+                                                   "--publish-truth",
+                                                   "--lcm-url",
+                                                   kUrl,
+                                                   "--fault-device",
+                                                   "hi219",
+                                                   "--hangup-at",
+                                                   "6",
+                                                   "--down-s",
+                                                   "2"});
+  for (int i = 0; i < 100 && !(fs::exists(imu) && fs::exists(board)); ++i) sleepS(0.05);
+  ASSERT_TRUE(fs::exists(imu) && fs::exists(board)) << readFile(dir_ / "emulator_1.txt");
+  const pid_t odo = procs_.start(
+      "odometry",
+      {binPath("sweepmap-odometry"), "--rig", "rig_b", "--set", sets[0], "--imu-device",
+       "hi219://" + imu, "--wheels-device", "wheelboard://" + board, "--lcm-url", kUrl},
+      (dir_ / "odometry.txt").string());
+  sleepS(1.5 + 14.0 + 1.0);
+  EXPECT_EQ(procs_.stop(odo, 5.0), 0) << readFile(dir_ / "odometry.txt");
+  sleepS(0.3);
+  EXPECT_EQ(procs_.stop(log, 5.0), 0);
+  procs_.stop(emu, 5.0);
+
+  // The IMU's silence, and the poses published through it.
+  const auto imu_msgs = readChannel(log_, channels::kImu);
+  ASSERT_GT(imu_msgs.size(), 1000u) << readFile(dir_ / "odometry.txt");
+  int64_t gap_from = 0, gap_to = 0;
+  for (size_t i = 1; i < imu_msgs.size(); ++i) {
+    if (imu_msgs[i].utime - imu_msgs[i - 1].utime > gap_to - gap_from) {
+      gap_from = imu_msgs[i - 1].utime;
+      gap_to = imu_msgs[i].utime;
+    }
+  }
+  std::cout << "IMU silent for " << (gap_to - gap_from) * 1e-3 << " ms\n";
+  EXPECT_GT(gap_to - gap_from, 1'500'000);
+  const auto ekf = poses(log_, channels::kOdometryPose);
+  size_t during = 0;
+  for (const auto& p : ekf) during += p.utime > gap_from + 600'000 && p.utime < gap_to - 100'000;
+  EXPECT_GT(during, 50u) << "the EKF stopped while the IMU was away";
+
+  // The status said so while it lasted, and the driver counted the reconnect.
+  bool degraded_seen = false, ok_after = false;
+  for (const Message& m : readChannel(log_, "STATUS_ODOMETRY")) {
+    process_status_t s;
+    ASSERT_TRUE(decodeMessage(m, &s));
+    if (s.utime > gap_from && s.utime < gap_to && s.health == process_status_t::DEGRADED &&
+        s.detail.find("wheels alone") != std::string::npos) {
+      degraded_seen = true;
+    }
+    if (s.utime > gap_to + 1'000'000) ok_after = s.health == process_status_t::OK;
+  }
+  EXPECT_TRUE(degraded_seen);
+  EXPECT_TRUE(ok_after);
+  const auto c = statusCounters(log_, "STATUS_ODOMETRY", nullptr);
+  EXPECT_GE(c.at("imu_reconnects"), 1);
+  EXPECT_EQ(c.at("imu_outages"), 1);
+  EXPECT_EQ(c.at("wheels_reconnects"), 0);
+
+  const TrackError e = trackError(ekf, poses(log_, channels::kTruthPose));
+  const TrackError e_offline = offlineEkfError(dir_, sets, "4");
+  std::cout << "with the IMU away for 2 s: EKF error max " << e.max_m * 1e3 << " mm (offline, "
+            << "no outage: " << e_offline.max_m * 1e3 << " mm)\n";
+  EXPECT_GT(e.compared, 500u);
+  EXPECT_LT(e.max_m, e_offline.max_m + 0.03);
 }
 
 }  // namespace

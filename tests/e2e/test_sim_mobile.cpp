@@ -38,22 +38,6 @@ std::vector<std::string> simArgs(const std::string& out, const std::string& seed
   return a;
 }
 
-std::vector<pose2d_t> poses(const std::string& log, const std::string& channel) {
-  std::vector<pose2d_t> out;
-  for (const auto& m : readChannel(log, channel)) {
-    pose2d_t p;
-    if (decodeMessage(m, &p)) out.push_back(p);
-  }
-  return out;
-}
-
-double pathLength(const std::vector<pose2d_t>& p) {
-  double l = 0;
-  for (size_t i = 1; i < p.size(); ++i)
-    l += std::hypot(p[i].x_m - p[i - 1].x_m, p[i].y_m - p[i - 1].y_m);
-  return l;
-}
-
 TEST(SimMobile, SameSeedGivesByteIdenticalLogs) {
   const auto dir = scratchDir("sim_mobile_determinism");
   const std::vector<std::string> sets = {"sim.duration_s=8", "sim.path=loop"};

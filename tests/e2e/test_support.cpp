@@ -4,6 +4,8 @@
 #include <spawn.h>
 #include <sys/wait.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <sstream>
@@ -71,6 +73,44 @@ std::vector<Message> readChannel(const std::string& log, const std::string& chan
     if (e.channel == channel) out.push_back({e.utime, e.channel, e.data});
   }
   return out;
+}
+
+std::vector<pose2d_t> poses(const std::string& log, const std::string& channel) {
+  std::vector<pose2d_t> out;
+  for (const auto& m : readChannel(log, channel)) {
+    pose2d_t p;
+    if (decodeMessage(m, &p)) out.push_back(p);
+  }
+  return out;
+}
+
+double pathLength(const std::vector<pose2d_t>& p) {
+  double l = 0;
+  for (size_t i = 1; i < p.size(); ++i) {
+    l += std::hypot(p[i].x_m - p[i - 1].x_m, p[i].y_m - p[i - 1].y_m);
+  }
+  return l;
+}
+
+TrackError trackError(const std::vector<pose2d_t>& track, const std::vector<pose2d_t>& truth) {
+  TrackError e;
+  double sum2 = 0.0;
+  for (const pose2d_t& p : track) {
+    const auto it = std::lower_bound(truth.begin(), truth.end(), p.utime,
+                                     [](const pose2d_t& t, int64_t u) { return t.utime < u; });
+    if (it == truth.begin() || it == truth.end()) continue;
+    const pose2d_t& a = *(it - 1);
+    const pose2d_t& b = *it;
+    const double f = double(p.utime - a.utime) / double(std::max<int64_t>(1, b.utime - a.utime));
+    const double d =
+        std::hypot(p.x_m - (a.x_m + f * (b.x_m - a.x_m)), p.y_m - (a.y_m + f * (b.y_m - a.y_m)));
+    ++e.compared;
+    e.max_m = std::max(e.max_m, d);
+    sum2 += d * d;
+    e.final_m = d;
+  }
+  if (e.compared > 0) e.rms_m = std::sqrt(sum2 / double(e.compared));
+  return e;
 }
 
 }  // namespace test

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "processes/node.hpp"
+#include "sweepmap/pose2d_t.hpp"
 
 namespace sweepmap {
 namespace test {
@@ -29,6 +30,19 @@ std::string readFile(const fs::path& p);
 nlohmann::json readJson(const fs::path& p);
 // Every message of `channel` in the log, in log order.
 std::vector<Message> readChannel(const std::string& log, const std::string& channel);
+
+// Rig B's tracks: the poses of a channel (TRUTH_POSE, ODOMETRY_POSE, WHEEL_ODOMETRY) in a log.
+std::vector<pose2d_t> poses(const std::string& log, const std::string& channel);
+double pathLength(const std::vector<pose2d_t>& p);
+// A track against the truth interpolated at each pose's time (poses outside the truth's span
+// are skipped): position errors [m].
+struct TrackError {
+  size_t compared = 0;
+  double max_m = 0.0;
+  double rms_m = 0.0;
+  double final_m = 0.0;  // at the last compared pose
+};
+TrackError trackError(const std::vector<pose2d_t>& track, const std::vector<pose2d_t>& truth);
 
 }  // namespace test
 }  // namespace sweepmap

@@ -119,7 +119,7 @@ void benchOdometryProcess(const RigBBenchOptions& o, std::ostream& out) {
     ProcessGroup procs;
     const std::string odo_log = o.work + "/odometry_imu" + std::to_string(imu_hz) + ".txt";
     const pid_t odometry =
-        procs.start("odometry", {exe, "--rig", o.rig, "--lcm-url", url}, odo_log);
+        procs.start("odometry", {exe, "--rig", o.rig, "--from-lcm", "--lcm-url", url}, odo_log);
     std::this_thread::sleep_for(std::chrono::milliseconds(800));  // start-up (config, LCM)
     // Baseline: the same process idle (status at 1 Hz, waiting on its socket).
     const double idle_cpu0 = processCpuSeconds(odometry);

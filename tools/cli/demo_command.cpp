@@ -15,18 +15,17 @@ Runner addDemoCommand(CLI::App& app) {
       "log, and leave the log, clouds, maps and a PNG top view in the output directory. "
       "rotating_lidar: sweepmap-motor and -lidar (simulated stepper and lidar), -assembler, "
       "-mapper make --sweeps 3D sweeps of the default room (--devices emulated: the lidar is "
-      "`sweepmap emulate ust10lx` driven over SCIP by the real driver). mobile_lidar: the "
-      "simulated car's "
-      "raw channels (DIR/devices.lcmlog) are played in real time by lcm-logplayer into "
-      "sweepmap-odometry, -assembler and -mapper (the drive is the rig's sim.* keys: "
-      "a 60 s circle for rig_b)");
+      "`sweepmap emulate ust10lx` driven over SCIP by the real driver). mobile_lidar: "
+      "sweepmap-lidar (X4) and sweepmap-odometry (wheel board, IMU, EKF) drive one simulated "
+      "car for the rig's sim.duration_s (a 60 s circle for rig_b), -assembler and -mapper "
+      "build the world cloud and map (--devices emulated: `sweepmap emulate "
+      "x4,hi219,wheel-board` on pseudo-terminals, opened by the real serial drivers)");
   auto o = std::make_shared<DemoOptions>();
   cmd->add_option("--rig", o->rig, "rig file or name")->capture_default_str();
   cmd->add_option("--scene", o->scene, "scene file or name (default: the rig kind's scene)");
   cmd->add_option("--out", o->out, "output directory")->capture_default_str();
   cmd->add_option("--set", o->overrides,
-                  "override a rig key for every process: key=value; mobile_lidar also takes "
-                  "scene.<key> (repeatable)");
+                  "override a rig key for every process: key=value (repeatable)");
   cmd->add_option("--mode", o->mode, "rotating_lidar: scan mode 1..7")
       ->capture_default_str()
       ->check(CLI::Range(1, 7));
@@ -35,9 +34,10 @@ Runner addDemoCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_option("--seed", o->seed, "simulation seed")->capture_default_str();
   cmd->add_option("--devices", o->devices,
-                  "rotating_lidar: sim (the lidar process simulates the lidar) or emulated "
-                  "(`sweepmap emulate ust10lx` serves the same simulated lidar over SCIP 2.0 "
-                  "on 127.0.0.1:10940 and sweepmap-lidar drives it with the real driver)")
+                  "sim (the device processes simulate their devices) or emulated (`sweepmap "
+                  "emulate` serves the simulated devices behind their protocols: a UST-10LX "
+                  "over SCIP 2.0 on 127.0.0.1:10940, or rig B's X4, HI219 and wheel board on "
+                  "pseudo-terminals, and the processes drive them with the real drivers)")
       ->capture_default_str()
       ->check(CLI::IsMember({"sim", "emulated"}));
   return [o]() {

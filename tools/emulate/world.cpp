@@ -127,7 +127,8 @@ class MobileWorld : public EmulatorWorld {
   MobileWorld(const SimSetup& setup, const EmulatorWorldOptions& options, int64_t start_utime)
       : rig_(std::get<MobileLidarConfig>(setup.rig.config)),
         scene_(setup.scene, PlateConfig{}),
-        rng_(options.seed * 8 + 3) {
+        rng_(options.seed * 8 + 3),
+        lead_rng_(options.seed * 8 + 7) {
     MobileLidarConfig timed = rig_;
     timed.sim.scan_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
     timed.sim.sample_rate_hz *= 1.0 + options.clock_drift_ppm * 1e-6;
@@ -161,8 +162,18 @@ class MobileWorld : public EmulatorWorld {
     return [this](int64_t now_us) {
       std::lock_guard<std::mutex> lock(mutex_);
       std::vector<Scan2D> out;
+      if (!started_) {
+        // A powered X4 streams from the moment it is opened: before the car starts, the scans
+        // of the car at rest (negative indices, their noise from their own generator so that
+        // the run's scans are those of the same seed elsewhere).
+        started_ = true;
+        next_ = std::min<int64_t>(0, car_->scanIndexAt(now_us));
+      }
       for (;;) {
-        if (!pending_) pending_ = car_->makeScan(next_++, &rng_);
+        if (!pending_) {
+          pending_ = car_->makeScan(next_, next_ < 0 ? &lead_rng_ : &rng_);
+          ++next_;
+        }
         // As the scan begins: a sample-streaming device sends each ray at its own time.
         if (pending_->utime > now_us) break;
         out.push_back(std::move(*pending_));
@@ -182,6 +193,8 @@ class MobileWorld : public EmulatorWorld {
   std::unique_ptr<SimCarTruthNode> truth_;
   std::unique_ptr<LockedNode> locked_truth_;
   std::mt19937_64 rng_;
+  std::mt19937_64 lead_rng_;
+  bool started_ = false;
   int64_t next_ = 0;
   std::optional<Scan2D> pending_;
 };

@@ -6,7 +6,6 @@
 #include <iostream>
 #include <thread>
 
-#include "core/event_log.hpp"
 #include "processes/channels.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/offline/runs.hpp"
@@ -155,47 +154,108 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   return failures;
 }
 
-// `rig_sets`: the overrides of the rig's keys, for the processes (the simulator also takes
-// the scene's, from o.overrides).
-int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& rig_sets) {
-  // The devices: the simulated car's raw channels, simulated first, then played in real time.
-  const std::string devices = (fs::absolute(o.out) / "devices.lcmlog").string();
-  fs::create_directories(fs::absolute(o.out));
-  const SimSetup setup = loadSimSetup(rig.path, o.scene, o.overrides);
-  SimRunOptions so;
-  so.seed = o.seed;
-  SimRunResult sim;
-  {
-    EventLogWriter w(devices);
-    sim = simulateRig(setup, so, [&](const Message& m) { w.write(m.utime, m.channel, m.data); });
-    w.close();
+// Waits up to timeout_s for every path to exist (the emulator's pty links).
+bool waitForPaths(const std::vector<std::string>& paths, double timeout_s) {
+  const auto until =
+      std::chrono::steady_clock::now() + std::chrono::milliseconds(int(timeout_s * 1000));
+  while (std::chrono::steady_clock::now() < until) {
+    bool all = true;
+    for (const auto& p : paths) all = all && fs::exists(p);
+    if (all) return true;
+    pause(50);
   }
-  std::cout << "demo: simulated devices: " << sim.summary << " -> " << devices << "\n";
+  return false;
+}
 
+int64_t wallClockUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+// Rig B live: sweepmap-lidar (X4) and sweepmap-odometry (wheel board + IMU) on one simulated
+// car, started at one agreed wall-clock time: in-process (--devices sim) or behind the
+// devices' serial protocols on pseudo-terminals (--devices emulated).
+int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& rig_sets,
+               const std::string& scene) {
   DemoRun run = prepare(o, rig, rig_sets);
+  MobileLidarConfig config = std::get<MobileLidarConfig>(rig.config);
+  const double duration_s = config.sim.duration_s;
   const pid_t logger = run.startLogger();
-  const pid_t odometry = run.startProcess("odometry", {});
   const pid_t assembler = run.startProcess("assembler", {});
   const pid_t mapper = run.startProcess("mapper", {"--save", (run.out / "live_map.bt").string()});
   pause(700);  // subscribers ready
-  std::cout << "demo: playing the devices for "
-            << std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s
-            << " s; processes log to " << (run.out / "logs").string() << "\n";
-  const pid_t player =
-      run.procs.start("lcm-logplayer",
-                      {"lcm-logplayer", "--lcm-url=" + run.url,
-                       "--regexp=WHEEL_TICKS|IMU|LIDAR_SCAN|TRUTH_POSE|TRUTH_MOUNTING", devices},
-                      run.logFile("logplayer"));
-  const double duration_s = std::get<MobileLidarConfig>(setup.rig.config).sim.duration_s;
-  int failures = run.procs.wait(player, duration_s * 2.0 + 60.0) != 0;
-  pause(800);  // last poses and scans through
-  failures +=
-      run.stopInOrder({{odometry, 10.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 300);
+  // The car starts when every device process is up and has opened its devices.
+  const int64_t start_utime = wallClockUtime() + 2'000'000;
+  const std::string seed = std::to_string(o.seed), start = std::to_string(start_utime);
+  pid_t emulator = -1, lidar = -1, odometry = -1;
+  if (o.devices == "emulated") {
+    // The simulated car behind the X4's, the HI219's and the wheel board's serial protocols,
+    // each on a pseudo-terminal (a symlink to it in DIR/dev/), publishing the truth.
+    fs::create_directories(run.out / "dev");
+    const std::vector<std::string> links = {(run.out / "dev" / "x4").string(),
+                                            (run.out / "dev" / "hi219").string(),
+                                            (run.out / "dev" / "wheelboard").string()};
+    for (const auto& l : links) fs::remove(l);
+    std::vector<std::string> argv = {(run.bin / "sweepmap").string(),
+                                     "emulate",
+                                     "x4,hi219,wheel-board",
+                                     "--pty",
+                                     "--link",
+                                     links[0],
+                                     "--link",
+                                     links[1],
+                                     "--link",
+                                     links[2],
+                                     "--rig",
+                                     run.rig,
+                                     "--scene",
+                                     scene,
+                                     "--seed",
+                                     seed,
+                                     "--start-utime",
+                                     start,
+                                     "--publish-truth",
+                                     "--lcm-url",
+                                     run.url};
+    for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
+    emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
+    if (!waitForPaths(links, 10.0)) {
+      std::cerr << "demo: the emulator made no pseudo-terminals; see " << run.logFile("emulator")
+                << "\n";
+      return 1;
+    }
+    lidar = run.startProcess("lidar", {"--device", "ydlidar://" + links[0]});
+    odometry = run.startProcess("odometry", {"--imu-device", "hi219://" + links[1],
+                                             "--wheels-device", "wheelboard://" + links[2]});
+  } else {
+    const std::vector<std::string> sim = {"--sim", "--scene",           scene, "--seed",
+                                          seed,    "--sim-start-utime", start};
+    lidar = run.startProcess("lidar", sim);
+    odometry = run.startProcess("odometry", sim);
+  }
+  std::cout << "demo: rig B drives for " << duration_s << " s on " << o.devices
+            << " devices; processes log to " << (run.out / "logs").string() << "\n";
+  const int64_t end_utime = start_utime + static_cast<int64_t>((duration_s + 1.0) * 1e6);
+  int failures = 0;
+  while (wallClockUtime() < end_utime) {
+    pause(200);
+    for (pid_t p : {lidar, odometry, emulator}) {
+      if (p > 0 && !run.procs.running(p)) {
+        std::cerr << "demo: " << run.procs.name(p) << " ended early; see its log in "
+                  << (run.out / "logs").string() << "\n";
+        failures = 1;
+      }
+    }
+    if (failures) break;
+  }
+  failures += run.stopInOrder(
+      {{lidar, 5.0}, {odometry, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 300);
+  if (emulator > 0) failures += run.procs.stop(emulator, 5.0) != 0;
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.scans == 0;
   std::cout << "\ndemo: done (" << r.summary << ")\n"
-            << "  devices' log     " << devices << "\n"
             << "  recorded log     " << run.log << "\n"
             << "  world cloud      " << (run.out / "cloud.pcd").string() << "\n"
             << "  map (replayed)   " << (run.out / "map.bt").string() << "\n"
@@ -210,29 +270,26 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
 int runDemo(const DemoOptions& o) {
   std::vector<std::string> rig_sets, scene_sets;
   splitSimOverrides(o.overrides, &rig_sets, &scene_sets);
+  if (!scene_sets.empty()) {
+    throw ConfigError(
+        "scene.<key> overrides are for `sweepmap sim`; give the demo another --scene file");
+  }
+  if (o.devices != "sim" && o.devices != "emulated") {
+    throw ConfigError("--devices must be sim or emulated");
+  }
   Rig rig = loadRig(o.rig, rig_sets);
+  const std::string scene =
+      fs::absolute(resolveConfigFile(o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene))
+          .string();
   switch (rig.kind()) {
     case RigKind::kRotatingLidar: {
-      if (!scene_sets.empty()) {
-        throw ConfigError(
-            "scene.<key> overrides are for mobile_lidar demos; give a rotating_lidar "
-            "demo another --scene file");
-      }
       if (o.mode < 1 || o.mode > 7) throw ConfigError("--mode must be 1..7");
       std::get<RotatingLidarConfig>(rig.config).motor.mode = o.mode;
       rig_sets.push_back("motor.mode=" + std::to_string(o.mode));  // for the processes
-      const std::string scene =
-          fs::absolute(resolveConfigFile(o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene))
-              .string();
       return rotatingDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
     }
     case RigKind::kMobileLidar:
-      if (o.devices != "sim") {
-        throw ConfigError(
-            "--devices emulated is for rotating_lidar rigs so far; a mobile_lidar "
-            "demo plays its simulated devices from a log");
-      }
-      return mobileDemo(o, rig, rig_sets) == 0 ? 0 : 1;
+      return mobileDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
   }
   return 1;
 }

@@ -6,10 +6,12 @@
 //     -assembler and -mapper build the sweeps and the map. With devices "emulated" the
 //     lidar is `sweepmap emulate ust10lx` (the same simulated lidar behind the SCIP 2.0
 //     protocol on 127.0.0.1:10940) and sweepmap-lidar talks to it with the real driver.
-//   mobile_lidar: the simulated car's raw channels (WHEEL_TICKS, IMU, LIDAR_SCAN and its
-//     truth) are simulated into DIR/devices.lcmlog and played in real time by lcm-logplayer,
-//     standing in for the wheel board, IMU and lidar drivers; sweepmap-odometry, -assembler
-//     and -mapper process them live.
+//   mobile_lidar (rig B live): sweepmap-lidar (the X4) and sweepmap-odometry (the wheel board
+//     and the IMU; wheel odometry and the EKF) drive one simulated car from an agreed start
+//     time for the rig's sim.duration_s, -assembler (world frame) and -mapper process them.
+//     With devices "emulated" the car's three devices are `sweepmap emulate
+//     x4,hi219,wheel-board` on pseudo-terminals (symlinks in DIR/dev/), publishing the truth,
+//     and the two processes open them with the real serial drivers.
 #pragma once
 
 #include <cstdint>
@@ -26,9 +28,10 @@ struct DemoOptions {
   int mode = 7;                        // rotating_lidar: scan mode
   int sweeps = 3;                      // rotating_lidar: 3D sweeps
   uint64_t seed = 1;
-  // rotating_lidar: "sim" (sweepmap-lidar runs the simulated lidar in-process) or "emulated"
-  // (`sweepmap emulate ust10lx` serves the simulated lidar as a UST-10LX over loopback TCP
-  // and sweepmap-lidar drives it with the real SCIP 2.0 driver).
+  // "sim": the device processes simulate their devices in-process; "emulated": `sweepmap
+  // emulate` serves the simulated devices behind their protocols (rotating_lidar: a UST-10LX
+  // over loopback TCP; mobile_lidar: X4, HI219 and wheel board on pseudo-terminals) and the
+  // processes drive them with the real drivers.
   std::string devices = "sim";
 };
 
