@@ -1,5 +1,5 @@
 // Rig B's odometry devices as sweepmap-odometry sees them, real (drivers/odometry_drivers.hpp)
-// or simulated (drivers/sim_odometry_devices.hpp): the IMU and the wheel board.
+// or simulated (drivers/sim_car_devices.hpp): the IMU and the wheel board.
 #pragma once
 
 #include <cstdint>

@@ -186,7 +186,10 @@ int WheelBoardSession::onBytes(const uint8_t* data, size_t size, int64_t arrival
     if (!t) continue;
     WheelTicks w{};
     if (raw_) {
-      w.utime = line_.at(t->offset);
+      // The board's own clock, unwrapped past 32 bits, from its first reading.
+      if (!board_clock_.have)
+        board_clock0_ = int64_t{t->time_us} - static_cast<int32_t>(t->time_us);
+      w.utime = board_clock0_ + board_clock_(t->time_us);
     } else {
       const int64_t complete = line_.at(t->offset + wheelboard::kTicksFrameBytes);
       w.utime = clock_.observe(t->time_us, complete);

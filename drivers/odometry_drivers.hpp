@@ -97,6 +97,8 @@ class WheelBoardSession {
   bool raw_;
   int64_t fed_ = 0;
   Unwrap32 left_, right_;
+  Unwrap32 board_clock_;  // raw bytes: the board's time [us]
+  int64_t board_clock0_ = 0;
   std::vector<wheelboard::Event> events_;
 };
 

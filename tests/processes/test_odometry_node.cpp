@@ -13,6 +13,8 @@
 #include "rigs/mobile_lidar.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/process_status_t.hpp"
+#include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 
 namespace sweepmap {
@@ -95,6 +97,168 @@ TEST(OdometryNode, BadInputRejectedAndCounted) {
   EXPECT_EQ(node.counter("gyro_rejected"), 2);
   EXPECT_EQ(node.ekf().counters().invalid, 2);
   EXPECT_TRUE(node.ekf().state().allFinite());
+}
+
+// Scripted devices: samples handed out once their time has come; the IMU can go silent.
+class ScriptedImu : public ImuDevice {
+ public:
+  std::vector<ImuSample> samples;
+  int64_t silent_from = INT64_MAX, silent_to = INT64_MAX;
+  std::vector<ImuSample> poll(int64_t now) override {
+    std::vector<ImuSample> out;
+    for (; next_ < samples.size() && samples[next_].utime <= now; ++next_) {
+      const int64_t t = samples[next_].utime;
+      if (t < silent_from || t >= silent_to) out.push_back(samples[next_]);
+    }
+    return out;
+  }
+
+ private:
+  size_t next_ = 0;
+};
+
+class ScriptedWheels : public WheelDevice {
+ public:
+  std::vector<WheelTicks> ticks;
+  std::vector<std::pair<double, double>> commands;
+  std::vector<WheelTicks> poll(int64_t now) override {
+    std::vector<WheelTicks> out;
+    for (; next_ < ticks.size() && ticks[next_].utime <= now; ++next_) out.push_back(ticks[next_]);
+    return out;
+  }
+  void command(int64_t, double v, double w) override { commands.emplace_back(v, w); }
+
+ private:
+  size_t next_ = 0;
+};
+
+// A turning drive: wheels at 50 Hz, the gyro at 200 Hz (0.2 m/s, 0.4 rad/s).
+void script(ScriptedImu* imu, ScriptedWheels* wheels, int64_t t0, double seconds) {
+  const double ticks_per_m = 1000.0 / (2 * M_PI * 0.1), v = 0.2, w = 0.4, b = 0.3;
+  for (int64_t k = 0; k * 20000 <= seconds * 1e6; ++k) {
+    const double t = k * 0.02;
+    wheels->ticks.push_back({t0 + k * 20000, std::llround((v - w * b / 2) * t * ticks_per_m),
+                             std::llround((v + w * b / 2) * t * ticks_per_m), 0});
+  }
+  for (int64_t k = 0; k * 5000 <= seconds * 1e6; ++k) {
+    ImuSample s{};
+    s.utime = t0 + 2500 + k * 5000;
+    s.gyro[2] = w;
+    s.accel[2] = 9.81;
+    s.rpy[0] = s.rpy[1] = s.rpy[2] = std::nan("");
+    imu->samples.push_back(s);
+  }
+}
+
+// Live with devices: the node publishes the devices' raw messages first, in time order, then its
+// poses; a node without devices fed those raw messages (a replay of the recorded log) publishes
+// the same poses, byte for byte.
+TEST(OdometryNode, DevicesModePublishesRawFirstAndEqualsReplay) {
+  ScriptedImu imu;
+  ScriptedWheels wheels;
+  const int64_t t0 = 1'000'000;
+  script(&imu, &wheels, t0, 4.0);
+  OdometryNode live(config(), &imu, &wheels);
+  EXPECT_EQ(live.subscriptions(), std::vector<std::string>{channels::kWheelCmd});
+  std::vector<Message> published;
+  for (int64_t now = t0; now <= t0 + 4'100'000; now += 10'000) {  // the process's 10 ms tick
+    Outbox o;
+    live.tick(now, o);
+    for (auto& m : o.take()) published.push_back(std::move(m));
+  }
+  std::vector<Message> raw, poses;
+  int64_t last_raw = INT64_MIN;
+  for (const auto& m : published) {
+    if (m.channel == channels::kImu || m.channel == channels::kWheelTicks) {
+      raw.push_back(m);
+      EXPECT_GE(m.utime, last_raw);
+      last_raw = m.utime;
+    } else if (m.channel == channels::kOdometryPose || m.channel == channels::kWheelOdometry) {
+      poses.push_back(m);
+    }
+  }
+  EXPECT_EQ(raw.size(), imu.samples.size() + wheels.ticks.size());
+  ASSERT_EQ(poses.size(), 2 * (wheels.ticks.size() - 1));
+
+  OdometryNode replay(config());
+  std::vector<Message> replayed;
+  for (const auto& m : raw) {
+    Outbox o;
+    replay.receive(m, o);
+    for (auto& r : o.take()) {
+      if (r.channel == channels::kOdometryPose || r.channel == channels::kWheelOdometry) {
+        replayed.push_back(std::move(r));
+      }
+    }
+  }
+  ASSERT_EQ(replayed.size(), poses.size());
+  for (size_t i = 0; i < poses.size(); ++i) {
+    EXPECT_EQ(replayed[i].channel, poses[i].channel) << i;
+    EXPECT_TRUE(replayed[i].data == poses[i].data) << i;
+  }
+  pose2d_t end{};
+  ASSERT_TRUE(decodeMessage(poses.back(), &end));
+  EXPECT_NEAR(end.theta_rad, std::remainder(0.4 * 4.0, 2 * M_PI), 0.01);
+}
+
+// WHEEL_CMD goes to the wheel board; a malformed or absurd one is counted, not sent.
+TEST(OdometryNode, WheelCommandsGoToTheBoard) {
+  ScriptedImu imu;
+  ScriptedWheels wheels;
+  OdometryNode node(config(), &imu, &wheels);
+  wheel_cmd_t c{};
+  c.utime = 5;
+  c.v_m_s = 0.3;
+  c.w_rad_s = -0.2;
+  Outbox o;
+  node.receive(encode(channels::kWheelCmd, c), o);
+  c.v_m_s = std::nan("");
+  node.receive(encode(channels::kWheelCmd, c), o);
+  node.receive(Message{0, channels::kWheelCmd, {1, 2}}, o);
+  ASSERT_EQ(wheels.commands.size(), 1u);
+  EXPECT_EQ(wheels.commands[0], std::make_pair(0.3, -0.2));
+  EXPECT_EQ(node.counter("invalid"), 2);
+}
+
+// The IMU goes silent for 2 s while the wheels go on: the status turns DEGRADED ("EKF on wheels
+// alone") 0.5 s in, poses go on from the wheels, and when the samples return the status is OK
+// again; one outage counted.
+TEST(OdometryNode, ImuOutageDegradesAndRecovers) {
+  ScriptedImu imu;
+  ScriptedWheels wheels;
+  const int64_t t0 = 1'000'000;
+  script(&imu, &wheels, t0, 6.0);
+  imu.silent_from = t0 + 2'000'000;
+  imu.silent_to = t0 + 4'000'000;
+  OdometryNode node(config(), &imu, &wheels);
+  std::vector<std::pair<int64_t, process_status_t>> statuses;
+  size_t poses_in_outage = 0;
+  for (int64_t now = t0; now <= t0 + 6'000'000; now += 10'000) {
+    Outbox o;
+    node.tick(now, o);
+    if (now % 250'000 == 0) node.publishStatus(now, o);
+    for (const auto& m : o.take()) {
+      process_status_t s;
+      if (m.channel == node.statusChannel() && decodeMessage(m, &s)) statuses.emplace_back(now, s);
+      poses_in_outage += m.channel == channels::kOdometryPose && now > imu.silent_from + 600'000 &&
+                         now < imu.silent_to;
+    }
+  }
+  EXPECT_GT(poses_in_outage, 50u);
+  bool degraded = false, ok_after = false, ok_before = false;
+  for (const auto& [now, s] : statuses) {
+    if (now < imu.silent_from) ok_before = s.health == process_status_t::OK;
+    if (now > imu.silent_from + 600'000 && now < imu.silent_to) {
+      degraded = s.health == process_status_t::DEGRADED &&
+                 s.detail.find("EKF on wheels alone") != std::string::npos;
+      EXPECT_TRUE(degraded) << now << ": " << s.detail;
+    }
+    if (now > imu.silent_to + 100'000) ok_after = s.health == process_status_t::OK;
+  }
+  EXPECT_TRUE(ok_before);
+  EXPECT_TRUE(degraded);
+  EXPECT_TRUE(ok_after);
+  EXPECT_EQ(node.counter("imu_outages"), 1);
 }
 
 TEST(OdometryNode, ShippedConfigLoads) {
