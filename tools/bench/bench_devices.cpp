@@ -1,5 +1,7 @@
 #include "tools/bench/bench_devices.hpp"
 
+#include <unistd.h>
+
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -158,11 +160,81 @@ void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
       << std::setprecision(1) << emu_share * 100.0 << " %\n";
 }
 
+// sweepmap-odometry reading both of rig B's devices (the real HI219 and wheel board drivers)
+// from the emulators on pseudo-terminals, at 400 Hz IMU (the 0x91 record; a real HI219 needs
+// 460800 baud for that, so the URI says so) and 100 Hz wheels, measured from /proc.
+void benchOdometryProcess(const DevicesBenchOptions& o, std::ostream& out) {
+  out << "sweepmap-odometry process (real HI219 and wheel board drivers, emulated devices on "
+         "ptys: 400 Hz IMU, 100 Hz wheels; share of one core):\n";
+  if (o.bin_dir.empty()) {
+    out << "  skipped: executables not found\n";
+    return;
+  }
+  std::string why;
+  if (!enterPrivateNetwork(&why)) {
+    out << "  skipped: no private network namespace (" << why << ")\n";
+    return;
+  }
+  const fs::path bin = o.bin_dir;
+  const fs::path dir = fs::temp_directory_path() / ("sweepmap_bench_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const std::string imu = (dir / "hi219").string(), board = (dir / "wheelboard").string();
+  const std::vector<std::string> sets = {
+      "--set", "sim.imu_rate_hz=400",
+      "--set", "sim.wheel_ticks_rate_hz=100",
+      "--set", "sim.duration_s=" + std::to_string(o.process_s + 30.0)};
+  ProcessGroup procs;
+  std::vector<std::string> emu_argv = {(bin / "sweepmap").string(),
+                                       "emulate",
+                                       "hi219,wheel-board",
+                                       "--pty",
+                                       "--link",
+                                       imu,
+                                       "--link",
+                                       board,
+                                       "--rig",
+                                       "rig_b"};
+  emu_argv.insert(emu_argv.end(), sets.begin(), sets.end());
+  const pid_t emulator = procs.start("emulator", emu_argv, "/dev/null");
+  for (int i = 0; i < 100 && !(fs::exists(imu) && fs::exists(board)); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  std::vector<std::string> odo_argv = {(bin / "sweepmap-odometry").string(),
+                                       "--rig",
+                                       "rig_b",
+                                       "--imu-device",
+                                       "hi219://" + imu + "?baud=460800",
+                                       "--wheels-device",
+                                       "wheelboard://" + board,
+                                       "--lcm-url",
+                                       kDefaultLcmUrl};
+  odo_argv.insert(odo_argv.end(), sets.begin(), sets.end());
+  const pid_t odometry = procs.start("odometry", odo_argv, "/dev/null");
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // connected, clocks synced
+  const double cpu0 = processCpuSeconds(odometry), emu0 = processCpuSeconds(emulator);
+  const int64_t switches0 = contextSwitches(odometry);
+  const auto t0 = BenchClock::now();
+  std::this_thread::sleep_for(std::chrono::duration<double>(o.process_s));
+  const double wall = secondsSince(t0);
+  const double share = (processCpuSeconds(odometry) - cpu0) / wall;
+  const double emu_share = (processCpuSeconds(emulator) - emu0) / wall;
+  const double switches = double(contextSwitches(odometry) - switches0) / wall;
+  const int64_t rss = statusKib(odometry, "VmHWM:");
+  procs.stop(odometry, 5.0);
+  procs.stop(emulator, 5.0);
+  fs::remove_all(dir);
+  out << std::setprecision(2) << "  sweepmap-odometry " << share * 100.0 << " % of a core over "
+      << std::setprecision(1) << wall << " s (" << std::setprecision(0) << switches
+      << " thread switches/s, peak RSS " << rss / 1024.0 << " MiB); the emulator "
+      << std::setprecision(1) << emu_share * 100.0 << " %\n";
+}
+
 }  // namespace
 
 int benchDevices(const DevicesBenchOptions& options, std::ostream& out) {
   benchDecoders(options, out);
   benchLidarProcess(options, out);
+  benchOdometryProcess(options, out);
   return 0;
 }
 

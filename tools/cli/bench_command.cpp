@@ -21,8 +21,9 @@ Runner addBenchCommand(CLI::App& app) {
       "sweepmap-odometry process at 100/200/400 Hz IMU (private network namespace), and "
       "`sweepmap replay` real-time factors on a circle and a lab loop. Then the real-device "
       "drivers: each protocol decoder's throughput (MB/s, scans/s, and as a multiple of the "
-      "device's own data rate) and the CPU share of sweepmap-lidar driving an emulated "
-      "UST-10LX at 40 Hz (--no-devices skips them). Prints figures; run on an idle machine, "
+      "device's own data rate), the CPU share of sweepmap-lidar driving an emulated "
+      "UST-10LX at 40 Hz and of sweepmap-odometry reading the emulated HI219 (400 Hz) and "
+      "wheel board (100 Hz) (--no-devices skips them). Prints figures; run on an idle machine, "
       "compare ratios within one run");
   struct Opts {
     std::vector<std::string> rigs = {"rig_a", "rig_b"};
@@ -43,10 +44,13 @@ Runner addBenchCommand(CLI::App& app) {
   cmd->add_option("--odometry-feed-s", o->odometry_feed_s,
                   "mobile_lidar: log time fed to sweepmap-odometry per IMU rate")
       ->capture_default_str();
-  cmd->add_flag("--no-devices", o->no_devices, "skip the decoders and the lidar process");
-  cmd->add_flag("--only-devices", o->only_devices, "only the decoders and the lidar process");
+  cmd->add_flag("--no-devices", o->no_devices,
+                "skip the decoders and the device processes (lidar, odometry)");
+  cmd->add_flag("--only-devices", o->only_devices,
+                "only the decoders and the device processes (lidar, odometry)");
   cmd->add_option("--lidar-process-s", o->lidar_process_s,
-                  "how long sweepmap-lidar's CPU share is measured")
+                  "how long the CPU share of sweepmap-lidar and of sweepmap-odometry reading "
+                  "its devices is measured, each")
       ->capture_default_str();
   return [o]() {
     namespace fs = std::filesystem;
