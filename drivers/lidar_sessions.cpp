@@ -327,6 +327,7 @@ class TurnAssembler {
     const double ray_s = grid_.rayPeriodS();
     s.time_increment_ns = static_cast<int64_t>(std::llround(ray_s * 1e9));
     s.utime = first_utime - static_cast<int64_t>(std::llround(first_index * ray_s * 1e6));
+    rate_hz_ = 0.0;  // unknown: a turn whose samples all came at once
     if (current_.size() > 1 && current_.back().utime > current_.front().utime) {
       const double covered = current_.back().theta - current_.front().theta;
       rate_hz_ =
@@ -380,15 +381,31 @@ void checkRange(const LidarConfig& expected, const std::string& model, RangeSpec
   }
 }
 
-void checkTurnRate(const LidarConfig& expected, const std::string& model, double rate_hz,
-                   int64_t turns) {
-  // After a few turns: a motor far from the rig's rate means another device or setting.
-  if (turns >= 5 && rate_hz > 0 &&
-      std::fabs(rate_hz - expected.scan_rate_hz) > 0.25 * expected.scan_rate_hz) {
-    throw IdentityMismatch("scan rate: the rig file says " + fmt(expected.scan_rate_hz) +
-                           " Hz, the " + model + " turns at " + fmt(rate_hz) + " Hz");
+// A motor far from the rig's rate means another device or setting. One turn's rate is timed
+// by the arrival of its bytes, and a host that stalls, then reads a backlog at once, makes one
+// turn look fast: so the rate must be off for kOffTurns turns in a row, after the first few.
+class TurnRateCheck {
+ public:
+  static constexpr int kOffTurns = 5;
+  void reset() { turns_ = 0, off_in_a_row_ = 0; }
+  // `turns`: complete turns so far; `rate_hz`: the last one's (0: not timed).
+  void update(const LidarConfig& expected, const std::string& model, double rate_hz,
+              int64_t turns) {
+    if (turns == turns_ || !(rate_hz > 0)) return;  // no new turn, or one not timed
+    turns_ = turns;
+    const bool off =
+        turns >= 5 && std::fabs(rate_hz - expected.scan_rate_hz) > 0.25 * expected.scan_rate_hz;
+    off_in_a_row_ = off ? off_in_a_row_ + 1 : 0;
+    if (off_in_a_row_ >= kOffTurns) {
+      throw IdentityMismatch("scan rate: the rig file says " + fmt(expected.scan_rate_hz) +
+                             " Hz, the " + model + " turns at " + fmt(rate_hz) + " Hz");
+    }
   }
-}
+
+ private:
+  int64_t turns_ = 0;
+  int off_in_a_row_ = 0;
+};
 
 // Reads until `pred` accepts an event or 1 s passes; events after it are kept in *rest.
 template <class Decoder, class Event, class Pred>
@@ -432,6 +449,7 @@ class X4Session : public LidarSession {
     turns_.clear();
     pending_.clear();
     seen_ = 0;
+    rate_check_.reset();
     ydlidar::DeviceInfo info;
     stream.write(std::string("\xA5\x90", 2));
     awaitEvent(stream, now, decoder_, &pending_, "X4 device info", [&](const ydlidar::Event& e) {
@@ -490,8 +508,8 @@ class X4Session : public LidarSession {
         }
       }
     }
-    checkTurnRate(expected_, "X4", turns_.turnRateHz(),
-                  static_cast<int64_t>(scans->size()) + seen_);
+    rate_check_.update(expected_, "X4", turns_.turnRateHz(),
+                       static_cast<int64_t>(scans->size()) + seen_);
     seen_ += static_cast<int64_t>(scans->size());
   }
 
@@ -510,6 +528,7 @@ class X4Session : public LidarSession {
   std::vector<ydlidar::Event> pending_;
   std::string identity_ = "YDLIDAR";
   int64_t seen_ = 0;
+  TurnRateCheck rate_check_;
 };
 
 class RplidarSession : public LidarSession {
@@ -527,6 +546,7 @@ class RplidarSession : public LidarSession {
     turns_.clear();
     pending_.clear();
     seen_ = 0;
+    rate_check_.reset();
     rplidar::DeviceInfo info;
     stream.write(rplidar::request(rplidar::kCmdInfo));
     awaitEvent(stream, now, decoder_, &pending_, "RPLIDAR info", [&](const rplidar::Event& e) {
@@ -585,8 +605,8 @@ class RplidarSession : public LidarSession {
         }
       }
     }
-    checkTurnRate(expected_, "RPLIDAR", turns_.turnRateHz(),
-                  static_cast<int64_t>(scans->size()) + seen_);
+    rate_check_.update(expected_, "RPLIDAR", turns_.turnRateHz(),
+                       static_cast<int64_t>(scans->size()) + seen_);
     seen_ += static_cast<int64_t>(scans->size());
   }
 
@@ -605,6 +625,7 @@ class RplidarSession : public LidarSession {
   std::vector<rplidar::Event> pending_;
   std::string identity_ = "RPLIDAR";
   int64_t seen_ = 0;
+  TurnRateCheck rate_check_;
 };
 
 }  // namespace

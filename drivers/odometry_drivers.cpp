@@ -1,5 +1,6 @@
 #include "drivers/odometry_drivers.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -103,56 +104,13 @@ int Hi219Session::onBytes(const uint8_t* data, size_t size, int64_t arrival_utim
 
 Hi219Driver::Hi219Driver(const DeviceUri& uri, const OdometryDriverOptions& options,
                          std::function<int64_t()> now)
-    : StreamDevice(uri, options, std::move(now)),
-      options_(options),
-      session_(uri.baud, /*raw=*/false) {}
+    : SampleStreamDevice(uri, options, std::move(now), "HI219") {}
 
 Hi219Driver::~Hi219Driver() { stopWorker(); }
-
-std::vector<ImuSample> Hi219Driver::poll(int64_t) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::vector<ImuSample> out;
-  out.swap(queue_);
-  return out;
-}
-
-void Hi219Driver::startSession(ByteStream& stream) {
-  awaitFirstFrame(stream, options_.identify_timeout_ms, "HI219", &read_ahead_,
-                  [](const std::vector<uint8_t>& bytes) {
-                    hi219::Decoder probe;
-                    std::vector<hi219::Event> events;
-                    probe.feed(bytes.data(), bytes.size(), &events);
-                    for (const auto& e : events) {
-                      if (std::holds_alternative<hi219::Frame>(e)) return true;
-                    }
-                    return false;
-                  });
-  session_.reset();
-}
-
-int Hi219Driver::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
-                         std::vector<std::string>* errors) {
-  decoded_.clear();
-  int n = 0;
-  if (size == 0 && !read_ahead_.empty()) {
-    n = session_.onBytes(read_ahead_.data(), read_ahead_.size(), arrival_utime, &decoded_, errors);
-    read_ahead_.clear();
-  } else {
-    n = session_.onBytes(data, size, arrival_utime, &decoded_, errors);
-  }
-  std::lock_guard<std::mutex> lock(mutex_);
-  enqueue(&queue_, &decoded_, options_.max_queued, &queue_drops_);
-  return n;
-}
 
 std::string Hi219Driver::identity() const {
   const int id = session_.userId();
   return id >= 0 ? "HI219 (user ID " + std::to_string(id) + ")" : "HI219";
-}
-
-std::vector<std::pair<std::string, int64_t>> Hi219Driver::extraCounters() {
-  std::lock_guard<std::mutex> lock(mutex_);
-  return {{"queue_drops", queue_drops_}};
 }
 
 // ---- wheel board ----
@@ -205,18 +163,9 @@ int WheelBoardSession::onBytes(const uint8_t* data, size_t size, int64_t arrival
 
 WheelBoardDriver::WheelBoardDriver(const DeviceUri& uri, const OdometryDriverOptions& options,
                                    std::function<int64_t()> now)
-    : StreamDevice(uri, options, std::move(now)),
-      options_(options),
-      session_(uri.baud, /*raw=*/false) {}
+    : SampleStreamDevice(uri, options, std::move(now), "wheel board TICKS") {}
 
 WheelBoardDriver::~WheelBoardDriver() { stopWorker(); }
-
-std::vector<WheelTicks> WheelBoardDriver::poll(int64_t) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  std::vector<WheelTicks> out;
-  out.swap(queue_);
-  return out;
-}
 
 void WheelBoardDriver::command(int64_t, double v_m_s, double w_rad_s) {
   std::lock_guard<std::mutex> lock(mutex_);
@@ -224,42 +173,18 @@ void WheelBoardDriver::command(int64_t, double v_m_s, double w_rad_s) {
   while (commands_.size() > 16) commands_.pop_front();  // only the newest matter
 }
 
-void WheelBoardDriver::startSession(ByteStream& stream) {
-  awaitFirstFrame(stream, options_.identify_timeout_ms, "wheel board TICKS", &read_ahead_,
-                  [](const std::vector<uint8_t>& bytes) {
-                    wheelboard::Decoder probe;
-                    std::vector<wheelboard::Event> events;
-                    probe.feed(bytes.data(), bytes.size(), &events);
-                    for (const auto& e : events) {
-                      if (std::holds_alternative<wheelboard::Ticks>(e)) return true;
-                    }
-                    return false;
-                  });
-  session_.reset();
-  std::lock_guard<std::mutex> lock(mutex_);
+void WheelBoardDriver::onSessionStart() {
   frames_lost_total_ += frames_lost_now_;
   frames_lost_now_ = 0;
 }
 
-int WheelBoardDriver::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
-                              std::vector<std::string>* errors) {
-  decoded_.clear();
-  int n = 0;
-  if (size == 0 && !read_ahead_.empty()) {
-    n = session_.onBytes(read_ahead_.data(), read_ahead_.size(), arrival_utime, &decoded_, errors);
-    read_ahead_.clear();
-  } else {
-    n = session_.onBytes(data, size, arrival_utime, &decoded_, errors);
-  }
-  std::lock_guard<std::mutex> lock(mutex_);
-  for (const WheelTicks& t : decoded_) {
+void WheelBoardDriver::onDecoded(const std::vector<WheelTicks>& ticks) {
+  for (const WheelTicks& t : ticks) {
     const bool stopped = (t.flags & wheelboard::kFlagWatchdog) != 0;
     if (stopped && !(last_flags_ & wheelboard::kFlagWatchdog)) ++watchdog_stops_;
     last_flags_ = t.flags;
   }
   frames_lost_now_ = session_.framesLost();
-  enqueue(&queue_, &decoded_, options_.max_queued, &queue_drops_);
-  return n;
 }
 
 void WheelBoardDriver::service(ByteStream& stream, int64_t) {
@@ -281,12 +206,77 @@ void WheelBoardDriver::stopSession(ByteStream& stream) {
 }
 
 std::vector<std::pair<std::string, int64_t>> WheelBoardDriver::extraCounters() {
+  auto counters = SampleStreamDevice::extraCounters();
   std::lock_guard<std::mutex> lock(mutex_);
-  return {{"queue_drops", queue_drops_},
-          {"frames_lost", frames_lost_total_ + frames_lost_now_},
-          {"commands_sent", commands_sent_},
-          {"watchdog_stops", watchdog_stops_},
-          {"board_flags", last_flags_}};
+  counters.insert(counters.end(), {{"frames_lost", frames_lost_total_ + frames_lost_now_},
+                                   {"commands_sent", commands_sent_},
+                                   {"watchdog_stops", watchdog_stops_},
+                                   {"board_flags", last_flags_}});
+  return counters;
 }
+
+// ---- what both drivers share ----
+
+template <class Session, class Sample, class Frame>
+SampleStreamDevice<Session, Sample, Frame>::SampleStreamDevice(const DeviceUri& uri,
+                                                               const OdometryDriverOptions& options,
+                                                               std::function<int64_t()> now,
+                                                               const char* frame_name)
+    : StreamDevice(uri, options, std::move(now)),
+      options_(options),
+      session_(uri.baud, /*raw=*/false),
+      frame_name_(frame_name) {}
+
+template <class Session, class Sample, class Frame>
+std::vector<Sample> SampleStreamDevice<Session, Sample, Frame>::take() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  std::vector<Sample> out;
+  out.swap(queue_);
+  return out;
+}
+
+template <class Session, class Sample, class Frame>
+void SampleStreamDevice<Session, Sample, Frame>::startSession(ByteStream& stream) {
+  awaitFirstFrame(stream, options_.identify_timeout_ms, frame_name_, &read_ahead_,
+                  [](const std::vector<uint8_t>& bytes) {
+                    typename Session::Decoder probe;
+                    std::vector<typename Session::Event> events;
+                    probe.feed(bytes.data(), bytes.size(), &events);
+                    return std::any_of(events.begin(), events.end(), [](const auto& e) {
+                      return std::holds_alternative<Frame>(e);
+                    });
+                  });
+  session_.reset();
+  std::lock_guard<std::mutex> lock(mutex_);
+  onSessionStart();
+}
+
+template <class Session, class Sample, class Frame>
+int SampleStreamDevice<Session, Sample, Frame>::onBytes(const uint8_t* data, size_t size,
+                                                        int64_t arrival_utime,
+                                                        std::vector<std::string>* errors) {
+  decoded_.clear();
+  int n = 0;
+  if (size == 0 && !read_ahead_.empty()) {  // the start-up's bytes first
+    n = session_.onBytes(read_ahead_.data(), read_ahead_.size(), arrival_utime, &decoded_, errors);
+    read_ahead_.clear();
+  } else {
+    n = session_.onBytes(data, size, arrival_utime, &decoded_, errors);
+  }
+  std::lock_guard<std::mutex> lock(mutex_);
+  onDecoded(decoded_);
+  enqueue(&queue_, &decoded_, options_.max_queued, &queue_drops_);
+  return n;
+}
+
+template <class Session, class Sample, class Frame>
+std::vector<std::pair<std::string, int64_t>>
+SampleStreamDevice<Session, Sample, Frame>::extraCounters() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return {{"queue_drops", queue_drops_}};
+}
+
+template class SampleStreamDevice<Hi219Session, ImuSample, hi219::Frame>;
+template class SampleStreamDevice<WheelBoardSession, WheelTicks, wheelboard::Ticks>;
 
 }  // namespace sweepmap

@@ -59,6 +59,8 @@ struct Unwrap32 {
 // counted, not used). `raw`: no receive times (arrival_utime ignored).
 class Hi219Session {
  public:
+  using Decoder = hi219::Decoder;
+  using Event = hi219::Event;
   Hi219Session(int baud, bool raw);
   // Returns the samples completed.
   int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
@@ -82,6 +84,8 @@ class Hi219Session {
 // capture of both directions) are skipped.
 class WheelBoardSession {
  public:
+  using Decoder = wheelboard::Decoder;
+  using Event = wheelboard::Event;
   WheelBoardSession(int baud, bool raw);
   int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
               std::vector<WheelTicks>* ticks, std::vector<std::string>* errors);
@@ -107,73 +111,84 @@ struct OdometryDriverOptions : StreamDeviceOptions {
   int identify_timeout_ms = 1000;  // start-up: a valid frame within this, or reconnect
 };
 
-// The HI219 on hi219:///dev/PORT: it streams on power-up; start-up flushes what is buffered and
-// waits for one valid frame (a port with another device behind it is an error, retried).
-class Hi219Driver : public ImuDevice, public StreamDevice {
+// What both drivers share: a device that streams on its own, whose session turns bytes into
+// samples. Start-up flushes what the port buffered and waits for one valid `Frame` (a port with
+// another device behind it is an error, retried); the samples queue for take() (the oldest
+// dropped beyond max_queued, counted in queue_drops).
+template <class Session, class Sample, class Frame>
+class SampleStreamDevice : public StreamDevice {
+ protected:
+  SampleStreamDevice(const DeviceUri& uri, const OdometryDriverOptions& options,
+                     std::function<int64_t()> now, const char* frame_name);
+  std::vector<Sample> take();
+  void startSession(ByteStream& stream) override;
+  int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
+              std::vector<std::string>* errors) override;
+  DecoderCounters decoderCounters() const override { return session_.counters(); }
+  int64_t clockResets() const override { return session_.clockResets(); }
+  std::vector<std::pair<std::string, int64_t>> extraCounters() override;
+  // Hooks, called with mutex_ held: a new connection; samples decoded (before queueing).
+  virtual void onSessionStart() {}
+  virtual void onDecoded(const std::vector<Sample>& samples) {}
+
+  OdometryDriverOptions options_;
+  Session session_;  // worker only
+  std::mutex mutex_;
+
+ private:
+  const char* frame_name_;
+  std::vector<uint8_t> read_ahead_;
+  std::vector<Sample> decoded_;
+  std::vector<Sample> queue_;  // guarded by mutex_
+  int64_t queue_drops_ = 0;    // guarded by mutex_
+};
+
+// The HI219 on hi219:///dev/PORT: it streams on power-up.
+class Hi219Driver : public ImuDevice,
+                    public SampleStreamDevice<Hi219Session, ImuSample, hi219::Frame> {
  public:
   Hi219Driver(const DeviceUri& uri, const OdometryDriverOptions& options,
               std::function<int64_t()> now);
   ~Hi219Driver() override;
   void start() { startWorker(); }
-  std::vector<ImuSample> poll(int64_t now_utime) override;
+  std::vector<ImuSample> poll(int64_t) override { return take(); }
   DeviceHealth health() override { return StreamDevice::health(); }
   bool streaming() const override { return StreamDevice::streaming(); }
 
  protected:
-  void startSession(ByteStream& stream) override;
-  int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
-              std::vector<std::string>* errors) override;
-  DecoderCounters decoderCounters() const override { return session_.counters(); }
-  int64_t clockResets() const override { return session_.clockResets(); }
   std::string identity() const override;
   const char* itemsName() const override { return "imu_samples"; }
-  std::vector<std::pair<std::string, int64_t>> extraCounters() override;
-
- private:
-  OdometryDriverOptions options_;
-  Hi219Session session_;
-  std::vector<uint8_t> read_ahead_;
-  std::vector<ImuSample> decoded_;
-  std::mutex mutex_;
-  std::vector<ImuSample> queue_;
-  int64_t queue_drops_ = 0;
 };
 
 // The wheel board on wheelboard:///dev/PORT: TICKS in, SPEED out (each command() once, at the
 // next service of the connection; the board's own watchdog stops the wheels when they stop).
-class WheelBoardDriver : public WheelDevice, public StreamDevice {
+class WheelBoardDriver
+    : public WheelDevice,
+      public SampleStreamDevice<WheelBoardSession, WheelTicks, wheelboard::Ticks> {
  public:
   WheelBoardDriver(const DeviceUri& uri, const OdometryDriverOptions& options,
                    std::function<int64_t()> now);
   ~WheelBoardDriver() override;
   void start() { startWorker(); }
-  std::vector<WheelTicks> poll(int64_t now_utime) override;
+  std::vector<WheelTicks> poll(int64_t) override { return take(); }
   void command(int64_t now_utime, double v_m_s, double w_rad_s) override;
   DeviceHealth health() override { return StreamDevice::health(); }
   bool streaming() const override { return StreamDevice::streaming(); }
 
  protected:
-  void startSession(ByteStream& stream) override;
-  int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
-              std::vector<std::string>* errors) override;
   void service(ByteStream& stream, int64_t now_utime) override;
   void stopSession(ByteStream& stream) override;
-  DecoderCounters decoderCounters() const override { return session_.counters(); }
-  int64_t clockResets() const override { return session_.clockResets(); }
   std::string identity() const override { return "wheel board"; }
   const char* itemsName() const override { return "wheel_readings"; }
   std::vector<std::pair<std::string, int64_t>> extraCounters() override;
+  void onSessionStart() override;
+  void onDecoded(const std::vector<WheelTicks>& ticks) override;
 
  private:
-  OdometryDriverOptions options_;
-  WheelBoardSession session_;
-  std::vector<uint8_t> read_ahead_;
-  std::vector<WheelTicks> decoded_;
   uint16_t tx_seq_ = 0;  // worker only
-  std::mutex mutex_;     // guards below
-  std::vector<WheelTicks> queue_;
+  // Guarded by mutex_:
   std::deque<std::pair<double, double>> commands_;  // (v, w) not yet sent
-  int64_t queue_drops_ = 0, commands_sent_ = 0, watchdog_stops_ = 0;
+  int64_t commands_sent_ = 0, watchdog_stops_ = 0;
   int64_t frames_lost_total_ = 0, frames_lost_now_ = 0;  // closed connections, this one
   uint16_t last_flags_ = 0;
 };

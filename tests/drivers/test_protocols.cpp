@@ -8,6 +8,7 @@
 #include <cmath>
 #include <string>
 
+#include "drivers/lidar_sessions.hpp"
 #include "drivers/protocols/rplidar.hpp"
 #include "drivers/protocols/scip.hpp"
 #include "drivers/protocols/ydlidar.hpp"
@@ -309,6 +310,57 @@ TEST(Ydlidar, BadCheckCodeDropsThatPacketOnly) {
 }
 
 // ---- RPLIDAR -------------------------------------------------------------------------------
+
+// The X4's turns as the session sees them: 12 packets of 60 samples per turn at `rate_hz`;
+// the packets of turns [burst_from, burst_to) all reach the host at the end of the last one (a
+// stall, then the backlog, each packet read on its own: the harshest timing).
+// Returns the error the session throws, or "" after `turns` turns.
+std::string feedX4Turns(double rate_hz, int turns, int burst_from = -1, int burst_to = -1) {
+  LidarConfig x4;
+  x4.beam_count = 714;
+  x4.angle_min_deg = -180.0;
+  x4.angle_increment_deg = 360.0 / 714;
+  x4.scan_rate_hz = 7.0;
+  x4.steps_per_revolution = 714;
+  x4.range_min_m = 0.12;
+  x4.range_max_m = 10.0;
+  auto session = makeLidarSession(DeviceProtocol::kYdlidarX4, x4, SessionOptions{});
+  std::vector<Scan2D> scans;
+  std::vector<std::string> errors;
+  const int64_t t0 = 1'000'000'000;
+  const int64_t burst_at = t0 + static_cast<int64_t>(burst_to / rate_hz * 1e6);
+  try {
+    for (int t = 0; t < turns; ++t) {
+      // As the device sends them: a one-sample packet at the zero position, then the turn.
+      for (int p = -1; p < 12; ++p) {
+        const std::string bytes =
+            p < 0 ? ydlidar::encodePacket(true, 0.0, 0.0, {2000.0})
+                  : ydlidar::encodePacket(false, p * 30.0 + 0.5, p * 30.0 + 30.0,
+                                          std::vector<double>(60, 2000.0));
+        int64_t arrival = t0 + static_cast<int64_t>((t + (p + 1) / 12.0) / rate_hz * 1e6);
+        if (t >= burst_from && t < burst_to) arrival = burst_at;
+        std::vector<Scan2D> got;
+        session->onBytes(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), arrival,
+                         &got, &errors);
+        scans.insert(scans.end(), got.begin(), got.end());
+      }
+    }
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  EXPECT_GT(scans.size(), size_t(turns - 3));
+  return "";
+}
+
+// Another device or motor setting stops the driver; a host stall that makes a turn or two
+// look fast does not.
+TEST(X4Session, ScanRateFarFromTheRigsStopsTheDriverAHostStallDoesNot) {
+  EXPECT_EQ(feedX4Turns(7.0, 40), "");
+  EXPECT_EQ(feedX4Turns(7.0, 40, 10, 13), "");
+  const std::string e = feedX4Turns(12.0, 40);
+  EXPECT_NE(e.find("scan rate: the rig file says 7 Hz, the X4 turns at 12"), std::string::npos)
+      << e;
+}
 
 TEST(Rplidar, RequestsDescriptorsAndSampleBits) {
   EXPECT_EQ(rplidar::request(rplidar::kCmdScan), std::string("\xA5\x20", 2));
