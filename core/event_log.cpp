@@ -1,5 +1,6 @@
 #include "core/event_log.hpp"
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 
@@ -27,7 +28,8 @@ void writeBE(uint8_t* p, uint64_t v, int n) {
 
 LogError::LogError(const std::string& path, uint64_t offset, const std::string& what)
     : std::runtime_error(path + ": byte " + std::to_string(offset) + ": " + what),
-      offset_(offset) {}
+      offset_(offset),
+      detail_(what) {}
 
 EventLogReader::EventLogReader(const std::string& path) : path_(path) {
   file_ = std::fopen(path.c_str(), "rb");
@@ -44,6 +46,59 @@ EventLogReader::~EventLogReader() {
 }
 
 bool EventLogReader::next(LogEvent* event) {
+  try {
+    return readAt(event);
+  } catch (const LogError& e) {
+    if (!resync_) throw;
+    const uint64_t bad = offset_;
+    uint64_t good = nextSyncAt(bad + 1);
+    while (good < size_ && !plausibleEventAt(good)) good = nextSyncAt(good + 1);
+    skipped_.push_back({bad, good, e.detail()});
+    offset_ = std::min(good, size_);
+    std::clearerr(file_);
+    std::fseek(file_, static_cast<long>(offset_), SEEK_SET);
+    return offset_ < size_ && readAt(event);
+  }
+}
+
+uint64_t EventLogReader::nextSyncAt(uint64_t from) {
+  std::vector<uint8_t> buf(1 << 16);
+  for (uint64_t at = from; at < size_;) {
+    if (std::fseek(file_, static_cast<long>(at), SEEK_SET) != 0) break;
+    const size_t n = std::fread(buf.data(), 1, buf.size(), file_);
+    if (n < 4) break;
+    for (size_t i = 0; i + 4 <= n; ++i) {
+      if (buf[i] == 0xED && readBE(&buf[i], 4) == kSync) return at + i;
+    }
+    at += n - 3;  // a sync word across the chunk boundary is found in the next chunk
+  }
+  return size_;
+}
+
+bool EventLogReader::plausibleEventAt(uint64_t offset) {
+  const auto headerAt = [this](uint64_t at, uint8_t* h) {
+    return std::fseek(file_, static_cast<long>(at), SEEK_SET) == 0 &&
+           std::fread(h, 1, 28, file_) == 28 && readBE(h, 4) == kSync;
+  };
+  uint8_t h[28];
+  if (offset + 28 > size_ || !headerAt(offset, h)) return false;
+  const uint64_t channel_len = readBE(h + 20, 4), data_len = readBE(h + 24, 4);
+  if (channel_len == 0 || channel_len > kMaxChannelLength || data_len > kMaxDataLength) {
+    return false;
+  }
+  const uint64_t end = offset + 28 + channel_len + data_len;
+  if (end > size_) return false;
+  char channel[kMaxChannelLength];
+  if (std::fread(channel, 1, channel_len, file_) != channel_len) return false;
+  for (uint64_t i = 0; i < channel_len; ++i) {
+    if (channel[i] < 0x20 || channel[i] > 0x7e) return false;
+  }
+  uint8_t next[28];
+  return end == size_ || (end + 28 <= size_ && headerAt(end, next)) ||
+         (end + 28 > size_ && end < size_);  // a cut event after it is the next range's
+}
+
+bool EventLogReader::readAt(LogEvent* event) {
   uint8_t header[28];
   const size_t got = std::fread(header, 1, sizeof header, file_);
   if (got == 0 && std::feof(file_)) return false;

@@ -3,8 +3,11 @@
 // length, data length (all big-endian), channel, data.
 //
 // Written here rather than with lcm::LogFile because the reader must report the byte
-// offset of a truncated or corrupt event and stop there (LCM's reader silently skips
-// ahead to the next sync word), and the writer must be byte-deterministic.
+// offset of a truncated or corrupt event (LCM's reader silently skips ahead to the next sync
+// word), and the writer must be byte-deterministic. A reader either stops at the first bad
+// event (throws), or, with resync, skips it as LCM's reader does — to the next event header
+// that holds up (sync word, lengths, a printable channel, the event inside the file and
+// followed by another sync word or the end) — and keeps the skipped byte ranges.
 #pragma once
 
 #include <cstdint>
@@ -26,9 +29,17 @@ class LogError : public std::runtime_error {
  public:
   LogError(const std::string& path, uint64_t offset, const std::string& what);
   uint64_t offset() const { return offset_; }
+  const std::string& detail() const { return detail_; }  // what, without path and offset
 
  private:
   uint64_t offset_;
+  std::string detail_;
+};
+
+// Bytes [begin, end) of a log that held no readable event, and why.
+struct SkippedRange {
+  uint64_t begin = 0, end = 0;
+  std::string why;
 };
 
 class EventLogReader {
@@ -38,9 +49,12 @@ class EventLogReader {
   EventLogReader(const EventLogReader&) = delete;
   EventLogReader& operator=(const EventLogReader&) = delete;
 
-  // Reads the next event. Returns false at a clean end of file; throws LogError with the
-  // byte offset of the event that is truncated or corrupt.
+  // Reads the next event. Returns false at the end of the file. A truncated or corrupt event:
+  // throws LogError with its byte offset; with resync, skips to the next good event instead
+  // (or to the end) and records the range in skipped().
   bool next(LogEvent* event);
+  void setResync(bool resync) { resync_ = resync; }
+  const std::vector<SkippedRange>& skipped() const { return skipped_; }
   uint64_t offset() const { return offset_; }  // start of the next event
   uint64_t size() const { return size_; }
   const std::string& path() const { return path_; }
@@ -50,6 +64,15 @@ class EventLogReader {
   std::FILE* file_ = nullptr;
   uint64_t offset_ = 0;
   uint64_t size_ = 0;
+  bool resync_ = false;
+  std::vector<SkippedRange> skipped_;
+
+  // The event at offset_ (true), or false at the end; throws LogError if it is bad.
+  bool readAt(LogEvent* event);
+  // Whether a whole, plausible event starts at `offset`.
+  bool plausibleEventAt(uint64_t offset);
+  // The offset of the next sync word at or after `from`, or size_.
+  uint64_t nextSyncAt(uint64_t from);
 };
 
 class EventLogWriter {

@@ -106,6 +106,68 @@ TEST_F(EventLogTest, CorruptLengthReported) {
   EXPECT_THROW(r.next(&e), LogError);
 }
 
+// Corrupt regions in the middle (a broken header, garbage that even holds a false sync word)
+// and a cut last event: with resync every event outside them is read, and the ranges are
+// exactly the bytes from each bad event to the next good one (or the end).
+TEST_F(EventLogTest, ResyncKeepsEveryEventOutsideCorruptRegions) {
+  const std::string p = path("r.lcmlog");
+  std::vector<uint64_t> starts;
+  {
+    EventLogWriter w(p);
+    for (int i = 0; i < 100; ++i) {
+      w.flush();
+      starts.push_back(fs::exists(p) ? fs::file_size(p) : 0);
+      w.write(1000 + i, i % 2 ? "ODD" : "EVEN", std::vector<uint8_t>(50 + i, uint8_t(i)));
+    }
+    w.close();
+  }
+  const uint64_t size = fs::file_size(p);
+  std::string bytes;
+  {
+    std::ifstream in(p, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  bytes[starts[30] + 2] ^= 0x40;  // event 30's sync word
+  for (uint64_t i = starts[60] + 20; i < starts[62] + 10; ++i) bytes[i] = char(i * 37);
+  bytes.replace(starts[61], 4, std::string("\xED\xA1\xDA\x01", 4));  // a false sync word
+  bytes.resize(size - 20);                                           // the last event cut
+  std::ofstream(p, std::ios::binary | std::ios::trunc) << bytes;
+
+  EventLogReader r(p);
+  r.setResync(true);
+  LogEvent e;
+  std::vector<int64_t> times;
+  while (r.next(&e)) {
+    times.push_back(e.utime);
+    EXPECT_EQ(e.data.size(), size_t(50 + e.utime - 1000));
+  }
+  std::vector<int64_t> want;
+  for (int i = 0; i < 99; ++i) {
+    if (i != 30 && i != 60 && i != 61 && i != 62) want.push_back(1000 + i);
+  }
+  EXPECT_EQ(times, want);
+  ASSERT_EQ(r.skipped().size(), 3u);
+  EXPECT_EQ(r.skipped()[0].begin, starts[30]);
+  EXPECT_EQ(r.skipped()[0].end, starts[31]);
+  EXPECT_EQ(r.skipped()[0].why, "bad sync word (corrupt log)");
+  EXPECT_EQ(r.skipped()[1].begin, starts[60]);
+  EXPECT_EQ(r.skipped()[1].end, starts[63]);
+  EXPECT_EQ(r.skipped()[2].begin, starts[99]);
+  EXPECT_EQ(r.skipped()[2].end, size - 20);
+  EXPECT_NE(r.skipped()[2].why.find("truncated"), std::string::npos);
+
+  // Without resync the first bad event stops the reader, as before.
+  EventLogReader strict(p);
+  int n = 0;
+  try {
+    while (strict.next(&e)) ++n;
+    FAIL() << "corruption not detected";
+  } catch (const LogError& err) {
+    EXPECT_EQ(err.offset(), starts[30]);
+  }
+  EXPECT_EQ(n, 30);
+}
+
 TEST_F(EventLogTest, MissingFileNamed) {
   try {
     EventLogReader r(path("nope.lcmlog"));

@@ -187,6 +187,14 @@ TEST(BadInput, CorruptLogNamesOffset) {
             1);
   EXPECT_NE(readFile(dir / "replay.txt").find("byte " + std::to_string(offset)), std::string::npos)
       << readFile(dir / "replay.txt");
+  // Everything after the broken event is replayed: both sweeps are there, and every event but
+  // the broken one.
+  const auto summary = readJson(dir / "out" / "summary.json");
+  EXPECT_EQ(summary["sweeps"].size(), 2u);
+  int64_t events = 0;
+  for (EventLogReader all(log); all.next(&e);) ++events;
+  EXPECT_EQ(summary["events"].get<int64_t>(), events - 1);
+  EXPECT_NE(summary["error"].get<std::string>().find("skipped: bad sync word"), std::string::npos);
 }
 
 TEST(BadInput, ConfigWithUnknownOrMissingKeyRejected) {

@@ -14,8 +14,9 @@ Runner addDumpCommand(CLI::App& app) {
       "shortened; --full prints them whole). --json: one JSON object per message per line "
       "with \"channel\", \"log_utime\", \"type\" and the fields (arrays whole; NaN and "
       "infinities as null). A message of no known type is shown with its size and first bytes. "
-      "A log that ends in a truncated or corrupt event: everything before it is printed, then "
-      "the error with its byte offset, and the exit status is 1.");
+      "Corrupt or truncated bytes are skipped to the next good event header (as LCM's own "
+      "reader does): every event outside them is printed, each skipped byte range is "
+      "reported on stderr where it occurs, and the exit status is 1.");
   auto o = std::make_shared<DumpOptions>();
   cmd->add_option("log", o->log, "LCM log file")->required()->check(CLI::ExistingFile);
   cmd->add_option("--channel", o->channel, "only this channel (exact name)");

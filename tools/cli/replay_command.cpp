@@ -14,9 +14,10 @@ Runner addReplayCommand(CLI::App& app) {
       "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. mobile_lidar: sweepmap-odometry "
       "(wheel odometry + EKF), the world-frame assembler (each ray with its own interpolated "
       "pose and the configured mounting) and the mapper: DIR/map.bt, DIR/cloud.pcd, "
-      "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. Unknown channels are skipped. A "
-      "truncated or corrupt log is reported with its byte offset (exit 1) after keeping every "
-      "output up to that point");
+      "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. Unknown channels are skipped. "
+      "Corrupt regions and a truncated tail are skipped to the next good event header (as "
+      "LCM's own reader does): every event outside them is replayed, the skipped byte ranges "
+      "are reported (and in summary.json's error), and the exit status is 1");
   struct Opts {
     std::string log, rig, out;
     std::vector<std::string> sets;

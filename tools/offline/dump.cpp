@@ -98,16 +98,26 @@ std::string hexHead(const std::vector<uint8_t>& data, size_t n) {
 int runDump(const DumpOptions& o, std::ostream& out, std::ostream& err) {
   const LcmSchema& schema = LcmSchema::builtIn();
   EventLogReader reader(o.log);
+  reader.setResync(true);
   LogEvent ev;
   int status = 0;
+  size_t reported = 0;  // skipped ranges reported so far
   for (;;) {
+    bool more = false;
     try {
-      if (!reader.next(&ev)) break;
+      more = reader.next(&ev);
     } catch (const LogError& e) {
       err << "sweepmap dump: " << e.what() << "\n";
       status = 1;
       break;
     }
+    for (; reported < reader.skipped().size(); ++reported) {
+      const SkippedRange& r = reader.skipped()[reported];
+      err << "sweepmap dump: " << o.log << ": byte " << r.begin << " to " << r.end
+          << " skipped: " << r.why << "\n";
+      status = 1;
+    }
+    if (!more) break;
     if (!o.channel.empty() && ev.channel != o.channel) continue;
     LcmValue value;
     const LcmStruct* type = nullptr;

@@ -6,7 +6,9 @@
 
 namespace sweepmap {
 
-LogPlayer::LogPlayer(const std::string& path) : reader_(std::make_unique<EventLogReader>(path)) {}
+LogPlayer::LogPlayer(const std::string& path) : reader_(std::make_unique<EventLogReader>(path)) {
+  reader_->setResync(true);
+}
 
 LogPlayer::~LogPlayer() = default;
 
@@ -42,9 +44,15 @@ LogPlayResult LogPlayer::play() {
         ++result.skipped_channels[m.channel];
       }
     }
-  } catch (const LogError& e) {
+  } catch (const LogError& e) {  // an I/O error: what was read is kept
     result.log_error = true;
     result.error = e.what();
+  }
+  result.skipped_ranges = reader_->skipped();
+  for (const SkippedRange& r : result.skipped_ranges) {
+    result.error += (result.error.empty() ? reader_->path() + ": " : std::string("; ")) + "byte " +
+                    std::to_string(r.begin) + " to " + std::to_string(r.end) + " skipped: " + r.why;
+    result.log_error = true;
   }
   result.now_utime = now_;
   return result;

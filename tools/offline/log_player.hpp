@@ -2,8 +2,9 @@
 // channels delivered to the process classes on an OfflineBus (the bus's clock moved to the
 // event's time first), other channels handed to handlers (ground truth, raw scans kept
 // aside) or counted as skipped. Replay, calibration and evaluation all read logs through
-// it, so they see exactly what the live processes would. A corrupt or truncated log stops
-// the loop at the bad bytes with everything before them delivered.
+// it, so they see exactly what the live processes would. Corrupt regions and a truncated
+// tail are skipped as LCM's own reader skips them (to the next good event header): every
+// event outside them is delivered, and the skipped byte ranges are reported.
 #pragma once
 
 #include <cstdint>
@@ -13,12 +14,11 @@
 #include <set>
 #include <string>
 
+#include "core/event_log.hpp"
 #include "processes/node.hpp"
 #include "processes/offline_bus.hpp"
 
 namespace sweepmap {
-
-class EventLogReader;
 
 struct LogPlayResult {
   int64_t events = 0;       // every event read, whatever its channel
@@ -26,8 +26,9 @@ struct LogPlayResult {
   int64_t last_utime = 0;
   int64_t now_utime = 0;  // the bus's clock at the end: the latest event time
   std::map<std::string, int64_t> skipped_channels;  // neither input nor handled
-  bool log_error = false;  // truncated or corrupt log (everything before it was played)
-  std::string error;       // with the byte offset
+  bool log_error = false;  // the log had corrupt or truncated bytes (skipped)
+  std::string error;       // "PATH: byte B to E skipped: why; ..."
+  std::vector<SkippedRange> skipped_ranges;
 };
 
 class LogPlayer {
@@ -45,8 +46,8 @@ class LogPlayer {
   void handle(const std::string& channel, Handler handler);
   void setProgress(std::function<void(uint64_t offset, uint64_t size)> progress);
 
-  // Plays the whole log (or up to its first corrupt byte). Does not finish the bus: the
-  // caller decides what a truncated log means for pending work (finish()).
+  // Plays the whole log, skipping what is corrupt. Does not finish the bus: the caller
+  // decides what a damaged log means for pending work (finish()).
   LogPlayResult play();
   // bus().finish() at the last event time.
   void finish();
