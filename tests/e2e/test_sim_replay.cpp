@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 
 #include "core/event_log.hpp"
@@ -259,6 +260,20 @@ TEST(Tool, SpyPutsTheTypesJarOnItsClassPath) {
   EXPECT_NE(cmd.find("sweepmap_lcmtypes.jar"), std::string::npos) << cmd;
   EXPECT_NE(cmd.find("lcm.spy.Spy"), std::string::npos) << cmd;
   EXPECT_EQ(cmd.find("Xincgc"), std::string::npos) << cmd;
+  // Its message view (double-clicking a channel) charts with jchart2d: every class it needs
+  // loads from that class path (Debian's liblcm-java does not pull jchart2d in).
+  const size_t cp_at = cmd.find("-cp ");
+  ASSERT_NE(cp_at, std::string::npos) << cmd;
+  const std::string cp = cmd.substr(cp_at + 4, cmd.find(' ', cp_at + 4) - cp_at - 4);
+  std::ofstream(dir / "Check.java")
+      << "public class Check { public static void main(String[] a) "
+         "throws Exception { for (String c : a) Class.forName(c); } }";
+  const std::string java =
+      "java -Djava.awt.headless=true -cp " + cp + " " + (dir / "Check.java").string() +
+      " lcm.spy.ChartData info.monitorenter.gui.chart.Chart2D "
+      "info.monitorenter.gui.chart.traces.Trace2DLtd sweepmap.lidar_scan_t > " +
+      (dir / "java.txt").string() + " 2>&1";
+  EXPECT_EQ(std::system(java.c_str()), 0) << readFile(dir / "java.txt");
 }
 
 // Every rig kind through the same commands, by rig name, from a directory with no config/

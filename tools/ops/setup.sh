@@ -5,7 +5,7 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
-  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev default-jdk-headless
+  liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
   libeigen3-dev libpcl-dev libceres-dev liboctomap-dev
   libgtest-dev libgmock-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
   gnuplot-nox iproute2 util-linux clang-format
