@@ -4,11 +4,11 @@
 #include <pcl/common/io.h>
 #include <pcl/conversions.h>
 #include <pcl/io/pcd_io.h>
-#include <pcl/io/ply_io.h>
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 
 #include <cstdio>
+#include <cstring>
 #include <stdexcept>
 
 #include "core/atomic_file.hpp"
@@ -59,10 +59,20 @@ void writePcdBinary(const std::string& path, const std::vector<Eigen::Vector3f>&
   });
 }
 
+// Written here: PCL's PLY writer adds a `camera` element (or, without it, a range grid and a
+// header full of obj_info lines) that CloudCompare asks about on import. This is the plain
+// form every tool reads: one vertex element of three float32, little-endian.
 void writePlyBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points) {
-  const auto cloud = toPcl(points);
-  saveAtomic(path, "PLY",
-             [&](const std::string& tmp) { return pcl::io::savePLYFileBinary(tmp, cloud); });
+  std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment sweepmap\nelement vertex " +
+                      std::to_string(points.size()) +
+                      "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+  const size_t header = bytes.size();
+  bytes.resize(header + points.size() * 12);
+  static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "PLY body written as in memory");
+  for (size_t i = 0; i < points.size(); ++i) {
+    std::memcpy(&bytes[header + 12 * i], points[i].data(), 12);
+  }
+  writeFileAtomic(path, bytes);
 }
 
 std::vector<Eigen::Vector3f> readPcd(const std::string& path) {

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cstring>
+
 #include "mapping/cloud_io.hpp"
 #include "mapping/synthetic_room.hpp"
 #include "mapping_test_util.hpp"
@@ -69,8 +71,18 @@ TEST(CloudIo, PlyHasAHeaderAndBytesRepeat) {
   EXPECT_NE(header.find("property float x\nproperty float y\nproperty float z\n"),
             std::string::npos)
       << header;
-  // The vertex data follow the header: 3 float32 per point (plus PCL's camera element).
-  EXPECT_GE(bytes.size() - (end + 11), points.size() * 12);
+  // One element, the vertices (no camera element, which CloudCompare would ask about): 3
+  // float32 per point, little-endian, right after the header and nothing after them.
+  EXPECT_EQ(header.find("camera"), std::string::npos) << header;
+  size_t elements = 0;
+  for (size_t at = 0; (at = header.find("element ", at)) != std::string::npos; ++at) ++elements;
+  EXPECT_EQ(elements, 1u) << header;
+  ASSERT_EQ(bytes.size() - (end + 11), points.size() * 12);
+  for (size_t i = 0; i < points.size(); ++i) {
+    float xyz[3];
+    std::memcpy(xyz, bytes.data() + end + 11 + 12 * i, 12);
+    EXPECT_EQ(Eigen::Vector3f(xyz[0], xyz[1], xyz[2]), points[i]) << i;
+  }
 }
 
 TEST(CloudIo, FailuresNameThePath) {
