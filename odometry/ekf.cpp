@@ -3,6 +3,8 @@
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <vector>
 
 namespace sweepmap {
 
@@ -20,13 +22,15 @@ bool OdometryEkf::trusted() const {
          cov_(kTheta, kTheta) <= config_.trusted_theta_sigma_rad * config_.trusted_theta_sigma_rad;
 }
 
-bool OdometryEkf::addWheels(int64_t utime, double v_left, double v_right) {
+bool OdometryEkf::addWheels(int64_t utime, double v_left, double v_right, int64_t interval_us) {
   if (!std::isfinite(v_left) || !std::isfinite(v_right) ||
       std::abs(v_left) > config_.max_speed_m_s || std::abs(v_right) > config_.max_speed_m_s) {
     ++counters_.invalid;
     return false;
   }
-  return add({utime, Kind::kWheels, v_left, v_right});
+  interval_us = std::max<int64_t>(0, interval_us);
+  max_interval_us_ = std::max(max_interval_us_, interval_us);
+  return add({utime, Kind::kWheels, v_left, v_right, interval_us});
 }
 
 bool OdometryEkf::addGyro(int64_t utime, double w) {
@@ -60,21 +64,28 @@ bool OdometryEkf::add(const Measurement& m) {
                                                : counters_.gated_yaw;
     (s.accepted ? fused : gated) += sign;
   };
-  // Later measurements to re-apply after this one (late arrival).
-  std::vector<Snapshot> later;
   // Measurements apply in (time, kind) order, wheels after gyro and yaw at equal times,
   // yaw after gyro, so the result does not depend on arrival order.
   const auto after = [](const Measurement& a, const Measurement& b) {
     return a.utime > b.utime ||
            (a.utime == b.utime && static_cast<int>(a.kind) > static_cast<int>(b.kind));
   };
-  while (!history_.empty() && after(history_.back().m, m)) {
-    count(history_.back(), -1);
-    later.push_back(history_.back());
-    history_.pop_back();
+  // Re-applied from the first of: the measurements after this one (late arrival) and, for a
+  // gyro sample, the wheel readings whose interval holds it (their slip check uses it).
+  size_t keep = history_.size();
+  while (keep > 0 && after(history_[keep - 1].m, m)) --keep;
+  const bool late = keep < history_.size();
+  if (m.kind == Kind::kGyro) {
+    insertGyro(m.utime, m.a);
+    for (size_t i = keep; i > 0 && history_[i - 1].m.utime + max_interval_us_ / 2 >= m.utime; --i) {
+      if (holds(history_[i - 1].m, m.utime)) keep = i - 1;
+    }
   }
+  std::vector<Snapshot> later(history_.begin() + static_cast<std::ptrdiff_t>(keep), history_.end());
+  for (const Snapshot& s : later) count(s, -1);
+  history_.erase(history_.begin() + static_cast<std::ptrdiff_t>(keep), history_.end());
+  if (late) ++counters_.reordered;
   if (!later.empty()) {
-    ++counters_.reordered;
     if (history_.empty()) {
       state_ = base_state_;
       cov_ = base_cov_;
@@ -91,8 +102,15 @@ bool OdometryEkf::add(const Measurement& m) {
     history_.push_back(s);
     return s.accepted;
   };
-  const bool accepted = applyAndKeep(m);
-  for (auto it = later.rbegin(); it != later.rend(); ++it) applyAndKeep(it->m);
+  bool accepted = false, applied = false;
+  for (const Snapshot& s : later) {
+    if (!applied && after(s.m, m)) {
+      accepted = applyAndKeep(m);
+      applied = true;
+    }
+    applyAndKeep(s.m);
+  }
+  if (!applied) accepted = applyAndKeep(m);
   // Forget what is older than the history window.
   const int64_t keep_us = static_cast<int64_t>(config_.history_s * 1e6);
   while (!history_.empty() && history_.front().m.utime < utime_ - keep_us) {
@@ -101,7 +119,41 @@ bool OdometryEkf::add(const Measurement& m) {
     base_utime_ = history_.front().utime;
     history_.pop_front();
   }
+  // Gyro samples are kept as long as a wheel reading in the history may span them.
+  while (!gyro_.empty() && gyro_.front().first < base_utime_ - max_interval_us_) gyro_.pop_front();
   return accepted;
+}
+
+void OdometryEkf::insertGyro(int64_t utime, double w) {
+  auto it = gyro_.end();
+  while (it != gyro_.begin() && std::prev(it)->first > utime) --it;
+  gyro_.insert(it, {utime, w});
+}
+
+bool OdometryEkf::holds(const Measurement& wheels, int64_t utime) {
+  if (wheels.kind != Kind::kWheels || wheels.interval_us <= 0) return false;
+  const int64_t lo = wheels.utime - wheels.interval_us / 2;
+  return utime >= lo && utime <= lo + wheels.interval_us;
+}
+
+bool OdometryEkf::slipsAgainstGyro(const Measurement& m, double w_wheels,
+                                   double var_w_wheels) const {
+  if (m.interval_us <= 0) return false;
+  double sum = 0.0;
+  int n = 0;
+  for (auto it = gyro_.rbegin(); it != gyro_.rend() && it->first >= m.utime - m.interval_us; ++it) {
+    if (holds(m, it->first)) {
+      sum += it->second;
+      ++n;
+    }
+  }
+  if (n == 0) return false;  // no gyro over the interval (IMU off or silent): the gate alone
+  // Both are the interval's mean turn rate: the gyro's less its bias estimate.
+  const double w_gyro = sum / n - state_[kBias];
+  const double gyro_var = config_.gyro_sigma_rad_s * config_.gyro_sigma_rad_s / n;
+  const double var = var_w_wheels + gyro_var + cov_(kBias, kBias);
+  const double d = w_wheels - w_gyro;
+  return d * d > config_.gate_chi2_gyro * var;
 }
 
 void OdometryEkf::predict(int64_t utime) {
@@ -165,6 +217,7 @@ bool OdometryEkf::apply(const Measurement& m) {
     Eigen::Matrix2d R;  // (v, w) = A (v_l, v_r): R = A diag(sl^2, sr^2) A^T
     R << 0.25 * (sl * sl + sr * sr), 0.5 * (sr * sr - sl * sl) / wd, 0.5 * (sr * sr - sl * sl) / wd,
         (sl * sl + sr * sr) / (wd * wd);
+    if (slipsAgainstGyro(m, t.w_rad_s, R(1, 1))) return false;
     Eigen::MatrixXd H = Eigen::MatrixXd::Zero(2, 6);
     H(0, kV) = 1.0;
     H(1, kW) = 1.0;

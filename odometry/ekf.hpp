@@ -6,7 +6,14 @@
 //    filter's first yaw reading, measures theta (optional: yaw_sigma_rad > 0): it stops
 //    the heading drift that gyro noise and an imperfect bias estimate would integrate;
 //  - every measurement is gated by its Mahalanobis distance: a slipping wheel disagrees
-//    with the gyro about w and is rejected (counted), not fused;
+//    with the gyro about w and is rejected (counted), not fused. A wheel reading given with
+//    its interval is first checked against the gyro over that same interval: the wheels' w
+//    is the interval's mean, so is the gyro's (less its bias), whatever the phase of the two
+//    devices' samples. (The state's w alone would not do: between gyro samples the model's
+//    turn acceleration lets it spread by sqrt(turn_accel_psd * 5 ms) = 0.07 rad/s, enough to
+//    let a slip through whenever the wheel reading falls just before a gyro sample rather
+//    than just after one.) A gyro sample arriving after a wheel reading whose interval holds
+//    it re-applies that reading, so the result does not depend on the arrival order;
 //  - measurements are applied in timestamp order: one that arrives late is inserted into a
 //    short history and everything after it is re-applied, so the estimate equals the one from
 //    ordered input; older than the history -> dropped and counted;
@@ -19,6 +26,7 @@
 #include <cstdint>
 #include <deque>
 #include <string>
+#include <utility>
 
 #include "odometry/wheel_odometry.hpp"
 
@@ -53,7 +61,9 @@ class OdometryEkf {
   explicit OdometryEkf(const EkfConfig& config, int64_t start_utime = 0);
 
   // Each returns false when the input was rejected (bad, gated out, or too old).
-  bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s);
+  // Wheels: the mean speeds over an interval of interval_us centred on utime (0: unknown,
+  // then only the Mahalanobis gate applies).
+  bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s, int64_t interval_us = 0);
   bool addGyro(int64_t utime, double w_rad_s);
   // The IMU's yaw; the first one fused sets the offset between its frame and the world.
   bool addYaw(int64_t utime, double yaw_rad);
@@ -78,7 +88,8 @@ class OdometryEkf {
   struct Measurement {
     int64_t utime;
     Kind kind;
-    double a, b;  // wheels: v_left, v_right; gyro: w, unused; yaw: yaw, unused
+    double a, b;              // wheels: v_left, v_right; gyro: w, unused; yaw: yaw, unused
+    int64_t interval_us = 0;  // wheels: the interval the speeds are the means of
   };
   struct Snapshot {
     Measurement m;
@@ -90,6 +101,10 @@ class OdometryEkf {
 
   bool add(const Measurement& m);
   bool apply(const Measurement& m);  // predict to m.utime, update; false if gated out
+  // The wheels' turn rate disagrees with the gyro's mean over the same interval.
+  bool slipsAgainstGyro(const Measurement& m, double w_wheels, double var_w_wheels) const;
+  void insertGyro(int64_t utime, double w);
+  static bool holds(const Measurement& wheels, int64_t utime);  // utime within its interval
   void predict(int64_t utime);
   bool update(const Eigen::VectorXd& innovation, const Eigen::MatrixXd& H, const Eigen::MatrixXd& R,
               double gate);
@@ -102,6 +117,8 @@ class OdometryEkf {
   EkfCov base_cov_;
   int64_t base_utime_;
   std::deque<Snapshot> history_;
+  std::deque<std::pair<int64_t, double>> gyro_;  // valid gyro samples (utime, w), time order
+  int64_t max_interval_us_ = 0;                  // longest wheel interval seen
   bool have_yaw_offset_ = false;
   double yaw_offset_ = 0.0;  // IMU yaw minus theta at the first yaw reading
   Counters counters_;

@@ -130,10 +130,12 @@ void OdometryNode::onTicks(const Message& msg, Outbox& out) {
   // Wheel odometry, Eq. 2-5, with the speeds over the interval just ended.
   last_twist_ = twistFromWheels(vl, vr, config_.ekf.wheel_distance_m);
   odometry_ = integrateOdometry(odometry_, last_twist_, dt);
-  // The speeds are the interval's means: they belong to its middle.
-  const int64_t mid = last_ticks_->utime + (m.utime - last_ticks_->utime) / 2;
+  // The speeds are the interval's means: they belong to its middle, and the EKF checks them
+  // against the gyro over the same interval.
+  const int64_t interval = m.utime - last_ticks_->utime;
+  const int64_t mid = last_ticks_->utime + interval / 2;
   last_ticks_ = Ticks{m.utime, m.left_ticks, m.right_ticks};
-  if (!ekf_.addWheels(mid, vl, vr)) count("wheels_rejected");
+  if (!ekf_.addWheels(mid, vl, vr, interval)) count("wheels_rejected");
   publish(m.utime, msg.utime, out);
 }
 

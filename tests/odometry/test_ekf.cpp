@@ -133,6 +133,33 @@ TEST(OdometryEkf, OutOfOrderInputGivesTheOrderedEstimate) {
   EXPECT_EQ(ordered.counters().gated_wheels, shuffled.counters().gated_wheels);
 }
 
+// Wheel readings given with their interval are checked against the gyro samples within it; a
+// gyro sample arriving after such a reading re-applies it: still the ordered estimate. The
+// wheels' mid-times are off the gyro's 5 ms grid, and the slip is gated.
+TEST(OdometryEkf, WheelIntervalsKeepTheOrderedEstimateAndGateTheSlip) {
+  const Drive d = simulateDrive(3, 8.0, true);
+  const auto feedTimed = [](OdometryEkf& ekf, const Drive::Sample& s) {
+    if (s.wheels) {
+      ekf.addWheels(s.utime - 7500, s.a, s.b, 20000);  // a 20 ms interval ending 2.5 ms early
+    } else {
+      ekf.addGyro(s.utime, s.a);
+    }
+  };
+  OdometryEkf ordered(EkfConfig{}), shuffled(EkfConfig{});
+  for (const auto& s : d.samples) feedTimed(ordered, s);
+  auto samples = d.samples;
+  for (size_t i = 0; i + 20 <= samples.size(); i += 20) {
+    std::reverse(samples.begin() + i, samples.begin() + i + 20);
+  }
+  for (const auto& s : samples) feedTimed(shuffled, s);
+  EXPECT_EQ(ordered.state(), shuffled.state());
+  EXPECT_EQ(ordered.covariance(), shuffled.covariance());
+  EXPECT_EQ(ordered.counters().gated_wheels, shuffled.counters().gated_wheels);
+  EXPECT_EQ(ordered.counters().gated_gyro, shuffled.counters().gated_gyro);
+  EXPECT_GE(ordered.counters().gated_wheels, 15);  // 0.4 s of 50 Hz wheel samples
+  EXPECT_LE(ordered.counters().gated_wheels, 22);
+}
+
 TEST(OdometryEkf, BadInputRejectedAndStateStaysFinite) {
   OdometryEkf ekf(EkfConfig{});
   EXPECT_TRUE(ekf.addWheels(10000, 0.2, 0.2));
