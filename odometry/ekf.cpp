@@ -22,7 +22,8 @@ bool OdometryEkf::trusted() const {
          cov_(kTheta, kTheta) <= config_.trusted_theta_sigma_rad * config_.trusted_theta_sigma_rad;
 }
 
-bool OdometryEkf::addWheels(int64_t utime, double v_left, double v_right, int64_t interval_us) {
+bool OdometryEkf::addWheels(int64_t utime, double v_left, double v_right, int64_t interval_us,
+                            double tick_m) {
   if (!std::isfinite(v_left) || !std::isfinite(v_right) ||
       std::abs(v_left) > config_.max_speed_m_s || std::abs(v_right) > config_.max_speed_m_s) {
     ++counters_.invalid;
@@ -30,7 +31,8 @@ bool OdometryEkf::addWheels(int64_t utime, double v_left, double v_right, int64_
   }
   interval_us = std::max<int64_t>(0, interval_us);
   max_interval_us_ = std::max(max_interval_us_, interval_us);
-  return add({utime, Kind::kWheels, v_left, v_right, interval_us});
+  return add({utime, Kind::kWheels, v_left, v_right, interval_us,
+              std::isfinite(tick_m) ? std::max(0.0, tick_m) : 0.0});
 }
 
 bool OdometryEkf::addGyro(int64_t utime, double w) {
@@ -208,9 +210,13 @@ bool OdometryEkf::apply(const Measurement& m) {
   predict(m.utime);
   if (m.kind == Kind::kWheels) {
     const BodyTwist t = twistFromWheels(m.a, m.b, config_.wheel_distance_m);
+    // Quantisation: the counts at both ends of the interval are each off by U(-1/2, 1/2).
+    const double quantum =
+        m.interval_us > 0 ? m.tick_m / (1e-6 * double(m.interval_us) * std::sqrt(6.0)) : 0.0;
     const auto sigma = [&](double v) {
-      return std::max(config_.wheel_speed_sigma_min_m_s,
-                      config_.wheel_speed_sigma_fraction * std::abs(v));
+      return std::hypot(std::max(config_.wheel_speed_sigma_min_m_s,
+                                 config_.wheel_speed_sigma_fraction * std::abs(v)),
+                        quantum);
     };
     const double sl = sigma(m.a), sr = sigma(m.b);
     const double wd = config_.wheel_distance_m;

@@ -62,8 +62,11 @@ class OdometryEkf {
 
   // Each returns false when the input was rejected (bad, gated out, or too old).
   // Wheels: the mean speeds over an interval of interval_us centred on utime (0: unknown,
-  // then only the Mahalanobis gate applies).
-  bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s, int64_t interval_us = 0);
+  // then only the Mahalanobis gate applies), from encoder counts of tick_m each (0: not
+  // counted): a speed from counts is off by up to a count at either end of the interval, so
+  // its variance gains tick_m^2 / (6 interval^2) over the configured speed noise.
+  bool addWheels(int64_t utime, double v_left_m_s, double v_right_m_s, int64_t interval_us = 0,
+                 double tick_m = 0.0);
   bool addGyro(int64_t utime, double w_rad_s);
   // The IMU's yaw; the first one fused sets the offset between its frame and the world.
   bool addYaw(int64_t utime, double yaw_rad);
@@ -90,6 +93,7 @@ class OdometryEkf {
     Kind kind;
     double a, b;              // wheels: v_left, v_right; gyro: w, unused; yaw: yaw, unused
     int64_t interval_us = 0;  // wheels: the interval the speeds are the means of
+    double tick_m = 0.0;      // wheels: the distance of one encoder count
   };
   struct Snapshot {
     Measurement m;

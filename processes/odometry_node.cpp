@@ -135,7 +135,7 @@ void OdometryNode::onTicks(const Message& msg, Outbox& out) {
   const int64_t interval = m.utime - last_ticks_->utime;
   const int64_t mid = last_ticks_->utime + interval / 2;
   last_ticks_ = Ticks{m.utime, m.left_ticks, m.right_ticks};
-  if (!ekf_.addWheels(mid, vl, vr, interval)) count("wheels_rejected");
+  if (!ekf_.addWheels(mid, vl, vr, interval, per_tick)) count("wheels_rejected");
   publish(m.utime, msg.utime, out);
 }
 

@@ -199,6 +199,10 @@ TEST(OdometryNode, DevicesModePublishesRawFirstAndEqualsReplay) {
   }
   pose2d_t end{};
   ASSERT_TRUE(decodeMessage(poses.back(), &end));
+  // 4-5 counts per wheel per reading: their quantisation is part of the speeds' noise, not
+  // slip (no reading gated, the gyro's bias not pulled).
+  EXPECT_EQ(live.ekf().counters().gated_wheels, 0);
+  EXPECT_NEAR(live.ekf().state()[OdometryEkf::kBias], 0.0, 1e-3);
   EXPECT_NEAR(end.theta_rad, std::remainder(0.4 * 4.0, 2 * M_PI), 0.01);
 }
 
@@ -260,95 +264,96 @@ TEST(OdometryNode, ImuOutageDegradesAndRecovers) {
   EXPECT_TRUE(degraded);
   EXPECT_TRUE(ok_after);
   EXPECT_EQ(node.counter("imu_outages"), 1);
+}
 
-  // Two devices, two clocks: the IMU's samples fall anywhere within the wheel board's 20 ms
-  // intervals. A 0.4 s slip of the left wheel (20 % fast) must be gated whatever that phase. (The
-  // EKF used to gate the wheels on its predicted turn rate alone, which spreads quickly between
-  // gyro samples: the slip was gated when a gyro sample shared the wheel reading's mid-time, as
-  // in the simulator, and fused, the gyro gated instead, when the IMU's stamps were a fraction
-  // of a millisecond later, as with the emulated devices.)
-  TEST(OdometryNode, SlipIsGatedWhateverThePhaseOfImuAndWheels) {
-    OdometryConfig c = config();
-    c.ticks_per_revolution = 100000;  // fine counts: the test is about the gate, not quantisation
-    const double per_tick = 2.0 * M_PI * c.wheel_radius_m / c.ticks_per_revolution;
-    const double v = 0.2, w = 0.24, wd = c.ekf.wheel_distance_m, bias = 0.01;
-    for (const int64_t phase_us : {0, 500, 1000, 2000, 2500, 3000, 4000, 4500, 4900}) {
-      OdometryNode node(c);
-      std::mt19937 rng(11);
-      std::normal_distribution<double> noise(0.0, 0.005);
-      std::vector<std::pair<int64_t, Message>> timed;
-      double left_m = 0.0, right_m = 0.0;
-      const int64_t t0 = 1000000;
-      for (int k = 0; k <= 500; ++k) {  // 10 s of wheel readings at 50 Hz
-        const int64_t t = t0 + 20000 * k;
-        if (k > 0) {
-          const bool slipping = t > t0 + 5000000 && t <= t0 + 5400000;
-          left_m += (v - 0.5 * w * wd) * 0.02 * (slipping ? 1.2 : 1.0);
-          right_m += (v + 0.5 * w * wd) * 0.02;
-        }
-        timed.emplace_back(
-            t, ticks(t, std::llround(left_m / per_tick), std::llround(right_m / per_tick)));
+// Two devices, two clocks: the IMU's samples fall anywhere within the wheel board's 20 ms
+// intervals. A 0.4 s slip of the left wheel (20 % fast) must be gated whatever that phase. (The
+// EKF used to gate the wheels on its predicted turn rate alone, which spreads quickly between
+// gyro samples: the slip was gated when a gyro sample shared the wheel reading's mid-time, as
+// in the simulator, and fused, the gyro gated instead, when the IMU's stamps were a fraction
+// of a millisecond later, as with the emulated devices.)
+TEST(OdometryNode, SlipIsGatedWhateverThePhaseOfImuAndWheels) {
+  OdometryConfig c = config();
+  c.ticks_per_revolution = 100000;  // fine counts: the test is about the gate, not quantisation
+  const double per_tick = 2.0 * M_PI * c.wheel_radius_m / c.ticks_per_revolution;
+  const double v = 0.2, w = 0.24, wd = c.ekf.wheel_distance_m, bias = 0.01;
+  for (const int64_t phase_us : {0, 500, 1000, 2000, 2500, 3000, 4000, 4500, 4900}) {
+    OdometryNode node(c);
+    std::mt19937 rng(11);
+    std::normal_distribution<double> noise(0.0, 0.005);
+    std::vector<std::pair<int64_t, Message>> timed;
+    double left_m = 0.0, right_m = 0.0;
+    const int64_t t0 = 1000000;
+    for (int k = 0; k <= 500; ++k) {  // 10 s of wheel readings at 50 Hz
+      const int64_t t = t0 + 20000 * k;
+      if (k > 0) {
+        const bool slipping = t > t0 + 5000000 && t <= t0 + 5400000;
+        left_m += (v - 0.5 * w * wd) * 0.02 * (slipping ? 1.2 : 1.0);
+        right_m += (v + 0.5 * w * wd) * 0.02;
       }
-      for (int64_t t = t0 + phase_us; t <= t0 + 10000000; t += 5000) {  // 200 Hz gyro
-        timed.emplace_back(t, gyro(t, w + bias + noise(rng)));
-      }
-      std::stable_sort(timed.begin(), timed.end(),
-                       [](const auto& a, const auto& b) { return a.first < b.first; });
-      std::vector<Message> msgs;
-      for (auto& [t, m] : timed) msgs.push_back(std::move(m));
-      run(node, msgs, channels::kOdometryPose);
-      const auto& n = node.ekf().counters();
-      EXPECT_GE(n.gated_wheels, 15) << "phase " << phase_us << " us";  // 20 readings slip
-      EXPECT_LE(n.gated_wheels, 25) << "phase " << phase_us << " us";
-      EXPECT_LE(n.gated_gyro, 2) << "phase " << phase_us << " us";
-      EXPECT_NEAR(node.ekf().pose().theta_rad, w * 10.0, 0.01) << "phase " << phase_us << " us";
+      timed.emplace_back(
+          t, ticks(t, std::llround(left_m / per_tick), std::llround(right_m / per_tick)));
     }
-  }
-
-  TEST(OdometryNode, ShippedConfigLoads) {
-    const OdometryConfig c =
-        loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml")
-            .odometry;
-    EXPECT_DOUBLE_EQ(c.wheel_radius_m, 0.077);
-    EXPECT_FALSE(c.use_imu);
-  }
-
-  // mounting.calibration_file (relative to the rig file) replaces the rig's gamma/beta/alpha_rad.
-  TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
-    namespace fs = std::filesystem;
-    const fs::path dir_ = fs::temp_directory_path() / "sweepmap_rig_b_mounting_file";
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-    MountingCalibration c;
-    c.gamma_rad = 0.0355123456789;
-    c.beta_rad = 0.0126;
-    c.alpha_rad = -0.0058;
-    writeMountingCalibration((dir_ / "mounting.yaml").string(), c);
-    std::ifstream in(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml");
-    std::stringstream text;
-    text << in.rdbuf();
-    std::string rig = text.str();
-    const std::string from = "calibration_file: \"\"";
-    ASSERT_NE(rig.find(from), std::string::npos);
-    rig.replace(rig.find(from), from.size(), "calibration_file: mounting.yaml");
-    std::ofstream(dir_ / "rig_b.yaml") << rig;
-    const MobileLidarConfig b = loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
-    EXPECT_NEAR(b.mounting.gamma_rad, c.gamma_rad, 1e-12);
-    EXPECT_DOUBLE_EQ(b.mounting.beta_rad, c.beta_rad);
-    EXPECT_DOUBLE_EQ(b.mounting.alpha_rad, c.alpha_rad);
-    // Without it the rig's own values stay.
-    EXPECT_DOUBLE_EQ(loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml")
-                         .mounting.gamma_rad,
-                     0.0);
-    fs::remove(dir_ / "mounting.yaml");
-    try {
-      loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
-      FAIL();
-    } catch (const ConfigError& e) {
-      EXPECT_NE(std::string(e.what()).find("mounting.yaml"), std::string::npos) << e.what();
+    for (int64_t t = t0 + phase_us; t <= t0 + 10000000; t += 5000) {  // 200 Hz gyro
+      timed.emplace_back(t, gyro(t, w + bias + noise(rng)));
     }
-    fs::remove_all(dir_);
+    std::stable_sort(timed.begin(), timed.end(),
+                     [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<Message> msgs;
+    for (auto& [t, m] : timed) msgs.push_back(std::move(m));
+    run(node, msgs, channels::kOdometryPose);
+    const auto& n = node.ekf().counters();
+    EXPECT_GE(n.gated_wheels, 15) << "phase " << phase_us << " us";  // 20 readings slip
+    EXPECT_LE(n.gated_wheels, 25) << "phase " << phase_us << " us";
+    EXPECT_LE(n.gated_gyro, 2) << "phase " << phase_us << " us";
+    EXPECT_NEAR(node.ekf().pose().theta_rad, w * 10.0, 0.01) << "phase " << phase_us << " us";
   }
+}
+
+TEST(OdometryNode, ShippedConfigLoads) {
+  const OdometryConfig c =
+      loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b_mines_rover.yaml")
+          .odometry;
+  EXPECT_DOUBLE_EQ(c.wheel_radius_m, 0.077);
+  EXPECT_FALSE(c.use_imu);
+}
+
+// mounting.calibration_file (relative to the rig file) replaces the rig's gamma/beta/alpha_rad.
+TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
+  namespace fs = std::filesystem;
+  const fs::path dir_ = fs::temp_directory_path() / "sweepmap_rig_b_mounting_file";
+  fs::remove_all(dir_);
+  fs::create_directories(dir_);
+  MountingCalibration c;
+  c.gamma_rad = 0.0355123456789;
+  c.beta_rad = 0.0126;
+  c.alpha_rad = -0.0058;
+  writeMountingCalibration((dir_ / "mounting.yaml").string(), c);
+  std::ifstream in(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml");
+  std::stringstream text;
+  text << in.rdbuf();
+  std::string rig = text.str();
+  const std::string from = "calibration_file: \"\"";
+  ASSERT_NE(rig.find(from), std::string::npos);
+  rig.replace(rig.find(from), from.size(), "calibration_file: mounting.yaml");
+  std::ofstream(dir_ / "rig_b.yaml") << rig;
+  const MobileLidarConfig b = loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
+  EXPECT_NEAR(b.mounting.gamma_rad, c.gamma_rad, 1e-12);
+  EXPECT_DOUBLE_EQ(b.mounting.beta_rad, c.beta_rad);
+  EXPECT_DOUBLE_EQ(b.mounting.alpha_rad, c.alpha_rad);
+  // Without it the rig's own values stay.
+  EXPECT_DOUBLE_EQ(loadMobileLidarConfig(std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml")
+                       .mounting.gamma_rad,
+                   0.0);
+  fs::remove(dir_ / "mounting.yaml");
+  try {
+    loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("mounting.yaml"), std::string::npos) << e.what();
+  }
+  fs::remove_all(dir_);
+}
 
 }  // namespace
 }  // namespace sweepmap
