@@ -1,9 +1,9 @@
 // Point cloud files (XYZ, float32, metres, in whatever frame the caller's points are in).
 //
 // PCD (binary) is PCL's native format; PLY (binary little-endian, one vertex element, no
-// camera element) opens in CloudCompare without an import dialog, and in MeshLab. Both writers are atomic (`path + ".tmp"`, then rename) and byte-
-// deterministic: the same points give the same bytes (no timestamps in either header).
-// PCL is kept out of this header.
+// camera element) opens in CloudCompare without an import dialog, and in MeshLab. Both writers are
+// atomic (`path + ".tmp"`, then rename) and byte- deterministic: the same points give the same
+// bytes (no timestamps in either header). PCL is kept out of this header.
 #pragma once
 
 #include <Eigen/Core>
