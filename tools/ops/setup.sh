@@ -8,7 +8,7 @@ packages=(
   liblcm-dev liblcm-bin liblcm-java libjchart2d-java libglib2.0-dev default-jdk-headless
   libeigen3-dev libpcl-dev libceres-dev liboctomap-dev
   libgtest-dev libgmock-dev libyaml-cpp-dev nlohmann-json3-dev libcli11-dev
-  gnuplot-nox iproute2 util-linux clang-format
+  gnuplot-nox iproute2 util-linux clang-format python3
   clang libclang-rt-14-dev
   libgpiod-dev
 )
