@@ -11,6 +11,8 @@ DeviceClockSync::DeviceClockSync(const Options& options) : options_(options) {}
 void DeviceClockSync::clear() {
   have_raw_ = false;
   have_anchor_ = false;
+  exchanged_ = false;
+  have_out_ = false;
   anchoring_ = false;
   have_latency_ = false;
   rho_ = 0.0;
@@ -69,6 +71,8 @@ void DeviceClockSync::anchor(int64_t raw, int64_t host_send_us, int64_t host_rec
   }
   h0_ = 0.5 * (anchor_lo_ + anchor_hi_) + 0.5 * tick;
   have_anchor_ = true;
+  exchanged_ = true;
+  have_out_ = false;  // an exchange is better than anything returned before it
   anchoring_ = true;
   envelope_.clear();
   have_latency_ = false;
@@ -141,6 +145,12 @@ int64_t DeviceClockSync::observe(int64_t raw, int64_t host_arrival_us) {
     h0_ = static_cast<double>(host_arrival_us);
     have_anchor_ = true;
   }
+  const double early = static_cast<double>(host_arrival_us) - mapped(u);
+  if (!exchanged_ && !jumped && early < 0.0 && early > -options_.max_backstep_us) {
+    // Arrived before its mapped time: the anchor (the first arrival) was late by as much.
+    h0_ += early;
+    for (EnvelopePoint& p : envelope_) p.y_us -= early;
+  }
   if (!have_latency_) {
     // Until the rate is fitted: the smallest delay seen since the anchor.
     const double early = std::max(0.0, static_cast<double>(host_arrival_us) - mapped(u));
@@ -155,13 +165,29 @@ int64_t DeviceClockSync::observe(int64_t raw, int64_t host_arrival_us) {
       envelope_.clear();
       outliers_ = 0;
       ++resets_;
+      return slewed(u, /*discontinuous=*/true);
     }
-    return static_cast<int64_t>(std::llround(mapped(u)));
+    return slewed(u, jumped);
   }
   outliers_ = 0;
   addEnvelope(u, host_arrival_us);
   fitRate();
-  return static_cast<int64_t>(std::llround(mapped(u)));
+  return slewed(u, false);
+}
+
+int64_t DeviceClockSync::slewed(int64_t u, bool discontinuous) {
+  double t = mapped(u);
+  const double device_us = static_cast<double>(u - out_u_) * options_.tick_us;
+  if (have_out_ && !discontinuous && device_us > 0.0) {
+    t = std::clamp(t, out_us_ + device_us * (1.0 - options_.max_slew),
+                   out_us_ + device_us * (1.0 + options_.max_slew));
+  }
+  if (!have_out_ || device_us > 0.0 || discontinuous) {
+    have_out_ = true;
+    out_u_ = u;
+    out_us_ = t;
+  }
+  return static_cast<int64_t>(std::llround(t));
 }
 
 }  // namespace sweepmap

@@ -14,7 +14,13 @@
 // A stamp that does not fit (the device reset its clock, or it jumped) resets the mapping:
 // after `jump_confirm` consecutive stamps whose residual is outside
 // [-max_early_us, +max_late_us] around the learned latency, the anchor is moved so that the
-// newest stamp has the learned latency again; the rate is kept (same oscillator).
+// newest stamp has the learned latency again; the rate is kept (same oscillator). Without an
+// exchange, a stamp that arrives before its mapped time shows that the anchor was late (its
+// message was held up, as on a loaded host at start-up): the mapping moves earlier by as much.
+//
+// The times returned follow the device's own intervals: when the mapping moves (a later
+// anchor, a new rate fit), they slew toward it by at most max_slew of each interval, so they
+// never go back and never bunch up; only a reset of the device's clock is followed at once.
 #pragma once
 
 #include <cstdint>
@@ -35,6 +41,7 @@ class DeviceClockSync {
     int jump_confirm = 3;
     double max_backstep_us = 2000000.0;  // a counter going back further has been reset
     double max_rate_ppm = 500.0;         // a fitted rate beyond this is not believed
+    double max_slew = 0.02;              // returned intervals within +-2 % of the device's
   };
 
   DeviceClockSync() : DeviceClockSync(Options{}) {}
@@ -89,6 +96,13 @@ class DeviceClockSync {
   int64_t resets_ = 0;
   int64_t wraps_ = 0;
   std::deque<EnvelopePoint> envelope_;
+  bool exchanged_ = false;  // the anchor comes from anchor(), not from a first arrival
+  // The last time returned, for the slew limit.
+  bool have_out_ = false;
+  int64_t out_u_ = 0;
+  double out_us_ = 0.0;
+  // The mapped time of u, slewed from the last one returned (discontinuous: follow at once).
+  int64_t slewed(int64_t u, bool discontinuous);
 };
 
 }  // namespace sweepmap

@@ -22,5 +22,6 @@ Runner addEmulateCommand(CLI::App& app);
 Runner addCaptureCommand(CLI::App& app);
 Runner addDecodeCommand(CLI::App& app);
 Runner addDumpCommand(CLI::App& app);
+Runner addStatusCommand(CLI::App& app);
 
 }  // namespace sweepmap

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addCaptureCommand(app));
   add(sweepmap::addDecodeCommand(app));
   add(sweepmap::addDumpCommand(app));
+  add(sweepmap::addStatusCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

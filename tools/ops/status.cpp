@@ -1,0 +1,245 @@
+#include "tools/ops/status.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <iomanip>
+#include <iostream>
+#include <lcm/lcm-cpp.hpp>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "sweepmap/map_stats_t.hpp"
+#include "sweepmap/process_status_t.hpp"
+#include "sweepmap/sweep_status_t.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr const char* kStatusPrefix = "STATUS_";
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+const char* healthName(int health) {
+  switch (health) {
+    case process_status_t::OK:
+      return "OK";
+    case process_status_t::DEGRADED:
+      return "DEGRADED";
+    case process_status_t::FAILED:
+      return "FAILED";
+  }
+  return "?";
+}
+
+double seconds(int64_t us) { return 1e-6 * static_cast<double>(us); }
+
+}  // namespace
+
+StatusBoard::StatusBoard(const StatusBoardOptions& options) : options_(options) {}
+
+void StatusBoard::add(const Message& msg, int64_t now_utime) {
+  if (first_rx_ < 0) first_rx_ = now_utime;
+  Channel& c = channels_[msg.channel];
+  c.rx.push_back(now_utime);
+  ++c.total;
+  c.last_size = msg.data.size();
+  const int64_t window = static_cast<int64_t>(options_.rate_window_s * 1e6);
+  while (!c.rx.empty() && c.rx.front() <= now_utime - window) c.rx.pop_front();
+
+  if (msg.channel.rfind(kStatusPrefix, 0) == 0) {
+    process_status_t s;
+    if (!decodeMessage(msg, &s)) {
+      ++malformed_;
+      return;
+    }
+    Process& p = processes_[s.process.empty() ? msg.channel.substr(7) : s.process];
+    p.last_rx = now_utime;
+    p.health = s.health;
+    p.detail = s.detail;
+    p.counters.clear();
+    for (int i = 0; i < s.ncounters; ++i)
+      p.counters.emplace_back(s.counter_names[i], s.counter_values[i]);
+  } else if (msg.channel == "MAP_STATS") {
+    map_stats_t m;
+    if (!decodeMessage(msg, &m)) {
+      ++malformed_;
+      return;
+    }
+    map_ = Map{m.sweeps_inserted, m.points_inserted,   m.occupied_voxels, m.free_voxels,
+               m.memory_bytes,    m.incomplete_sweeps, m.resolution_m};
+  } else if (msg.channel == "SWEEP_STATUS") {
+    sweep_status_t m;
+    if (!decodeMessage(msg, &m)) {
+      ++malformed_;
+      return;
+    }
+    sweep_ = Sweep{m.sweep_id, m.corrected, m.phi_offset_rad * kRadToDeg, m.reason};
+  }
+}
+
+bool StatusBoard::stale(const Process& p, int64_t now) const {
+  return seconds(now - p.last_rx) > options_.stale_s;
+}
+
+double StatusBoard::rateHz(const Channel& c, int64_t now) const {
+  // Over the window, or over the time listened when that is shorter.
+  const double span = std::min(options_.rate_window_s, seconds(now - first_rx_));
+  size_t n = 0;
+  for (const int64_t t : c.rx) n += t > now - static_cast<int64_t>(options_.rate_window_s * 1e6);
+  return span > 0.0 ? static_cast<double>(n) / span : 0.0;
+}
+
+int StatusBoard::unhealthy(int64_t now_utime) const {
+  int n = 0;
+  for (const auto& [name, p] : processes_) {
+    n += stale(p, now_utime) || p.health == process_status_t::FAILED;
+  }
+  return n;
+}
+
+std::string StatusBoard::text(int64_t now) const {
+  std::ostringstream o;
+  o << std::fixed;
+  o << "sweepmap status: " << processes_.size() << " processes, " << channels_.size()
+    << " channels, listening for " << std::setprecision(1)
+    << (first_rx_ < 0 ? 0.0 : seconds(now - first_rx_)) << " s\n\n";
+  o << std::left << std::setw(20) << "PROCESS" << std::setw(10) << "HEALTH" << std::setw(9)
+    << "STATUS"
+    << "DETAIL\n";
+  for (const auto& [name, p] : processes_) {
+    std::ostringstream age;
+    age << std::fixed << std::setprecision(1) << seconds(now - p.last_rx) << " s";
+    o << std::setw(20) << name << std::setw(10)
+      << (stale(p, now) ? std::string("STALE") : std::string(healthName(p.health))) << std::setw(9)
+      << age.str() << p.detail << "\n";
+    std::string line = "    ";
+    for (const auto& [k, v] : p.counters) {
+      const std::string item = k + "=" + std::to_string(v) + "  ";
+      if (line.size() + item.size() > 100) {
+        o << line << "\n";
+        line = "    ";
+      }
+      line += item;
+    }
+    if (line.size() > 4) o << line << "\n";
+  }
+  o << "\n"
+    << std::setw(28) << "CHANNEL" << std::right << std::setw(10) << "RATE Hz" << std::setw(12)
+    << "MESSAGES" << std::setw(12) << "LAST BYTES" << std::left << "\n";
+  for (const auto& [name, c] : channels_) {
+    o << std::setw(28) << name << std::right << std::setw(10) << std::setprecision(1)
+      << rateHz(c, now) << std::setw(12) << c.total << std::setw(12) << c.last_size << std::left
+      << "\n";
+  }
+  if (map_) {
+    o << "\nmapper: " << map_->sweeps << " sweeps, " << map_->points << " points, "
+      << map_->occupied << " occupied / " << map_->free << " free voxels at "
+      << std::setprecision(2) << map_->resolution_m << " m, " << std::setprecision(1)
+      << static_cast<double>(map_->memory_bytes) / (1 << 20) << " MiB, " << map_->incomplete
+      << " incomplete sweeps\n";
+  }
+  if (sweep_) {
+    o << "last sweep: #" << sweep_->id << " "
+      << (sweep_->corrected ? "corrected" : "not corrected (" + sweep_->reason + ")")
+      << ", phi_offset " << std::setprecision(3) << sweep_->phi_offset_deg << " deg\n";
+  }
+  if (malformed_ > 0) o << "\n" << malformed_ << " malformed status messages ignored\n";
+  if (processes_.empty()) o << "\nno STATUS_* message seen: is anything running on this URL?\n";
+  return o.str();
+}
+
+std::string StatusBoard::json(int64_t now) const {
+  nlohmann::json j;
+  j["listened_s"] = first_rx_ < 0 ? 0.0 : seconds(now - first_rx_);
+  j["processes"] = nlohmann::json::object();
+  for (const auto& [name, p] : processes_) {
+    nlohmann::json c = nlohmann::json::object();
+    for (const auto& [k, v] : p.counters) c[k] = v;
+    j["processes"][name] = {{"health", healthName(p.health)},
+                            {"stale", stale(p, now)},
+                            {"age_s", seconds(now - p.last_rx)},
+                            {"detail", p.detail},
+                            {"counters", c}};
+  }
+  j["channels"] = nlohmann::json::object();
+  for (const auto& [name, c] : channels_) {
+    j["channels"][name] = {
+        {"rate_hz", rateHz(c, now)}, {"messages", c.total}, {"last_bytes", c.last_size}};
+  }
+  if (map_) {
+    j["mapper"] = {{"sweeps", map_->sweeps},
+                   {"points", map_->points},
+                   {"occupied_voxels", map_->occupied},
+                   {"free_voxels", map_->free},
+                   {"resolution_m", map_->resolution_m},
+                   {"memory_bytes", map_->memory_bytes},
+                   {"incomplete_sweeps", map_->incomplete}};
+  }
+  if (sweep_) {
+    j["last_sweep"] = {{"id", sweep_->id},
+                       {"corrected", sweep_->corrected},
+                       {"phi_offset_deg", sweep_->phi_offset_deg},
+                       {"reason", sweep_->reason}};
+  }
+  j["malformed"] = malformed_;
+  j["unhealthy"] = unhealthy(now);
+  return j.dump(2) + "\n";
+}
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void onStopSignal(int) { g_stop = true; }
+
+int64_t nowUtime() {
+  return std::chrono::duration_cast<std::chrono::microseconds>(
+             std::chrono::system_clock::now().time_since_epoch())
+      .count();
+}
+
+class Listener {
+ public:
+  explicit Listener(StatusBoard* board) : board_(board) {}
+  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
+    const auto* p = static_cast<const uint8_t*>(rbuf->data);
+    board_->add(Message{rbuf->recv_utime, channel, std::vector<uint8_t>(p, p + rbuf->data_size)},
+                nowUtime());
+  }
+
+ private:
+  StatusBoard* board_;
+};
+
+}  // namespace
+
+int runStatus(const StatusOptions& o) {
+  lcm::LCM lcm(o.lcm_url);
+  if (!lcm.good()) {
+    std::cerr << "sweepmap status: cannot open LCM at '" << o.lcm_url << "'\n";
+    return 2;
+  }
+  StatusBoard board(o.board);
+  Listener listener(&board);
+  lcm.subscribe(".*", &Listener::onMessage, &listener);
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
+  const int64_t start = nowUtime();
+  int64_t next_draw = start + 1'000'000;
+  while (!g_stop) {
+    lcm.handleTimeout(100);
+    const int64_t now = nowUtime();
+    if (o.once) {
+      if (seconds(now - start) < o.window_s) continue;
+      std::cout << (o.json ? board.json(now) : board.text(now));
+      return std::min(board.unhealthy(now), 100);
+    }
+    if (now >= next_draw) {
+      std::cout << "\033[H\033[2J" << board.text(now) << std::flush;
+      next_draw += 1'000'000;
+    }
+  }
+  return 0;
+}
+
+}  // namespace sweepmap
