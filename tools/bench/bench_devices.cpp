@@ -117,6 +117,27 @@ void benchDecoders(const DevicesBenchOptions& o, std::ostream& out) {
   }
 }
 
+// The CPU share of `pid` (and of the emulator feeding it) over `seconds`, from /proc, with its
+// thread switches and peak RSS; then stops both.
+void measureProcess(ProcessGroup& procs, const std::string& name, pid_t pid, pid_t emulator,
+                    double seconds, std::ostream& out) {
+  const double cpu0 = processCpuSeconds(pid), emu0 = processCpuSeconds(emulator);
+  const int64_t switches0 = contextSwitches(pid);
+  const auto t0 = BenchClock::now();
+  std::this_thread::sleep_for(std::chrono::duration<double>(seconds));
+  const double wall = secondsSince(t0);
+  const double share = (processCpuSeconds(pid) - cpu0) / wall;
+  const double emu_share = (processCpuSeconds(emulator) - emu0) / wall;
+  const double switches = double(contextSwitches(pid) - switches0) / wall;
+  const int64_t rss = statusKib(pid, "VmHWM:");
+  procs.stop(pid, 5.0);
+  procs.stop(emulator, 5.0);
+  out << std::setprecision(2) << "  " << name << " " << share * 100.0 << " % of a core over "
+      << std::setprecision(1) << wall << " s (" << std::setprecision(0) << switches
+      << " thread switches/s, peak RSS " << rss / 1024.0 << " MiB); the emulator "
+      << std::setprecision(1) << emu_share * 100.0 << " %\n";
+}
+
 // sweepmap-lidar driving the emulated UST-10LX over loopback TCP, measured from /proc.
 void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
   out << "sweepmap-lidar process (real SCIP driver, emulated UST-10LX at 40 Hz over loopback "
@@ -143,21 +164,7 @@ void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
                                    "scip://127.0.0.1:10940", "--lcm-url", url},
                                   "/dev/null");
   std::this_thread::sleep_for(std::chrono::seconds(2));  // connected, clock anchored
-  const double cpu0 = processCpuSeconds(lidar), emu0 = processCpuSeconds(emulator);
-  const int64_t switches0 = contextSwitches(lidar);
-  const auto t0 = BenchClock::now();
-  std::this_thread::sleep_for(std::chrono::duration<double>(o.process_s));
-  const double wall = secondsSince(t0);
-  const double share = (processCpuSeconds(lidar) - cpu0) / wall;
-  const double emu_share = (processCpuSeconds(emulator) - emu0) / wall;
-  const double switches = double(contextSwitches(lidar) - switches0) / wall;
-  const int64_t rss = statusKib(lidar, "VmHWM:");
-  procs.stop(lidar, 5.0);
-  procs.stop(emulator, 5.0);
-  out << std::setprecision(2) << "  sweepmap-lidar " << share * 100.0 << " % of a core over "
-      << std::setprecision(1) << wall << " s (" << std::setprecision(0) << switches
-      << " thread switches/s, peak RSS " << rss / 1024.0 << " MiB); the emulator "
-      << std::setprecision(1) << emu_share * 100.0 << " %\n";
+  measureProcess(procs, "sweepmap-lidar", lidar, emulator, o.process_s, out);
 }
 
 // sweepmap-odometry reading both of rig B's devices (the real HI219 and wheel board drivers)
@@ -211,22 +218,8 @@ void benchOdometryProcess(const DevicesBenchOptions& o, std::ostream& out) {
   odo_argv.insert(odo_argv.end(), sets.begin(), sets.end());
   const pid_t odometry = procs.start("odometry", odo_argv, "/dev/null");
   std::this_thread::sleep_for(std::chrono::seconds(2));  // connected, clocks synced
-  const double cpu0 = processCpuSeconds(odometry), emu0 = processCpuSeconds(emulator);
-  const int64_t switches0 = contextSwitches(odometry);
-  const auto t0 = BenchClock::now();
-  std::this_thread::sleep_for(std::chrono::duration<double>(o.process_s));
-  const double wall = secondsSince(t0);
-  const double share = (processCpuSeconds(odometry) - cpu0) / wall;
-  const double emu_share = (processCpuSeconds(emulator) - emu0) / wall;
-  const double switches = double(contextSwitches(odometry) - switches0) / wall;
-  const int64_t rss = statusKib(odometry, "VmHWM:");
-  procs.stop(odometry, 5.0);
-  procs.stop(emulator, 5.0);
+  measureProcess(procs, "sweepmap-odometry", odometry, emulator, o.process_s, out);
   fs::remove_all(dir);
-  out << std::setprecision(2) << "  sweepmap-odometry " << share * 100.0 << " % of a core over "
-      << std::setprecision(1) << wall << " s (" << std::setprecision(0) << switches
-      << " thread switches/s, peak RSS " << rss / 1024.0 << " MiB); the emulator "
-      << std::setprecision(1) << emu_share * 100.0 << " %\n";
 }
 
 }  // namespace
