@@ -7,13 +7,18 @@
 // check, capture -> decode, and rig B live on its three emulated devices (EKF against the
 // truth, an IMU hang-up).
 #include <gtest/gtest.h>
+#include <sched.h>
 #include <signal.h>
+#include <sys/mount.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <fstream>
 #include <thread>
 
+#include "core/event_log.hpp"
 #include "drivers/io/capture_file.hpp"
 #include "drivers/protocols/wheelboard.hpp"
 #include "processes/channels.hpp"
@@ -686,6 +691,68 @@ TEST_F(DevicesTest, StatusShowsLiveProcessesAndMarksAStoppedOneStale) {
   EXPECT_TRUE(k["processes"]["odometry"]["stale"].get<bool>()) << k.dump(2);
   EXPECT_TRUE(k["processes"]["sim_truth"]["stale"].get<bool>()) << k.dump(2);
   EXPECT_EQ(k["unhealthy"], 2);
+}
+
+// The channels of a log and their counts.
+std::map<std::string, int> channelCounts(const std::string& log) {
+  std::map<std::string, int> n;
+  EventLogReader r(log);
+  LogEvent e;
+  while (r.next(&e)) ++n[e.channel];
+  return n;
+}
+
+// `sweepmap record --preset raw` keeps what replay needs (the devices' raw channels, the
+// statuses, the truth) and nothing derived; `--preset all` keeps everything.
+TEST_F(DevicesTest, RecordPresets) {
+  prepare("record");
+  const pid_t odo = procs_.start(
+      "odometry", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl},
+      (dir_ / "odometry.txt").string());
+  for (const std::string preset : {"raw", "all"}) {
+    const fs::path out = dir_ / preset;
+    ASSERT_EQ(sweepmap({"record", "--preset", preset, "--out", out.string(), "--duration", "2.5",
+                        "--min-free-mb", "1", "--lcm-url", kUrl},
+                       dir_ / (preset + ".txt")),
+              0)
+        << readFile(dir_ / (preset + ".txt"));
+    const auto n = channelCounts((out / "run").string());
+    EXPECT_GT(n.count("IMU") ? n.at("IMU") : 0, 200) << preset;
+    EXPECT_GT(n.count("WHEEL_TICKS") ? n.at("WHEEL_TICKS") : 0, 50) << preset;
+    EXPECT_GT(n.count("STATUS_ODOMETRY") ? n.at("STATUS_ODOMETRY") : 0, 0) << preset;
+    EXPECT_GT(n.count("TRUTH_POSE") ? n.at("TRUTH_POSE") : 0, 0) << preset;
+    EXPECT_EQ(n.count("ODOMETRY_POSE"), preset == "all" ? 1u : 0u) << preset;
+  }
+  EXPECT_EQ(procs_.stop(odo, 5.0), 0);
+}
+
+// Recording onto a small file system (a 1.2 MB tmpfs in a private mount namespace): it stops
+// by itself below --min-free-mb with a clear message and exit status 3, and the log it leaves
+// reads to its end without a broken event.
+TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
+  prepare("record_full");
+  const fs::path disk = dir_ / "disk";
+  fs::create_directories(disk);
+  if (::unshare(CLONE_NEWNS) != 0 ||
+      ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
+      ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=1200k") != 0) {
+    GTEST_SKIP() << "no private mount namespace: " << std::strerror(errno);
+  }
+  const pid_t odo = procs_.start(
+      "odometry", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl},
+      (dir_ / "odometry.txt").string());
+  const int rc = sweepmap({"record", "--preset", "all", "--out", disk.string(), "--min-free-mb",
+                           "1", "--duration", "60", "--lcm-url", kUrl},
+                          dir_ / "record.txt");
+  EXPECT_EQ(procs_.stop(odo, 5.0), 0);
+  const std::string said = readFile(dir_ / "record.txt");
+  EXPECT_EQ(rc, 3) << said;
+  EXPECT_NE(said.find("below --min-free-mb 1"), std::string::npos) << said;
+  EXPECT_EQ(sweepmap({"dump", (disk / "run").string()}, dir_ / "dump.txt"), 0)
+      << readFile(dir_ / "dump.txt").substr(0, 2000);
+  const auto n = channelCounts((disk / "run").string());
+  EXPECT_GT(n.count("IMU") ? n.at("IMU") : 0, 300);  // ~200 kB recorded
+  ::umount(disk.c_str());
 }
 
 }  // namespace

@@ -23,5 +23,6 @@ Runner addCaptureCommand(CLI::App& app);
 Runner addDecodeCommand(CLI::App& app);
 Runner addDumpCommand(CLI::App& app);
 Runner addStatusCommand(CLI::App& app);
+Runner addRecordCommand(CLI::App& app);
 
 }  // namespace sweepmap

@@ -23,6 +23,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addDecodeCommand(app));
   add(sweepmap::addDumpCommand(app));
   add(sweepmap::addStatusCommand(app));
+  add(sweepmap::addRecordCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

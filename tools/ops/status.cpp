@@ -1,15 +1,14 @@
 #include "tools/ops/status.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <csignal>
 #include <iomanip>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "processes/live_runner.hpp"
 #include "sweepmap/map_stats_t.hpp"
 #include "sweepmap/process_status_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
@@ -189,9 +188,6 @@ std::string StatusBoard::json(int64_t now) const {
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-void onStopSignal(int) { g_stop = true; }
-
 int64_t nowUtime() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::system_clock::now().time_since_epoch())
@@ -222,11 +218,10 @@ int runStatus(const StatusOptions& o) {
   StatusBoard board(o.board);
   Listener listener(&board);
   lcm.subscribe(".*", &Listener::onMessage, &listener);
-  std::signal(SIGINT, onStopSignal);
-  std::signal(SIGTERM, onStopSignal);
+  installStopSignals();
   const int64_t start = nowUtime();
   int64_t next_draw = start + 1'000'000;
-  while (!g_stop) {
+  while (!stopRequested()) {
     lcm.handleTimeout(100);
     const int64_t now = nowUtime();
     if (o.once) {

@@ -1,0 +1,38 @@
+// `sweepmap record`: lcm-logger with presets, splitting and a disk guard (tools/ops/record.hpp).
+#include "processes/channels.hpp"
+#include "tools/cli/commands.hpp"
+#include "tools/ops/record.hpp"
+
+namespace sweepmap {
+
+Runner addRecordCommand(CLI::App& app) {
+  auto* cmd = app.add_subcommand(
+      "record",
+      "Record the LCM bus with lcm-logger into --out DIR/NAME: --preset raw (what replay needs: "
+      "LIDAR_SCAN, MOTOR_STATE, MOTOR_SWITCH, SCAN_WINDOW, WHEEL_TICKS, IMU, WHEEL_CMD, "
+      "STATUS_*, TRUTH_*) or all; --split-mb N starts a new file (NAME.00, NAME.01, ...) every N "
+      "MB; when the free space falls below --min-free-mb the recording stops cleanly (the log "
+      "ends with its last complete event; exit status 3). Stops at SIGINT/SIGTERM or after "
+      "--duration seconds");
+  auto o = std::make_shared<RecordOptions>();
+  o->lcm_url = kDefaultLcmUrl;
+  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--name", o->name, "log file name in it")->capture_default_str();
+  cmd->add_option("--preset", o->preset, "raw or all")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"raw", "all"}));
+  cmd->add_option("--split-mb", o->split_mb, "start a new file every N MB (0: one file)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--min-free-mb", o->min_free_mb,
+                  "stop cleanly when the output's file system has less free")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--lcm-url", o->lcm_url, "LCM URL to record")->capture_default_str();
+  cmd->add_option("--duration", o->duration_s, "stop after [s] (0: at SIGINT/SIGTERM)")
+      ->capture_default_str()
+      ->check(CLI::NonNegativeNumber);
+  return [o]() { return runRecord(*o); };
+}
+
+}  // namespace sweepmap
