@@ -65,6 +65,7 @@ class GpioStepper : public StepperDevice {
   int64_t position() const { return generator_.position(); }  // steps made, signed
   ShaftTrajectory plan() const { return generator_.trajectory(); }
   bool realtime() const { return generator_.realtime(); }
+  double stepThreadCpuSeconds() const { return generator_.threadCpuSeconds(); }
   void setOnStep(std::function<void(const StepRecord&)> on_step);
 
  private:

@@ -5,6 +5,7 @@
 #include <sys/prctl.h>
 
 #include <algorithm>
+#include <ctime>
 #include <limits>
 
 #include "drivers/motion_profile.hpp"
@@ -137,6 +138,17 @@ void StepGenerator::stop() {
   stopping_ = true;
   clock_.interrupt();
   thread_.join();
+}
+
+double StepGenerator::threadCpuSeconds() const {
+  if (!thread_.joinable()) return 0.0;
+  clockid_t cpu_clock{};
+  timespec ts{};
+  if (pthread_getcpuclockid(const_cast<std::thread&>(thread_).native_handle(), &cpu_clock) != 0 ||
+      clock_gettime(cpu_clock, &ts) != 0) {
+    return 0.0;
+  }
+  return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
 }
 
 std::string StepGenerator::fault() const {

@@ -78,6 +78,8 @@ class StepGenerator {
   void stop();
 
   bool realtime() const { return realtime_; }
+  // CPU time the thread has used so far [s] (0 without the thread).
+  double threadCpuSeconds() const;
   // Why the thread stopped on its own (a GPIO write failed); empty while it is fine.
   std::string fault() const;
   int64_t position() const;            // steps, signed
