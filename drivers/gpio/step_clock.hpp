@@ -21,10 +21,13 @@ class StepClock {
 
 // The host's CLOCK_MONOTONIC. A sleep is a condition-variable wait with an absolute
 // steady_clock deadline (pthread_cond_clockwait on CLOCK_MONOTONIC), so interrupt() wakes it;
-// the last kSpinNs are spun, so short waits (a step pulse) do not pay the wake-up latency.
+// it wakes kSpinNs early and spins to the deadline, as a wake-up comes 20-50 us late here even
+// at SCHED_FIFO (sweepmap bench: a step's median lateness 6-21 us with 20 us of spin, 0.3-0.5
+// us with 60 us), at the price of kSpinNs of CPU per step (0.6 % of a core at mode 7's 100
+// steps/s, about 10 % at mode 1's 1600). Short waits (a step pulse) are spun whole.
 class MonotonicClock : public StepClock {
  public:
-  static constexpr int64_t kSpinNs = 20'000;
+  static constexpr int64_t kSpinNs = 60'000;
   int64_t nowNs() override;
   bool sleepUntilNs(int64_t deadline_ns) override;
   void interrupt() override;

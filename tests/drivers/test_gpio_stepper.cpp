@@ -451,27 +451,20 @@ TEST(GpioStepper, BadUrisAndLinesAreOneClearError) {
   EXPECT_FALSE(v.gpio.dir_positive_high);
   EXPECT_FALSE(v.gpio.home_blocked_high);
   EXPECT_EQ(v.gpio.home_pull, GpioPull::kNone);
-  const auto uriError = [](const std::string& text) {
-    return errorOf([&] { parseDeviceUri(text); });
-  };
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=17&dir=27&enable=22").find("missing line home"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=17&dir=17&enable=22&home=23").find("both 17"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=70000&dir=27&enable=22&home=23")
-                .find("bad line offset step '70000'"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=-1&dir=27&enable=22&home=23").find("bad line"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=x&dir=27&enable=22&home=23").find("bad line"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=1&dir=2&enable=3&home=4&home_pull=sideways")
-                .find("home_pull"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://gpiochip0?step=1&dir=2&enable=3&home=4&speed=9").find("unknown"),
-            std::string::npos);
-  EXPECT_NE(uriError("gpiod://?step=1&dir=2&enable=3&home=4").find("expected gpiod://CHIP"),
-            std::string::npos);
+  for (const auto& [text, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"gpiod://gpiochip0?step=17&dir=27&enable=22", "missing line home"},
+           {"gpiod://gpiochip0?step=17&dir=17&enable=22&home=23", "both 17"},
+           {"gpiod://gpiochip0?step=70000&dir=27&enable=22&home=23",
+            "bad line offset step '70000'"},
+           {"gpiod://gpiochip0?step=-1&dir=27&enable=22&home=23", "bad line offset step"},
+           {"gpiod://gpiochip0?step=x&dir=27&enable=22&home=23", "bad line offset step"},
+           {"gpiod://gpiochip0?step=1&dir=2&enable=3&home=4&home_pull=sideways", "home_pull"},
+           {"gpiod://gpiochip0?step=1&dir=2&enable=3&home=4&speed=9", "unknown option"},
+           {"gpiod://?step=1&dir=2&enable=3&home=4", "expected gpiod://CHIP"}}) {
+    const std::string e = errorOf([&] { parseDeviceUri(text); });
+    EXPECT_NE(e.find("device '" + text + "': "), std::string::npos) << e;
+    EXPECT_NE(e.find(expected), std::string::npos) << text << ": " << e;
+  }
   EXPECT_NE(errorOf([] {
               parseDeviceUriFor("scip://host", {DeviceProtocol::kGpiod});
             }).find("does not belong here"),
