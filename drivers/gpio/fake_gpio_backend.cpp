@@ -83,7 +83,21 @@ void FakeGpioBackend::record(int offset, bool high) {
   if (on_output) on_output(change);
 }
 
-void FakeGpioBackend::setOutput(int offset, bool high) { record(offset, high); }
+void FakeGpioBackend::failWrites(int offset) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  failing_.insert(offset);
+}
+
+void FakeGpioBackend::setOutput(int offset, bool high) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (failing_.count(offset) != 0) {
+      throw GpioError(gpioLineName(name_, offset, "output") +
+                      ": cannot set it: " + std::strerror(EIO));
+    }
+  }
+  record(offset, high);
+}
 
 bool FakeGpioBackend::inputLevel(int offset) {
   std::lock_guard<std::mutex> lock(mutex_);

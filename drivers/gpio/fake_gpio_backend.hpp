@@ -29,6 +29,8 @@ class FakeGpioBackend : public GpioBackend {
 
   // Test set-up.
   void makeBusy(int offset) { busy_.insert(offset); }
+  // From now on, writing output `offset` fails (EIO), as on a chip that went away.
+  void failWrites(int offset);
   void setInputLevel(int offset, bool high);  // the level an input has when requested
   // Queues an edge of input `offset` at `t_ns` (the level follows it when read).
   void injectEdge(int offset, int64_t t_ns, bool rising);
@@ -56,6 +58,7 @@ class FakeGpioBackend : public GpioBackend {
   int num_lines_;
   std::string name_;
   std::set<int> busy_;
+  std::set<int> failing_;  // guarded by mutex_
   mutable std::mutex mutex_;
   std::map<int, bool> output_levels_;
   std::vector<OutputChange> outputs_;

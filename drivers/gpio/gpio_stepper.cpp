@@ -51,6 +51,7 @@ GpioStepper::GpioStepper(const GpioStepperOptions& options, GpioBackend& gpio, S
   const GpioLines& l = options_.lines;
   fatal_slot_ = registerFatalSignalWrite(gpio_.signalSafeWrite(l.enable, l.enable_active_low));
   gpio_.setOutput(l.enable, !l.enable_active_low);
+  generator_.setOnStep(options_.on_step);
   if (options_.dedicated_thread) generator_.start(options_.realtime_priority);
 }
 
@@ -66,10 +67,6 @@ GpioStepper::~GpioStepper() {
 
 void GpioStepper::disable() {
   gpio_.setOutput(options_.lines.enable, options_.lines.enable_active_low);
-}
-
-void GpioStepper::setOnStep(std::function<void(const StepRecord&)> on_step) {
-  generator_.setOnStep(std::move(on_step));
 }
 
 void GpioStepper::command(int64_t now_utime, const StepperCommand& cmd) {

@@ -40,6 +40,8 @@ struct GpioStepperOptions {
   int realtime_priority = 50;
   // utime * 1000 = clock ns + this (processes/live_runner.hpp wallMinusMonotonicNs()).
   int64_t utime_ns_minus_clock_ns = 0;
+  // Called for every step made, on the thread that makes it (the bench's timing).
+  std::function<void(const StepRecord&)> on_step;
   double stepRad() const;
 };
 
@@ -66,7 +68,9 @@ class GpioStepper : public StepperDevice {
   ShaftTrajectory plan() const { return generator_.trajectory(); }
   bool realtime() const { return generator_.realtime(); }
   double stepThreadCpuSeconds() const { return generator_.threadCpuSeconds(); }
-  void setOnStep(std::function<void(const StepRecord&)> on_step);
+  // Why the step thread stopped (a GPIO write failed; the driver is disabled at the next
+  // poll); empty while it runs.
+  std::string fault() const { return generator_.fault(); }
 
  private:
   void disable();

@@ -84,6 +84,7 @@ class StepGenerator {
   std::string fault() const;
   int64_t position() const;            // steps, signed
   ShaftTrajectory trajectory() const;  // the plan (older than 10 min pruned)
+  // Before start(): called for every step made, on the thread that makes it.
   void setOnStep(std::function<void(const StepRecord&)> on_step) { on_step_ = std::move(on_step); }
 
  private:

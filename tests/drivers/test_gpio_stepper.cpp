@@ -8,12 +8,14 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstring>
 #include <functional>
 #include <iostream>
 #include <memory>
+#include <thread>
 
 #include "core/angles.hpp"
 #include "core/config.hpp"
@@ -292,7 +294,9 @@ TEST(GpioStepper, DirIsSetBeforeStepWithSetupTime) {
   for (const auto& c : gpio.outputs()) {
     if (c.offset != kStep) continue;
     if (c.high) {
-      if (fall_ns >= 0) EXPECT_GE(c.t_ns - fall_ns, o.timing.step_pulse_ns);
+      if (fall_ns >= 0) {
+        EXPECT_GE(c.t_ns - fall_ns, o.timing.step_pulse_ns);
+      }
       rise_ns = c.t_ns;
     } else if (rise_ns >= 0) {
       EXPECT_GE(c.t_ns - rise_ns, o.timing.step_pulse_ns);
@@ -491,6 +495,40 @@ TEST(GpioStepper, BadUrisAndLinesAreOneClearError) {
               std::string::npos)
         << e;
   }
+}
+
+// The dedicated thread on the real clock (nothing here depends on how punctual it is): it
+// makes the commanded steps on its own; when a write fails it stops, poll() reports it
+// as a GpioError and the driver is disabled.
+TEST(GpioStepper, StepThreadMakesTheStepsAndStopsOnAWriteError) {
+  GpioStepperOptions o = fakeOptions();
+  o.dedicated_thread = true;
+  MonotonicClock clock;
+  FakeGpioBackend gpio(clock);
+  const auto poll_until = [&](GpioStepper& stepper, const std::function<bool()>& done) {
+    for (int i = 0; i < 5000 && !done(); ++i) {
+      stepper.poll(clock.nowNs() / 1000);
+      std::this_thread::sleep_for(std::chrono::milliseconds(1));
+    }
+    return done();
+  };
+  GpioStepper stepper(o, gpio, clock, clock.nowNs() / 1000);
+  stepper.command(clock.nowNs() / 1000, moveBy(-40 * o.stepRad(), 2.0, 200.0));
+  ASSERT_TRUE(poll_until(stepper, [&] { return stepper.position() == -40; }));
+  const auto steps = seenSteps(gpio);
+  ASSERT_EQ(steps.size(), 40u);
+  for (const auto& s : steps) {
+    EXPECT_EQ(s.direction, -1);
+    EXPECT_GE(s.t_ns - s.dir_set_ns, o.timing.dir_setup_ns);
+  }
+  EXPECT_TRUE(stepper.fault().empty());
+  gpio.failWrites(kStep);
+  stepper.command(clock.nowNs() / 1000, moveBy(40 * o.stepRad(), 2.0, 200.0));
+  ASSERT_TRUE(poll_until(stepper, [&] { return !stepper.fault().empty(); }));
+  EXPECT_NE(stepper.fault().find("line 17 (output): cannot set it"), std::string::npos);
+  const std::string e = errorOf([&] { stepper.poll(clock.nowNs() / 1000); });
+  EXPECT_NE(e.find("step generator stopped"), std::string::npos) << e;
+  EXPECT_EQ(gpio.outputLevel(kEnable), true);  // disabled
 }
 
 // The real backend, without hardware: a chip that is not there is one clear error.

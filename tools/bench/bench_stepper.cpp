@@ -51,12 +51,12 @@ int benchStepper(const StepperBenchOptions& o, std::ostream& out) {
   const double cpu0 = cpuSeconds(RUSAGE_SELF);
   double thread_cpu_s = 0;
   bool realtime = false;
+  options.on_step = [&steps](const StepRecord& r) {
+    if (steps.size() < steps.capacity()) steps.push_back(r);
+  };
   {
     const int64_t start_utime = clock.nowNs() / 1000;
     GpioStepper stepper(options, gpio, clock, start_utime);
-    stepper.setOnStep([&steps](const StepRecord& r) {
-      if (steps.size() < steps.capacity()) steps.push_back(r);
-    });
     stepper.command(start_utime + 1000, {StepperCommand::Kind::kRun, omega, accel, 0.0});
     const auto poll_until = [&](double seconds) {
       const auto end = BenchClock::now() + std::chrono::duration<double>(seconds);
