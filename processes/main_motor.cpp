@@ -1,8 +1,10 @@
 // sweepmap-motor: homing and 3D sweeps of the stepper; MOTOR_STATE, MOTOR_SWITCH, SCAN_WINDOW.
 // The stepper is motor.device: sim (or --sim) the simulated stepper and switch, gpiod://...
 // the real one on GPIO lines (drivers/gpio/gpio_stepper.hpp).
+#include <functional>
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
+#include <string>
 
 #include "drivers/gpio/gpio_stepper.hpp"
 #include "drivers/gpio/gpiod_backend.hpp"
@@ -17,14 +19,23 @@
 namespace sweepmap {
 namespace {
 
-int runController(lcm::LCM& lcm, const RotatingLidarConfig& rig, StepperDevice& stepper, int sweeps,
-                  int64_t start) {
+// `device_fault`: why the device can no longer move the motor ("" while it can); the
+// process then stops with status 1.
+int runController(
+    lcm::LCM& lcm, const RotatingLidarConfig& rig, StepperDevice& stepper, int sweeps,
+    int64_t start,
+    const std::function<std::string()>& device_fault = [] { return std::string(); }) {
   MotorController controller(rig, &stepper, sweeps, start);
   installStopSignals();
   LiveOptions options;
-  options.should_stop = [&] { return controller.done(); };
+  options.should_stop = [&] { return controller.done() || !device_fault().empty(); };
   const int rc = runLive(lcm, {&controller}, options);
-  return rc != 0 ? rc : (controller.phase() == MotorController::Phase::kFault ? 1 : 0);
+  if (rc != 0) return rc;
+  if (const std::string fault = device_fault(); !fault.empty()) {
+    std::cerr << "sweepmap-motor: the stepper stopped: " << fault << "\n";
+    return 1;
+  }
+  return controller.phase() == MotorController::Phase::kFault ? 1 : 0;
 }
 
 int runSim(const RotatingLidarConfig& rig, const std::string& lcm_url, uint64_t seed, int sweeps) {
@@ -56,7 +67,7 @@ int runGpio(const RotatingLidarConfig& rig, const std::string& lcm_url, int swee
   std::cerr << "sweepmap-motor: " << rig.motor.device << ", step thread "
             << (stepper->realtime() ? "SCHED_FIFO" : "at normal priority (no SCHED_FIFO)") << "\n";
   lcm::LCM lcm(lcm_url);
-  return runController(lcm, rig, *stepper, sweeps, start);
+  return runController(lcm, rig, *stepper, sweeps, start, [&] { return stepper->fault(); });
 }
 
 }  // namespace
