@@ -41,14 +41,14 @@ void FakeGpioBackend::checkLine(int offset, const std::string& role) {
 
 void FakeGpioBackend::requestOutput(int offset, bool high, const std::string& role) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
     checkLine(offset, role);
   }
   record(offset, high);
 }
 
 void FakeGpioBackend::requestInput(int offset, GpioPull, const std::string& role) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   const auto level = input_levels_.find(offset);
   const bool initial = level == input_levels_.end() ? false : level->second;
   if (level != input_levels_.end()) input_levels_.erase(level);
@@ -57,17 +57,17 @@ void FakeGpioBackend::requestInput(int offset, GpioPull, const std::string& role
 }
 
 void FakeGpioBackend::setInputLevel(int offset, bool high) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   input_levels_[offset] = high;
 }
 
 void FakeGpioBackend::injectEdge(int offset, int64_t t_ns, bool rising) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   pending_events_[offset].push_back({t_ns, rising});
 }
 
 void FakeGpioBackend::setOnOutput(std::function<void(const OutputChange&)> on_output) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   on_output_ = std::move(on_output);
 }
 
@@ -75,7 +75,7 @@ void FakeGpioBackend::record(int offset, bool high) {
   OutputChange change{offset, high, clock_.nowNs()};
   std::function<void(const OutputChange&)> on_output;
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
     output_levels_[offset] = high;
     outputs_.push_back(change);
     on_output = on_output_;
@@ -84,13 +84,13 @@ void FakeGpioBackend::record(int offset, bool high) {
 }
 
 void FakeGpioBackend::failWrites(int offset) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   failing_.insert(offset);
 }
 
 void FakeGpioBackend::setOutput(int offset, bool high) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
     if (failing_.count(offset) != 0) {
       throw GpioError(gpioLineName(name_, offset, "output") +
                       ": cannot set it: " + std::strerror(EIO));
@@ -100,12 +100,12 @@ void FakeGpioBackend::setOutput(int offset, bool high) {
 }
 
 bool FakeGpioBackend::inputLevel(int offset) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   return input_levels_[offset];
 }
 
 std::vector<GpioInputEvent> FakeGpioBackend::readEvents(int offset) {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   std::vector<GpioInputEvent> events;
   events.swap(pending_events_[offset]);
   if (!events.empty()) input_levels_[offset] = events.back().rising;
@@ -117,12 +117,12 @@ SignalSafeWrite FakeGpioBackend::signalSafeWrite(int, bool high) {
 }
 
 std::vector<FakeGpioBackend::OutputChange> FakeGpioBackend::outputs() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   return outputs_;
 }
 
 bool FakeGpioBackend::outputLevel(int offset) const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   const auto it = output_levels_.find(offset);
   return it != output_levels_.end() && it->second;
 }

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "drivers/gpio/gpio_backend.hpp"
+#include "drivers/gpio/priority_inheritance_mutex.hpp"
 #include "drivers/gpio/step_clock.hpp"
 
 namespace sweepmap {
@@ -58,8 +59,8 @@ class FakeGpioBackend : public GpioBackend {
   int num_lines_;
   std::string name_;
   std::set<int> busy_;
-  std::set<int> failing_;  // guarded by mutex_
-  mutable std::mutex mutex_;
+  std::set<int> failing_;                   // guarded by mutex_
+  mutable PriorityInheritanceMutex mutex_;  // the step thread writes, a poll reads
   std::map<int, bool> output_levels_;
   std::vector<OutputChange> outputs_;
   std::map<int, bool> input_levels_;

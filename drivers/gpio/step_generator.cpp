@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <ctime>
 #include <limits>
+#include <mutex>
 
 #include "drivers/motion_profile.hpp"
 
@@ -41,7 +42,7 @@ StepGenerator::~StepGenerator() { stop(); }
 void StepGenerator::command(int64_t now_utime, const StepperCommand& cmd) {
   checkStepperCommand(cmd);
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
     const int64_t start_utime = std::max(now_utime, (committed_ns_ + 999) / 1000);
     const PlannedMotion motion = planMotion(plan_, start_utime, cmd, cmd.accel_rad_s2);
     for (const ShaftSegment& s : motion.segments) plan_.apply(s);
@@ -52,7 +53,7 @@ void StepGenerator::command(int64_t now_utime, const StepperCommand& cmd) {
 }
 
 std::optional<StepGenerator::NextStep> StepGenerator::findNext() {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   const double upper = double(position_ + 1) * step_rad_ - kLevelSlackRad;
   const double lower = double(position_ - 1) * step_rad_ + kLevelSlackRad;
   const auto c =
@@ -70,7 +71,7 @@ void StepGenerator::prepareDirection(const NextStep& next) {
 
 bool StepGenerator::emit(const NextStep& next) {
   {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
     if (version_ != next.version) return false;
     committed_ns_ = next.t_ns;  // made: a command from now on plans after it
     position_ += next.direction;
@@ -99,7 +100,7 @@ void StepGenerator::runUntil(int64_t until_utime) {
     emit(*next);
   }
   clock_.sleepUntilNs(toClock(until_ns));
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   committed_ns_ = std::max(committed_ns_, until_ns);
 }
 
@@ -116,8 +117,9 @@ void StepGenerator::loop() {
       emit(*next);
     }
   } catch (const std::exception& e) {
-    std::lock_guard<std::mutex> lock(mutex_);
+    std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
     fault_ = e.what();
+    faulted_ = true;
   }
 }
 
@@ -152,17 +154,18 @@ double StepGenerator::threadCpuSeconds() const {
 }
 
 std::string StepGenerator::fault() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  if (!faulted_) return {};
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   return fault_;
 }
 
 int64_t StepGenerator::position() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   return position_;
 }
 
 ShaftTrajectory StepGenerator::trajectory() const {
-  std::lock_guard<std::mutex> lock(mutex_);
+  std::lock_guard<PriorityInheritanceMutex> lock(mutex_);
   return plan_;
 }
 

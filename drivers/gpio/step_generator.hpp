@@ -24,12 +24,12 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
-#include <mutex>
 #include <optional>
 #include <string>
 #include <thread>
 
 #include "drivers/gpio/gpio_backend.hpp"
+#include "drivers/gpio/priority_inheritance_mutex.hpp"
 #include "drivers/gpio/step_clock.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "drivers/stepper_device.hpp"
@@ -109,7 +109,7 @@ class StepGenerator {
   int64_t offset_ns_;
   std::function<void(const StepRecord&)> on_step_;
 
-  mutable std::mutex mutex_;  // guards the plan, the position and committed_ns_
+  mutable PriorityInheritanceMutex mutex_;  // guards the plan, the position, committed_ns_, fault_
   ShaftTrajectory plan_;
   uint64_t version_ = 0;
   int64_t position_ = 0;
@@ -123,6 +123,7 @@ class StepGenerator {
   std::thread thread_;
   std::atomic<bool> stopping_{false};
   std::atomic<bool> realtime_{false};
+  std::atomic<bool> faulted_{false};  // fault_ is set (read without the lock on every poll)
   std::string fault_;
 };
 
