@@ -1,11 +1,15 @@
 #include "core/device_uri.hpp"
 
+#include <cctype>
+#include <iterator>
 #include <stdexcept>
+#include <utility>
 
 namespace sweepmap {
 namespace {
 
-int parsePositive(const std::string& uri, const std::string& what, const std::string& s, int max) {
+int parseInRange(const std::string& uri, const std::string& what, const std::string& s, int min,
+                 int max) {
   size_t used = 0;
   long v = 0;
   try {
@@ -13,10 +17,99 @@ int parsePositive(const std::string& uri, const std::string& what, const std::st
   } catch (const std::exception&) {
     used = 0;
   }
-  if (s.empty() || used != s.size() || v <= 0 || v > max) {
-    throw std::invalid_argument("device '" + uri + "': bad " + what + " '" + s + "'");
+  if (s.empty() || !std::isdigit(static_cast<unsigned char>(s[0])) || used != s.size() || v < min ||
+      v > max) {
+    throw std::invalid_argument("device '" + uri + "': bad " + what + " '" + s + "' (" +
+                                std::to_string(min) + ".." + std::to_string(max) + ")");
   }
   return static_cast<int>(v);
+}
+
+int parsePositive(const std::string& uri, const std::string& what, const std::string& s, int max) {
+  return parseInRange(uri, what, s, 1, max);
+}
+
+// Calls on_option(key, value, kv) for each `key=value` of `query`; a pair without '=' is
+// passed with an empty value and has_value false.
+template <class F>
+void forEachOption(const std::string& query, F on_option) {
+  size_t at = 0;
+  while (at < query.size()) {
+    size_t amp = query.find('&', at);
+    if (amp == std::string::npos) amp = query.size();
+    const std::string kv = query.substr(at, amp - at);
+    const size_t eq = kv.find('=');
+    on_option(kv.substr(0, eq), eq == std::string::npos ? std::string() : kv.substr(eq + 1),
+              eq != std::string::npos, kv);
+    at = amp + 1;
+  }
+}
+
+// One of two words for a boolean option (`first` -> true).
+bool parseChoice(const std::string& uri, const std::string& key, const std::string& value,
+                 const char* first, const char* second) {
+  if (value == first) return true;
+  if (value == second) return false;
+  throw std::invalid_argument("device '" + uri + "': option " + key + "='" + value + "' must be " +
+                              first + " or " + second);
+}
+
+void parseGpiod(const std::string& text, const std::string& rest, const std::string& query,
+                DeviceUri& uri) {
+  GpioLines& g = uri.gpio;
+  g.chip = rest;
+  if (!g.chip.empty() && g.chip.front() != '/' && g.chip.back() == '/') g.chip.pop_back();
+  if (g.chip.empty()) {
+    throw std::invalid_argument("device '" + text +
+                                "': expected gpiod://CHIP?step=N&dir=N&enable=N&home=N "
+                                "(CHIP: gpiochip0, a number, a label or /dev/gpiochipN)");
+  }
+  const std::pair<const char*, int*> lines[] = {
+      {"step", &g.step}, {"dir", &g.dir}, {"enable", &g.enable}, {"home", &g.home}};
+  forEachOption(query, [&](const std::string& key, const std::string& value, bool has_value,
+                           const std::string& kv) {
+    for (const auto& [name, offset] : lines) {
+      if (key != name || !has_value) continue;
+      *offset =
+          parseInRange(text, std::string("line offset ") + name, value, 0, kGpioMaxLineOffset);
+      return;
+    }
+    if (key == "enable_active" && has_value) {
+      g.enable_active_low = parseChoice(text, key, value, "low", "high");
+    } else if (key == "dir_positive" && has_value) {
+      g.dir_positive_high = parseChoice(text, key, value, "high", "low");
+    } else if (key == "home_blocked" && has_value) {
+      g.home_blocked_high = parseChoice(text, key, value, "high", "low");
+    } else if (key == "home_pull" && has_value) {
+      if (value == "up") {
+        g.home_pull = GpioPull::kUp;
+      } else if (value == "down") {
+        g.home_pull = GpioPull::kDown;
+      } else if (value == "none") {
+        g.home_pull = GpioPull::kNone;
+      } else {
+        throw std::invalid_argument("device '" + text + "': option home_pull='" + value +
+                                    "' must be up, down or none");
+      }
+    } else {
+      throw std::invalid_argument("device '" + text + "': unknown option '" + kv +
+                                  "' (known: step, dir, enable, home, enable_active, "
+                                  "dir_positive, home_blocked, home_pull)");
+    }
+  });
+  for (size_t i = 0; i < std::size(lines); ++i) {
+    if (*lines[i].second < 0) {
+      throw std::invalid_argument("device '" + text + "': missing line " + lines[i].first +
+                                  "=N (step, dir, enable and home are required)");
+    }
+    for (size_t j = 0; j < i; ++j) {
+      if (*lines[i].second == *lines[j].second) {
+        throw std::invalid_argument("device '" + text + "': lines " + lines[j].first + " and " +
+                                    lines[i].first + " are both " +
+                                    std::to_string(*lines[i].second));
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -35,6 +128,8 @@ const char* protocolName(DeviceProtocol protocol) {
       return "hi219";
     case DeviceProtocol::kWheelBoard:
       return "wheelboard";
+    case DeviceProtocol::kGpiod:
+      return "gpiod";
   }
   return "?";
 }
@@ -47,8 +142,9 @@ DeviceUri parseDeviceUri(const std::string& text) {
   if (colon == std::string::npos) {
     throw std::invalid_argument("device '" + text +
                                 "': expected sim, scip://HOST[:PORT], ydlidar:///dev/PORT, "
-                                "rplidar:///dev/PORT, hi219:///dev/PORT or "
-                                "wheelboard:///dev/PORT (serial ones with [?baud=N])");
+                                "rplidar:///dev/PORT, hi219:///dev/PORT, "
+                                "wheelboard:///dev/PORT (serial ones with [?baud=N]) or "
+                                "gpiod://CHIP?step=N&dir=N&enable=N&home=N");
   }
   const std::string scheme = text.substr(0, colon);
   std::string rest = text.substr(colon + 3);
@@ -99,24 +195,23 @@ DeviceUri parseDeviceUri(const std::string& text) {
                                   ":///dev/PORT (an absolute path)");
     }
     uri.path = rest;
-    size_t at = 0;
-    while (at < query.size()) {
-      size_t amp = query.find('&', at);
-      if (amp == std::string::npos) amp = query.size();
-      const std::string kv = query.substr(at, amp - at);
-      const size_t eq = kv.find('=');
-      const std::string key = kv.substr(0, eq);
-      if (key != "baud" || eq == std::string::npos) {
+    forEachOption(query, [&](const std::string& key, const std::string& value, bool has_value,
+                             const std::string& kv) {
+      if (key != "baud" || !has_value) {
         throw std::invalid_argument("device '" + text + "': unknown option '" + kv +
                                     "' (known: baud=N)");
       }
-      uri.baud = parsePositive(text, "baud rate", kv.substr(eq + 1), 4000000);
-      at = amp + 1;
-    }
+      uri.baud = parsePositive(text, "baud rate", value, 4000000);
+    });
+    return uri;
+  }
+  if (scheme == "gpiod") {
+    uri.protocol = DeviceProtocol::kGpiod;
+    parseGpiod(text, rest, query, uri);
     return uri;
   }
   throw std::invalid_argument("device '" + text + "': unknown scheme '" + scheme +
-                              "' (sim, scip, ydlidar, rplidar, hi219, wheelboard)");
+                              "' (sim, scip, ydlidar, rplidar, hi219, wheelboard, gpiod)");
 }
 
 DeviceUri parseDeviceUriFor(const std::string& text, const std::vector<DeviceProtocol>& allowed) {

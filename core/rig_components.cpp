@@ -1,5 +1,6 @@
 #include "core/rig_components.hpp"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "core/device_uri.hpp"
@@ -53,6 +54,47 @@ void MotorConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "pause_s", &pause_s, "s", "standstill between sweeps");
   s.add(p + "settle_s", &settle_s, "s", "wait after a move's nominal end before the next");
   s.add(p + "status_rate_hz", &status_rate_hz, "Hz", "MOTOR_STATE publication rate");
+  s.add(p + "device", &device, "",
+        "the stepper to drive: sim | gpiod://CHIP?step=N&dir=N&enable=N&home=N[&enable_active="
+        "low|high&dir_positive=high|low&home_blocked=high|low&home_pull=up|down|none]");
+  s.add(p + "steps_per_rev", &steps_per_rev, "", "full steps per shaft turn (1.8 deg motor: 200)");
+  s.add(p + "microsteps", &microsteps, "", "microsteps per full step, as set on the driver board");
+  s.add(p + "switch_debounce_ms", &switch_debounce_ms, "ms",
+        "gpiod: the home switch's level must hold this long before an edge counts");
+}
+
+void MotorConfig::validate(const std::string& source, const std::string& p) const {
+  const auto require = [&](bool ok, const std::string& key, const std::string& what) {
+    if (!ok) throw ConfigError(source + ": key '" + p + key + "' " + what);
+  };
+  require(mode >= 1 && mode <= 7, "mode", "must be 1..7");
+  require(sweep_angle_deg > 0, "sweep_angle_deg", "must be > 0");
+  require(accel_deg_s2 > 0, "accel_deg_s2", "must be > 0");
+  require(move_speed_deg_s > 0, "move_speed_deg_s", "must be > 0");
+  require(homing_speed_deg_s > 0, "homing_speed_deg_s", "must be > 0");
+  require(homing_search_deg > 0, "homing_search_deg", "must be > 0");
+  require(margin_s >= 0, "margin_s", "must be >= 0");
+  require(settle_s >= 0 && pause_s >= 0, "settle_s", "and pause_s must be >= 0");
+  require(status_rate_hz > 0, "status_rate_hz", "must be > 0");
+  require(action_sequence == "improved" || action_sequence == "naive", "action_sequence",
+          "must be improved or naive");
+  require(steps_per_rev >= 1 && steps_per_rev <= 100000, "steps_per_rev", "must be 1..100000");
+  require(microsteps >= 1 && microsteps <= 256 && (microsteps & (microsteps - 1)) == 0,
+          "microsteps", "must be a power of two, 1..256");
+  require(switch_debounce_ms >= 0 && switch_debounce_ms <= 100, "switch_debounce_ms",
+          "must be in [0, 100]");
+  // The generator's pulses (5 us high, 5 us low) and a Pi's GPIO writes allow far more, but a
+  // stepper driver at this rate has lost its load long before: a typing error.
+  const double fastest_deg_s =
+      std::max({sweep_angle_deg / scanMode(mode).period_s, move_speed_deg_s, homing_speed_deg_s});
+  require(fastest_deg_s / stepAngleDeg() <= 50000, "microsteps",
+          "with steps_per_rev gives over 50000 steps/s at the fastest configured speed (" +
+              std::to_string(fastest_deg_s) + " deg/s)");
+  try {
+    parseDeviceUriFor(device, {DeviceProtocol::kGpiod});
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(source + ": key '" + p + "device': " + e.what());
+  }
 }
 
 void GeometryConfig::declare(ConfigSchema& s, const std::string& p) {

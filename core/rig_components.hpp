@@ -43,7 +43,16 @@ struct MotorConfig {
   double pause_s = 0.5;   // standstill between sweeps
   double settle_s = 0.2;  // wait after a move's nominal end before the next
   double status_rate_hz = 10.0;
+  // Which stepper the motor process drives (core/device_uri.hpp): sim |
+  // gpiod://CHIP?step=N&dir=N&enable=N&home=N[&...]. `sweepmap-motor --sim` forces sim.
+  std::string device = "sim";
+  int steps_per_rev = 200;          // full steps per shaft turn (1.8 deg motor: 200)
+  int microsteps = 16;              // as set on the driver board (MS1..MS3)
+  double switch_debounce_ms = 2.0;  // home switch level must hold this long to count
   void declare(ConfigSchema& s, const std::string& prefix);
+  // Throws ConfigError naming `source` and the key.
+  void validate(const std::string& source, const std::string& prefix) const;
+  double stepAngleDeg() const { return 360.0 / (double(steps_per_rev) * microsteps); }
 };
 
 struct GeometryConfig {

@@ -640,9 +640,13 @@ std::unique_ptr<LidarSession> makeLidarSession(DeviceProtocol protocol, const Li
     case DeviceProtocol::kRplidar:
       return std::make_unique<RplidarSession>(expected, options);
     case DeviceProtocol::kSim:
+    case DeviceProtocol::kHi219:
+    case DeviceProtocol::kWheelBoard:
+    case DeviceProtocol::kGpiod:
       break;
   }
-  throw std::invalid_argument("no driver session for the simulated lidar");
+  throw std::invalid_argument(std::string("no lidar driver session for a ") +
+                              protocolName(protocol) + " device");
 }
 
 std::unique_ptr<RealLidar> makeRealLidar(const DeviceUri& uri, const LidarConfig& expected,

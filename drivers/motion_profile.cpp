@@ -71,6 +71,18 @@ class Planner {
 
 }  // namespace
 
+void checkStepperCommand(const StepperCommand& cmd) {
+  if (!(std::isfinite(cmd.accel_rad_s2) && cmd.accel_rad_s2 > 0.0)) {
+    throw std::invalid_argument("stepper command: accel_rad_s2 must be finite and > 0");
+  }
+  if (!std::isfinite(cmd.velocity_rad_s) || !std::isfinite(cmd.delta_rad)) {
+    throw std::invalid_argument("stepper command: velocity and delta must be finite");
+  }
+  if (cmd.kind == StepperCommand::Kind::kMoveBy && !(cmd.velocity_rad_s > 0.0)) {
+    throw std::invalid_argument("stepper command: kMoveBy needs velocity_rad_s > 0");
+  }
+}
+
 PlannedMotion planMotion(const ShaftTrajectory& current, int64_t start_utime,
                          const StepperCommand& cmd, double accel) {
   if (!(accel > 0.0) || !std::isfinite(accel)) throw std::invalid_argument("accel must be > 0");

@@ -16,6 +16,10 @@ struct PlannedMotion {
   int64_t end_utime = 0;               // when the commanded state is reached
 };
 
+// Throws std::invalid_argument for a non-finite or non-positive accel, a non-positive kMoveBy
+// speed, or non-finite values: what a device checks before it executes a command.
+void checkStepperCommand(const StepperCommand& cmd);
+
 // Plans `cmd` from the state of `current` at `start_utime`, ramping at about `accel_rad_s2`
 // (which overrides cmd.accel_rad_s2, so a simulation can perturb it). Segment boundaries
 // fall on whole microseconds; ramp accelerations (and a move's peak speed) absorb the

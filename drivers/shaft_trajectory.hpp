@@ -3,8 +3,10 @@
 // another process via TRUTH_SHAFT) evaluates the angle at each ray's time.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <deque>
+#include <optional>
 
 namespace sweepmap {
 
@@ -13,6 +15,15 @@ struct ShaftSegment {
   double angle_rad = 0.0;       // at start_utime
   double velocity_rad_s = 0.0;  // at start_utime
   double accel_rad_s2 = 0.0;    // constant until the next segment
+};
+
+// Where the angle crosses a level: tau_s after the start of the segment it lies in.
+struct ShaftCrossing {
+  int64_t segment_start_utime = 0;
+  double tau_s = 0.0;
+  bool up = false;  // crossed the upper level going up (false: the lower level going down)
+  double utime() const { return double(segment_start_utime) + tau_s * 1e6; }
+  int64_t ns() const { return segment_start_utime * 1000 + std::llround(tau_s * 1e9); }
 };
 
 class ShaftTrajectory {
@@ -27,6 +38,12 @@ class ShaftTrajectory {
   // start values.
   double angleAt(int64_t utime) const;
   double velocityAt(int64_t utime) const;
+  // The first time in [from_ns, to_ns] (ns = utime * 1000: sub-microsecond, for step
+  // timing) at which the angle crosses upper_rad going up or lower_rad going down. The last
+  // segment extends forever. Solved in closed form per segment; a crossing exactly at a
+  // segment boundary is found once.
+  std::optional<ShaftCrossing> firstCrossing(int64_t from_ns, int64_t to_ns, double lower_rad,
+                                             double upper_rad) const;
   // Forgets segments that ended before `utime` (keeps the one active at `utime`).
   void pruneBefore(int64_t utime);
   const std::deque<ShaftSegment>& segments() const { return segments_; }

@@ -210,16 +210,35 @@ class LiveRun {
 
 }  // namespace
 
+namespace {
+
+// The wall clock read once, then advanced by the monotonic clock: a clock step (NTP at boot
+// on a Pi without RTC) does not make time jump inside a running process.
+struct WallEpoch {
+  std::chrono::steady_clock::time_point steady0 = std::chrono::steady_clock::now();
+  int64_t wall0_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                         std::chrono::system_clock::now().time_since_epoch())
+                         .count();
+};
+const WallEpoch& wallEpoch() {
+  static const WallEpoch epoch;
+  return epoch;
+}
+
+}  // namespace
+
 int64_t wallUtime() {
-  // The wall clock read once, then advanced by the monotonic clock: a clock step (NTP at
-  // boot on a Pi without RTC) does not make time jump inside a running process.
-  static const auto steady0 = std::chrono::steady_clock::now();
-  static const int64_t wall0 = std::chrono::duration_cast<std::chrono::microseconds>(
-                                   std::chrono::system_clock::now().time_since_epoch())
-                                   .count();
-  return wall0 + std::chrono::duration_cast<std::chrono::microseconds>(
-                     std::chrono::steady_clock::now() - steady0)
-                     .count();
+  const WallEpoch& e = wallEpoch();
+  return e.wall0_us + std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::steady_clock::now() - e.steady0)
+                          .count();
+}
+
+int64_t wallMinusMonotonicNs() {
+  // steady_clock is CLOCK_MONOTONIC on Linux (libstdc++).
+  const WallEpoch& e = wallEpoch();
+  return e.wall0_us * 1000 -
+         std::chrono::duration_cast<std::chrono::nanoseconds>(e.steady0.time_since_epoch()).count();
 }
 
 void installStopSignals() {

@@ -33,6 +33,9 @@ struct LiveOptions {
 
 // Wall-clock time [us] (LCM's utime convention), read once and then advanced monotonically.
 int64_t wallUtime();
+// wallUtime() * 1000 - CLOCK_MONOTONIC [ns], constant for the process: converts a kernel
+// timestamp (CLOCK_MONOTONIC) to utime and a utime to a monotonic deadline.
+int64_t wallMinusMonotonicNs();
 
 // Installs SIGINT/SIGTERM handlers that make runLive return after finish().
 void installStopSignals();

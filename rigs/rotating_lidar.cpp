@@ -26,9 +26,6 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   schema.loadFile(path);
   for (const auto& o : overrides) schema.set(o);
   checkRigKind(path, rig.rig, "rotating_lidar");
-  if (rig.motor.mode < 1 || rig.motor.mode > 7) {
-    throw ConfigError(path + ": key 'motor.mode' must be 1..7");
-  }
   if (!rig.plate.calibration_file.empty()) {
     std::filesystem::path calib(rig.plate.calibration_file);
     if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
@@ -38,15 +35,7 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
     if (!ok) throw ConfigError(path + ": key '" + key + "' " + what);
   };
   rig.lidar.validate(path, "lidar.");
-  require(rig.motor.sweep_angle_deg > 0, "motor.sweep_angle_deg", "must be > 0");
-  require(rig.motor.accel_deg_s2 > 0, "motor.accel_deg_s2", "must be > 0");
-  require(rig.motor.move_speed_deg_s > 0, "motor.move_speed_deg_s", "must be > 0");
-  require(rig.motor.homing_speed_deg_s > 0, "motor.homing_speed_deg_s", "must be > 0");
-  require(rig.motor.homing_search_deg > 0, "motor.homing_search_deg", "must be > 0");
-  require(rig.motor.margin_s >= 0, "motor.margin_s", "must be >= 0");
-  require(rig.motor.settle_s >= 0 && rig.motor.pause_s >= 0, "motor.settle_s",
-          "and pause_s must be >= 0");
-  require(rig.motor.status_rate_hz > 0, "motor.status_rate_hz", "must be > 0");
+  rig.motor.validate(path, "motor.");
   require(rig.plate.region_inner_radius_mm >= 0 &&
               rig.plate.region_outer_radius_mm > rig.plate.region_inner_radius_mm,
           "plate.region_outer_radius_mm", "must exceed region_inner_radius_mm >= 0");
@@ -68,9 +57,6 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
           "mapper.clamp_max", "needs 0 < clamp_min < clamp_max < 1");
   if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane") {
     throw ConfigError(path + ": key 'plate.beta_method' must be centroid or ray_plane");
-  }
-  if (rig.motor.action_sequence != "improved" && rig.motor.action_sequence != "naive") {
-    throw ConfigError(path + ": key 'motor.action_sequence' must be improved or naive");
   }
   return rig;
 }

@@ -10,10 +10,12 @@
 #include <sched.h>
 #include <signal.h>
 #include <sys/mount.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <thread>
@@ -753,6 +755,24 @@ TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
   const auto n = channelCounts((disk / "run").string());
   EXPECT_GT(n.count("IMU") ? n.at("IMU") : 0, 300);  // ~200 kB recorded
   ::umount(disk.c_str());
+}
+
+// The real stepper where there is no GPIO chip (none on this machine): one message naming the
+// chip and the errno text, exit status 1, before anything is published.
+TEST(MotorProcess, MissingGpioChipIsOneClearError) {
+  const std::string cmd = binPath("sweepmap-motor") + " --rig " + sourcePath("config/rig_a.yaml") +
+                          " --set 'motor.device=gpiod://gpiochip77?step=17&dir=27&enable=22&"
+                          "home=23' 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string out;
+  char buffer[256];
+  while (fgets(buffer, sizeof buffer, pipe) != nullptr) out += buffer;
+  const int status = pclose(pipe);
+  ASSERT_TRUE(WIFEXITED(status)) << out;
+  EXPECT_EQ(WEXITSTATUS(status), 1) << out;
+  EXPECT_EQ(out,
+            "sweepmap-motor: GPIO chip 'gpiochip77': cannot open it: No such file or directory\n");
 }
 
 }  // namespace

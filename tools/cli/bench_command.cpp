@@ -7,6 +7,7 @@
 #include "tools/bench/bench_devices.hpp"
 #include "tools/bench/bench_mobile.hpp"
 #include "tools/bench/bench_rotating.hpp"
+#include "tools/bench/bench_stepper.hpp"
 #include "tools/cli/commands.hpp"
 
 namespace sweepmap {
@@ -23,8 +24,10 @@ Runner addBenchCommand(CLI::App& app) {
       "drivers: each protocol decoder's throughput (MB/s, scans/s, and as a multiple of the "
       "device's own data rate), the CPU share of sweepmap-lidar driving an emulated "
       "UST-10LX at 40 Hz and of sweepmap-odometry reading the emulated HI219 (400 Hz) and "
-      "wheel board (100 Hz) (--no-devices skips them). Prints figures; run on an idle machine, "
-      "compare ratios within one run");
+      "wheel board (100 Hz), and the GPIO step generator's timing (emitted - planned step "
+      "times, its thread's CPU share) through a mode-7 sweep on a fake chip, about 17 s "
+      "(--no-devices skips them). Prints figures; run on an idle machine, compare ratios "
+      "within one run");
   struct Opts {
     std::vector<std::string> rigs = {"rig_a", "rig_b"};
     std::string scene;
@@ -45,9 +48,11 @@ Runner addBenchCommand(CLI::App& app) {
                   "mobile_lidar: log time fed to sweepmap-odometry per IMU rate")
       ->capture_default_str();
   cmd->add_flag("--no-devices", o->no_devices,
-                "skip the decoders and the device processes (lidar, odometry)");
+                "skip the decoders, the device processes (lidar, odometry) and the step "
+                "generator");
   cmd->add_flag("--only-devices", o->only_devices,
-                "only the decoders and the device processes (lidar, odometry)");
+                "only the decoders, the device processes (lidar, odometry) and the step "
+                "generator");
   cmd->add_option("--lidar-process-s", o->lidar_process_s,
                   "how long the CPU share of sweepmap-lidar and of sweepmap-odometry reading "
                   "its devices is measured, each")
@@ -105,6 +110,14 @@ Runner addBenchCommand(CLI::App& app) {
         d.bin_dir = self.parent_path().string();
       }
       benchDevices(d, std::cout);
+      StepperBenchOptions stepper;  // rig A's motor: the first rotating_lidar rig given
+      for (const Rig& rig : rigs) {
+        if (const auto* rotating = std::get_if<RotatingLidarConfig>(&rig.config)) {
+          stepper.motor = rotating->motor;
+          break;
+        }
+      }
+      benchStepper(stepper, std::cout);
     }
     return 0;
   };
