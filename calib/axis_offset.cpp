@@ -1,0 +1,411 @@
+#include "calib/axis_offset.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace sweepmap {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+constexpr double kRadToDeg = 180.0 / M_PI;
+
+// Raw moments of points (relative to a reference) for the plane fit of Eq. 13.
+struct Moments {
+  double n = 0, x = 0, y = 0, z = 0, xx = 0, xy = 0, yy = 0, xz = 0, yz = 0, zz = 0;
+  void add(double px, double py, double pz) {
+    n += 1;
+    x += px;
+    y += py;
+    z += pz;
+    xx += px * px;
+    xy += px * py;
+    yy += py * py;
+    xz += px * pz;
+    yz += py * pz;
+    zz += pz * pz;
+  }
+  // The least-squares plane z = a x + b y + c (Eq. 13, solved on centred moments) and the
+  // RMS of its point-to-plane distances (Eq. 14). False if the points do not fix a, b.
+  bool fit(PlaneFitEq13* plane, double* rmse) const {
+    const double sxx = xx - x * x / n, sxy = xy - x * y / n, syy = yy - y * y / n;
+    const double sxz = xz - x * z / n, syz = yz - y * z / n, szz = zz - z * z / n;
+    const double det = sxx * syy - sxy * sxy;
+    if (n < 3 || !(std::fabs(det) > 1e-12 * (sxx * syy + 1e-300))) return false;
+    const double a = (syy * sxz - sxy * syz) / det;
+    const double b = (sxx * syz - sxy * sxz) / det;
+    plane->a = a;
+    plane->b = b;
+    plane->c = (z - a * x - b * y) / n;
+    const double rss = std::max(0.0, szz - a * sxz - b * syz);
+    *rmse = std::sqrt(rss / (n * (1 + a * a + b * b)));
+    return true;
+  }
+};
+
+// Eq. 7 (the paper's model: no tilt, no encoder zero) on a precomputed sample.
+template <class Pre>
+Eigen::Vector3d eq7(const Pre& p, double m, double n) {
+  // x = M cos a - (N + y) sin a,  y = -M sin a - (N + y) cos a
+  return {m * p.c - n * p.s - p.ys, -m * p.s - n * p.c - p.yc, p.z};
+}
+
+}  // namespace
+
+PlanePoints subsample(const PlanePoints& plane, int max_samples) {
+  if (max_samples <= 0 || plane.samples.size() <= static_cast<size_t>(max_samples)) return plane;
+  PlanePoints out;
+  out.source = plane.source;
+  const size_t stride = (plane.samples.size() + max_samples - 1) / max_samples;
+  for (size_t i = 0; i < plane.samples.size(); i += stride) out.samples.push_back(plane.samples[i]);
+  return out;
+}
+
+PlaneFitEq13 fitPlaneEq13(const std::vector<Eigen::Vector3d>& points) {
+  // phi = (D^T D)^-1 D^T delta, D = [x y 1], delta = z
+  Eigen::MatrixXd d(points.size(), 3);
+  Eigen::VectorXd delta(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    d.row(static_cast<Eigen::Index>(i)) << points[i].x(), points[i].y(), 1.0;
+    delta(static_cast<Eigen::Index>(i)) = points[i].z();
+  }
+  const Eigen::Matrix3d dtd = d.transpose() * d;
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(dtd);
+  if (points.size() < 3 || lu.rank() < 3) {
+    throw std::invalid_argument("fitPlaneEq13: the points do not determine z = Ax + By + C");
+  }
+  const Eigen::Vector3d phi = lu.solve(d.transpose() * delta);
+  return {phi(0), phi(1), phi(2)};
+}
+
+double planeRmseEq14(const std::vector<Eigen::Vector3d>& points, const PlaneFitEq13& p) {
+  double sum = 0.0;
+  const double norm2 = p.a * p.a + p.b * p.b + 1.0;
+  for (const auto& q : points) {
+    const double r = p.a * q.x() + p.b * q.y() - q.z() + p.c;
+    sum += r * r / norm2;
+  }
+  return points.empty() ? 0.0 : std::sqrt(sum / points.size());
+}
+
+PlaneRmseObjective::PlaneRmseObjective(const std::vector<PlanePoints>& planes) {
+  for (const PlanePoints& plane : planes) {
+    std::vector<Pre> pre;
+    pre.reserve(plane.samples.size());
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const ProfileSample& s : plane.samples) {
+      const double c = std::cos(s.encoder_rad), sn = std::sin(s.encoder_rad);
+      pre.push_back({c, sn, s.y_mm * c, s.y_mm * sn, s.z_mm});
+      mean += eq7(pre.back(), 0.0, 0.0);
+    }
+    // A reference near the points keeps the moments small (no cancellation in the fit).
+    reference_.push_back(pre.empty() ? mean : Eigen::Vector3d(mean / pre.size()));
+    planes_.push_back(std::move(pre));
+  }
+}
+
+size_t PlaneRmseObjective::samples() const {
+  size_t n = 0;
+  for (const auto& p : planes_) n += p.size();
+  return n;
+}
+
+double PlaneRmseObjective::meanRmse(double m_mm, double n_mm) const {
+  double sum = 0.0;
+  for (size_t k = 0; k < planes_.size(); ++k) {
+    Moments mo;
+    const Eigen::Vector3d& ref = reference_[k];
+    for (const Pre& p : planes_[k]) {
+      const Eigen::Vector3d q = eq7(p, m_mm, n_mm);
+      mo.add(q.x() - ref.x(), q.y() - ref.y(), q.z() - ref.z());
+    }
+    PlaneFitEq13 plane;
+    double rmse = 0.0;
+    if (!mo.fit(&plane, &rmse)) return std::numeric_limits<double>::infinity();
+    sum += rmse;
+  }
+  return planes_.empty() ? 0.0 : sum / planes_.size();
+}
+
+GridSearchResult gridSearchAxisOffset(const std::vector<PlanePoints>& planes,
+                                      const GridSearchOptions& o) {
+  if (!(o.step_mm > 0) || !(o.m_max_mm >= o.m_min_mm) || !(o.n_max_mm >= o.n_min_mm)) {
+    throw std::invalid_argument("grid search: needs min <= max and a step > 0");
+  }
+  const auto t0 = Clock::now();
+  const PlaneRmseObjective objective(planes);
+  GridSearchResult r;
+  // Nodes by index (no accumulated rounding), both ends included.
+  const auto nodes = [&](double lo, double hi) {
+    std::vector<double> v;
+    const auto count = static_cast<long>(std::floor((hi - lo) / o.step_mm + 1e-9)) + 1;
+    for (long i = 0; i < count; ++i) v.push_back(lo + i * o.step_mm);
+    return v;
+  };
+  r.m_values = nodes(o.m_min_mm, o.m_max_mm);
+  r.n_values = nodes(o.n_min_mm, o.n_max_mm);
+  r.s_min_mm = std::numeric_limits<double>::infinity();
+  r.s_mm.reserve(r.m_values.size() * r.n_values.size());
+  for (const double m : r.m_values) {
+    for (const double n : r.n_values) {
+      const double s = objective.meanRmse(m, n);
+      r.s_mm.push_back(s);
+      if (s < r.s_min_mm) {  // Algorithm 1, steps 7-8
+        r.s_min_mm = s;
+        r.m_mm = m;
+        r.n_mm = n;
+      }
+    }
+  }
+  r.seconds = secondsSince(t0);
+  return r;
+}
+
+namespace {
+
+// One point on its plane: residual = n . p(M, N, tilt, zero) - d [mm].
+// Residuals: 1. Parameters: {M, N} 2, tilt 1, encoder zero 1, unit normal 3, distance 1.
+struct PointToPlaneCost {
+  ProfileSample s;
+  template <class T>
+  bool operator()(const T* mn, const T* tilt, const T* zero, const T* normal, const T* distance,
+                  T* residual) const {
+    const Eigen::Matrix<T, 3, 1> p =
+        profilePointInRigFrame<T>(mn[0], mn[1], tilt[0], zero[0], s.y_mm, s.z_mm, s.encoder_rad);
+    residual[0] = normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] - distance[0];
+    return true;
+  }
+  static ceres::CostFunction* Create(const ProfileSample& s) {
+    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 2, 1, 1, 3, 1>(
+        new PointToPlaneCost{s});
+  }
+};
+
+// The best plane through the points placed with `g` (PCA), normal pointing up.
+FittedPlane planeThrough(const PlanePoints& plane, const ProfileGeometry& g) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector3d> pts;
+  pts.reserve(plane.samples.size());
+  for (const auto& s : plane.samples) {
+    pts.push_back(profilePointInRigFrame(g, s.y_mm, s.z_mm, s.encoder_rad));
+    mean += pts.back();
+  }
+  mean /= static_cast<double>(pts.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) cov += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  Eigen::Vector3d n = eig.eigenvectors().col(0);
+  if (n.z() < 0) n = -n;
+  FittedPlane f{n, n.dot(mean), std::sqrt(std::max(0.0, eig.eigenvalues()(0)) / pts.size())};
+  return f;
+}
+
+// The problem's state: the rig's parameters and one (normal, distance) per plane.
+struct Problem {
+  double mn[2], tilt, zero;
+  std::vector<Eigen::Vector3d> normals;
+  std::vector<double> distances;
+  std::unique_ptr<ceres::Problem> problem;
+  size_t residuals = 0;
+};
+
+void buildProblem(const std::vector<PlanePoints>& planes, const ProfileGeometry& g,
+                  bool estimate_tilt, bool estimate_zero, Problem* p) {
+  p->mn[0] = g.m_mm;
+  p->mn[1] = g.n_mm;
+  p->tilt = g.laser_tilt_rad;
+  p->zero = g.encoder_zero_rad;
+  p->normals.clear();
+  p->distances.clear();
+  for (const auto& plane : planes) {
+    const FittedPlane f = planeThrough(plane, g);
+    p->normals.push_back(f.normal);
+    p->distances.push_back(f.distance_mm);
+  }
+  p->problem = std::make_unique<ceres::Problem>();
+  p->residuals = 0;
+  for (size_t k = 0; k < planes.size(); ++k) {
+    for (const auto& s : planes[k].samples) {
+      p->problem->AddResidualBlock(PointToPlaneCost::Create(s), nullptr, p->mn, &p->tilt, &p->zero,
+                                   p->normals[k].data(), &p->distances[k]);
+      ++p->residuals;
+    }
+    p->problem->SetManifold(p->normals[k].data(), new ceres::SphereManifold<3>());
+  }
+  if (!estimate_tilt) p->problem->SetParameterBlockConstant(&p->tilt);
+  if (!estimate_zero) p->problem->SetParameterBlockConstant(&p->zero);
+}
+
+double rmsOf(Problem* p) {
+  double cost = 0.0;
+  p->problem->Evaluate(ceres::Problem::EvaluateOptions(), &cost, nullptr, nullptr, nullptr);
+  return std::sqrt(2.0 * cost / std::max<size_t>(1, p->residuals));
+}
+
+// The information the planes give about the rig's estimated parameters (names[i]): J^T J
+// with the planes' parameters eliminated (Schur complement), scaled to a unit diagonal.
+struct Observability {
+  std::vector<std::string> names;
+  Eigen::VectorXd eigenvalues;   // ascending
+  Eigen::MatrixXd eigenvectors;  // columns
+};
+
+Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
+                      const std::vector<std::string>& rig_names, size_t rig_columns) {
+  ceres::Problem::EvaluateOptions eo;
+  eo.parameter_blocks = rig_blocks;
+  for (size_t k = 0; k < p->normals.size(); ++k) {
+    eo.parameter_blocks.push_back(p->normals[k].data());
+    eo.parameter_blocks.push_back(&p->distances[k]);
+  }
+  ceres::CRSMatrix crs;
+  p->problem->Evaluate(eo, nullptr, nullptr, nullptr, &crs);
+  const int cols = crs.num_cols;
+  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(cols, cols);
+  for (int r = 0; r < crs.num_rows; ++r) {
+    for (int a = crs.rows[r]; a < crs.rows[r + 1]; ++a) {
+      for (int b = crs.rows[r]; b < crs.rows[r + 1]; ++b) {
+        h(crs.cols[a], crs.cols[b]) += crs.values[a] * crs.values[b];
+      }
+    }
+  }
+  const auto k = static_cast<Eigen::Index>(rig_columns);
+  const Eigen::Index rest = cols - k;
+  Eigen::MatrixXd reduced = h.topLeftCorner(k, k);
+  if (rest > 0) {
+    const Eigen::MatrixXd hpp = h.bottomRightCorner(rest, rest);
+    const Eigen::MatrixXd hrp = h.topRightCorner(k, rest);
+    reduced -= hrp * hpp.ldlt().solve(hrp.transpose());
+  }
+  Eigen::VectorXd scale = reduced.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::MatrixXd unit = scale.asDiagonal() * reduced * scale.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(unit);
+  return {rig_names, eig.eigenvalues(), eig.eigenvectors()};
+}
+
+}  // namespace
+
+AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
+                                 const AxisOffsetOptions& o) {
+  if (planes.empty()) throw std::invalid_argument("axis offset: no plane given");
+  for (const auto& plane : planes) {
+    if (plane.samples.size() < 3) {
+      throw std::invalid_argument("axis offset: " + plane.source + " has fewer than 3 points");
+    }
+  }
+  const auto t0 = Clock::now();
+  AxisOffsetResult r;
+  bool estimate_tilt = o.estimate_tilt, estimate_zero = o.estimate_encoder_zero;
+  Problem p;
+  Observability obs;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    buildProblem(planes, o.initial, estimate_tilt, estimate_zero, &p);
+    if (attempt == 0) r.rms_before_mm = rmsOf(&p);
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_QR;
+    so.max_num_iterations = o.max_iterations;
+    so.function_tolerance = 1e-12;
+    so.parameter_tolerance = 1e-12;
+    so.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, p.problem.get(), &summary);
+    r.iterations = static_cast<int>(summary.iterations.size());
+    r.converged = summary.termination_type == ceres::CONVERGENCE;
+    // Observability of what was estimated; an optional parameter the planes cannot determine
+    // is held at its initial value and the problem solved again without it.
+    std::vector<double*> blocks = {p.mn};
+    std::vector<std::string> names = {"M", "N"};
+    if (estimate_tilt) blocks.push_back(&p.tilt), names.push_back("laser_tilt");
+    if (estimate_zero) blocks.push_back(&p.zero), names.push_back("encoder_zero");
+    obs = analyse(&p, blocks, names, names.size());
+    bool dropped = false;
+    for (Eigen::Index e = 0; e < obs.eigenvalues.size(); ++e) {
+      if (obs.eigenvalues(e) > 1e-9) continue;
+      for (size_t i = 2; i < names.size(); ++i) {
+        if (std::fabs(obs.eigenvectors(static_cast<Eigen::Index>(i), e)) < 0.3) continue;
+        r.warnings.push_back(names[i] +
+                             " is not observable from these planes (a direction of "
+                             "the parameters they do not constrain); held at its initial value");
+        (names[i] == "laser_tilt" ? estimate_tilt : estimate_zero) = false;
+        dropped = true;
+      }
+    }
+    if (!dropped) break;
+  }
+  r.tilt_estimated = estimate_tilt;
+  r.zero_estimated = estimate_zero;
+  r.smallest_eigenvalue = obs.eigenvalues.size() ? obs.eigenvalues(0) : 0.0;
+  for (Eigen::Index e = 0; e < obs.eigenvalues.size(); ++e) {
+    if (obs.eigenvalues(e) > 1e-9) continue;
+    std::ostringstream w;
+    w << "M and N are not observable from these planes (smallest eigenvalue of their scaled "
+         "information "
+      << obs.eigenvalues(e) << "): give non-parallel, tilted plate poses";
+    r.warnings.push_back(w.str());
+    r.observable = false;
+  }
+  r.geometry = {p.mn[0], p.mn[1], p.tilt, p.zero};
+  r.rms_after_mm = rmsOf(&p);
+  r.residuals = p.residuals;
+  // Standard deviations: (J^T J)^-1 from ceres::Covariance, scaled by the residual variance.
+  const double dof = static_cast<double>(p.residuals) - (2 + estimate_tilt + estimate_zero) -
+                     3.0 * static_cast<double>(planes.size());
+  const double variance = r.rms_after_mm * r.rms_after_mm * p.residuals / std::max(1.0, dof);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  r.sigma_m_mm = r.sigma_n_mm = r.sigma_tilt_deg = r.sigma_zero_deg = nan;
+  ceres::Covariance::Options co;
+  co.num_threads = 1;
+  ceres::Covariance covariance(co);
+  std::vector<std::pair<const double*, const double*>> pairs = {{p.mn, p.mn}};
+  if (estimate_tilt) pairs.push_back({&p.tilt, &p.tilt});
+  if (estimate_zero) pairs.push_back({&p.zero, &p.zero});
+  if (r.observable && covariance.Compute(pairs, p.problem.get())) {
+    double c_mn[4], c1 = 0.0;
+    covariance.GetCovarianceBlock(p.mn, p.mn, c_mn);
+    r.sigma_m_mm = std::sqrt(c_mn[0] * variance);
+    r.sigma_n_mm = std::sqrt(c_mn[3] * variance);
+    if (estimate_tilt && covariance.GetCovarianceBlock(&p.tilt, &p.tilt, &c1)) {
+      r.sigma_tilt_deg = std::sqrt(c1 * variance) * kRadToDeg;
+    }
+    if (estimate_zero && covariance.GetCovarianceBlock(&p.zero, &p.zero, &c1)) {
+      r.sigma_zero_deg = std::sqrt(c1 * variance) * kRadToDeg;
+    }
+  } else if (r.observable) {
+    r.warnings.push_back("the covariance is singular: no standard deviations");
+  }
+  const auto weak = [&](const char* name, double sigma, double limit, const char* unit) {
+    if (!(sigma > limit)) return;
+    std::ostringstream w;
+    w << name << " is poorly determined by these planes: sigma " << sigma << " " << unit << " > "
+      << limit << " " << unit;
+    r.warnings.push_back(w.str());
+  };
+  weak("M", r.sigma_m_mm, o.max_sigma_mm, "mm");
+  weak("N", r.sigma_n_mm, o.max_sigma_mm, "mm");
+  if (r.sigma_m_mm > o.max_sigma_mm || r.sigma_n_mm > o.max_sigma_mm) r.observable = false;
+  weak("laser_tilt", r.sigma_tilt_deg, o.max_sigma_deg, "deg");
+  weak("encoder_zero", r.sigma_zero_deg, o.max_sigma_deg, "deg");
+  for (size_t k = 0; k < planes.size(); ++k) {
+    double sum = 0.0;
+    for (const auto& s : planes[k].samples) {
+      const double d =
+          p.normals[k].dot(profilePointInRigFrame(r.geometry, s.y_mm, s.z_mm, s.encoder_rad)) -
+          p.distances[k];
+      sum += d * d;
+    }
+    r.planes.push_back({p.normals[k], p.distances[k], std::sqrt(sum / planes[k].samples.size())});
+  }
+  r.seconds = secondsSince(t0);
+  return r;
+}
+
+}  // namespace sweepmap
