@@ -18,6 +18,10 @@ double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 constexpr double kRadToDeg = 180.0 / M_PI;
+// A scaled singular value of the rig's reduced Jacobian below this: a direction the planes do
+// not constrain at all (the encoder zero's is ~1e-13; the weakest determined one on the default
+// plates ~1e-2).
+constexpr double kUnobservable = 1e-7;
 
 // Raw moments of points (relative to a reference) for the plane fit of Eq. 13.
 struct Moments {
@@ -251,45 +255,48 @@ double rmsOf(Problem* p) {
   return std::sqrt(2.0 * cost / std::max<size_t>(1, p->residuals));
 }
 
-// The information the planes give about the rig's estimated parameters (names[i]): J^T J
-// with the planes' parameters eliminated (Schur complement), scaled to a unit diagonal.
+// How well the planes determine the rig's estimated parameters (names[i]): the Jacobian
+// (columns: every plane's tangent parameters, then the rig's) is QR-factorised, so the last
+// block of R is the rig's information with the planes eliminated (R22^T R22), without forming
+// J^T J. Its columns are scaled to unit length; a singular value near 0 is a direction of the
+// rig's parameters that no plane constrains.
 struct Observability {
   std::vector<std::string> names;
-  Eigen::VectorXd eigenvalues;   // ascending
-  Eigen::MatrixXd eigenvectors;  // columns
+  Eigen::VectorXd singular_values;  // ascending
+  Eigen::MatrixXd directions;       // columns: the matching right singular vectors
 };
 
 Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
-                      const std::vector<std::string>& rig_names, size_t rig_columns) {
+                      const std::vector<std::string>& rig_names) {
   ceres::Problem::EvaluateOptions eo;
-  eo.parameter_blocks = rig_blocks;
   for (size_t k = 0; k < p->normals.size(); ++k) {
     eo.parameter_blocks.push_back(p->normals[k].data());
     eo.parameter_blocks.push_back(&p->distances[k]);
   }
+  eo.parameter_blocks.insert(eo.parameter_blocks.end(), rig_blocks.begin(), rig_blocks.end());
   ceres::CRSMatrix crs;
   p->problem->Evaluate(eo, nullptr, nullptr, nullptr, &crs);
-  const int cols = crs.num_cols;
-  Eigen::MatrixXd h = Eigen::MatrixXd::Zero(cols, cols);
+  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
   for (int r = 0; r < crs.num_rows; ++r) {
-    for (int a = crs.rows[r]; a < crs.rows[r + 1]; ++a) {
-      for (int b = crs.rows[r]; b < crs.rows[r + 1]; ++b) {
-        h(crs.cols[a], crs.cols[b]) += crs.values[a] * crs.values[b];
-      }
-    }
+    for (int a = crs.rows[r]; a < crs.rows[r + 1]; ++a) j(r, crs.cols[a]) = crs.values[a];
   }
-  const auto k = static_cast<Eigen::Index>(rig_columns);
-  const Eigen::Index rest = cols - k;
-  Eigen::MatrixXd reduced = h.topLeftCorner(k, k);
-  if (rest > 0) {
-    const Eigen::MatrixXd hpp = h.bottomRightCorner(rest, rest);
-    const Eigen::MatrixXd hrp = h.topRightCorner(k, rest);
-    reduced -= hrp * hpp.ldlt().solve(hrp.transpose());
+  const auto k = static_cast<Eigen::Index>(rig_names.size());
+  const Eigen::Index rest = crs.num_cols - k;
+  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(j);
+  Eigen::MatrixXd r22 = qr.matrixQR()
+                            .topRows(crs.num_cols)
+                            .template triangularView<Eigen::Upper>()
+                            .toDenseMatrix()
+                            .bottomRightCorner(k, k);
+  for (Eigen::Index c = 0; c < k; ++c) {
+    // Scale by the full column's norm: how much of what the data say about the parameter
+    // is left once the planes have taken their share.
+    const double norm = j.col(rest + c).norm();
+    if (norm > 0) r22.col(c) /= norm;
   }
-  Eigen::VectorXd scale = reduced.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd unit = scale.asDiagonal() * reduced * scale.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(unit);
-  return {rig_names, eig.eigenvalues(), eig.eigenvectors()};
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(r22, Eigen::ComputeFullV);
+  Observability o{rig_names, svd.singularValues().reverse(), svd.matrixV().rowwise().reverse()};
+  return o;
 }
 
 }  // namespace
@@ -311,7 +318,7 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
     buildProblem(planes, o.initial, estimate_tilt, estimate_zero, &p);
     if (attempt == 0) r.rms_before_mm = rmsOf(&p);
     ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_QR;
+    so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 4 + 4m parameters
     so.max_num_iterations = o.max_iterations;
     so.function_tolerance = 1e-12;
     so.parameter_tolerance = 1e-12;
@@ -326,12 +333,12 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
     std::vector<std::string> names = {"M", "N"};
     if (estimate_tilt) blocks.push_back(&p.tilt), names.push_back("laser_tilt");
     if (estimate_zero) blocks.push_back(&p.zero), names.push_back("encoder_zero");
-    obs = analyse(&p, blocks, names, names.size());
+    obs = analyse(&p, blocks, names);
     bool dropped = false;
-    for (Eigen::Index e = 0; e < obs.eigenvalues.size(); ++e) {
-      if (obs.eigenvalues(e) > 1e-9) continue;
+    for (Eigen::Index e = 0; e < obs.singular_values.size(); ++e) {
+      if (obs.singular_values(e) > kUnobservable) continue;
       for (size_t i = 2; i < names.size(); ++i) {
-        if (std::fabs(obs.eigenvectors(static_cast<Eigen::Index>(i), e)) < 0.3) continue;
+        if (std::fabs(obs.directions(static_cast<Eigen::Index>(i), e)) < 0.3) continue;
         r.warnings.push_back(names[i] +
                              " is not observable from these planes (a direction of "
                              "the parameters they do not constrain); held at its initial value");
@@ -343,13 +350,13 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
   }
   r.tilt_estimated = estimate_tilt;
   r.zero_estimated = estimate_zero;
-  r.smallest_eigenvalue = obs.eigenvalues.size() ? obs.eigenvalues(0) : 0.0;
-  for (Eigen::Index e = 0; e < obs.eigenvalues.size(); ++e) {
-    if (obs.eigenvalues(e) > 1e-9) continue;
+  r.smallest_singular_value = obs.singular_values.size() ? obs.singular_values(0) : 0.0;
+  for (Eigen::Index e = 0; e < obs.singular_values.size(); ++e) {
+    if (obs.singular_values(e) > kUnobservable) continue;
     std::ostringstream w;
-    w << "M and N are not observable from these planes (smallest eigenvalue of their scaled "
-         "information "
-      << obs.eigenvalues(e) << "): give non-parallel, tilted plate poses";
+    w << "M and N are not observable from these planes (a direction of the parameters with "
+         "scaled singular value "
+      << obs.singular_values(e) << "): give non-parallel, tilted plate poses";
     r.warnings.push_back(w.str());
     r.observable = false;
   }
@@ -364,6 +371,8 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
   r.sigma_m_mm = r.sigma_n_mm = r.sigma_tilt_deg = r.sigma_zero_deg = nan;
   ceres::Covariance::Options co;
   co.num_threads = 1;
+  co.algorithm_type = ceres::DENSE_SVD;  // few parameters; the rank was checked above
+  co.null_space_rank = 0;                // a rank-deficient Jacobian fails Compute()
   ceres::Covariance covariance(co);
   std::vector<std::pair<const double*, const double*>> pairs = {{p.mn, p.mn}};
   if (estimate_tilt) pairs.push_back({&p.tilt, &p.tilt});
@@ -403,6 +412,21 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
       sum += d * d;
     }
     r.planes.push_back({p.normals[k], p.distances[k], std::sqrt(sum / planes[k].samples.size())});
+  }
+  for (size_t a = 0; a < r.planes.size(); ++a) {
+    for (size_t b = a + 1; b < r.planes.size(); ++b) {
+      const double c = std::fabs(r.planes[a].normal.dot(r.planes[b].normal));
+      r.largest_plane_angle_deg =
+          std::max(r.largest_plane_angle_deg, std::acos(std::min(1.0, c)) * kRadToDeg);
+    }
+  }
+  if (r.largest_plane_angle_deg < o.min_plane_angle_deg) {
+    std::ostringstream w;
+    w << "the planes are parallel (largest angle between their normals "
+      << r.largest_plane_angle_deg << " deg < " << o.min_plane_angle_deg
+      << " deg): M and N are not determined; Zhao 2021 needs non-parallel plate poses";
+    r.warnings.push_back(w.str());
+    r.observable = false;
   }
   r.seconds = secondsSince(t0);
   return r;

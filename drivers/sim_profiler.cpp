@@ -1,5 +1,6 @@
 #include "drivers/sim_profiler.hpp"
 
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <limits>
