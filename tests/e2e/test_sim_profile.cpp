@@ -1,0 +1,82 @@
+// Rig C end to end through the binary: `sweepmap sim --rig rig_c` is deterministic from its
+// seed, and `sweepmap calib axis-offset` calibrates from its log, writes the file the rig
+// points to and the S(M, N) figure, and refuses bad input with a clear message.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "core/calibration_file.hpp"
+#include "tests/e2e/test_support.hpp"
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+TEST(SimRigC, SameSeedIsByteIdenticalForBothScenes) {
+  const auto dir = scratchDir("sim_rig_c");
+  for (const char* scene : {"plate", "test_piece"}) {
+    const std::string s(scene);
+    for (const char* name : {"a", "b"}) {
+      ASSERT_EQ(sweepmap({"sim", "--rig", "rig_c", "--scene", s, "--seed", "3", "--out",
+                          (dir / (s + name + ".lcmlog")).string()},
+                         dir / (s + name + ".txt")),
+                0)
+          << readFile(dir / (s + name + ".txt"));
+    }
+    const std::string a = readFile(dir / (s + "a.lcmlog"));
+    EXPECT_GT(a.size(), 1000000u) << scene;
+    EXPECT_TRUE(a == readFile(dir / (s + "b.lcmlog"))) << scene << ": logs differ";
+    EXPECT_FALSE(readChannel((dir / (s + "a.lcmlog")).string(), "PROFILE").empty());
+    EXPECT_FALSE(readChannel((dir / (s + "a.lcmlog")).string(), "TRUTH_PROFILE_RIG").empty());
+  }
+  ASSERT_EQ(
+      sweepmap({"sim", "--rig", "rig_c", "--seed", "4", "--out", (dir / "c.lcmlog").string()}), 0);
+  EXPECT_FALSE(readFile(dir / "platea.lcmlog") == readFile(dir / "c.lcmlog"));
+  // A scene file is not a rig C scene.
+  EXPECT_EQ(sweepmap({"sim", "--rig", "rig_c", "--scene", "scene_lab", "--out",
+                      (dir / "x.lcmlog").string()},
+                     dir / "bad_scene.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "bad_scene.txt").find("plate or test_piece"), std::string::npos);
+}
+
+TEST(ToolRigC, CalibAxisOffsetFromASimulatedLog) {
+  const std::string log = cachedSimLog("rig_c_plates", {"--rig", "rig_c", "--seed", "1"});
+  const auto dir = scratchDir("calib_axis_offset");
+  const auto out = dir / "axis_offset.yaml";
+  ASSERT_EQ(sweepmap({"calib", "axis-offset", "--logs", log, "--rig", "rig_c", "--out",
+                      out.string(), "--json"},
+                     dir / "calib.txt"),
+            0)
+      << readFile(dir / "calib.txt");
+  const std::string text = readFile(dir / "calib.txt");
+  const auto json = nlohmann::json::parse(text.substr(text.find('{'), text.rfind('}') + 1));
+  EXPECT_LT(std::fabs(json["offset_error_mm"]["ours"]["M"].get<double>()), 0.1) << json.dump(2);
+  EXPECT_LT(std::fabs(json["offset_error_mm"]["ours"]["N"].get<double>()), 0.1);
+  EXPECT_EQ(json["paper"]["evaluations"].get<int>(), 21 * 31);
+  EXPECT_TRUE(fs::exists(dir / "axis_offset_S.png"));
+  const AxisOffsetCalibration c = loadAxisOffsetCalibration(out.string());
+  EXPECT_NEAR(c.m_mm, 123.0, 0.1);
+  EXPECT_NEAR(c.n_mm, 409.0, 0.1);
+  EXPECT_EQ(c.logs, std::vector<std::string>{log});
+  // A log without profiles: exit 2, naming it.
+  const std::string rig_a_log = (dir / "rig_a.lcmlog").string();
+  { std::ofstream(rig_a_log) << ""; }
+  EXPECT_EQ(sweepmap({"calib", "axis-offset", "--logs", rig_a_log, "--rig", "rig_c", "--out",
+                      (dir / "x.yaml").string()},
+                     dir / "empty.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "empty.txt").find(rig_a_log + ": no PROFILE messages"),
+            std::string::npos)
+      << readFile(dir / "empty.txt");
+  // Another kind's rig.
+  EXPECT_EQ(sweepmap({"calib", "axis-offset", "--logs", log, "--rig", "rig_a", "--out",
+                      (dir / "x.yaml").string()},
+                     dir / "kind.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "kind.txt").find("needs a rotating_profile rig"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace sweepmap
