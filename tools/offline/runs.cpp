@@ -6,6 +6,7 @@
 #include "processes/sim_car.hpp"
 #include "tools/offline/replay.hpp"
 #include "tools/offline/replay_mobile.hpp"
+#include "tools/offline/replay_profile.hpp"
 #include "tools/offline/sim_mobile.hpp"
 #include "tools/offline/sim_profile.hpp"
 #include "tools/offline/simulation.hpp"
@@ -141,10 +142,14 @@ ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
                         << " points";
                    return ReplayRunResult{line.str(), 0, r.scans, r.points, r.log_error, r.error};
                  },
-                 [&](const RotatingProfileConfig&) -> ReplayRunResult {
-                   throw ConfigError(rig.path +
-                                     " is a rotating_profile rig: its replay (profiles to a "
-                                     "cloud) is not implemented yet");
+                 [&](const RotatingProfileConfig& config) {
+                   const ProfileReplayResult r =
+                       replayProfileLog(options.log_path, config, options.out_dir);
+                   std::ostringstream line;
+                   line << r.events << " events, " << r.profiles << " profiles in " << r.sweeps
+                        << " sweeps, " << r.points << " points";
+                   if (r.invalid) line << ", " << r.invalid << " invalid profiles skipped";
+                   return ReplayRunResult{line.str(), r.sweeps, 0, r.points, r.log_error, r.error};
                  }},
       rig.config);
 }
