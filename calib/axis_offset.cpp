@@ -176,22 +176,55 @@ GridSearchResult gridSearchAxisOffset(const std::vector<PlanePoints>& planes,
 
 namespace {
 
-// One point on its plane: residual = n . p(M, N, tilt, zero) - d [mm].
-// Residuals: 1. Parameters: {M, N} 2, tilt 1, encoder zero 1, unit normal 3, distance 1.
-struct PointToPlaneCost {
-  ProfileSample s;
-  template <class T>
-  bool operator()(const T* mn, const T* tilt, const T* zero, const T* normal, const T* distance,
-                  T* residual) const {
-    const Eigen::Matrix<T, 3, 1> p =
-        profilePointInRigFrame<T>(mn[0], mn[1], tilt[0], zero[0], s.y_mm, s.z_mm, s.encoder_rad);
-    residual[0] = normal[0] * p[0] + normal[1] * p[1] + normal[2] * p[2] - distance[0];
+// The points one profile saw on one plane (they share the turntable's angle): residual
+// n . p_i(M, N, tilt, zero) - d [mm] each, p_i by the generalised Eq. 7, with analytic
+// Jacobians (a profile per residual block keeps Ceres' per-block cost small).
+// Residuals: one per point. Parameters: {M, N} 2, tilt 1, encoder zero 1, unit normal 3,
+// distance 1.
+class ProfileOnPlaneCost : public ceres::CostFunction {
+ public:
+  ProfileOnPlaneCost(const ProfileSample* first, size_t count)
+      : encoder_rad_(first->encoder_rad), samples_(first, first + count) {
+    set_num_residuals(static_cast<int>(count));
+    *mutable_parameter_block_sizes() = {2, 1, 1, 3, 1};
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const double m = parameters[0][0], n_off = parameters[0][1];
+    const double tilt = parameters[1][0], zero = parameters[2][0];
+    const double* nv = parameters[3];
+    const double d = parameters[4][0];
+    const double alpha = encoder_rad_ + zero;
+    const double c = std::cos(alpha), s = std::sin(alpha);
+    const double ct = std::cos(tilt), st = std::sin(tilt);
+    // n . Rz(-alpha) v = a v_x + b v_y + n_z v_z
+    const double a = nv[0] * c - nv[1] * s, b = nv[0] * s + nv[1] * c;
+    for (size_t i = 0; i < samples_.size(); ++i) {
+      const ProfileSample& q = samples_[i];
+      const double x0 = m - q.z_mm * st, y0 = -(n_off + q.y_mm), z0 = q.z_mm * ct;
+      const double px = c * x0 + s * y0, py = -s * x0 + c * y0;
+      residuals[i] = nv[0] * px + nv[1] * py + nv[2] * z0 - d;
+      if (!jacobians) continue;
+      if (jacobians[0]) {
+        jacobians[0][2 * i] = a;
+        jacobians[0][2 * i + 1] = -b;
+      }
+      if (jacobians[1]) jacobians[1][i] = -a * q.z_mm * ct - nv[2] * q.z_mm * st;
+      if (jacobians[2]) jacobians[2][i] = nv[0] * py - nv[1] * px;
+      if (jacobians[3]) {
+        jacobians[3][3 * i] = px;
+        jacobians[3][3 * i + 1] = py;
+        jacobians[3][3 * i + 2] = z0;
+      }
+      if (jacobians[4]) jacobians[4][i] = -1.0;
+    }
     return true;
   }
-  static ceres::CostFunction* Create(const ProfileSample& s) {
-    return new ceres::AutoDiffCostFunction<PointToPlaneCost, 1, 2, 1, 1, 3, 1>(
-        new PointToPlaneCost{s});
-  }
+
+ private:
+  double encoder_rad_;
+  std::vector<ProfileSample> samples_;
 };
 
 // The best plane through the points placed with `g` (PCA), normal pointing up.
@@ -238,10 +271,13 @@ void buildProblem(const std::vector<PlanePoints>& planes, const ProfileGeometry&
   p->problem = std::make_unique<ceres::Problem>();
   p->residuals = 0;
   for (size_t k = 0; k < planes.size(); ++k) {
-    for (const auto& s : planes[k].samples) {
-      p->problem->AddResidualBlock(PointToPlaneCost::Create(s), nullptr, p->mn, &p->tilt, &p->zero,
-                                   p->normals[k].data(), &p->distances[k]);
-      ++p->residuals;
+    const std::vector<ProfileSample>& samples = planes[k].samples;
+    // One block per run of samples from one profile (one turntable angle).
+    for (size_t i = 0, j = 0; i < samples.size(); i = j) {
+      for (j = i + 1; j < samples.size() && samples[j].encoder_rad == samples[i].encoder_rad;) ++j;
+      p->problem->AddResidualBlock(new ProfileOnPlaneCost(&samples[i], j - i), nullptr, p->mn,
+                                   &p->tilt, &p->zero, p->normals[k].data(), &p->distances[k]);
+      p->residuals += j - i;
     }
     p->problem->SetManifold(p->normals[k].data(), new ceres::SphereManifold<3>());
   }
