@@ -140,6 +140,11 @@ void writeHeader(std::ostream& s, const std::string& png_tmp, int width_px, int 
   s << "set grid\n";
 }
 
+void writeAxisLabels(std::ostream& s, const std::string& x_label, const std::string& y_label) {
+  if (!x_label.empty()) s << "set xlabel " << quoted(x_label) << "\n";
+  if (!y_label.empty()) s << "set ylabel " << quoted(y_label) << "\n";
+}
+
 void writeRange(std::ostream& s, const char* axis, const std::optional<PlotRange>& r) {
   if (!r) return;
   if (!(r->min < r->max)) throw std::invalid_argument(std::string("plot: empty ") + axis + "range");
@@ -259,8 +264,7 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
 
   std::ostringstream s = scriptStream();
   writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
-  if (!options.x_label.empty()) s << "set xlabel " << quoted(options.x_label) << "\n";
-  if (!options.y_label.empty()) s << "set ylabel " << quoted(options.y_label) << "\n";
+  writeAxisLabels(s, options.x_label, options.y_label);
   if (options.log_y) s << "set logscale y\n";
   // Boxes: see-through, so that a series behind stays visible.
   s << "set style fill transparent solid 0.5 border -1\n";
@@ -340,8 +344,7 @@ void plotSurface(const std::string& png_path, const std::vector<double>& x,
   const std::string png_tmp = tmpPathFor(png_path);
   std::ostringstream s = scriptStream();
   writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
-  if (!options.x_label.empty()) s << "set xlabel " << quoted(options.x_label) << "\n";
-  if (!options.y_label.empty()) s << "set ylabel " << quoted(options.y_label) << "\n";
+  writeAxisLabels(s, options.x_label, options.y_label);
   if (!options.z_label.empty()) s << "set zlabel " << quoted(options.z_label) << " rotate\n";
   s << "set pm3d depthorder\nset palette rgbformulae 33,13,10\n"
     << "set view 60,30\nset datafile missing 'NaN'\n";

@@ -196,18 +196,4 @@ std::string validateProfile(const profile_t& m) {
   return "";
 }
 
-Profile fromLcm(const profile_t& m) {
-  Profile p;
-  p.utime = m.utime;
-  p.sequence = m.sequence;
-  p.sweep_id = m.sweep_id;
-  p.encoder_counts = m.encoder_counts;
-  p.counts_per_revolution = m.counts_per_revolution;
-  p.column_count = m.column_count;
-  p.column = m.column;
-  p.y_mm = m.y_mm;
-  p.z_mm = m.z_mm;
-  return p;
-}
-
 }  // namespace sweepmap

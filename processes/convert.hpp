@@ -43,6 +43,5 @@ profile_t toLcm(const Profile& profile);
 // Empty when valid, else the reason: counts and sizes agree, columns in range, every
 // coordinate finite, a positive encoder resolution.
 std::string validateProfile(const profile_t& msg);
-Profile fromLcm(const profile_t& msg);
 
 }  // namespace sweepmap
