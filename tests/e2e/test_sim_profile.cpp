@@ -119,7 +119,7 @@ TEST(ReplayRigC, CloudByEq7LiesOnThePlatesWithTheTrueGeometry) {
     const double with_nominal = rmsToTruePlane(log, dir / "nominal" / name, k);
     std::printf("sweep %d: RMS to the true plane %.4f mm (true geometry), %.3f mm (nominal)\n", k,
                 with_truth, with_nominal);
-    EXPECT_LT(with_truth, 0.05) << k;  // range noise 0.02 mm, encoder quantisation
+    EXPECT_LT(with_truth, 0.05) << k;               // range noise 0.02 mm, encoder quantisation
     EXPECT_GT(with_nominal, 10 * with_truth) << k;  // 3 mm off: the plates bend
   }
   EXPECT_TRUE(fs::exists(dir / "truth" / "cloud.pcd"));
