@@ -24,7 +24,8 @@ Runner addBenchCommand(CLI::App& app) {
       "device's own data rate), the CPU share of sweepmap-lidar driving an emulated "
       "UST-10LX at 40 Hz and of sweepmap-odometry reading the emulated HI219 (400 Hz) and "
       "wheel board (100 Hz) (--no-devices skips them). Prints figures; run on an idle machine, "
-      "compare ratios within one run");
+      "compare ratios within one run. rotating_profile (rig C): nothing yet (the calibration's "
+      "timing is printed by its unit test)");
   struct Opts {
     std::vector<std::string> rigs = {"rig_a", "rig_b"};
     std::string scene;
