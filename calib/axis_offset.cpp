@@ -335,6 +335,145 @@ Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
   return o;
 }
 
+// Solves with the optional parameters asked for; one the planes cannot determine is held at
+// its initial value (with a warning) and the problem solved again without it. Returns the
+// observability of the final solution's parameters.
+Observability solveHoldingUnobservable(const std::vector<PlanePoints>& planes,
+                                       const AxisOffsetOptions& o, Problem* p,
+                                       AxisOffsetResult* r) {
+  bool estimate_tilt = o.estimate_tilt, estimate_zero = o.estimate_encoder_zero;
+  Observability obs;
+  for (int attempt = 0; attempt < 3; ++attempt) {  // at most two parameters to drop
+    buildProblem(planes, o.initial, estimate_tilt, estimate_zero, p);
+    if (attempt == 0) r->rms_before_mm = rmsOf(p);
+    ceres::Solver::Options so;
+    so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 4 + 4m parameters
+    so.max_num_iterations = o.max_iterations;
+    so.function_tolerance = 1e-12;
+    so.parameter_tolerance = 1e-12;
+    so.num_threads = 1;
+    ceres::Solver::Summary summary;
+    ceres::Solve(so, p->problem.get(), &summary);
+    r->iterations = static_cast<int>(summary.iterations.size());
+    r->converged = summary.termination_type == ceres::CONVERGENCE;
+    std::vector<double*> blocks = {p->mn};
+    std::vector<std::string> names = {"M", "N"};
+    if (estimate_tilt) blocks.push_back(&p->tilt), names.push_back("laser_tilt");
+    if (estimate_zero) blocks.push_back(&p->zero), names.push_back("encoder_zero");
+    obs = analyse(p, blocks, names);
+    bool dropped = false;
+    for (Eigen::Index e = 0; e < obs.singular_values.size(); ++e) {
+      if (obs.singular_values(e) > kUnobservable) continue;
+      for (size_t i = 2; i < names.size(); ++i) {
+        if (std::fabs(obs.directions(static_cast<Eigen::Index>(i), e)) < 0.3) continue;
+        r->warnings.push_back(names[i] +
+                              " is not observable from these planes (a direction of "
+                              "the parameters they do not constrain); held at its initial value");
+        (names[i] == "laser_tilt" ? estimate_tilt : estimate_zero) = false;
+        dropped = true;
+      }
+    }
+    if (!dropped) break;
+  }
+  r->tilt_estimated = estimate_tilt;
+  r->zero_estimated = estimate_zero;
+  return obs;
+}
+
+// A direction left unconstrained after the optional parameters were dropped involves M or N.
+void flagUnobservable(const Observability& obs, AxisOffsetResult* r) {
+  r->smallest_singular_value = obs.singular_values.size() ? obs.singular_values(0) : 0.0;
+  for (Eigen::Index e = 0; e < obs.singular_values.size(); ++e) {
+    if (obs.singular_values(e) > kUnobservable) continue;
+    std::ostringstream w;
+    w << "M and N are not observable from these planes (a direction of the parameters with "
+         "scaled singular value "
+      << obs.singular_values(e) << "): give non-parallel, tilted plate poses";
+    r->warnings.push_back(w.str());
+    r->observable = false;
+  }
+}
+
+// Standard deviations: (J^T J)^-1 of the estimated parameters from ceres::Covariance, scaled
+// by the residuals' variance; NaN (with a warning) where it is singular.
+void standardDeviations(size_t plane_count, Problem* p, AxisOffsetResult* r) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  r->sigma_m_mm = r->sigma_n_mm = r->sigma_tilt_deg = r->sigma_zero_deg = nan;
+  if (!r->observable) return;
+  const double dof = static_cast<double>(p->residuals) -
+                     (2 + r->tilt_estimated + r->zero_estimated) - 3.0 * plane_count;
+  const double variance = r->rms_after_mm * r->rms_after_mm * p->residuals / std::max(1.0, dof);
+  ceres::Covariance::Options co;
+  co.num_threads = 1;
+  co.algorithm_type = ceres::DENSE_SVD;  // few parameters; the rank was checked before
+  co.null_space_rank = 0;                // a rank-deficient Jacobian fails Compute()
+  ceres::Covariance covariance(co);
+  std::vector<std::pair<const double*, const double*>> pairs = {{p->mn, p->mn}};
+  if (r->tilt_estimated) pairs.push_back({&p->tilt, &p->tilt});
+  if (r->zero_estimated) pairs.push_back({&p->zero, &p->zero});
+  if (!covariance.Compute(pairs, p->problem.get())) {
+    r->warnings.push_back("the covariance is singular: no standard deviations");
+    return;
+  }
+  double c_mn[4], c1 = 0.0;
+  covariance.GetCovarianceBlock(p->mn, p->mn, c_mn);
+  r->sigma_m_mm = std::sqrt(c_mn[0] * variance);
+  r->sigma_n_mm = std::sqrt(c_mn[3] * variance);
+  if (r->tilt_estimated && covariance.GetCovarianceBlock(&p->tilt, &p->tilt, &c1)) {
+    r->sigma_tilt_deg = std::sqrt(c1 * variance) * kRadToDeg;
+  }
+  if (r->zero_estimated && covariance.GetCovarianceBlock(&p->zero, &p->zero, &c1)) {
+    r->sigma_zero_deg = std::sqrt(c1 * variance) * kRadToDeg;
+  }
+}
+
+// Warnings for parameters whose standard deviation exceeds the options' limits; M or N that
+// does is not determined.
+void flagWeak(const AxisOffsetOptions& o, AxisOffsetResult* r) {
+  const auto weak = [&](const char* name, double sigma, double limit, const char* unit) {
+    if (!(sigma > limit)) return;
+    std::ostringstream w;
+    w << name << " is poorly determined by these planes: sigma " << sigma << " " << unit << " > "
+      << limit << " " << unit;
+    r->warnings.push_back(w.str());
+  };
+  weak("M", r->sigma_m_mm, o.max_sigma_mm, "mm");
+  weak("N", r->sigma_n_mm, o.max_sigma_mm, "mm");
+  if (r->sigma_m_mm > o.max_sigma_mm || r->sigma_n_mm > o.max_sigma_mm) r->observable = false;
+  weak("laser_tilt", r->sigma_tilt_deg, o.max_sigma_deg, "deg");
+  weak("encoder_zero", r->sigma_zero_deg, o.max_sigma_deg, "deg");
+}
+
+// The fitted planes with their points' RMS, and the paper's rule: they must not be parallel.
+void reportPlanes(const std::vector<PlanePoints>& planes, const Problem& p,
+                  const AxisOffsetOptions& o, AxisOffsetResult* r) {
+  for (size_t k = 0; k < planes.size(); ++k) {
+    double sum = 0.0;
+    for (const auto& s : planes[k].samples) {
+      const double d =
+          p.normals[k].dot(profilePointInRigFrame(r->geometry, s.y_mm, s.z_mm, s.encoder_rad)) -
+          p.distances[k];
+      sum += d * d;
+    }
+    r->planes.push_back({p.normals[k], p.distances[k], std::sqrt(sum / planes[k].samples.size())});
+  }
+  for (size_t a = 0; a < r->planes.size(); ++a) {
+    for (size_t b = a + 1; b < r->planes.size(); ++b) {
+      const double c = std::fabs(r->planes[a].normal.dot(r->planes[b].normal));
+      r->largest_plane_angle_deg =
+          std::max(r->largest_plane_angle_deg, std::acos(std::min(1.0, c)) * kRadToDeg);
+    }
+  }
+  if (r->largest_plane_angle_deg < o.min_plane_angle_deg) {
+    std::ostringstream w;
+    w << "the planes are parallel (largest angle between their normals "
+      << r->largest_plane_angle_deg << " deg < " << o.min_plane_angle_deg
+      << " deg): M and N are not determined; Zhao 2021 needs non-parallel plate poses";
+    r->warnings.push_back(w.str());
+    r->observable = false;
+  }
+}
+
 }  // namespace
 
 AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
@@ -347,123 +486,15 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
   }
   const auto t0 = Clock::now();
   AxisOffsetResult r;
-  bool estimate_tilt = o.estimate_tilt, estimate_zero = o.estimate_encoder_zero;
   Problem p;
-  Observability obs;
-  for (int attempt = 0; attempt < 2; ++attempt) {
-    buildProblem(planes, o.initial, estimate_tilt, estimate_zero, &p);
-    if (attempt == 0) r.rms_before_mm = rmsOf(&p);
-    ceres::Solver::Options so;
-    so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 4 + 4m parameters
-    so.max_num_iterations = o.max_iterations;
-    so.function_tolerance = 1e-12;
-    so.parameter_tolerance = 1e-12;
-    so.num_threads = 1;
-    ceres::Solver::Summary summary;
-    ceres::Solve(so, p.problem.get(), &summary);
-    r.iterations = static_cast<int>(summary.iterations.size());
-    r.converged = summary.termination_type == ceres::CONVERGENCE;
-    // Observability of what was estimated; an optional parameter the planes cannot determine
-    // is held at its initial value and the problem solved again without it.
-    std::vector<double*> blocks = {p.mn};
-    std::vector<std::string> names = {"M", "N"};
-    if (estimate_tilt) blocks.push_back(&p.tilt), names.push_back("laser_tilt");
-    if (estimate_zero) blocks.push_back(&p.zero), names.push_back("encoder_zero");
-    obs = analyse(&p, blocks, names);
-    bool dropped = false;
-    for (Eigen::Index e = 0; e < obs.singular_values.size(); ++e) {
-      if (obs.singular_values(e) > kUnobservable) continue;
-      for (size_t i = 2; i < names.size(); ++i) {
-        if (std::fabs(obs.directions(static_cast<Eigen::Index>(i), e)) < 0.3) continue;
-        r.warnings.push_back(names[i] +
-                             " is not observable from these planes (a direction of "
-                             "the parameters they do not constrain); held at its initial value");
-        (names[i] == "laser_tilt" ? estimate_tilt : estimate_zero) = false;
-        dropped = true;
-      }
-    }
-    if (!dropped) break;
-  }
-  r.tilt_estimated = estimate_tilt;
-  r.zero_estimated = estimate_zero;
-  r.smallest_singular_value = obs.singular_values.size() ? obs.singular_values(0) : 0.0;
-  for (Eigen::Index e = 0; e < obs.singular_values.size(); ++e) {
-    if (obs.singular_values(e) > kUnobservable) continue;
-    std::ostringstream w;
-    w << "M and N are not observable from these planes (a direction of the parameters with "
-         "scaled singular value "
-      << obs.singular_values(e) << "): give non-parallel, tilted plate poses";
-    r.warnings.push_back(w.str());
-    r.observable = false;
-  }
+  const Observability obs = solveHoldingUnobservable(planes, o, &p, &r);
+  flagUnobservable(obs, &r);
   r.geometry = {p.mn[0], p.mn[1], p.tilt, p.zero};
   r.rms_after_mm = rmsOf(&p);
   r.residuals = p.residuals;
-  // Standard deviations: (J^T J)^-1 from ceres::Covariance, scaled by the residual variance.
-  const double dof = static_cast<double>(p.residuals) - (2 + estimate_tilt + estimate_zero) -
-                     3.0 * static_cast<double>(planes.size());
-  const double variance = r.rms_after_mm * r.rms_after_mm * p.residuals / std::max(1.0, dof);
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  r.sigma_m_mm = r.sigma_n_mm = r.sigma_tilt_deg = r.sigma_zero_deg = nan;
-  ceres::Covariance::Options co;
-  co.num_threads = 1;
-  co.algorithm_type = ceres::DENSE_SVD;  // few parameters; the rank was checked above
-  co.null_space_rank = 0;                // a rank-deficient Jacobian fails Compute()
-  ceres::Covariance covariance(co);
-  std::vector<std::pair<const double*, const double*>> pairs = {{p.mn, p.mn}};
-  if (estimate_tilt) pairs.push_back({&p.tilt, &p.tilt});
-  if (estimate_zero) pairs.push_back({&p.zero, &p.zero});
-  if (r.observable && covariance.Compute(pairs, p.problem.get())) {
-    double c_mn[4], c1 = 0.0;
-    covariance.GetCovarianceBlock(p.mn, p.mn, c_mn);
-    r.sigma_m_mm = std::sqrt(c_mn[0] * variance);
-    r.sigma_n_mm = std::sqrt(c_mn[3] * variance);
-    if (estimate_tilt && covariance.GetCovarianceBlock(&p.tilt, &p.tilt, &c1)) {
-      r.sigma_tilt_deg = std::sqrt(c1 * variance) * kRadToDeg;
-    }
-    if (estimate_zero && covariance.GetCovarianceBlock(&p.zero, &p.zero, &c1)) {
-      r.sigma_zero_deg = std::sqrt(c1 * variance) * kRadToDeg;
-    }
-  } else if (r.observable) {
-    r.warnings.push_back("the covariance is singular: no standard deviations");
-  }
-  const auto weak = [&](const char* name, double sigma, double limit, const char* unit) {
-    if (!(sigma > limit)) return;
-    std::ostringstream w;
-    w << name << " is poorly determined by these planes: sigma " << sigma << " " << unit << " > "
-      << limit << " " << unit;
-    r.warnings.push_back(w.str());
-  };
-  weak("M", r.sigma_m_mm, o.max_sigma_mm, "mm");
-  weak("N", r.sigma_n_mm, o.max_sigma_mm, "mm");
-  if (r.sigma_m_mm > o.max_sigma_mm || r.sigma_n_mm > o.max_sigma_mm) r.observable = false;
-  weak("laser_tilt", r.sigma_tilt_deg, o.max_sigma_deg, "deg");
-  weak("encoder_zero", r.sigma_zero_deg, o.max_sigma_deg, "deg");
-  for (size_t k = 0; k < planes.size(); ++k) {
-    double sum = 0.0;
-    for (const auto& s : planes[k].samples) {
-      const double d =
-          p.normals[k].dot(profilePointInRigFrame(r.geometry, s.y_mm, s.z_mm, s.encoder_rad)) -
-          p.distances[k];
-      sum += d * d;
-    }
-    r.planes.push_back({p.normals[k], p.distances[k], std::sqrt(sum / planes[k].samples.size())});
-  }
-  for (size_t a = 0; a < r.planes.size(); ++a) {
-    for (size_t b = a + 1; b < r.planes.size(); ++b) {
-      const double c = std::fabs(r.planes[a].normal.dot(r.planes[b].normal));
-      r.largest_plane_angle_deg =
-          std::max(r.largest_plane_angle_deg, std::acos(std::min(1.0, c)) * kRadToDeg);
-    }
-  }
-  if (r.largest_plane_angle_deg < o.min_plane_angle_deg) {
-    std::ostringstream w;
-    w << "the planes are parallel (largest angle between their normals "
-      << r.largest_plane_angle_deg << " deg < " << o.min_plane_angle_deg
-      << " deg): M and N are not determined; Zhao 2021 needs non-parallel plate poses";
-    r.warnings.push_back(w.str());
-    r.observable = false;
-  }
+  standardDeviations(planes.size(), &p, &r);
+  flagWeak(o, &r);
+  reportPlanes(planes, p, o, &r);
   r.seconds = secondsSince(t0);
   return r;
 }
