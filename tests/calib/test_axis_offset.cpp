@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <map>
 
 #include "calib/axis_offset.hpp"
 #include "profile_test_util.hpp"
@@ -52,6 +53,30 @@ TEST(AxisOffsetSim, PlatePointsLieOnTheTruePlaneWithTheTrueOffsets) {
   }
   // The three poses are not parallel.
   EXPECT_LT(std::fabs(poses[0].normal.dot(poses[1].normal)), std::cos(20 * kDeg));
+}
+
+TEST(AxisOffsetSim, TestPieceHasTable2sDepths) {
+  RotatingProfileConfig rig = rigC({"sim.range_noise_sigma_mm=0", "sim.encoder_noise_counts=0",
+                                    "turntable.counts_per_revolution=1073741824"});
+  SimProfiler profiler(rig.profiler, rig.turntable, rig.sim, 1);
+  const ProfileGeometry truth = rig.sim.trueGeometry();
+  std::map<long, size_t> depths;  // depth below the top face [um] -> points
+  for (const Profile& p : profiler.sweep(ProfileScene::testPiece(rig.sim, rig.turntable), 0, 0)) {
+    const double a = 2 * M_PI * p.encoder_counts / p.counts_per_revolution;
+    for (size_t i = 0; i < p.y_mm.size(); ++i) {
+      const double z = profilePointInRigFrame(truth, p.y_mm[i], p.z_mm[i], a).z();
+      ++depths[std::lround((-rig.sim.test_piece.distance_mm - z) * 1000)];
+    }
+  }
+  const auto near = [&](double depth_mm) {
+    size_t n = 0;
+    for (const auto& [um, count] : depths) n += std::abs(um - depth_mm * 1000) <= 2 ? count : 0;
+    return n;
+  };
+  EXPECT_GT(near(0.0), 100000u);   // the top face
+  EXPECT_GT(near(20.01), 10000u);  // the rectangular groove's bottom
+  EXPECT_GT(near(30.03), 10000u);  // the first round groove's
+  EXPECT_GT(near(30.02), 10000u);  // the second's
 }
 
 TEST(AxisOffsetPaper, MomentsGiveEq13AndEq14) {
