@@ -52,7 +52,7 @@ Runner addSimCommand(CLI::App& app) {
       auto* rotating = std::get_if<RotatingLidarConfig>(&setup.rig.config);
       if (!rotating && (mode->count() || sweeps->count())) {
         throw ConfigError("--mode and --sweeps apply to rotating_lidar rigs; " + setup.rig.path +
-                          " is a " + setup.rig.kindName() + " rig (its sim.* keys set the drive)");
+                          " is a " + setup.rig.kindName() + " rig (its sim.* keys set the run)");
       }
       if (rotating && o->mode > 0) rotating->motor.mode = o->mode;  // 1..7, checked above
     } catch (const std::exception& e) {
