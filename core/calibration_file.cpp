@@ -138,4 +138,29 @@ void writeMountingCalibration(const std::string& path, const MountingCalibration
       c.logs);
 }
 
+AxisOffsetCalibration loadAxisOffsetCalibration(const std::string& path) {
+  const CalibrationFileContent f = loadCalibrationFile(
+      path, "axis_offset", {"m_mm", "n_mm", "laser_tilt_deg", "encoder_zero_deg"});
+  AxisOffsetCalibration c;
+  c.m_mm = f.values.at("m_mm");
+  c.n_mm = f.values.at("n_mm");
+  c.laser_tilt_deg = f.values.at("laser_tilt_deg");
+  c.encoder_zero_deg = f.values.at("encoder_zero_deg");
+  c.source = f.source;
+  c.logs = f.logs;
+  return c;
+}
+
+void writeAxisOffsetCalibration(const std::string& path, const AxisOffsetCalibration& c) {
+  writeCalibrationFile(path,
+                       "Axis-offset calibration of a rotating profile sensor (Zhao 2021, plane "
+                       "constraints); read via geometry.calibration_file",
+                       "axis_offset",
+                       {{"m_mm", c.m_mm},
+                        {"n_mm", c.n_mm},
+                        {"laser_tilt_deg", c.laser_tilt_deg},
+                        {"encoder_zero_deg", c.encoder_zero_deg}},
+                       c.source, c.logs);
+}
+
 }  // namespace sweepmap

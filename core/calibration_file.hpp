@@ -14,6 +14,13 @@
 //     beta_rad: 0.0126
 //     alpha_rad: -0.0058
 //   source: {...}                  # as above
+//
+//   axis_offset:                   # rig C (Zhao 2021): geometry.calibration_file
+//     m_mm: 123.0                  # the offsets M, N (core/profile_geometry.hpp)
+//     n_mm: 409.0
+//     laser_tilt_deg: 0.2
+//     encoder_zero_deg: 0          # as given: planes cannot determine it
+//   source: {...}                  # as above, with each parameter's standard deviation
 #pragma once
 
 #include <map>
@@ -48,5 +55,18 @@ struct MountingCalibration {
 // `mounting` and `source` at the top.
 MountingCalibration loadMountingCalibration(const std::string& path);
 void writeMountingCalibration(const std::string& path, const MountingCalibration& calibration);
+
+struct AxisOffsetCalibration {
+  double m_mm = 0.0;
+  double n_mm = 0.0;
+  double laser_tilt_deg = 0.0;
+  double encoder_zero_deg = 0.0;
+  std::map<std::string, std::string> source;
+  std::vector<std::string> logs;
+};
+
+// Same rules: `axis_offset.{m_mm,n_mm,laser_tilt_deg,encoder_zero_deg}` required and finite.
+AxisOffsetCalibration loadAxisOffsetCalibration(const std::string& path);
+void writeAxisOffsetCalibration(const std::string& path, const AxisOffsetCalibration& calibration);
 
 }  // namespace sweepmap

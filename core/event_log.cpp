@@ -45,6 +45,15 @@ EventLogReader::~EventLogReader() {
   if (file_) std::fclose(file_);
 }
 
+std::string describeSkipped(const std::string& path, const std::vector<SkippedRange>& skipped) {
+  std::string out;
+  for (const SkippedRange& r : skipped) {
+    out += (out.empty() ? path + ": " : std::string("; ")) + "byte " + std::to_string(r.begin) +
+           " to " + std::to_string(r.end) + " skipped: " + r.why;
+  }
+  return out;
+}
+
 bool EventLogReader::next(LogEvent* event) {
   try {
     return readAt(event);

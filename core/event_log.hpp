@@ -42,6 +42,9 @@ struct SkippedRange {
   std::string why;
 };
 
+// "PATH: byte B to E skipped: why; byte ..." ("" for none).
+std::string describeSkipped(const std::string& path, const std::vector<SkippedRange>& skipped);
+
 class EventLogReader {
  public:
   explicit EventLogReader(const std::string& path);  // throws LogError

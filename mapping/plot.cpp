@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -139,6 +140,11 @@ void writeHeader(std::ostream& s, const std::string& png_tmp, int width_px, int 
   s << "set grid\n";
 }
 
+void writeAxisLabels(std::ostream& s, const std::string& x_label, const std::string& y_label) {
+  if (!x_label.empty()) s << "set xlabel " << quoted(x_label) << "\n";
+  if (!y_label.empty()) s << "set ylabel " << quoted(y_label) << "\n";
+}
+
 void writeRange(std::ostream& s, const char* axis, const std::optional<PlotRange>& r) {
   if (!r) return;
   if (!(r->min < r->max)) throw std::invalid_argument(std::string("plot: empty ") + axis + "range");
@@ -258,8 +264,7 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
 
   std::ostringstream s = scriptStream();
   writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
-  if (!options.x_label.empty()) s << "set xlabel " << quoted(options.x_label) << "\n";
-  if (!options.y_label.empty()) s << "set ylabel " << quoted(options.y_label) << "\n";
+  writeAxisLabels(s, options.x_label, options.y_label);
   if (options.log_y) s << "set logscale y\n";
   // Boxes: see-through, so that a series behind stays visible.
   s << "set style fill transparent solid 0.5 border -1\n";
@@ -324,6 +329,57 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
   }
   s << "plot ";
   for (size_t i = 0; i < plots.size(); ++i) s << (i ? ", \\\n     " : "") << plots[i];
+  s << "\n";
+  render(png_path, s.str(), temps, png_tmp);
+}
+
+void plotSurface(const std::string& png_path, const std::vector<double>& x,
+                 const std::vector<double>& y, const std::vector<double>& z,
+                 const SurfacePlotOptions& options) {
+  checkPath(png_path);
+  if (x.empty() || y.empty() || z.size() != x.size() * y.size()) {
+    throw std::invalid_argument("plotSurface: z must hold x.size() * y.size() values");
+  }
+  TempFiles temps(png_path);
+  const std::string png_tmp = tmpPathFor(png_path);
+  std::ostringstream s = scriptStream();
+  writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
+  writeAxisLabels(s, options.x_label, options.y_label);
+  if (!options.z_label.empty()) s << "set zlabel " << quoted(options.z_label) << " rotate\n";
+  s << "set pm3d depthorder\nset palette rgbformulae 33,13,10\n"
+    << "set view 60,30\nset datafile missing 'NaN'\n";
+  // One scan line per x value (gnuplot's grid format: blank line between scans).
+  const std::string data_path = temps.make(".surface.tmp");
+  {
+    std::ofstream out(data_path, std::ios::trunc);
+    out.imbue(std::locale::classic());
+    out.precision(10);
+    for (size_t i = 0; i < x.size(); ++i) {
+      for (size_t j = 0; j < y.size(); ++j) {
+        const double v = z[i * y.size() + j];
+        out << x[i] << " " << y[j] << " ";
+        if (std::isfinite(v)) {
+          out << v << "\n";
+        } else {
+          out << "NaN\n";
+        }
+      }
+      out << "\n";
+    }
+    out.close();
+    if (!out) throw std::runtime_error("plot: cannot write temporary file " + data_path);
+  }
+  s << "splot " << quoted(data_path) << " using 1:2:3 with pm3d notitle";
+  if (options.marker) {
+    const std::string marker_path = temps.make(".marker.tmp");
+    std::ofstream out(marker_path, std::ios::trunc);
+    out.imbue(std::locale::classic());
+    out.precision(10);
+    out << options.marker->x() << " " << options.marker->y() << " " << options.marker->z() << "\n";
+    out.close();
+    s << ", " << quoted(marker_path) << " using 1:2:3 with points pt 7 ps 2 lc rgb 'black' title "
+      << quoted(options.marker_title);
+  }
   s << "\n";
   render(png_path, s.str(), temps, png_tmp);
 }

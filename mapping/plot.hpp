@@ -68,4 +68,20 @@ struct SeriesPlotOptions {
 void plotSeries(const std::string& png_path, const std::vector<Series>& series,
                 const SeriesPlotOptions& options);
 
+// A surface z(x_i, y_j) over a grid, drawn in 3D with a colour map (pm3d) and the point
+// `marker` (if set) on it, as Zhao 2021 Fig. 6 draws S(M, N).
+struct SurfacePlotOptions {
+  std::string title;
+  std::string x_label, y_label, z_label;
+  std::optional<Eigen::Vector3d> marker;  // drawn as a labelled point
+  std::string marker_title;
+  int width_px = 1000;
+  int height_px = 800;
+};
+
+// z[i * y.size() + j] is the value at (x[i], y[j]); non-finite values are left out.
+void plotSurface(const std::string& png_path, const std::vector<double>& x,
+                 const std::vector<double>& y, const std::vector<double>& z,
+                 const SurfacePlotOptions& options);
+
 }  // namespace sweepmap

@@ -28,7 +28,10 @@ constexpr const char* kTruthSweep = "TRUTH_SWEEP";        // truth_sweep_t, simu
 constexpr const char* kTruthPose =
     "TRUTH_POSE";  // pose2d_t, true body pose (rig B simulation only)
 constexpr const char* kTruthMounting =
-    "TRUTH_MOUNTING";  // truth_mounting_t (rig B simulation only)
+    "TRUTH_MOUNTING";                        // truth_mounting_t (rig B simulation only)
+constexpr const char* kProfile = "PROFILE";  // profile_t, raw (rig C): one profile + encoder
+constexpr const char* kTruthProfileRig =
+    "TRUTH_PROFILE_RIG";  // truth_profile_rig_t (rig C simulation only), per sweep
 // Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
 
 }  // namespace channels

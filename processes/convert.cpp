@@ -1,5 +1,6 @@
 #include "processes/convert.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace sweepmap {
@@ -156,6 +157,43 @@ wheel_ticks_t toLcm(const WheelTicks& t) {
   m.left_ticks = t.left;
   m.right_ticks = t.right;
   return m;
+}
+
+profile_t toLcm(const Profile& p) {
+  profile_t m;
+  m.utime = p.utime;
+  m.sequence = p.sequence;
+  m.sweep_id = p.sweep_id;
+  m.encoder_counts = p.encoder_counts;
+  m.counts_per_revolution = p.counts_per_revolution;
+  m.column_count = p.column_count;
+  m.point_count = static_cast<int32_t>(p.column.size());
+  m.column = p.column;
+  m.y_mm = p.y_mm;
+  m.z_mm = p.z_mm;
+  return m;
+}
+
+std::string validateProfile(const profile_t& m) {
+  const auto n = static_cast<size_t>(std::max(0, m.point_count));
+  if (m.point_count < 0 || m.column.size() != n || m.y_mm.size() != n || m.z_mm.size() != n) {
+    return "point_count " + std::to_string(m.point_count) + " does not match its arrays";
+  }
+  if (m.counts_per_revolution <= 0) {
+    return "counts_per_revolution " + std::to_string(m.counts_per_revolution) + " is not > 0";
+  }
+  if (m.point_count > m.column_count) return "more points than the sensor's columns";
+  for (size_t i = 0; i < n; ++i) {
+    if (m.column[i] < 0 || m.column[i] >= m.column_count) {
+      return "point " + std::to_string(i) + ": column " + std::to_string(m.column[i]) +
+             " outside 0.." + std::to_string(m.column_count - 1);
+    }
+    if (!std::isfinite(m.y_mm[i]) || !std::isfinite(m.z_mm[i])) {
+      return "point " + std::to_string(i) + " (column " + std::to_string(m.column[i]) +
+             "): y or z is not finite";
+    }
+  }
+  return "";
 }
 
 }  // namespace sweepmap

@@ -5,12 +5,14 @@
 #include <vector>
 
 #include "calib/sweep_assembly.hpp"
+#include "core/profile.hpp"
 #include "core/scan.hpp"
 #include "drivers/odometry_devices.hpp"
 #include "drivers/shaft_trajectory.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/profile_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
 #include "sweepmap/truth_shaft_t.hpp"
@@ -36,5 +38,10 @@ truth_shaft_t toLcm(const ShaftSegment& segment, int64_t utime);
 imu_t toLcm(const ImuSample& sample);
 wheel_ticks_t toLcm(const WheelTicks& ticks);
 ShaftSegment fromLcm(const truth_shaft_t& msg);
+
+profile_t toLcm(const Profile& profile);
+// Empty when valid, else the reason: counts and sizes agree, columns in range, every
+// coordinate finite, a positive encoder resolution.
+std::string validateProfile(const profile_t& msg);
 
 }  // namespace sweepmap

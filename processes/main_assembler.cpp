@@ -28,12 +28,19 @@ int main(int argc, char** argv) {
         using T = std::decay_t<decltype(c)>;
         if constexpr (std::is_same_v<T, RotatingLidarConfig>) {
           return std::make_unique<AssemblerNode>(c);
-        } else {
-          static_assert(std::is_same_v<T, MobileLidarConfig>, "a rig kind without an assembler");
+        } else if constexpr (std::is_same_v<T, MobileLidarConfig>) {
           return std::make_unique<WorldAssemblerNode>(c.assembler, c.mounting.toMounting());
+        } else {
+          static_assert(std::is_same_v<T, RotatingProfileConfig>, "a rig kind not dispatched");
+          return nullptr;  // rig C's live assembler is a later step
         }
       },
       rig->config);
+  if (!node) {
+    std::cerr << "sweepmap-assembler: " << rig->path << " is a " << rig->kindName()
+              << " rig: no live assembler for its kind yet\n";
+    return 2;
+  }
   lcm::LCM lcm(common.lcm_url);
   installStopSignals();
   return runLive(lcm, {node.get()}, LiveOptions{});

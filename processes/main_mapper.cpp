@@ -20,7 +20,14 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   const std::optional<Rig> rig = loadRigOrReport(common);
   if (!rig) return 2;
-  const MapperConfig config = std::visit([](const auto& c) { return c.mapper; }, rig->config);
+  const auto* rotating = std::get_if<RotatingLidarConfig>(&rig->config);
+  const auto* mobile = std::get_if<MobileLidarConfig>(&rig->config);
+  if (!rotating && !mobile) {
+    std::cerr << "sweepmap-mapper: " << rig->path << " is a " << rig->kindName()
+              << " rig: no mapper for its kind\n";
+    return 2;
+  }
+  const MapperConfig config = rotating ? rotating->mapper : mobile->mapper;
 
   lcm::LCM lcm(common.lcm_url);
   MapperNode node(config, save_path);

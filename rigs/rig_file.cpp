@@ -22,6 +22,7 @@ struct KindInfo {
 constexpr KindInfo kKinds[] = {
     {RigKind::kRotatingLidar, "rotating_lidar", "rig_a", "scene_conference_room"},
     {RigKind::kMobileLidar, "mobile_lidar", "rig_b", "scene_lab"},
+    {RigKind::kRotatingProfile, "rotating_profile", "rig_c", "plate"},
 };
 
 const KindInfo& info(RigKind kind) { return kKinds[static_cast<int>(kind)]; }
@@ -119,8 +120,17 @@ Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& ove
     case RigKind::kMobileLidar:
       rig.config = loadMobileLidarConfig(rig.path, overrides);
       break;
+    case RigKind::kRotatingProfile:
+      rig.config = loadRotatingProfileConfig(rig.path, overrides);
+      break;
   }
   return rig;
+}
+
+const LidarConfig& Rig::lidar() const {
+  if (const auto* a = std::get_if<RotatingLidarConfig>(&config)) return a->lidar;
+  if (const auto* b = std::get_if<MobileLidarConfig>(&config)) return b->lidar;
+  throw ConfigError(path + " is a " + kindName() + " rig: it has no 2D lidar");
 }
 
 namespace {
@@ -146,5 +156,6 @@ const T& requireKind(const Rig& rig, const std::string& what) {
 }
 template const RotatingLidarConfig& requireKind(const Rig&, const std::string&);
 template const MobileLidarConfig& requireKind(const Rig&, const std::string&);
+template const RotatingProfileConfig& requireKind(const Rig&, const std::string&);
 
 }  // namespace sweepmap

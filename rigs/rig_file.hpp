@@ -12,6 +12,7 @@
 #include "rigs/mobile_lidar.hpp"
 #include "rigs/rig_kind.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "rigs/rotating_profile.hpp"
 
 namespace sweepmap {
 
@@ -19,13 +20,12 @@ namespace sweepmap {
 // in the same order.
 struct Rig {
   std::string path;
-  std::variant<RotatingLidarConfig, MobileLidarConfig> config;
+  std::variant<RotatingLidarConfig, MobileLidarConfig, RotatingProfileConfig> config;
   RigKind kind() const { return static_cast<RigKind>(config.index()); }
   std::string kindName() const { return rigKindName(kind()); }
-  // The lidar section every kind has.
-  const LidarConfig& lidar() const {
-    return std::visit([](const auto& c) -> const LidarConfig& { return c.lidar; }, config);
-  }
+  // The lidar section of the lidar kinds; throws ConfigError for a rig without a 2D lidar
+  // (rotating_profile).
+  const LidarConfig& lidar() const;
 };
 
 // The folder of the default rig and scene files: $SWEEPMAP_CONFIG_DIR if set, else

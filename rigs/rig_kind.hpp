@@ -1,5 +1,6 @@
 // The kinds of rig sweepmap serves. A rig file names its kind in its `rig` key; each kind
-// has its own strict schema (rigs/rotating_lidar.hpp, rigs/mobile_lidar.hpp), and every
+// has its own strict schema (rigs/rotating_lidar.hpp, rigs/mobile_lidar.hpp,
+// rigs/rotating_profile.hpp), and every
 // command and process reads the kind from the file. Adding a rig means adding a kind here,
 // its config struct to rigs/rig_file.hpp's Rig, and its branch where a command dispatches
 // (the compiler lists every such place: std::visit over Rig::config).
@@ -11,19 +12,21 @@
 namespace sweepmap {
 
 enum class RigKind {
-  kRotatingLidar,  // rig A: 2D lidar turned by a stepper, plate correction (Yuan 2021)
-  kMobileLidar,    // rig B: 2D lidar on a differential-drive car, odometry + IMU (Miao 2022)
+  kRotatingLidar,    // rig A: 2D lidar turned by a stepper, plate correction (Yuan 2021)
+  kMobileLidar,      // rig B: 2D lidar on a differential-drive car, odometry + IMU (Miao 2022)
+  kRotatingProfile,  // rig C: profile sensor on a turntable, axis offsets M, N (Zhao 2021)
 };
 
-// "rotating_lidar", "mobile_lidar": the value of a rig file's `rig` key.
+// "rotating_lidar", "mobile_lidar", "rotating_profile": the value of a rig file's `rig` key.
 std::string rigKindName(RigKind kind);
 // Every kind's name, in declaration order.
 std::vector<std::string> rigKindNames();
 // The kind named `name`; throws ConfigError (naming `source`) for an unknown one.
 RigKind rigKindFromName(const std::string& name, const std::string& source);
-// The rig file of the kind's reference rig, by name ("rig_a", "rig_b").
+// The rig file of the kind's reference rig, by name ("rig_a", "rig_b", "rig_c").
 std::string defaultRigName(RigKind kind);
-// The scene its simulator uses by default, by name ("scene_conference_room", "scene_lab").
+// The scene its simulator uses by default, by name ("scene_conference_room", "scene_lab";
+// rotating_profile: "plate", a scene named by its sim.scene key, not a file).
 std::string defaultSceneName(RigKind kind);
 
 // Throws ConfigError "PATH: key 'rig' is KIND_FOUND, expected EXPECTED" when a file of one

@@ -18,10 +18,12 @@
 #include "sweepmap/motor_state_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/process_status_t.hpp"
+#include "sweepmap/profile_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
 #include "sweepmap/switch_event_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
+#include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 #include "sweepmap/truth_shaft_t.hpp"
 #include "sweepmap/truth_sweep_t.hpp"
@@ -41,7 +43,7 @@ void expectFingerprint(const char* name) {
 }
 
 TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
-  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 17u);
+  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 19u);
   expectFingerprint<cloud_chunk_t>("cloud_chunk_t");
   expectFingerprint<imu_t>("imu_t");
   expectFingerprint<lidar_scan_t>("lidar_scan_t");
@@ -50,10 +52,12 @@ TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
   expectFingerprint<motor_state_t>("motor_state_t");
   expectFingerprint<pose2d_t>("pose2d_t");
   expectFingerprint<process_status_t>("process_status_t");
+  expectFingerprint<profile_t>("profile_t");
   expectFingerprint<scan_window_t>("scan_window_t");
   expectFingerprint<sweep_status_t>("sweep_status_t");
   expectFingerprint<switch_event_t>("switch_event_t");
   expectFingerprint<truth_mounting_t>("truth_mounting_t");
+  expectFingerprint<truth_profile_rig_t>("truth_profile_rig_t");
   expectFingerprint<truth_rig_t>("truth_rig_t");
   expectFingerprint<truth_shaft_t>("truth_shaft_t");
   expectFingerprint<truth_sweep_t>("truth_sweep_t");

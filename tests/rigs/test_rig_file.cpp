@@ -6,6 +6,7 @@
 #include <fstream>
 #include <type_traits>
 
+#include "core/calibration_file.hpp"
 #include "core/config.hpp"
 #include "rigs/rig_file.hpp"
 
@@ -48,9 +49,50 @@ TEST(RigFile, KindComesFromTheFile) {
 }
 
 TEST(RigFile, EveryShippedRigFileLoads) {
-  for (const char* name : {"rig_a", "rig_b", "rig_b_mines_rover", "rig_a_ust10lx", "rig_b_x4"}) {
+  for (const char* name :
+       {"rig_a", "rig_b", "rig_b_mines_rover", "rig_a_ust10lx", "rig_b_x4", "rig_c"}) {
     EXPECT_NO_THROW(loadRig(name)) << name;
   }
+}
+
+TEST(RigFile, RigCIsARotatingProfileWithoutALidar) {
+  const Rig c = loadRig("rotating_profile");  // the kind's name stands for rig_c
+  EXPECT_EQ(c.kind(), RigKind::kRotatingProfile);
+  const auto& config = std::get<RotatingProfileConfig>(c.config);
+  EXPECT_EQ(config.profiler.column_count, 1280);
+  EXPECT_DOUBLE_EQ(config.sim.offset_m_mm, 123.0);  // Zhao 2021 Table 1
+  EXPECT_DOUBLE_EQ(config.sim.offset_n_mm, 409.0);
+  EXPECT_NE(config.geometry.offset_m_mm, config.sim.offset_m_mm);  // nominal, a few mm off
+  const std::string e = configError([&] { c.lidar(); });
+  EXPECT_NE(e.find("has no 2D lidar"), std::string::npos) << e;
+  const std::string scene = configError([] { loadRig("rig_c", {"sim.scene=room"}); });
+  EXPECT_NE(scene.find("sim.scene"), std::string::npos) << scene;
+}
+
+TEST(RigFile, RigCReadsItsAxisOffsetCalibrationFile) {
+  const fs::path dir = scratch("rig_c_calibration");
+  AxisOffsetCalibration c;
+  c.m_mm = 123.02;
+  c.n_mm = 408.97;
+  c.laser_tilt_deg = 0.21;
+  c.encoder_zero_deg = 0.0;
+  c.source["tool"] = "test";
+  c.logs = {"plates.lcmlog"};
+  writeAxisOffsetCalibration((dir / "axis_offset.yaml").string(), c);
+  EXPECT_FALSE(fs::exists(dir / "axis_offset.yaml.tmp"));
+  const AxisOffsetCalibration back = loadAxisOffsetCalibration((dir / "axis_offset.yaml").string());
+  EXPECT_DOUBLE_EQ(back.n_mm, 408.97);
+  EXPECT_EQ(back.logs, c.logs);
+  fs::copy_file(fs::path(SWEEPMAP_SOURCE_DIR) / "config" / "rig_c.yaml", dir / "rig.yaml");
+  const auto rig = std::get<RotatingProfileConfig>(
+      loadRig((dir / "rig.yaml").string(), {"geometry.calibration_file=axis_offset.yaml"}).config);
+  EXPECT_DOUBLE_EQ(rig.geometry.offset_m_mm, 123.02);
+  EXPECT_DOUBLE_EQ(rig.geometry.offset_n_mm, 408.97);
+  EXPECT_DOUBLE_EQ(rig.geometry.laser_tilt_deg, 0.21);
+  std::ofstream(dir / "bad.yaml") << "axis_offset:\n  m_mm: 1\n";
+  const std::string e =
+      configError([&] { loadAxisOffsetCalibration((dir / "bad.yaml").string()); });
+  EXPECT_NE(e.find("axis_offset.n_mm"), std::string::npos) << e;
 }
 
 TEST(RigFile, NamesResolveInTheInstallTreeFromAnyDirectory) {
@@ -119,7 +161,11 @@ TEST(RigFile, RealDeviceExamplesDifferOnlyInTheDevice) {
     Rig rig = loadRig(name);
     return std::visit(
         [&](auto c) {
-          c.lidar.device = device;
+          if constexpr (std::is_same_v<decltype(c), RotatingProfileConfig>) {
+            c.profiler.device = device;
+          } else {
+            c.lidar.device = device;
+          }
           if constexpr (std::is_same_v<decltype(c), MobileLidarConfig>) {
             c.imu_device = device;
             c.wheels_device = device;

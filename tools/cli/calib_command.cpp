@@ -1,9 +1,10 @@
 // `sweepmap calib <what>`: calibrate the rig from its own logs: `plate-angle` (rig A, Yuan
-// 2021 section 4.2, Algorithm A1) and `mounting` (rig B, Miao 2022 section 4.2). The
-// workflows are in tools/offline/calibrate_plate.hpp and tools/offline/calibrate_mounting.hpp.
+// 2021 section 4.2, Algorithm A1), `mounting` (rig B, Miao 2022 section 4.2) and
+// `axis-offset` (rig C, Zhao 2021). The workflows are in tools/offline/calibrate_*.hpp.
 #include <memory>
 
 #include "tools/cli/commands.hpp"
+#include "tools/offline/calibrate_axis_offset.hpp"
 #include "tools/offline/calibrate_mounting.hpp"
 #include "tools/offline/calibrate_plate.hpp"
 
@@ -109,6 +110,74 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
   return mount;
 }
 
+// `calib axis-offset`: its flags into an AxisOffsetCalibRequest.
+CLI::App* addAxisOffset(CLI::App* calib, std::shared_ptr<AxisOffsetCalibRequest> a) {
+  auto* axis = calib->add_subcommand(
+      "axis-offset",
+      "rotating_profile rigs (rig C): calibrate the profile sensor's offsets M, N from the "
+      "turntable's axis (Zhao 2021) from sweeps of a flat plate in m non-parallel poses");
+  axis->footer(
+      "Every turntable sweep of the logs is one pose of the plate (sweepmap sim --rig rig_c "
+      "makes sim.plate_count of them; a real recording: one sweep per pose, the plate alone in "
+      "view). Both methods see the same points (at most --max-points per sweep, evenly "
+      "strided).\n\n"
+      "The paper's (reported, and drawn as S(M, N) like its Fig. 6): points to frame O_r by "
+      "Eq. 7, a least-squares plane z = Ax + By + C per pose (Eq. 8-13), the RMS of the "
+      "point-to-plane distances (Eq. 14), their mean S (Eq. 15), minimised by a grid search of "
+      "--m-min..--m-max x --n-min..--n-max in --step (Algorithm 1; default the paper's (110, 130) "
+      "x (395, "
+      "425) mm in 1 mm).\n\n"
+      "Ours (the result written): Ceres over M, N and every plane (unit normal on the sphere + "
+      "distance) with point-to-plane residuals through the generalised Eq. 7, also the laser "
+      "plane's tilt from the axis (unless --no-tilt) and, with --encoder-zero, the encoder's "
+      "zero; each parameter's standard deviation from ceres::Covariance. A parameter the planes "
+      "do not determine is reported: the encoder zero never is (it turns the whole cloud about "
+      "the axis) and is then held at the rig's value; M and N are not with parallel or level "
+      "plates, and then nothing is written.\n\n"
+      "Writes OUT atomically (axis_offset.m_mm, n_mm, laser_tilt_deg, encoder_zero_deg + "
+      "provenance with the standard deviations and the paper's result); set "
+      "geometry.calibration_file in the rig file to use it. Human report on stderr; --json "
+      "prints ours, paper, warnings, planes and, for simulated logs, truth and offset_error_mm "
+      "on stdout.\n\n"
+      "Exit status: 0 calibrated; 1 not calibrated (no plate sweep, M or N not observable); 2 "
+      "bad rig, log (no profiles, a non-finite point, a corrupt event: named with its byte "
+      "offset) or output path.\n"
+      "Example: sweepmap sim --rig rig_c --out plates.lcmlog && sweepmap calib axis-offset "
+      "--logs plates.lcmlog --rig rig_c --out axis_offset.yaml");
+  axis->add_option("--logs", a->logs, "LCM logs of the plate sweeps (sweepmap sim, lcm-logger)")
+      ->required()
+      ->expected(1, -1);
+  axis->add_option("--rig", a->rig,
+                   "rig file or name (rotating_profile) the logs were recorded with")
+      ->required();
+  axis->add_option("--out", a->out, "calibration file to write (YAML, atomically)")->required();
+  axis->add_flag("--json", a->json, "print the result as JSON on stdout");
+  axis->add_option("--set", a->sets, "override a rig config key: key=value (repeatable)");
+  axis->add_option("--m-min", a->grid.m_min_mm, "the paper's grid: M from [mm]")
+      ->capture_default_str();
+  axis->add_option("--m-max", a->grid.m_max_mm, "the paper's grid: M to [mm]")
+      ->capture_default_str();
+  axis->add_option("--n-min", a->grid.n_min_mm, "the paper's grid: N from [mm]")
+      ->capture_default_str();
+  axis->add_option("--n-max", a->grid.n_max_mm, "the paper's grid: N to [mm]")
+      ->capture_default_str();
+  axis->add_option("--step", a->grid.step_mm, "the paper's grid step [mm]")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+  axis->add_flag("--no-grid", a->no_grid, "skip the paper's method");
+  axis->add_option("--figure", a->figure, "S(M, N) picture (PNG; default OUT's name + _S.png)");
+  axis->add_flag(
+      "--no-tilt", [a](int64_t) { a->estimate_tilt = false; },
+      "ours: hold the laser plane's tilt at the rig's value");
+  axis->add_flag(
+      "--encoder-zero", a->estimate_encoder_zero,
+      "ours: also estimate the encoder's zero (planes alone cannot: expect the warning)");
+  axis->add_option("--max-points", a->max_points_per_sweep,
+                   "points per sweep both methods use (evenly strided; 0 = all)")
+      ->capture_default_str();
+  return axis;
+}
+
 }  // namespace
 
 Runner addCalibCommand(CLI::App& app) {
@@ -116,15 +185,18 @@ Runner addCalibCommand(CLI::App& app) {
       "calib",
       "Calibrate the rig from its own logs and write the result as a calibration file the rig "
       "file points to. Subcommands by the rig's kind: plate-angle (rotating_lidar), mounting "
-      "(mobile_lidar)");
+      "(mobile_lidar), axis-offset (rotating_profile)");
   calib->require_subcommand(1);
   auto o = std::make_shared<PlateAngleCalibRequest>();
   auto m = std::make_shared<MountingCalibRequest>();
   CLI::App* plate = addPlateAngle(calib, o);
   CLI::App* mount = addMounting(calib, m);
-  return [plate, o, mount, m]() {
+  auto a = std::make_shared<AxisOffsetCalibRequest>();
+  CLI::App* axis = addAxisOffset(calib, a);
+  return [plate, o, mount, m, axis, a]() {
     if (plate->parsed()) return calibratePlateAngleFromLogs(*o);
     if (mount->parsed()) return calibrateMountingFromLog(*m);
+    if (axis->parsed()) return calibrateAxisOffsetFromLogs(*a);
     return 2;
   };
 }

@@ -19,7 +19,8 @@ Runner addDemoCommand(CLI::App& app) {
       "sweepmap-lidar (X4) and sweepmap-odometry (wheel board, IMU, EKF) drive one simulated "
       "car for the rig's sim.duration_s (a 60 s circle for rig_b), -assembler and -mapper "
       "build the world cloud and map (--devices emulated: `sweepmap emulate "
-      "x4,hi219,wheel-board` on pseudo-terminals, opened by the real serial drivers)");
+      "x4,hi219,wheel-board` on pseudo-terminals, opened by the real serial drivers). "
+      "rotating_profile (rig C): not yet (exit 2)");
   auto o = std::make_shared<DemoOptions>();
   cmd->add_option("--rig", o->rig, "rig file or name")->capture_default_str();
   cmd->add_option("--scene", o->scene, "scene file or name (default: the rig kind's scene)");

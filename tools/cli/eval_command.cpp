@@ -40,7 +40,8 @@ Runner addEvalCommand(CLI::App& app) {
       "Evaluate a rig with its paper's measures, against the simulator's truth where the logs "
       "carry it, into DIR/report.json, DIR/report.md and PNG figures. Either --logs LOG... "
       "(existing logs) or --experiment paper (simulates the paper's experiment into DIR/logs/, "
-      "calibrates, then evaluates). Same inputs and seed give identical files");
+      "calibrates, then evaluates). Same inputs and seed give identical files. rotating_profile "
+      "(rig C): not yet (exit 2)");
   cmd->footer(kEvalFooter);
   auto q = std::make_shared<EvalRequest>();
   auto no_plots = std::make_shared<bool>(false);

@@ -14,10 +14,13 @@ Runner addReplayCommand(CLI::App& app) {
       "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. mobile_lidar: sweepmap-odometry "
       "(wheel odometry + EKF), the world-frame assembler (each ray with its own interpolated "
       "pose and the configured mounting) and the mapper: DIR/map.bt, DIR/cloud.pcd, "
-      "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. Unknown channels are skipped. "
-      "Corrupt regions and a truncated tail are skipped to the next good event header (as "
-      "LCM's own reader does): every event outside them is replayed, the skipped byte ranges "
-      "are reported (and in summary.json's error), and the exit status is 1");
+      "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. rotating_profile: every PROFILE "
+      "placed in the turntable frame O_r by the generalised Eq. 7 of Zhao 2021 with the rig's "
+      "geometry (its calibration file if it names one): DIR/cloud.pcd, DIR/sweeps/*.pcd (one per "
+      "turntable sweep), DIR/summary.json; malformed profiles are skipped and counted. Unknown "
+      "channels are skipped. Corrupt regions and a truncated tail are skipped to the next good "
+      "event header (as LCM's own reader does): every event outside them is replayed, the "
+      "skipped byte ranges are reported (and in summary.json's error), and the exit status is 1");
   struct Opts {
     std::string log, rig, out;
     std::vector<std::string> sets;

@@ -14,7 +14,10 @@ Runner addSimCommand(CLI::App& app) {
       "clock, deterministic from the seed. rotating_lidar (rig A): the motor and lidar process "
       "classes against the simulated stepper, switch and lidar (MOTOR_*, SCAN_WINDOW, "
       "LIDAR_SCAN, TRUTH_*). mobile_lidar (rig B): the car with wheel encoders, IMU and vertical "
-      "lidar driving sim.path (WHEEL_TICKS, IMU, LIDAR_SCAN, TRUTH_POSE, TRUTH_MOUNTING)");
+      "lidar driving sim.path (WHEEL_TICKS, IMU, LIDAR_SCAN, TRUTH_POSE, TRUTH_MOUNTING). "
+      "rotating_profile (rig C): the profile sensor on its turntable sweeping the calibration "
+      "plate once per pose (sim.plate_count) or the paper's test piece (PROFILE, "
+      "TRUTH_PROFILE_RIG)");
   struct Opts {
     std::string rig, scene, out;
     int mode = 0;
@@ -24,10 +27,11 @@ Runner addSimCommand(CLI::App& app) {
     bool print_config = false;
   };
   auto o = std::make_shared<Opts>();
-  cmd->add_option("--rig", o->rig, "rig file or name (rig_a, rig_b, a path)")->required();
+  cmd->add_option("--rig", o->rig, "rig file or name (rig_a, rig_b, rig_c, a path)")->required();
   cmd->add_option("--scene", o->scene,
                   "scene file or name (default: scene_conference_room for rotating_lidar, "
-                  "scene_lab for mobile_lidar)");
+                  "scene_lab for mobile_lidar); rotating_profile: plate | test_piece (default: "
+                  "its sim.scene)");
   auto* mode = cmd->add_option("--mode", o->mode,
                                "rotating_lidar: scan mode 1..7 (default: motor.mode of the rig)")
                    ->check(CLI::Range(1, 7));
@@ -48,7 +52,7 @@ Runner addSimCommand(CLI::App& app) {
       auto* rotating = std::get_if<RotatingLidarConfig>(&setup.rig.config);
       if (!rotating && (mode->count() || sweeps->count())) {
         throw ConfigError("--mode and --sweeps apply to rotating_lidar rigs; " + setup.rig.path +
-                          " is a " + setup.rig.kindName() + " rig (its sim.* keys set the drive)");
+                          " is a " + setup.rig.kindName() + " rig (its sim.* keys set the run)");
       }
       if (rotating && o->mode > 0) rotating->motor.mode = o->mode;  // 1..7, checked above
     } catch (const std::exception& e) {

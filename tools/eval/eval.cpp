@@ -98,6 +98,8 @@ EvalRunResult runEval(const EvalRequest& q) {
       return evalRotating(q, rig);
     case RigKind::kMobileLidar:
       return evalMobile(q, rig);
+    case RigKind::kRotatingProfile:
+      break;  // rig C's evaluation (Zhao 2021 Table 2) is a later step
   }
   throw ConfigError(rig.path + ": no evaluation for rig kind " + rig.kindName());
 }

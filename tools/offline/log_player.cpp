@@ -49,9 +49,9 @@ LogPlayResult LogPlayer::play() {
     result.error = e.what();
   }
   result.skipped_ranges = reader_->skipped();
-  for (const SkippedRange& r : result.skipped_ranges) {
-    result.error += (result.error.empty() ? reader_->path() + ": " : std::string("; ")) + "byte " +
-                    std::to_string(r.begin) + " to " + std::to_string(r.end) + " skipped: " + r.why;
+  if (!result.skipped_ranges.empty()) {
+    const std::string skipped = describeSkipped(reader_->path(), result.skipped_ranges);
+    result.error = result.error.empty() ? skipped : result.error + "; " + skipped;
     result.log_error = true;
   }
   result.now_utime = now_;

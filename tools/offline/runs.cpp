@@ -6,7 +6,9 @@
 #include "processes/sim_car.hpp"
 #include "tools/offline/replay.hpp"
 #include "tools/offline/replay_mobile.hpp"
+#include "tools/offline/replay_profile.hpp"
 #include "tools/offline/sim_mobile.hpp"
+#include "tools/offline/sim_profile.hpp"
 #include "tools/offline/simulation.hpp"
 
 namespace sweepmap {
@@ -29,6 +31,23 @@ SimSetup loadSimSetup(const std::string& rig, const std::string& scene,
   splitSimOverrides(overrides, &rig_sets, &scene_sets);
   SimSetup s;
   s.rig = loadRig(rig, rig_sets);
+  if (auto* profile = std::get_if<RotatingProfileConfig>(&s.rig.config)) {
+    // Rig C's scenes are built in (drivers/sim_profiler.hpp), sized by the rig's sim.* keys.
+    if (!scene_sets.empty()) {
+      throw ConfigError("scene." + scene_sets.front() + ": " + s.rig.path +
+                        " is a rotating_profile rig: its scene is set by sim.* keys");
+    }
+    if (!scene.empty()) {
+      if (scene != "plate" && scene != "test_piece") {
+        throw ConfigError("--scene '" + scene +
+                          "': a rotating_profile rig's scene is plate or "
+                          "test_piece");
+      }
+      profile->sim.scene = scene;
+    }
+    s.scene_path = profile->sim.scene;
+    return s;
+  }
   s.scene_path = resolveConfigFile(scene.empty() ? defaultSceneName(s.rig.kind()) : scene);
   if (auto* mobile = std::get_if<MobileLidarConfig>(&s.rig.config)) {
     prepareSimMobileConfig(s.rig.path, mobile);
@@ -42,16 +61,21 @@ void printSimConfig(std::ostream& out, const SimSetup& setup) {
       [&](const auto& rig) {
         using Rig = std::decay_t<decltype(rig)>;
         Rig rig_copy = rig, rig_defaults{};
-        SceneConfig scene = setup.scene, scene_defaults{};
-        ConfigSchema rs, ss, rds, sds;
+        ConfigSchema rs, rds;
         rig_copy.declare(rs);
-        scene.declare(ss, "scene.");
         rig_defaults.declare(rds);
-        scene_defaults.declare(sds, "scene.");
         out << "# rig (" << setup.rig.path << ", kind " << setup.rig.kindName() << ")\n";
         rs.print(out, &rds);
-        out << "# scene (" << setup.scene_path << "), keys prefixed scene. for --set\n";
-        ss.print(out, &sds);
+        if constexpr (std::is_same_v<Rig, RotatingProfileConfig>) {
+          out << "# scene: sim.scene (" << setup.scene_path << "), sized by the sim.* keys\n";
+        } else {
+          SceneConfig scene = setup.scene, scene_defaults{};
+          ConfigSchema ss, sds;
+          scene.declare(ss, "scene.");
+          scene_defaults.declare(sds, "scene.");
+          out << "# scene (" << setup.scene_path << "), keys prefixed scene. for --set\n";
+          ss.print(out, &sds);
+        }
       },
       setup.rig.config);
 }
@@ -84,6 +108,14 @@ SimRunResult simulateRig(const SimSetup& setup, const SimRunOptions& options,
                  << " m driven, " << r.scans << " scans, " << r.slip_events << " slip events, "
                  << r.messages << " messages";
             return SimRunResult{true, line.str()};
+          },
+          [&](const RotatingProfileConfig& rig) {
+            const SimProfileResult r = simulateRotatingProfile(rig, options.seed, sink);
+            std::ostringstream line;
+            line << rig.sim.scene << " scene, " << r.sweeps << " sweeps, " << r.profiles
+                 << " profiles, " << r.points << " points, " << r.duration_s << " s, " << r.messages
+                 << " messages";
+            return SimRunResult{true, line.str()};
           }},
       setup.rig.config);
 }
@@ -109,6 +141,15 @@ ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
                    line << r.events << " events, " << r.scans << " scans, " << r.points
                         << " points";
                    return ReplayRunResult{line.str(), 0, r.scans, r.points, r.log_error, r.error};
+                 },
+                 [&](const RotatingProfileConfig& config) {
+                   const ProfileReplayResult r =
+                       replayProfileLog(options.log_path, config, options.out_dir);
+                   std::ostringstream line;
+                   line << r.events << " events, " << r.profiles << " profiles in " << r.sweeps
+                        << " sweeps, " << r.points << " points";
+                   if (r.invalid) line << ", " << r.invalid << " invalid profiles skipped";
+                   return ReplayRunResult{line.str(), r.sweeps, 0, r.points, r.log_error, r.error};
                  }},
       rig.config);
 }

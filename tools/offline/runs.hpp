@@ -57,7 +57,7 @@ struct ReplayRunOptions {
 
 struct ReplayRunResult {
   std::string summary;  // one line for the user
-  int64_t sweeps = 0;   // rotating_lidar: 3D sweeps assembled
+  int64_t sweeps = 0;   // rotating_lidar: 3D sweeps assembled; rotating_profile: turntable sweeps
   int64_t scans = 0;    // mobile_lidar: scans in the world cloud
   int64_t points = 0;
   bool log_error = false;  // truncated or corrupt log: outputs up to it were kept

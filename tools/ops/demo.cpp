@@ -278,6 +278,9 @@ int runDemo(const DemoOptions& o) {
     throw ConfigError("--devices must be sim or emulated");
   }
   Rig rig = loadRig(o.rig, rig_sets);
+  if (rig.kind() == RigKind::kRotatingProfile) {
+    throw ConfigError(rig.path + " is a rotating_profile rig: no live demo for its kind yet");
+  }
   const std::string scene =
       fs::absolute(resolveConfigFile(o.scene.empty() ? defaultSceneName(rig.kind()) : o.scene))
           .string();
@@ -290,6 +293,8 @@ int runDemo(const DemoOptions& o) {
     }
     case RigKind::kMobileLidar:
       return mobileDemo(o, rig, rig_sets, scene) == 0 ? 0 : 1;
+    case RigKind::kRotatingProfile:
+      break;  // refused above
   }
   return 1;
 }

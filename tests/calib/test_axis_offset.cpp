@@ -1,0 +1,199 @@
+// Rig C's plane-constraint calibration (calib/axis_offset.hpp) on the simulated plates: the
+// simulator against the truth, ours against the 0.1 mm, the paper's grid and its step,
+// the time of both, and the warnings for planes that cannot determine the parameters.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+
+#include "calib/axis_offset.hpp"
+#include "profile_test_util.hpp"
+
+namespace sweepmap {
+namespace {
+
+using test::rigC;
+using test::simulatedPlates;
+
+constexpr double kDeg = M_PI / 180.0;
+
+// The encoder zero is a gauge freedom (planes cannot see it): ours starts from the truth's.
+AxisOffsetOptions startFromNominal(const RotatingProfileConfig& rig) {
+  AxisOffsetOptions o;
+  o.initial = rig.geometry.toGeometry();
+  o.initial.encoder_zero_rad = rig.sim.encoder_zero_deg * kDeg;
+  return o;
+}
+
+bool hasWarning(const AxisOffsetResult& r, const std::string& text) {
+  for (const auto& w : r.warnings) {
+    if (w.find(text) != std::string::npos) return true;
+  }
+  return false;
+}
+
+TEST(AxisOffsetSim, PlatePointsLieOnTheTruePlaneWithTheTrueOffsets) {
+  // No noise, a fine encoder: what is left is float storage.
+  RotatingProfileConfig rig = rigC({"sim.range_noise_sigma_mm=0", "sim.encoder_noise_counts=0",
+                                    "turntable.counts_per_revolution=1073741824"});
+  const auto poses = platePoses(rig.sim, rig.turntable);
+  const auto planes = simulatedPlates(rig, 1, 0);
+  ASSERT_EQ(planes.size(), 3u);
+  const ProfileGeometry truth = rig.sim.trueGeometry();
+  for (size_t k = 0; k < planes.size(); ++k) {
+    ASSERT_GT(planes[k].samples.size(), 100000u);
+    double worst = 0;
+    for (const auto& s : planes[k].samples) {
+      const Eigen::Vector3d p = profilePointInRigFrame(truth, s.y_mm, s.z_mm, s.encoder_rad);
+      worst = std::max(worst, std::fabs(poses[k].normal.dot(p) - poses[k].distance()));
+    }
+    EXPECT_LT(worst, 2e-4) << planes[k].source;  // float32 at 400 mm: 3e-5
+  }
+  // The three poses are not parallel.
+  EXPECT_LT(std::fabs(poses[0].normal.dot(poses[1].normal)), std::cos(20 * kDeg));
+}
+
+TEST(AxisOffsetSim, TestPieceHasTable2sDepths) {
+  RotatingProfileConfig rig = rigC({"sim.range_noise_sigma_mm=0", "sim.encoder_noise_counts=0",
+                                    "turntable.counts_per_revolution=1073741824"});
+  SimProfiler profiler(rig.profiler, rig.turntable, rig.sim, 1);
+  const ProfileGeometry truth = rig.sim.trueGeometry();
+  std::map<long, size_t> depths;  // depth below the top face [um] -> points
+  for (const Profile& p : profiler.sweep(ProfileScene::testPiece(rig.sim, rig.turntable), 0, 0)) {
+    const double a = 2 * M_PI * p.encoder_counts / p.counts_per_revolution;
+    for (size_t i = 0; i < p.y_mm.size(); ++i) {
+      const double z = profilePointInRigFrame(truth, p.y_mm[i], p.z_mm[i], a).z();
+      ++depths[std::lround((-rig.sim.test_piece.distance_mm - z) * 1000)];
+    }
+  }
+  const auto near = [&](double depth_mm) {
+    size_t n = 0;
+    for (const auto& [um, count] : depths) n += std::abs(um - depth_mm * 1000) <= 2 ? count : 0;
+    return n;
+  };
+  EXPECT_GT(near(0.0), 100000u);   // the top face
+  EXPECT_GT(near(20.01), 10000u);  // the rectangular groove's bottom
+  EXPECT_GT(near(30.03), 10000u);  // the first round groove's
+  EXPECT_GT(near(30.02), 10000u);  // the second's
+}
+
+TEST(AxisOffsetPaper, MomentsGiveEq13AndEq14) {
+  const RotatingProfileConfig rig = rigC();
+  const auto planes = simulatedPlates(rig, 1, 3000);
+  const PlaneRmseObjective objective(planes);
+  double s = 0;
+  for (const auto& plane : planes) {
+    std::vector<Eigen::Vector3d> pts;
+    for (const auto& q : plane.samples)
+      pts.push_back(zhaoEq7(121.0, 411.0, q.encoder_rad, q.y_mm, q.z_mm));
+    s += planeRmseEq14(pts, fitPlaneEq13(pts));
+  }
+  // The direct normal equations (uncentred, coordinates ~400 mm) lose a few digits.
+  EXPECT_NEAR(objective.meanRmse(121.0, 411.0), s / planes.size(), 1e-7);
+}
+
+TEST(AxisOffsetOurs, RecoversMAndNWithinATenthOfAMillimetre) {
+  std::printf("seed  |dM| mm  |dN| mm  sigma_M  sigma_N  tilt err deg\n");
+  for (const uint64_t seed : {1, 2, 3, 4, 5, 6}) {  // the default and five others
+    const RotatingProfileConfig rig = rigC();
+    const AxisOffsetResult r = solveAxisOffset(simulatedPlates(rig, seed), startFromNominal(rig));
+    const double dm = std::fabs(r.geometry.m_mm - rig.sim.offset_m_mm);
+    const double dn = std::fabs(r.geometry.n_mm - rig.sim.offset_n_mm);
+    std::printf("%4d  %7.4f  %7.4f  %7.4f  %7.4f  %+8.5f\n", static_cast<int>(seed), dm, dn,
+                r.sigma_m_mm, r.sigma_n_mm,
+                r.geometry.laser_tilt_rad / kDeg - rig.sim.laser_tilt_deg);
+    EXPECT_LT(dm, 0.1) << "seed " << seed;
+    EXPECT_LT(dn, 0.1) << "seed " << seed;
+    EXPECT_TRUE(r.observable);
+    EXPECT_TRUE(r.warnings.empty()) << r.warnings.front();
+    EXPECT_TRUE(std::isfinite(r.sigma_m_mm) && r.sigma_m_mm > 0 && r.sigma_m_mm < 0.1);
+    EXPECT_LT(r.rms_after_mm, 0.03);
+  }
+}
+
+TEST(AxisOffsetPaper, GridCannotBeatItsStep) {
+  // Without the tilt the paper's model is exact; its answer is still a node of the grid.
+  const RotatingProfileConfig rig = rigC({"sim.laser_tilt_deg=0"});
+  const auto planes = simulatedPlates(rig, 1, 5000);
+  GridSearchOptions g;  // the paper's interval, 1 mm
+  const GridSearchResult r = gridSearchAxisOffset(planes, g);
+  EXPECT_EQ(r.m_values.size(), 21u);
+  EXPECT_EQ(r.n_values.size(), 31u);
+  EXPECT_EQ(r.m_mm, std::round(r.m_mm));
+  EXPECT_EQ(r.n_mm, std::round(r.n_mm));
+  EXPECT_LE(std::fabs(r.m_mm - 123.0), 1.0);
+  EXPECT_LE(std::fabs(r.n_mm - 409.0), 1.0);
+  // Truth off the grid by 0.4 mm: the grid's error is at least that.
+  const RotatingProfileConfig off =
+      rigC({"sim.laser_tilt_deg=0", "sim.offset_m_mm=122.6", "sim.offset_n_mm=409.4"});
+  const GridSearchResult o = gridSearchAxisOffset(simulatedPlates(off, 1, 5000), g);
+  EXPECT_GE(std::fabs(o.m_mm - 122.6), 0.4 - 1e-9);
+  EXPECT_GE(std::fabs(o.n_mm - 409.4), 0.4 - 1e-9);
+  std::printf("grid 1 mm: truth (122.6, 409.4) -> (%.1f, %.1f), min S %.4f mm\n", o.m_mm, o.n_mm,
+              o.s_min_mm);
+}
+
+TEST(AxisOffsetBenchmark, OursAgainstTheGridAtATenthOfAMillimetre) {
+  const RotatingProfileConfig rig = rigC();
+  const auto planes = simulatedPlates(rig, 1, 5000);
+  const AxisOffsetResult ours = solveAxisOffset(planes, startFromNominal(rig));
+  GridSearchOptions fine;
+  fine.step_mm = 0.1;  // 10x the paper's resolution over its interval
+  const GridSearchResult grid = gridSearchAxisOffset(planes, fine);
+  GridSearchOptions paper;
+  const GridSearchResult coarse = gridSearchAxisOffset(planes, paper);
+  std::printf(
+      "points %zu: ours %.3f s (M %.3f N %.3f); grid 1 mm %.3f s (%zu nodes: M %.1f N %.1f); "
+      "grid 0.1 mm %.3f s (%zu nodes: M %.1f N %.1f); grid 0.1 mm / ours = %.0fx\n",
+      ours.residuals, ours.seconds, ours.geometry.m_mm, ours.geometry.n_mm, coarse.seconds,
+      coarse.s_mm.size(), coarse.m_mm, coarse.n_mm, grid.seconds, grid.s_mm.size(), grid.m_mm,
+      grid.n_mm, grid.seconds / ours.seconds);
+  EXPECT_EQ(grid.s_mm.size(), 201u * 301u);
+}
+
+TEST(AxisOffsetOurs, ParallelPlatesAreReportedNotDetermined) {
+  const RotatingProfileConfig rig = rigC({"sim.plate_tilt_spread_deg=0"});
+  const AxisOffsetResult r = solveAxisOffset(simulatedPlates(rig, 1, 5000), startFromNominal(rig));
+  EXPECT_FALSE(r.observable);
+  EXPECT_TRUE(hasWarning(r, "the planes are parallel")) << r.warnings.size();
+  EXPECT_LT(r.largest_plane_angle_deg, 1.0);
+}
+
+TEST(AxisOffsetOurs, LevelPlatesLeaveMAndNUndetermined) {
+  const RotatingProfileConfig rig = rigC({"sim.plate_tilt_deg=0"});
+  AxisOffsetOptions o = startFromNominal(rig);
+  o.estimate_tilt = false;
+  o.max_iterations = 20;
+  const AxisOffsetResult r = solveAxisOffset(simulatedPlates(rig, 1, 3000), o);
+  EXPECT_FALSE(r.observable);
+  EXPECT_TRUE(hasWarning(r, "M is poorly determined") || hasWarning(r, "not observable") ||
+              hasWarning(r, "parallel"));
+}
+
+TEST(AxisOffsetOurs, EncoderZeroIsNotObservableFromPlanes) {
+  const RotatingProfileConfig rig = rigC();
+  AxisOffsetOptions o = startFromNominal(rig);
+  o.estimate_encoder_zero = true;
+  const AxisOffsetResult r = solveAxisOffset(simulatedPlates(rig, 1, 5000), o);
+  EXPECT_TRUE(hasWarning(r, "encoder_zero is not observable"));
+  EXPECT_FALSE(r.zero_estimated);
+  EXPECT_DOUBLE_EQ(r.geometry.encoder_zero_rad, o.initial.encoder_zero_rad);
+  EXPECT_TRUE(r.observable);  // M and N still are
+  EXPECT_LT(std::fabs(r.geometry.m_mm - 123.0), 0.1);
+}
+
+TEST(AxisOffsetOurs, RejectsTooFewPoints) {
+  EXPECT_THROW(solveAxisOffset({}, AxisOffsetOptions{}), std::invalid_argument);
+  PlanePoints few{"log sweep 0", {{0, -300, 0}, {1, -300, 0}}};
+  try {
+    solveAxisOffset({few}, AxisOffsetOptions{});
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("log sweep 0"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace sweepmap

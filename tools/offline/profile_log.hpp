@@ -1,0 +1,36 @@
+// Reading rig C's logs: the PROFILE messages of each turntable sweep as the points of one
+// plate pose (calib/axis_offset.hpp), and the simulator's truth where the log has it.
+#pragma once
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "calib/axis_offset.hpp"
+
+namespace sweepmap {
+
+// A log that cannot serve: no profiles, a malformed or non-finite profile, a corrupt event.
+// The message names the log and, where there is one, the byte offset of the event.
+class ProfileLogError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct ProfileLogTruth {
+  ProfileGeometry geometry;  // true M, N, tilt, encoder zero
+  std::string scene;
+};
+
+struct ProfileLog {
+  std::vector<PlanePoints> sweeps;  // one per sweep id, in order of first appearance
+  std::optional<ProfileLogTruth> truth;
+  int64_t profiles = 0;
+};
+
+// Every PROFILE of the log, grouped by sweep (sources "LOG sweep K"). Throws
+// ProfileLogError as above.
+ProfileLog readProfileLog(const std::string& path);
+
+}  // namespace sweepmap
