@@ -1,5 +1,6 @@
 #include "processes/live_runner.hpp"
 
+#include <cerrno>
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
@@ -109,7 +110,7 @@ class LiveRun {
     if (!options_.wake_on_message) return;
     receiver_ = std::thread([this] {
       while (receiving_) {
-        if (lcm_.handleTimeout(50) < 0) {
+        if (failed(lcm_.handleTimeout(50))) {
           lcm_failed_ = true;
           break;
         }
@@ -141,7 +142,7 @@ class LiveRun {
     auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
     if (!options_.wake_on_message) {
       while (!lcm_failed_ && std::chrono::steady_clock::now() < drain_until) {
-        if (lcm_.handleTimeout(20) < 0) lcm_failed_ = true;
+        if (failed(lcm_.handleTimeout(20))) lcm_failed_ = true;
       }
       drain_until = std::chrono::steady_clock::now();
     }
@@ -160,12 +161,16 @@ class LiveRun {
   }
 
  private:
+  // A handle call that failed, not one that a signal interrupted (select's EINTR: the stop
+  // signal arriving while this thread waits is no failure of LCM).
+  static bool failed(int rc) { return rc < 0 && errno != EINTR; }
+
   void receiveBuffered() {
     if (options_.wake_on_message) return;
     int rc = 0;
     while ((rc = lcm_.handleTimeout(0)) > 0) {
     }
-    if (rc < 0) lcm_failed_ = true;
+    if (failed(rc)) lcm_failed_ = true;
   }
 
   void dispatch(const Message& m) {
