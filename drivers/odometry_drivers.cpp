@@ -49,6 +49,26 @@ void awaitFirstFrame(ByteStream& stream, int timeout_ms, const std::string& what
                     std::to_string(read_ahead->size()) + " bytes read)");
 }
 
+// What both sessions' onBytes share: the chunk through the decoder, the line clock set for it,
+// each decode error reported with its stream offset, every other event to `on_event`.
+template <class Decoder, class Event, class OnEvent>
+void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* data, size_t size,
+                 int64_t arrival_utime, bool raw, int64_t* fed, LineClock* line,
+                 std::vector<std::string>* errors, OnEvent on_event) {
+  events->clear();
+  decoder.feed(data, size, events);
+  *fed += static_cast<int64_t>(size);
+  line->arrival = raw ? -1 : arrival_utime;
+  line->chunk_end = *fed;
+  for (const Event& e : *events) {
+    if (const auto* d = std::get_if<DecodeError>(&e)) {
+      errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
+    } else {
+      on_event(e);
+    }
+  }
+}
+
 }  // namespace
 
 // ---- HI219 ----
@@ -65,40 +85,29 @@ void Hi219Session::reset() {
 
 int Hi219Session::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                           std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
-  events_.clear();
-  decoder_.feed(data, size, &events_);
-  fed_ += static_cast<int64_t>(size);
-  line_.arrival = raw_ ? -1 : arrival_utime;
-  line_.chunk_end = fed_;
   int n = 0;
-  for (const hi219::Event& e : events_) {
-    if (const auto* d = std::get_if<DecodeError>(&e)) {
-      errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
-      continue;
-    }
-    const auto& f = std::get<hi219::Frame>(e);
-    if (f.id >= 0) user_id_ = f.id;
-    if (!f.has_gyro || !f.has_accel) continue;  // not a sample the odometry can use
-    ImuSample s{};
-    if (f.has_time) {
-      if (raw_) {
-        s.utime = int64_t{f.time_ms} * 1000;
-      } else {
-        // The frame arrived complete at the receive time of its last byte.
-        const int64_t complete = line_.at(f.offset + f.size);
-        s.utime = clock_.observe(f.time_ms, complete);
-      }
-    } else {
-      s.utime = line_.at(f.offset);
-    }
-    for (int k = 0; k < 3; ++k) {
-      s.gyro[k] = f.gyro_rad_s[k];
-      s.accel[k] = f.accel_m_s2[k];
-      s.rpy[k] = f.has_euler ? f.rpy_rad[k] : std::numeric_limits<double>::quiet_NaN();
-    }
-    samples->push_back(s);
-    ++n;
-  }
+  decodeChunk(decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
+              [&](const hi219::Event& e) {
+                const auto& f = std::get<hi219::Frame>(e);
+                if (f.id >= 0) user_id_ = f.id;
+                if (!f.has_gyro || !f.has_accel) return;  // not a sample the odometry can use
+                ImuSample s{};
+                if (f.has_time) {
+                  // Raw: the IMU's clock; else the frame arrived complete at the receive time
+                  // of its last byte.
+                  s.utime = raw_ ? int64_t{f.time_ms} * 1000
+                                 : clock_.observe(f.time_ms, line_.at(f.offset + f.size));
+                } else {
+                  s.utime = line_.at(f.offset);
+                }
+                for (int k = 0; k < 3; ++k) {
+                  s.gyro[k] = f.gyro_rad_s[k];
+                  s.accel[k] = f.accel_m_s2[k];
+                  s.rpy[k] = f.has_euler ? f.rpy_rad[k] : std::numeric_limits<double>::quiet_NaN();
+                }
+                samples->push_back(s);
+                ++n;
+              });
   return n;
 }
 
@@ -129,35 +138,28 @@ void WheelBoardSession::reset() {
 
 int WheelBoardSession::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                                std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
-  events_.clear();
-  decoder_.feed(data, size, &events_);
-  fed_ += static_cast<int64_t>(size);
-  line_.arrival = raw_ ? -1 : arrival_utime;
-  line_.chunk_end = fed_;
   int n = 0;
-  for (const wheelboard::Event& e : events_) {
-    if (const auto* d = std::get_if<DecodeError>(&e)) {
-      errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
-      continue;
-    }
-    const auto* t = std::get_if<wheelboard::Ticks>(&e);
-    if (!t) continue;
-    WheelTicks w{};
-    if (raw_) {
-      // The board's own clock, unwrapped past 32 bits, from its first reading.
-      if (!board_clock_.have)
-        board_clock0_ = int64_t{t->time_us} - static_cast<int32_t>(t->time_us);
-      w.utime = board_clock0_ + board_clock_(t->time_us);
-    } else {
-      const int64_t complete = line_.at(t->offset + wheelboard::kTicksFrameBytes);
-      w.utime = clock_.observe(t->time_us, complete);
-    }
-    w.left = left_(static_cast<uint32_t>(t->left));
-    w.right = right_(static_cast<uint32_t>(t->right));
-    w.flags = t->flags;
-    ticks->push_back(w);
-    ++n;
-  }
+  decodeChunk(decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
+              [&](const wheelboard::Event& e) {
+                const auto* t = std::get_if<wheelboard::Ticks>(&e);
+                if (!t) return;  // a SPEED frame of a two-way capture
+                WheelTicks w{};
+                if (raw_) {
+                  // The board's own clock, unwrapped past 32 bits, from its first reading.
+                  if (!board_clock_.have) {
+                    board_clock0_ = int64_t{t->time_us} - static_cast<int32_t>(t->time_us);
+                  }
+                  w.utime = board_clock0_ + board_clock_(t->time_us);
+                } else {
+                  const int64_t complete = line_.at(t->offset + wheelboard::kTicksFrameBytes);
+                  w.utime = clock_.observe(t->time_us, complete);
+                }
+                w.left = left_(static_cast<uint32_t>(t->left));
+                w.right = right_(static_cast<uint32_t>(t->right));
+                w.flags = t->flags;
+                ticks->push_back(w);
+                ++n;
+              });
   return n;
 }
 

@@ -60,10 +60,18 @@ ScanSource syntheticScans(const LidarConfig& lidar) {
 
 void benchDecoders(const DevicesBenchOptions& o, std::ostream& out) {
   const std::vector<Protocol> protocols = {
-      {"scip (UST-10LX, ME: ranges + intensities)", EmulatedModel::kUst10lx, DeviceProtocol::kScip,
-       "rig_a", "BM\nME0000108000000\n"},
-      {"ydlidar (X4)", EmulatedModel::kX4, DeviceProtocol::kYdlidarX4, "rig_b",
-       std::string("\xA5\x60", 2)},
+      {"scip (UST-10LX, ME: ranges + intensities)",
+       EmulatedModel::kUst10lx,
+       DeviceProtocol::kScip,
+       "rig_a",
+       "BM\nME0000108000000\n",
+       {}},
+      {"ydlidar (X4)",
+       EmulatedModel::kX4,
+       DeviceProtocol::kYdlidarX4,
+       "rig_b",
+       std::string("\xA5\x60", 2),
+       {}},
       {"rplidar (A1, standard scan)",
        EmulatedModel::kRplidarA1,
        DeviceProtocol::kRplidar,
@@ -138,19 +146,26 @@ void measureProcess(ProcessGroup& procs, const std::string& name, pid_t pid, pid
       << std::setprecision(1) << emu_share * 100.0 << " %\n";
 }
 
-// sweepmap-lidar driving the emulated UST-10LX over loopback TCP, measured from /proc.
-void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
-  out << "sweepmap-lidar process (real SCIP driver, emulated UST-10LX at 40 Hz over loopback "
-         "TCP, private network namespace; share of one core = CPU s / wall s):\n";
+// Whether the process benches can run here (the executables, a private network namespace,
+// entered now); says why not.
+bool canRunProcesses(const DevicesBenchOptions& o, std::ostream& out) {
   if (o.bin_dir.empty()) {
     out << "  skipped: executables not found\n";
-    return;
+    return false;
   }
   std::string why;
   if (!enterPrivateNetwork(&why)) {
     out << "  skipped: no private network namespace (" << why << ")\n";
-    return;
+    return false;
   }
+  return true;
+}
+
+// sweepmap-lidar driving the emulated UST-10LX over loopback TCP, measured from /proc.
+void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
+  out << "sweepmap-lidar process (real SCIP driver, emulated UST-10LX at 40 Hz over loopback "
+         "TCP, private network namespace; share of one core = CPU s / wall s):\n";
+  if (!canRunProcesses(o, out)) return;
   const fs::path bin = o.bin_dir;
   const std::string url = kDefaultLcmUrl;
   ProcessGroup procs;
@@ -173,15 +188,7 @@ void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
 void benchOdometryProcess(const DevicesBenchOptions& o, std::ostream& out) {
   out << "sweepmap-odometry process (real HI219 and wheel board drivers, emulated devices on "
          "ptys: 400 Hz IMU, 100 Hz wheels; share of one core):\n";
-  if (o.bin_dir.empty()) {
-    out << "  skipped: executables not found\n";
-    return;
-  }
-  std::string why;
-  if (!enterPrivateNetwork(&why)) {
-    out << "  skipped: no private network namespace (" << why << ")\n";
-    return;
-  }
+  if (!canRunProcesses(o, out)) return;
   const fs::path bin = o.bin_dir;
   const fs::path dir = fs::temp_directory_path() / ("sweepmap_bench_" + std::to_string(::getpid()));
   fs::create_directories(dir);
