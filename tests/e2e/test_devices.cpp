@@ -188,9 +188,12 @@ TEST_F(DevicesTest, ScipOverTcpWithDriftAndWrap) {
             << m.p99_time_us << " us, worst " << m.worst_time_us << " us, worst range error "
             << m.worst_range_m * 1e3 << " mm over " << m.rays_compared << " rays\n";
   EXPECT_EQ(m.matched, m.scans);
-  // Within 1 ms for 99 % of the scans, and never far off: the host (this test shares it
-  // with the emulator and, in CI, other tests) can hold a TM1 reply or a scan up.
-  EXPECT_LE(m.p99_time_us, 1000.0);
+  // Within 1.5 ms for 99 % of the scans, and never far off. The error is mostly one offset per
+  // run: a stamp's 1 ms counter tick (±0.5 ms) plus the TM1 anchor's (half its interval, at
+  // least one tick wide, plus half a round trip) — up to ~1.1 ms measured here (0.3-1.1 ms
+  // over runs) — and the host (shared with the emulator and, in CI, other tests) can hold a
+  // TM1 reply or a scan up.
+  EXPECT_LE(m.p99_time_us, 1500.0);
   EXPECT_LE(m.worst_time_us, 3000.0);
   EXPECT_LE(m.worst_range_m, 0.0011);
   EXPECT_GT(m.rays_compared, 100000u);
