@@ -4,7 +4,7 @@
 //   iptables-legacy -A INPUT -i veth-laptop -s 10.77.0.1 -p udp -j NFQUEUE --queue-num 7
 // It answers each with a verdict: it drops one packet chosen at random in every block of
 // 1/loss packets (exactly `loss` of them, never a long run without a loss), and holds a
-// packet now and then (probability `reorder`) until 1 to 3 later ones have been let
+// packet now and then (probability `reorder`) until 1 to 4 later ones have been let
 // through, or until `hold_ms` has passed with no other packet: the held one then arrives
 // after them. The kernel matches verdicts by packet id, so they may come in any order.
 // On SIGINT or SIGTERM it lets every held packet through and prints its counts.
@@ -71,7 +71,7 @@ struct Impairer {
     }
     if (std::uniform_real_distribution<double>(0.0, 1.0)(rng) < reorder) {
       ++held_count;
-      const int after = 1 + static_cast<int>(rng() % 3);
+      const int after = 1 + static_cast<int>(rng() % 4);
       held.push_back({id, after, after, Clock::now()});
       return;
     }
