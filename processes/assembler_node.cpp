@@ -98,6 +98,11 @@ void AssemblerNode::onScan(const Message& msg, Outbox& out) {
   while (scans_.size() > static_cast<size_t>(std::max(1, rig_.assembler.max_pending_scans))) {
     scans_.pop_front();
     count("scans_evicted");
+    // Gaps before the oldest pending scan are of evicted scans (counted above): forget them,
+    // so a lidar without a motor keeps no growing list.
+    while (!gaps_.empty() && gaps_.front().before_utime <= scans_.front().utime) {
+      gaps_.pop_front();
+    }
   }
   assembleReady(msg.utime, false, out);
 }

@@ -229,5 +229,21 @@ TEST_F(AssemblerNodeTest, SeqRestartIsNoGapAndAWildSeqIsBounded) {
   EXPECT_EQ(node.counter("sweeps_incomplete"), 1);
 }
 
+// Without windows the assembler keeps max_pending_scans scans; the gaps among scans it has
+// evicted go with them (counted as scans_evicted, not as missing in a later sweep).
+TEST_F(AssemblerNodeTest, GapsAmongEvictedScansAreForgotten) {
+  rig_.assembler.max_pending_scans = 5;
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs;
+  for (int j = 0; j <= 20; ++j) {
+    if (j != 3 && j != 7 && j != 18) msgs.push_back(scanMsg(j));
+  }
+  msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 20));
+  feed(msgs, &node);
+  EXPECT_EQ(node.counter("sweeps"), 1);
+  EXPECT_GT(node.counter("scans_evicted"), 0);
+  EXPECT_EQ(node.counter("scans_missing"), 1);  // 18, among the pending scans
+}
+
 }  // namespace
 }  // namespace sweepmap
