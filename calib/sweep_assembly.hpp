@@ -35,6 +35,9 @@ struct AssembledSweep {
   double phi_offset_rad = 0.0;  // applied rotation (0 when not corrected)
   bool corrected = false;
   std::string reason;  // why not corrected
+  // Scans of the window that never reached the assembler (a gap in their seq; set by
+  // processes/assembler_node, 0 here): the sweep is incomplete.
+  int missing_scans = 0;
 };
 
 // `scans` must be the valid scans of the window in time order. Rays with range 0 or

@@ -66,6 +66,9 @@ LogReadResult forEachSweep(
   result.scans = assembler.counter("scans");
   result.invalid = assembler.counter("invalid");
   result.dropped = assembler.counter("dropped");
+  result.sweeps_incomplete = assembler.counter("sweeps_incomplete");
+  result.scans_missing = assembler.counter("scans_missing");
+  result.windows_missing = assembler.counter("windows_missing");
   return result;
 }
 

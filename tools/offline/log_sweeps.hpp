@@ -26,6 +26,9 @@ struct LogReadResult {
   int64_t last_utime = 0;
   std::map<std::string, int64_t> skipped_channels;
   int64_t scans = 0, invalid = 0, dropped = 0;  // assembler counters
+  // Sweeps published with scans missing, those scans, and sweeps whose window never came
+  // (assembler counters; see processes/assembler_node.hpp).
+  int64_t sweeps_incomplete = 0, scans_missing = 0, windows_missing = 0;
   bool log_error = false;  // truncated or corrupt log (everything before it was processed)
   std::string error;
   std::optional<double> alpha_true_rad;

@@ -61,6 +61,7 @@ nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth,
   j["window_start_utime"] = s.window.start_utime;
   j["mode"] = s.window.mode;
   j["scans"] = s.scans;
+  j["missing_scans"] = s.missing_scans;
   j["points"] = s.points.size();
   j["plate_points"] = s.plate.points;
   j["beta_deg"] = s.plate.found ? nlohmann::json(roundTo(s.plate.beta_rad * kRadToDeg, 6))
@@ -90,8 +91,12 @@ void writeSummary(const fs::path& out, const std::string& log_path, const LogRea
                     {"free_voxels", st.free_voxels},
                     {"sweeps_inserted", st.sweeps_inserted}};
   summary["skipped_channels"] = read.skipped_channels;
-  summary["assembler"] = {
-      {"scans", read.scans}, {"invalid", read.invalid}, {"dropped", read.dropped}};
+  summary["assembler"] = {{"scans", read.scans},
+                          {"invalid", read.invalid},
+                          {"dropped", read.dropped},
+                          {"sweeps_incomplete", read.sweeps_incomplete},
+                          {"scans_missing", read.scans_missing},
+                          {"windows_missing", read.windows_missing}};
   if (read.alpha_true_rad) {
     summary["truth"] = {{"alpha_true_deg", roundTo(*read.alpha_true_rad * kRadToDeg, 6)},
                         {"scene", read.scene}};
@@ -147,6 +152,9 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   const LogReadResult read = forEachSweep(options.log_path, rig, onSweep, lo);
   derived.close();
   result.events = read.events;
+  result.sweeps_incomplete = static_cast<int>(read.sweeps_incomplete);
+  result.scans_missing = read.scans_missing;
+  result.windows_missing = read.windows_missing;
   result.log_error = read.log_error;
   result.error = read.error;
   result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
