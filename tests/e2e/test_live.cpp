@@ -5,7 +5,9 @@
 // and sweepmap-mapper (all --rig rig_b) gives the poses, clouds and map of `sweepmap replay`;
 // rig C's demo (sweepmap-profiler, -assembler, -mapper) equals its replay.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
 
+#include <cstdlib>
 #include <thread>
 
 #include "processes/channels.hpp"
@@ -214,6 +216,27 @@ TEST_F(LiveTest, RigBDemoLiveMapEqualsReplayedMap) {
   EXPECT_GT(readJson(dir / "summary.json")["scans"].get<int>(), 40);
   EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(dir / "map.bt"))
       << "the live mapper's map differs from the replay of the recorded log";
+}
+
+// sweepmap-profiler refuses what it cannot serve before opening anything: another kind's rig,
+// a device with no driver, bad flags (exit 2, naming the reason).
+TEST(RigCProcesses, ProfilerRefusesOtherKindsAndDevicesItHasNoDriverFor) {
+  const auto dir = scratchDir("profiler_refuses");
+  const auto run = [&](const std::string& args, const std::string& name) {
+    const std::string out = (dir / (name + ".txt")).string();
+    const int rc =
+        std::system((binPath("sweepmap-profiler") + " " + args + " > " + out + " 2>&1").c_str());
+    return std::make_pair(WEXITSTATUS(rc), readFile(out));
+  };
+  const auto [kind_rc, kind] = run("--rig rig_a", "kind");
+  EXPECT_EQ(kind_rc, 2);
+  EXPECT_NE(kind.find("needs a rotating_profile rig"), std::string::npos) << kind;
+  const auto [device_rc, device] =
+      run("--rig rig_c --set turntable.device=serial:///dev/x", "device");
+  EXPECT_EQ(device_rc, 2);
+  EXPECT_NE(device.find("turntable.device"), std::string::npos) << device;
+  const auto [flag_rc, flag] = run("--rig rig_c --pause-s -1", "flag");
+  EXPECT_NE(flag_rc, 0);
 }
 
 // Rig C live: `sweepmap demo --rig rig_c` runs sweepmap-profiler (the simulated turntable and
