@@ -218,6 +218,59 @@ TEST_F(LiveTest, RigBDemoLiveMapEqualsReplayedMap) {
       << "the live mapper's map differs from the replay of the recorded log";
 }
 
+// A `sweepmap sim --rig rig_c` log (the test piece) played by lcm-logplayer into
+// sweepmap-assembler and sweepmap-mapper (--rig rig_c) gives the chunks and map of `sweepmap
+// replay`: the offline simulation's raw messages are what the live processes take.
+TEST_F(LiveTest, RigCLogplayerIntoLiveProcessesMatchesReplay) {
+  const auto dir = scratchDir("live_rig_c");
+  const std::string sim_log = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(
+      sweepmap({"sim", "--rig", "rig_c", "--scene", "test_piece", "--seed", "6", "--out", sim_log}),
+      0);
+  const std::string rec = (dir / "recorded.lcmlog").string();
+  const auto procC = [&](const std::string& name, std::vector<std::string> args) {
+    args.insert(args.begin(), binPath("sweepmap-" + name));
+    args.insert(args.end(), {"--rig", "rig_c", "--lcm-url", kUrl});
+    return args;
+  };
+  ProcessGroup procs;
+  const pid_t logger =
+      procs.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c", "SWEEP_CLOUD", rec},
+                  (dir / "logger.txt").string());
+  const pid_t assembler =
+      procs.start("assembler", procC("assembler", {}), (dir / "assembler.txt").string());
+  const pid_t mapper =
+      procs.start("mapper", procC("mapper", {"--save", (dir / "live_map.bt").string()}),
+                  (dir / "mapper.txt").string());
+  std::this_thread::sleep_for(std::chrono::milliseconds(700));
+  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
+                                   (dir / "logplayer.txt").string());
+  ASSERT_EQ(procs.wait(player, 60.0), 0) << readFile(dir / "logplayer.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(800));
+  EXPECT_EQ(procs.stop(assembler, 10.0), 0) << readFile(dir / "assembler.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(mapper, 60.0), 0) << readFile(dir / "mapper.txt");
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+
+  const auto offline_dir = dir / "offline";
+  ASSERT_EQ(
+      sweepmap({"replay", sim_log, "--rig", "rig_c", "--out", offline_dir.string(), "--no-plots"},
+               dir / "replay.txt"),
+      0)
+      << readFile(dir / "replay.txt");
+  const auto live = readChannel(rec, channels::kSweepCloud);
+  const auto offline =
+      readChannel((offline_dir / "derived.lcmlog").string(), channels::kSweepCloud);
+  ASSERT_GT(offline.size(), 300u);
+  ASSERT_EQ(live.size(), offline.size());
+  size_t differ = 0;
+  for (size_t i = 0; i < live.size(); ++i) differ += live[i].data != offline[i].data;
+  EXPECT_EQ(differ, 0u) << differ << " of " << live.size() << " chunks differ";
+  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(offline_dir / "map.bt"))
+      << "the live mapper's map differs from the replay's";
+}
+
 // sweepmap-profiler refuses what it cannot serve before opening anything: another kind's rig,
 // a device with no driver, bad flags (exit 2, naming the reason).
 TEST(RigCProcesses, ProfilerRefusesOtherKindsAndDevicesItHasNoDriverFor) {
