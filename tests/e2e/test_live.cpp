@@ -290,6 +290,12 @@ TEST(RigCProcesses, ProfilerRefusesOtherKindsAndDevicesItHasNoDriverFor) {
   EXPECT_NE(device.find("turntable.device"), std::string::npos) << device;
   const auto [flag_rc, flag] = run("--rig rig_c --pause-s -1", "flag");
   EXPECT_NE(flag_rc, 0);
+  // The demo has no emulated devices for rig C.
+  EXPECT_EQ(sweepmap({"demo", "--rig", "rig_c", "--devices", "emulated", "--out",
+                      (dir / "demo").string()},
+                     dir / "demo.txt"),
+            2);
+  EXPECT_NE(readFile(dir / "demo.txt").find("only simulated devices"), std::string::npos);
 }
 
 // Rig C live: `sweepmap demo --rig rig_c` runs sweepmap-profiler (the simulated turntable and

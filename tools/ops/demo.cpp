@@ -322,6 +322,11 @@ int runDemo(const DemoOptions& o) {
   }
   Rig rig = loadRig(o.rig, rig_sets);
   if (auto* profile = std::get_if<RotatingProfileConfig>(&rig.config)) {
+    if (o.devices != "sim") {
+      throw ConfigError("--devices " + o.devices + ": " + rig.path +
+                        " is a rotating_profile rig: only simulated devices (no protocol, "
+                        "driver or emulator for its turntable and profile sensor yet)");
+    }
     // Rig C's scenes are built in: --scene picks one (plate | test_piece).
     if (!o.scene.empty()) {
       if (o.scene != "plate" && o.scene != "test_piece") {
