@@ -127,6 +127,8 @@ class SimProfiler {
   // `encoder_rad` (before its zero): the points the laser meets, with range noise, and the
   // encoder count latched (noise, then quantised). Draws from the seed's streams in order.
   Profile profile(const ProfileScene& scene, double encoder_rad, int64_t utime, int32_t sweep_id);
+
+ private:
   ProfilerConfig profiler_;
   TurntableConfig turntable_;
   SimProfileConfig sim_;
