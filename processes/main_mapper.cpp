@@ -9,7 +9,8 @@ int main(int argc, char** argv) {
   using namespace sweepmap;
   CLI::App app{
       "sweepmap-mapper: inserts assembled sweeps (rotating_lidar rigs) or world-frame "
-      "scans (mobile_lidar rigs, in mapper.batch_s batches) "
+      "scans (mobile_lidar rigs) or profiles (rotating_profile rigs), in mapper.batch_s "
+      "batches, "
       "into an OctoMap OcTree, publishes MAP_STATS, saves the map (.bt, atomically) on "
       "MAP_SAVE and on shutdown"};
   CommonOptions common;
@@ -20,14 +21,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   const std::optional<Rig> rig = loadRigOrReport(common);
   if (!rig) return 2;
-  const auto* rotating = std::get_if<RotatingLidarConfig>(&rig->config);
-  const auto* mobile = std::get_if<MobileLidarConfig>(&rig->config);
-  if (!rotating && !mobile) {
-    std::cerr << "sweepmap-mapper: " << rig->path << " is a " << rig->kindName()
-              << " rig: no mapper for its kind\n";
-    return 2;
-  }
-  const MapperConfig config = rotating ? rotating->mapper : mobile->mapper;
+  const MapperConfig config = std::visit([](const auto& c) { return c.mapper; }, rig->config);
 
   lcm::LCM lcm(common.lcm_url);
   MapperNode node(config, save_path);

@@ -19,4 +19,25 @@ truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scen
   return m;
 }
 
+truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t sweep_id,
+                                        int64_t utime, const PlatePose* plate) {
+  const ProfileGeometry g = sim.trueGeometry();
+  truth_profile_rig_t t{};
+  t.utime = utime;
+  t.sweep_id = sweep_id;
+  t.offset_m_mm = g.m_mm;
+  t.offset_n_mm = g.n_mm;
+  t.laser_tilt_rad = g.laser_tilt_rad;
+  t.encoder_zero_rad = g.encoder_zero_rad;
+  t.range_noise_sigma_mm = sim.range_noise_sigma_mm;
+  t.encoder_noise_counts = sim.encoder_noise_counts;
+  t.scene = sim.scene;
+  t.has_plane = plate != nullptr;
+  if (plate) {
+    for (int i = 0; i < 3; ++i) t.plane_normal[i] = plate->normal[i];
+    t.plane_distance_mm = plate->distance();
+  }
+  return t;
+}
+
 }  // namespace sweepmap

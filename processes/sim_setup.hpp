@@ -4,7 +4,9 @@
 #include <cstdint>
 
 #include "drivers/scene.hpp"
+#include "drivers/sim_profiler.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 
 namespace sweepmap {
@@ -20,5 +22,10 @@ inline uint64_t lidarSeed(uint64_t seed) { return seed * 2 + 2; }
 
 truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config,
                          const Scene& scene, int64_t utime);
+
+// Rig C's truth (TRUTH_PROFILE_RIG) for sweep `sweep_id`, with the plate's true plane when
+// `plate` is given: what the offline simulation and the live simulated profiler publish.
+truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t sweep_id,
+                                        int64_t utime, const PlatePose* plate);
 
 }  // namespace sweepmap

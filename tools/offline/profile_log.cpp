@@ -48,7 +48,7 @@ ProfileLog readProfileLog(const std::string& path) {
       }
       PlanePoints& plane = out.sweeps[it->second];
       const double encoder_rad =
-          2.0 * M_PI * static_cast<double>(msg.encoder_counts) / msg.counts_per_revolution;
+          turntableAngleRad(msg.encoder_counts, msg.counts_per_revolution, 0.0);
       for (int32_t i = 0; i < msg.point_count; ++i) {
         plane.samples.push_back({msg.y_mm[i], msg.z_mm[i], encoder_rad});
       }

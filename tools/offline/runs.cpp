@@ -152,7 +152,7 @@ ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
                  },
                  [&](const RotatingProfileConfig& config) {
                    const ProfileReplayResult r =
-                       replayProfileLog(options.log_path, config, options.out_dir);
+                       replayProfileLog(options.log_path, config, options.out_dir, options.plots);
                    std::ostringstream line;
                    line << r.events << " events, " << r.profiles << " profiles in " << r.sweeps
                         << " sweeps, " << r.points << " points";
