@@ -6,6 +6,7 @@
 #include "processes/convert.hpp"
 #include "processes/sim_setup.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
+#include "sweepmap/truth_test_piece_t.hpp"
 
 namespace sweepmap {
 
@@ -29,6 +30,31 @@ truth_profile_rig_t truthMessage(const SimProfileConfig& sim, int32_t sweep_id, 
     for (int i = 0; i < 3; ++i) t.plane_normal[i] = plate->normal[i];
     t.plane_distance_mm = plate->distance();
   }
+  return t;
+}
+
+// The test piece's true sizes and frame (what Zhao 2021's CMM measured).
+truth_test_piece_t testPieceMessage(const TestPieceConfig& c, const ProfileScene::Frame& f,
+                                    int32_t sweep_id, int64_t utime) {
+  truth_test_piece_t t{};
+  t.utime = utime;
+  t.sweep_id = sweep_id;
+  for (int i = 0; i < 3; ++i) {
+    t.origin[i] = f.origin[i];
+    t.u_axis[i] = f.u[i];
+    t.v_axis[i] = f.v[i];
+    t.w_axis[i] = f.w[i];
+  }
+  t.block_length_mm = c.block_length_mm;
+  t.block_width_mm = c.block_width_mm;
+  t.spacing_mm = c.spacing_mm;
+  t.left_diameter_mm = c.left_diameter_mm;
+  t.left_depth_mm = c.left_depth_mm;
+  t.right_diameter_mm = c.right_diameter_mm;
+  t.right_depth_mm = c.right_depth_mm;
+  t.rect_length_mm = c.rect_length_mm;
+  t.rect_width_mm = c.rect_width_mm;
+  t.rect_depth_mm = c.rect_depth_mm;
   return t;
 }
 
@@ -58,6 +84,10 @@ SimProfileResult simulateRotatingProfile(const RotatingProfileConfig& rig, uint6
     Outbox out;
     out.publish(channels::kTruthProfileRig, start,
                 truthMessage(rig.sim, sweep_id, start, plates.empty() ? nullptr : &plates[k]));
+    if (const auto frame = scenes[k].testPieceFrame()) {
+      out.publish(channels::kTruthTestPiece, start,
+                  testPieceMessage(rig.sim.test_piece, *frame, sweep_id, start));
+    }
     for (const Profile& p : profiler.sweep(scenes[k], sweep_id, start)) {
       out.publish(channels::kProfile, p.utime, toLcm(p));
       ++result.profiles;
