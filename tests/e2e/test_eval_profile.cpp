@@ -10,15 +10,15 @@ namespace sweepmap {
 namespace test {
 namespace {
 
-const std::vector<std::string> kFeatures = {"left_diameter", "left_depth", "right_diameter",
+const std::vector<std::string> kFeatures = {"left_diameter", "left_depth",  "right_diameter",
                                             "right_depth",   "rect_length", "rect_width",
                                             "rect_depth"};
 const std::vector<std::string> kSettings = {"ours", "grid", "too_small", "too_large"};
 const std::vector<std::string> kAlongScan = {"left_diameter", "right_diameter", "rect_length"};
 
 std::vector<std::string> experiment(int repeats) {
-  return {"eval", "--experiment", "paper", "--rig", "rig_c", "--repeats", std::to_string(repeats),
-          "--quiet"};
+  return {"eval",      "--experiment",          "paper",  "--rig", "rig_c",
+          "--repeats", std::to_string(repeats), "--quiet"};
 }
 
 class EvalProfilePaper : public ::testing::Test {
@@ -57,7 +57,8 @@ TEST_F(EvalProfilePaper, ReportHasTheIssuesKeys) {
   EXPECT_DOUBLE_EQ(report_["feature_truth_mm"]["left_diameter"].get<double>(), 50.01);
   EXPECT_EQ(report_["logs"].size(), 5u);
   EXPECT_TRUE(fs::exists(dir_ / "report.md"));
-  for (const auto& f : report_["figures"]) EXPECT_TRUE(fs::exists(dir_ / f.get<std::string>())) << f;
+  for (const auto& f : report_["figures"])
+    EXPECT_TRUE(fs::exists(dir_ / f.get<std::string>())) << f;
 }
 
 TEST_F(EvalProfilePaper, OursCalibratesWithinATenthOfAMillimetreAndTheGridToItsStep) {
@@ -117,8 +118,8 @@ TEST(EvalProfileOptions, RejectsWhatDoesNotApply) {
                       (dir / "c").string()},
                      dir / "c.txt"),
             2);
-  EXPECT_EQ(sweepmap({"eval", "--experiment", "paper", "--rig", "rig_c", "--repeats", "1",
-                      "--out", (dir / "r").string()},
+  EXPECT_EQ(sweepmap({"eval", "--experiment", "paper", "--rig", "rig_c", "--repeats", "1", "--out",
+                      (dir / "r").string()},
                      dir / "r.txt"),
             2);
 }

@@ -6,6 +6,7 @@
 #include "rigs/rig_file.hpp"
 #include "tools/bench/bench_devices.hpp"
 #include "tools/bench/bench_mobile.hpp"
+#include "tools/bench/bench_profile.hpp"
 #include "tools/bench/bench_rotating.hpp"
 #include "tools/bench/bench_stepper.hpp"
 #include "tools/cli/commands.hpp"
@@ -15,7 +16,7 @@ namespace sweepmap {
 Runner addBenchCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bench",
-      "Measure speed and memory for each rig given (default: rig_a and rig_b). "
+      "Measure speed and memory for each rig given (default: rig_a, rig_b and rig_c). "
       "rotating_lidar: simulation and offline replay speed (assembly + plate correction + "
       "OctoMap) as real-time factors for modes 1 and 7, points per second, one sweep's plate "
       "correction and peak memory. mobile_lidar: EKF updates per second, the CPU share of the "
@@ -26,11 +27,13 @@ Runner addBenchCommand(CLI::App& app) {
       "UST-10LX at 40 Hz and of sweepmap-odometry reading the emulated HI219 (400 Hz) and "
       "wheel board (100 Hz), and the GPIO step generator's timing (emitted - planned step "
       "times, its thread's CPU share) through a mode-7 sweep on a fake chip, about 17 s "
-      "(--no-devices skips them). rotating_profile (rig C): nothing yet (the calibration's "
-      "timing is printed by its unit test). Prints figures; run on an idle machine, compare "
+      "(--no-devices skips them). rotating_profile (rig C): the axis-offset calibration on the "
+      "default simulated plates (calib axis-offset's default point subset), ours (Ceres) "
+      "against the paper's grid search over its interval at 1 mm and at 0.1 mm (10x finer), "
+      "as seconds and a ratio. Prints figures; run on an idle machine, compare "
       "ratios within one run");
   struct Opts {
-    std::vector<std::string> rigs = {"rig_a", "rig_b"};
+    std::vector<std::string> rigs = {"rig_a", "rig_b", "rig_c"};
     std::string scene;
     std::string work = "build/bench";
     int sweeps = 2;
@@ -99,10 +102,14 @@ Runner addBenchCommand(CLI::App& app) {
           benchRigB(b, std::cout);
           break;
         }
-        case RigKind::kRotatingProfile:
-          std::cout << "  no benchmark for this kind yet (the axis-offset calibration's timing is "
-                       "printed by its unit test)\n";
+        case RigKind::kRotatingProfile: {
+          ProfileBenchOptions b;
+          b.rig = rig.path;
+          std::cout << std::setprecision(3);
+          benchProfile(b, std::cout);
+          std::cout << std::setprecision(2);
           break;
+        }
       }
     }
     if (!o->no_devices) {

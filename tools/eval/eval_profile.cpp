@@ -47,7 +47,8 @@ ProfileLog simulateLog(const ProfileExperimentOptions& o, const RotatingProfileC
   const fs::path log = fs::path(o.out_dir) / "logs" / (name + ".lcmlog");
   {
     EventLogWriter w(log.string());
-    simulateRotatingProfile(rig, seed, [&](const Message& m) { w.write(m.utime, m.channel, m.data); });
+    simulateRotatingProfile(rig, seed,
+                            [&](const Message& m) { w.write(m.utime, m.channel, m.data); });
     w.close();
   }
   ev->logs.push_back("logs/" + name + ".lcmlog");
@@ -94,10 +95,8 @@ std::vector<ProfileSetting> settingsOf(const ProfileEvaluation& ev) {
   const ProfileGeometry& t = ev.truth;
   return {{"ours", "ours (Ceres)", ev.ours.geometry, {}, {}},
           {"grid", "paper's grid (1 mm)", paper(ev.grid.m_mm, ev.grid.n_mm), {}, {}},
-          {"too_small", "M - 13, N - 14",
-           paper(t.m_mm + kTooSmallM, t.n_mm + kTooSmallN), {}, {}},
-          {"too_large", "M + 7, N + 16",
-           paper(t.m_mm + kTooLargeM, t.n_mm + kTooLargeN), {}, {}}};
+          {"too_small", "M - 13, N - 14", paper(t.m_mm + kTooSmallM, t.n_mm + kTooSmallN), {}, {}},
+          {"too_large", "M + 7, N + 16", paper(t.m_mm + kTooLargeM, t.n_mm + kTooLargeN), {}, {}}};
 }
 
 // Step 2 and 3: every scan of the test piece under every setting.
@@ -117,7 +116,8 @@ void measure(const ProfileExperimentOptions& o, ProfileEvaluation* ev) {
     const std::string name = "test_piece_" + std::to_string(k);
     eval::progressLine(o.progress, "scan " + std::to_string(k + 1) + "/" +
                                        std::to_string(o.repeats) + ": the piece " +
-                                       fixed(distance, 1) + " mm below -> logs/" + name + ".lcmlog");
+                                       fixed(distance, 1) + " mm below -> logs/" + name +
+                                       ".lcmlog");
     const ProfileLog log = simulateLog(o, rig, name, o.seed + 100 + k, ev);
     if (!log.test_piece || log.sweeps.empty()) {
       throw std::runtime_error("logs/" + name + ".lcmlog has no TRUTH_TEST_PIECE or no profiles");

@@ -22,8 +22,8 @@ const std::array<const char*, kPieceFeatureCount> kPieceFeatures = {
 namespace {
 
 constexpr double kNan = std::numeric_limits<double>::quiet_NaN();
-constexpr double kTopBand_mm = 0.3;     // |h| below this: the top face (range noise 0.02 mm)
-constexpr double kBelowTop_mm = 0.5;    // h below -this: inside a groove
+constexpr double kTopBand_mm = 0.3;      // |h| below this: the top face (range noise 0.02 mm)
+constexpr double kBelowTop_mm = 0.5;     // h below -this: inside a groove
 constexpr double kPlaneRansac_mm = 0.2;  // RANSAC inlier distances
 constexpr double kCircleRansac_mm = 0.3;
 constexpr double kCylinderBand_mm = 3.0;  // first cylinder fit: points this near the circle
@@ -355,8 +355,9 @@ PieceMeasurement measureTestPiece(const std::vector<ProfileSample>& samples,
   Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   int count = 0;
   for (const auto& p : piece) {
-    if (std::fabs(p.x()) < d.rect_width_mm / 2 + 10 && std::fabs(p.y()) < d.rect_length_mm / 2 + 10 &&
-        p.z() < -(d.rect_depth_mm - 3) && p.z() > -(d.rect_depth_mm + 3)) {
+    if (std::fabs(p.x()) < d.rect_width_mm / 2 + 10 &&
+        std::fabs(p.y()) < d.rect_length_mm / 2 + 10 && p.z() < -(d.rect_depth_mm - 3) &&
+        p.z() > -(d.rect_depth_mm + 3)) {
       sum += p.head<2>();
       ++count;
     }

@@ -13,7 +13,8 @@ namespace {
 // Top view of the piece's frame (u across, v along the scan), coloured by depth below the
 // top face.
 void drawCloud(const std::string& png, const PieceMeasurement& m) {
-  Layer top{"top face", "#b0b0b0", {}}, walls{"walls (0.5 mm below the top to 19 mm)", "#d62728", {}},
+  Layer top{"top face", "#b0b0b0", {}},
+      walls{"walls (0.5 mm below the top to 19 mm)", "#d62728", {}},
       bottoms{"groove bottoms (19 mm and deeper)", "#1f77b4", {}};
   for (const Eigen::Vector3f& p : m.cloud) {
     const Eigen::Vector3f q(p.y(), p.x(), 0.0f);  // scan direction to the right
@@ -30,7 +31,8 @@ void drawCloud(const std::string& png, const PieceMeasurement& m) {
   o.x_label = "v: along the scan [mm]";
   o.y_label = "u: along the laser line [mm]";
   o.point_size = 0.15;
-  plotTopView(png, {top, walls, bottoms}, o);
+  o.height_px = 700;
+  plotTopView(png, {top, bottoms, walls}, o);  // walls last: on top
 }
 
 // Mean error [%] per feature and setting, with the standard deviation as the bar.
@@ -52,12 +54,17 @@ void drawErrors(const std::string& png, const ProfileEvaluation& ev, bool zoom_o
     series.push_back(ser);
   }
   for (const double bound : {0.1, -0.1}) {
-    series.push_back({bound > 0 ? "+-0.1 % (the issue's bound)" : "", {-0.5, 6.5}, {bound, bound},
-                      "lines", "#7f7f7f", {}});
+    series.push_back({bound > 0 ? "+-0.1 % (the issue's bound)" : "",
+                      {-0.5, 6.5},
+                      {bound, bound},
+                      "lines",
+                      "#7f7f7f",
+                      {}});
   }
   for (int k = 0; k < kPieceFeatureCount; ++k) o.x_tics.push_back({k, kPieceFeatures[k]});
-  o.title = zoom_on_ours ? "Feature errors: ours and the paper's grid (mean +- std over the scans)"
-                         : "Feature errors per setting (mean +- std over the scans; Zhao 2021 Table 2)";
+  o.title = zoom_on_ours
+                ? "Feature errors: ours and the paper's grid (mean +- std over the scans)"
+                : "Feature errors per setting (mean +- std over the scans; Zhao 2021 Table 2)";
   o.y_label = "error [%]";
   o.x_range = PlotRange{-0.5, 6.5};
   o.width_px = 1200;

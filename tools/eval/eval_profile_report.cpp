@@ -55,30 +55,29 @@ json calibrationJson(const ProfileEvaluation& ev) {
                       {"points_used", ev.plate_points_used[k]},
                       {"rms_mm", r.planes[k].rms_mm}});
   }
-  return {
-      {"ours",
-       {{"m_mm", r.geometry.m_mm},
-        {"n_mm", r.geometry.n_mm},
-        {"laser_tilt_deg", r.geometry.laser_tilt_rad * kRadToDeg},
-        {"sigma_m_mm", orNull(r.sigma_m_mm)},
-        {"sigma_n_mm", orNull(r.sigma_n_mm)},
-        {"sigma_laser_tilt_deg", orNull(r.sigma_tilt_deg)},
-        {"observable", r.observable},
-        {"iterations", r.iterations},
-        {"rms_before_mm", r.rms_before_mm},
-        {"rms_after_mm", r.rms_after_mm},
-        {"warnings", r.warnings}}},
-      {"grid",
-       {{"m_mm", ev.grid.m_mm},
-        {"n_mm", ev.grid.n_mm},
-        {"s_min_mm", ev.grid.s_min_mm},
-        {"step_mm", ev.grid_options.step_mm},
-        {"m_interval_mm", {ev.grid_options.m_min_mm, ev.grid_options.m_max_mm}},
-        {"n_interval_mm", {ev.grid_options.n_min_mm, ev.grid_options.n_max_mm}},
-        {"evaluations", ev.grid.s_mm.size()}}},
-      {"nominal_m_mm", ev.nominal.m_mm},
-      {"nominal_n_mm", ev.nominal.n_mm},
-      {"plates", planes}};
+  return {{"ours",
+           {{"m_mm", r.geometry.m_mm},
+            {"n_mm", r.geometry.n_mm},
+            {"laser_tilt_deg", r.geometry.laser_tilt_rad * kRadToDeg},
+            {"sigma_m_mm", orNull(r.sigma_m_mm)},
+            {"sigma_n_mm", orNull(r.sigma_n_mm)},
+            {"sigma_laser_tilt_deg", orNull(r.sigma_tilt_deg)},
+            {"observable", r.observable},
+            {"iterations", r.iterations},
+            {"rms_before_mm", r.rms_before_mm},
+            {"rms_after_mm", r.rms_after_mm},
+            {"warnings", r.warnings}}},
+          {"grid",
+           {{"m_mm", ev.grid.m_mm},
+            {"n_mm", ev.grid.n_mm},
+            {"s_min_mm", ev.grid.s_min_mm},
+            {"step_mm", ev.grid_options.step_mm},
+            {"m_interval_mm", {ev.grid_options.m_min_mm, ev.grid_options.m_max_mm}},
+            {"n_interval_mm", {ev.grid_options.n_min_mm, ev.grid_options.n_max_mm}},
+            {"evaluations", ev.grid.s_mm.size()}}},
+          {"nominal_m_mm", ev.nominal.m_mm},
+          {"nominal_n_mm", ev.nominal.n_mm},
+          {"plates", planes}};
 }
 
 json settingsJson(const ProfileEvaluation& ev) {
@@ -193,10 +192,12 @@ json reportJson(const ProfileEvaluation& ev, const std::vector<Figures::Entry>& 
   r["calibration"] = calibrationJson(ev);
   r["offset_error_mm"] = {
       {"ours",
-       {{"M", ev.ours.geometry.m_mm - ev.truth.m_mm}, {"N", ev.ours.geometry.n_mm - ev.truth.n_mm}}},
+       {{"M", ev.ours.geometry.m_mm - ev.truth.m_mm},
+        {"N", ev.ours.geometry.n_mm - ev.truth.n_mm}}},
       {"grid", {{"M", ev.grid.m_mm - ev.truth.m_mm}, {"N", ev.grid.n_mm - ev.truth.n_mm}}}};
   json truth_sizes;
-  for (int k = 0; k < kPieceFeatureCount; ++k) truth_sizes[kPieceFeatures[k]] = trueSize(ev.piece, k);
+  for (int k = 0; k < kPieceFeatureCount; ++k)
+    truth_sizes[kPieceFeatures[k]] = trueSize(ev.piece, k);
   r["feature_truth_mm"] = truth_sizes;
   r["settings"] = settingsJson(ev);
   r["feature_error_pct"] = featureErrorJson(ev);
@@ -252,12 +253,12 @@ std::string reportMarkdown(const ProfileEvaluation& ev, const json& r,
   m << "\n";
   for (int k = 0; k < kPieceFeatureCount; ++k) {
     const double t = trueSize(ev.piece, k);
-    m << "| " << kPieceFeatures[k] << (kAlongScan[k] ? " (along scan)" : "") << " | "
-      << fixed(t, 2) << " |";
+    m << "| " << kPieceFeatures[k] << (kAlongScan[k] ? " (along scan)" : "") << " | " << fixed(t, 2)
+      << " |";
     for (const auto& s : ev.settings) m << " " << cell(errorPctStats(s, ev.piece, k), t) << " |";
     for (int c = 0; c < 3; ++c) {
-      m << " " << fixed(kPaperTable2[k].v[c], 2) << " mm, " << (kPaperTable2[k].pct[c] >= 0 ? "+" : "")
-        << fixed(kPaperTable2[k].pct[c], 2) << " % |";
+      m << " " << fixed(kPaperTable2[k].v[c], 2) << " mm, "
+        << (kPaperTable2[k].pct[c] >= 0 ? "+" : "") << fixed(kPaperTable2[k].pct[c], 2) << " % |";
     }
     m << "\n";
   }
@@ -282,12 +283,13 @@ std::string reportMarkdown(const ProfileEvaluation& ev, const json& r,
     << fixed(sn["x_spacing_near_mm"].get<double>(), 3) << "-"
     << fixed(sn["x_spacing_far_mm"].get<double>(), 3) << " mm along the line (datasheet X "
     << "resolution 0.075-0.150 mm), range noise " << ev.range_noise_sigma_mm
-    << " mm (datasheet Z resolution 0.013-0.037 mm), " << ev.profiler.profile_rate_hz
-    << " Hz; at " << ev.turntable.speed_deg_s << " deg/s the profiles are "
+    << " mm (datasheet Z resolution 0.013-0.037 mm), " << ev.profiler.profile_rate_hz << " Hz; at "
+    << ev.turntable.speed_deg_s << " deg/s the profiles are "
     << fixed(sn["scan_step_deg"].get<double>(), 4) << " deg, "
     << fixed(sn["scan_step_at_sensor_radius_mm"].get<double>(), 2)
     << " mm apart along the scan.\n\n## Figures\n\n";
-  for (const auto& f : figures) m << "![" << f.caption << "](" << f.file << ")\n\n" << f.caption << "\n\n";
+  for (const auto& f : figures)
+    m << "![" << f.caption << "](" << f.file << ")\n\n" << f.caption << "\n\n";
   return m.str();
 }
 
