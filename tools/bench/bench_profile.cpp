@@ -1,6 +1,7 @@
 #include "tools/bench/bench_profile.hpp"
 
 #include <algorithm>
+#include <ios>
 #include <vector>
 
 #include "calib/axis_offset.hpp"
@@ -30,6 +31,9 @@ std::vector<PlanePoints> simulatedPlates(const RotatingProfileConfig& rig, uint6
 }  // namespace
 
 int benchProfile(const ProfileBenchOptions& o, std::ostream& out) {
+  const std::ios::fmtflags flags = out.flags();
+  const std::streamsize precision = out.precision(4);
+  out.unsetf(std::ios::floatfield);
   const Rig loaded = loadRig(o.rig, {"sim.scene=plate"});
   const RotatingProfileConfig& rig = requireKind<RotatingProfileConfig>(loaded, "the rig-C bench");
   const int max_points = AxisOffsetCalibRequest{}.max_points_per_sweep;
@@ -66,6 +70,8 @@ int benchProfile(const ProfileBenchOptions& o, std::ostream& out) {
         << " s, M " << r.m_mm - truth.m_mm << " mm, N " << r.n_mm - truth.n_mm
         << " mm from the truth; grid / ours = " << r.seconds / ours_median << "x\n";
   }
+  out.flags(flags);
+  out.precision(precision);
   return 0;
 }
 

@@ -105,9 +105,7 @@ Runner addBenchCommand(CLI::App& app) {
         case RigKind::kRotatingProfile: {
           ProfileBenchOptions b;
           b.rig = rig.path;
-          std::cout << std::setprecision(3);
           benchProfile(b, std::cout);
-          std::cout << std::setprecision(2);
           break;
         }
       }
