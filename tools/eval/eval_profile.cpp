@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <stdexcept>
 
 #include "core/event_log.hpp"
 #include "rigs/rig_file.hpp"
@@ -32,8 +33,8 @@ constexpr double kTooLargeM = 7.0, kTooLargeN = 16.0;
 // fall elsewhere on the piece).
 constexpr double kDistanceStep_mm = 3.0;
 
-RotatingProfileConfig loadRig(const ProfileExperimentOptions& o,
-                              const std::vector<std::string>& extra) {
+RotatingProfileConfig loadProfileRig(const ProfileExperimentOptions& o,
+                                     const std::vector<std::string>& extra) {
   std::vector<std::string> sets = o.overrides;
   sets.insert(sets.end(), extra.begin(), extra.end());
   const Rig rig = sweepmap::loadRig(o.rig_path, sets);
@@ -57,7 +58,7 @@ ProfileLog simulateLog(const ProfileExperimentOptions& o, const RotatingProfileC
 
 // Step 1: the plate, both calibrations, S(M, N).
 void calibrate(const ProfileExperimentOptions& o, ProfileEvaluation* ev) {
-  const RotatingProfileConfig rig = loadRig(o, {"sim.scene=plate"});
+  const RotatingProfileConfig rig = loadProfileRig(o, {"sim.scene=plate"});
   eval::progressLine(o.progress, "simulating " + std::to_string(rig.sim.plate_count) +
                                      " plate poses -> " + o.out_dir + "/logs/plate.lcmlog");
   const ProfileLog log = simulateLog(o, rig, "plate", o.seed, ev);
@@ -102,7 +103,7 @@ std::vector<ProfileSetting> settingsOf(const ProfileEvaluation& ev) {
 // Step 2 and 3: every scan of the test piece under every setting.
 void measure(const ProfileExperimentOptions& o, ProfileEvaluation* ev) {
   ev->settings = settingsOf(*ev);
-  const RotatingProfileConfig base = loadRig(o, {"sim.scene=test_piece"});
+  const RotatingProfileConfig base = loadProfileRig(o, {"sim.scene=test_piece"});
   const double middle_rad =
       0.5 * (base.turntable.sweep_start_deg + base.turntable.sweep_end_deg) * kDegToRad;
   const double step_deg = base.turntable.speed_deg_s / base.profiler.profile_rate_hz;
@@ -110,9 +111,9 @@ void measure(const ProfileExperimentOptions& o, ProfileEvaluation* ev) {
     const double distance =
         base.sim.test_piece.distance_mm + kDistanceStep_mm * (k - 0.5 * (o.repeats - 1));
     const double end = base.turntable.sweep_end_deg + step_deg * k / o.repeats;
-    const RotatingProfileConfig rig =
-        loadRig(o, {"sim.scene=test_piece", "sim.test_piece.distance_mm=" + fixed(distance, 6),
-                    "turntable.sweep_end_deg=" + fixed(end, 9)});
+    const RotatingProfileConfig rig = loadProfileRig(
+        o, {"sim.scene=test_piece", "sim.test_piece.distance_mm=" + fixed(distance, 6),
+            "turntable.sweep_end_deg=" + fixed(end, 9)});
     const std::string name = "test_piece_" + std::to_string(k);
     eval::progressLine(o.progress, "scan " + std::to_string(k + 1) + "/" +
                                        std::to_string(o.repeats) + ": the piece " +
@@ -144,8 +145,16 @@ EvalProfileResult runProfilePaperExperiment(const ProfileExperimentOptions& o) {
   ev.rig_path = resolveRigFile(o.rig_path);
   ev.seed = o.seed;
   ev.repeats = o.repeats;
-  calibrate(o, &ev);
-  measure(o, &ev);
+  try {
+    calibrate(o, &ev);
+    measure(o, &ev);
+  } catch (const ConfigError&) {
+    throw;
+  } catch (const std::exception& e) {  // a log that does not read back, a failed fit
+    result.failed = true;
+    result.message = e.what();
+    return result;
+  }
   Figures figures(out, o.plots);
   eval::drawProfileFigures(ev, &figures);
   eval::writeProfileReport(out, ev, figures.files(), figures.errors());

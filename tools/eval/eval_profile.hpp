@@ -34,7 +34,9 @@ struct EvalProfileResult {
   int scans = 0;
 };
 
-// Throws ConfigError for a rig that is not rotating_profile or a bad override.
+// Throws ConfigError for a rig that is not rotating_profile, a bad override or fewer than 2
+// repeats; anything else that stops the experiment (a log that does not read back) fails
+// the result with the reason, and no report is written.
 EvalProfileResult runProfilePaperExperiment(const ProfileExperimentOptions& options);
 
 }  // namespace sweepmap
