@@ -37,9 +37,10 @@ const char* const kEvalFooter =
     "width by PCL RANSAC planes, its length from the top face's edges) with ours, the grid's "
     "result and the paper's wrong settings (truth M - 13, N - 14 and M + 7, N + 16). "
     "report.json: offset_error_mm, feature_error_pct (mean, std per feature and setting), "
-    "paper_table2, checks, timings_s (the only part that differs between runs), ~1 min.\n\n"
+    "paper_table2, checks, timings_s (the only part that differs between runs), ~15 s.\n\n"
     "Exit status: 0 evaluated; 1 a log is corrupt (after evaluating what came before) or holds "
-    "nothing to evaluate (the report says why); 2 bad rig, scene or option.\n"
+    "nothing to evaluate (the report says why), or (rotating_profile) a feature was not "
+    "measured under some setting or ours did not calibrate; 2 bad rig, scene or option.\n"
     "Examples: sweepmap eval --experiment paper --rig rig_a --out eval_a\n"
     "          sweepmap eval --experiment paper --rig rig_b --out eval_b\n"
     "          sweepmap eval --experiment paper --rig rig_c --out eval_c";
