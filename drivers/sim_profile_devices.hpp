@@ -47,6 +47,7 @@ class SimProfileWorld {
   std::vector<std::pair<int64_t, int>> takePlacements(int64_t now_utime);
   // The plate of scene k, nullptr for the test piece.
   const PlatePose* plate(int k) const;
+  const ProfileScene& scene(int k) const { return scenes_.at(static_cast<size_t>(k)); }
   Profile expose(int64_t utime);
 
   const ProfilerConfig& profiler() const { return profiler_; }

@@ -145,6 +145,11 @@ ProfileScene ProfileScene::testPiece(const SimProfileConfig& sim,
   return s;
 }
 
+std::optional<ProfileScene::Frame> ProfileScene::testPieceFrame() const {
+  if (!test_piece_) return std::nullopt;
+  return Frame{origin_, u_, v_, w_};
+}
+
 std::optional<double> ProfileScene::cast(const Eigen::Vector3d& origin,
                                          const Eigen::Vector3d& dir) const {
   if (test_piece_) return castTestPiece(origin, dir);

@@ -99,6 +99,12 @@ class ProfileScene {
  public:
   static ProfileScene plate(const PlatePose& pose);
   static ProfileScene testPiece(const SimProfileConfig& sim, const TurntableConfig& turntable);
+  // The test piece's frame in O_r (u along the line, v along the scan, w up; origin at the
+  // top face's centre); unset for a plate.
+  struct Frame {
+    Eigen::Vector3d origin, u, v, w;
+  };
+  std::optional<Frame> testPieceFrame() const;
   // Distance [mm] from `origin` along the unit `dir` to the first surface, if any.
   std::optional<double> cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
 

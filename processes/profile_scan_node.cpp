@@ -135,6 +135,10 @@ void ProfileTruthNode::advance(int64_t now_utime, Outbox& out) {
   for (const auto& [utime, k] : world_->takePlacements(now_utime)) {
     out.publish(channels::kTruthProfileRig, now_utime,
                 makeTruthProfileRig(world_->sim(), k, utime, world_->plate(k)));
+    if (const auto frame = world_->scene(k).testPieceFrame()) {
+      out.publish(channels::kTruthTestPiece, now_utime,
+                  makeTruthTestPiece(world_->sim().test_piece, *frame, k, utime));
+    }
     count("truths");
   }
 }

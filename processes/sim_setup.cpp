@@ -40,4 +40,28 @@ truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t swe
   return t;
 }
 
+truth_test_piece_t makeTruthTestPiece(const TestPieceConfig& c, const ProfileScene::Frame& f,
+                                      int32_t sweep_id, int64_t utime) {
+  truth_test_piece_t t{};
+  t.utime = utime;
+  t.sweep_id = sweep_id;
+  for (int i = 0; i < 3; ++i) {
+    t.origin[i] = f.origin[i];
+    t.u_axis[i] = f.u[i];
+    t.v_axis[i] = f.v[i];
+    t.w_axis[i] = f.w[i];
+  }
+  t.block_length_mm = c.block_length_mm;
+  t.block_width_mm = c.block_width_mm;
+  t.spacing_mm = c.spacing_mm;
+  t.left_diameter_mm = c.left_diameter_mm;
+  t.left_depth_mm = c.left_depth_mm;
+  t.right_diameter_mm = c.right_diameter_mm;
+  t.right_depth_mm = c.right_depth_mm;
+  t.rect_length_mm = c.rect_length_mm;
+  t.rect_width_mm = c.rect_width_mm;
+  t.rect_depth_mm = c.rect_depth_mm;
+  return t;
+}
+
 }  // namespace sweepmap

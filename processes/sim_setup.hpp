@@ -8,6 +8,7 @@
 #include "rigs/rotating_lidar.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
+#include "sweepmap/truth_test_piece_t.hpp"
 
 namespace sweepmap {
 
@@ -27,5 +28,8 @@ truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scen
 // `plate` is given: what the offline simulation and the live simulated profiler publish.
 truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t sweep_id,
                                         int64_t utime, const PlatePose* plate);
+// The test piece's true sizes (what Zhao 2021's CMM measured) and its frame in O_r.
+truth_test_piece_t makeTruthTestPiece(const TestPieceConfig& c, const ProfileScene::Frame& f,
+                                      int32_t sweep_id, int64_t utime);
 
 }  // namespace sweepmap

@@ -7,6 +7,7 @@
 #include "tools/bench/bench_devices.hpp"
 #include "tools/bench/bench_mobile.hpp"
 #include "tools/bench/bench_onboard.hpp"
+#include "tools/bench/bench_profile.hpp"
 #include "tools/bench/bench_rotating.hpp"
 #include "tools/bench/bench_stepper.hpp"
 #include "tools/cli/commands.hpp"
@@ -16,7 +17,7 @@ namespace sweepmap {
 Runner addBenchCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bench",
-      "Measure speed and memory for each rig given (default: rig_a and rig_b). "
+      "Measure speed and memory for each rig given (default: rig_a, rig_b and rig_c). "
       "rotating_lidar: simulation and offline replay speed (assembly + plate correction + "
       "OctoMap) as real-time factors for modes 1 and 7, points per second, one sweep's plate "
       "correction and peak memory. mobile_lidar: EKF updates per second, the CPU share of the "
@@ -30,12 +31,14 @@ Runner addBenchCommand(CLI::App& app) {
       "times, its thread's CPU share) through a mode-7 sweep on a fake chip, about 17 s; then "
       "one line per on-board process and their estimated load on a Raspberry Pi 3B, scaled by "
       "a reference workload measured in the same run (sysbench 1.0's cpu loop) against its "
-      "published Pi figure (--no-devices skips all this). rotating_profile (rig C): nothing yet "
-      "(the calibration's "
-      "timing is printed by its unit test). Prints figures; run on an idle machine, compare "
+      "published Pi figure (--no-devices skips all this). rotating_profile (rig C): the "
+      "axis-offset calibration on the default simulated plates (calib axis-offset's default "
+      "point subset), ours (Ceres) against the paper's grid search over its interval at 1 mm "
+      "and at 0.1 mm (10x finer), as seconds and a ratio. Prints figures; run on an idle "
+      "machine, compare "
       "ratios within one run");
   struct Opts {
-    std::vector<std::string> rigs = {"rig_a", "rig_b"};
+    std::vector<std::string> rigs = {"rig_a", "rig_b", "rig_c"};
     std::string scene;
     std::string work = "build/bench";
     int sweeps = 2;
@@ -104,10 +107,12 @@ Runner addBenchCommand(CLI::App& app) {
           benchRigB(b, std::cout);
           break;
         }
-        case RigKind::kRotatingProfile:
-          std::cout << "  no benchmark for this kind yet (the axis-offset calibration's timing is "
-                       "printed by its unit test)\n";
+        case RigKind::kRotatingProfile: {
+          ProfileBenchOptions b;
+          b.rig = rig.path;
+          benchProfile(b, std::cout);
           break;
+        }
       }
     }
     if (!o->no_devices) {
