@@ -28,8 +28,9 @@ SimProfileResult simulateRotatingProfile(const RotatingProfileConfig& rig, uint6
   for (size_t k = 0; k < scenes.size(); ++k) {
     const auto sweep_id = static_cast<int32_t>(k);
     Outbox out;
-    out.publish(channels::kTruthProfileRig, start,
-                makeTruthProfileRig(rig.sim, sweep_id, start, plates.empty() ? nullptr : &plates[k]));
+    out.publish(
+        channels::kTruthProfileRig, start,
+        makeTruthProfileRig(rig.sim, sweep_id, start, plates.empty() ? nullptr : &plates[k]));
     if (const auto frame = scenes[k].testPieceFrame()) {
       out.publish(channels::kTruthTestPiece, start,
                   makeTruthTestPiece(rig.sim.test_piece, *frame, sweep_id, start));
