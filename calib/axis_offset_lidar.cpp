@@ -134,9 +134,8 @@ void buildProblem(const std::vector<LidarPlaneRays>& planes, const LidarAxisOffs
     p->weights[k].assign(p->rays[k].size(), 1.0);
     for (size_t i = 0; i < p->rays[k].size(); i += kRaysPerBlock) {
       const size_t count = std::min(kRaysPerBlock, p->rays[k].size() - i);
-      p->problem->AddResidualBlock(
-          new RaysOnPlaneCost(&p->rays[k][i], &p->weights[k][i], count), nullptr, p->t,
-          p->normals[k].data(), &p->distances[k]);
+      p->problem->AddResidualBlock(new RaysOnPlaneCost(&p->rays[k][i], &p->weights[k][i], count),
+                                   nullptr, p->t, p->normals[k].data(), &p->distances[k]);
       p->residuals += count;
     }
     p->problem->SetManifold(p->normals[k].data(), new ceres::SphereManifold<3>());
@@ -213,11 +212,9 @@ TObservability analyse(const Problem& p) {
     }
     for (const double w : p.weights[k]) weights += w;
     const Eigen::HouseholderQR<Eigen::MatrixXd> qr(j);
-    blocks.push_back(qr.matrixQR()
-                         .topRows(6)
-                         .triangularView<Eigen::Upper>()
-                         .toDenseMatrix()
-                         .bottomRightCorner(3, 3));
+    blocks.push_back(
+        qr.matrixQR().topRows(6).triangularView<Eigen::Upper>().toDenseMatrix().bottomRightCorner(
+            3, 3));
   }
   TObservability o;
   o.scale = std::sqrt(weights);
@@ -234,8 +231,8 @@ TObservability analyse(const Problem& p) {
 
 // The joint scaled singular values of the estimated components; a warning and observable =
 // false when x (or y, if estimated) is not determined.
-void flagUnobservable(const TObservability& obs, const LidarAxisOffsetOptions& o,
-                      size_t wall_count, LidarAxisOffsetResult* r) {
+void flagUnobservable(const TObservability& obs, const LidarAxisOffsetOptions& o, size_t wall_count,
+                      LidarAxisOffsetResult* r) {
   r->observability = obs.share;
   std::vector<int> est = {0};
   if (o.estimate_y) est.push_back(1);

@@ -40,12 +40,12 @@ struct LidarPlaneRays {
 };
 
 struct PlaneSegmentationOptions {
-  double voxel_m = 0.05;             // RANSAC on the voxel-downsampled cloud
-  double ransac_distance_m = 0.03;   // RANSAC inlier threshold
-  double assign_distance_m = 0.05;   // a point belongs to the plane it is this near...
-  int max_planes = 8;                // ...unless it is as near another one (an edge)
-  int min_inliers = 300;             // after downsampling
-  int max_rays_per_plane = 5000;     // evenly strided (time order: spread over the sweep)
+  double voxel_m = 0.05;            // RANSAC on the voxel-downsampled cloud
+  double ransac_distance_m = 0.03;  // RANSAC inlier threshold
+  double assign_distance_m = 0.05;  // a point belongs to the plane it is this near...
+  int max_planes = 8;               // ...unless it is as near another one (an edge)
+  int min_inliers = 300;            // after downsampling
+  int max_rays_per_plane = 5000;    // evenly strided (time order: spread over the sweep)
 };
 
 // The planes of one sweep: `points_Op` the cloud assembled with the nominal offset, `rays`
@@ -79,8 +79,8 @@ struct LidarFittedPlane {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();  // unit, frame O' of its sweep
   double distance_mm = 0.0;                          // normal . p = distance
   size_t rays = 0;
-  bool wall = false;                                  // parallel to the axis
-  double rms_before_mm = 0.0, rms_after_mm = 0.0;    // least-squares plane with each offset
+  bool wall = false;                               // parallel to the axis
+  double rms_before_mm = 0.0, rms_after_mm = 0.0;  // least-squares plane with each offset
 };
 
 struct LidarAxisOffsetResult {

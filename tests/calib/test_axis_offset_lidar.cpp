@@ -23,7 +23,7 @@ struct Room {
 
 struct SyntheticSweep {
   std::vector<SweepRay> rays;
-  std::vector<int> face;  // which face each ray hit
+  std::vector<int> face;                   // which face each ray hit
   std::vector<Eigen::Vector3f> points_Op;  // placed with the nominal offset
 };
 
@@ -113,9 +113,10 @@ TEST(LidarAxisOffset, RecoversTheOffsetWithoutNoise) {
       EXPECT_LT(p.rms_before_mm, 1e-3) << p.source;
     }
   }
-  std::printf("no noise: x = %.5f mm, wall RMS %.4f -> %.5f mm, observability x %.3g y %.3g z %.3g\n",
-              r.offset_mm.x(), r.wall_rms_before_mm, r.wall_rms_after_mm, r.observability.x(),
-              r.observability.y(), r.observability.z());
+  std::printf(
+      "no noise: x = %.5f mm, wall RMS %.4f -> %.5f mm, observability x %.3g y %.3g z %.3g\n",
+      r.offset_mm.x(), r.wall_rms_before_mm, r.wall_rms_after_mm, r.observability.x(),
+      r.observability.y(), r.observability.z());
 }
 
 TEST(LidarAxisOffset, WithTheLidarsNoiseWithinItsSigma) {
@@ -172,7 +173,7 @@ TEST(LidarAxisOffset, SegmentsASweepsPlanesAndDropsEdges) {
     assigned += p.rays.size();
     EXPECT_NE(p.source.find("synthetic plane"), std::string::npos);
   }
-  EXPECT_LT(assigned, s.rays.size());        // edges dropped
+  EXPECT_LT(assigned, s.rays.size());  // edges dropped
   EXPECT_GT(assigned, s.rays.size() * 9 / 10);
   const LidarAxisOffsetResult r = solveLidarAxisOffset(planes, {});
   EXPECT_NEAR(r.offset_mm.x(), 16.0, 0.3);

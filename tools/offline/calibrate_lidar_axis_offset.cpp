@@ -55,10 +55,11 @@ void takeSweep(const LidarAxisOffsetCalibRequest& o, const std::string& log,
   rays.reserve(s.points_Op.size());
   forEachSweepRay(scans, s.window.omega_rad_s, [&](const SweepRay& r) { rays.push_back(r); });
   const auto t0 = Clock::now();
-  std::vector<LidarPlaneRays> planes = segmentSweepPlanes(s.points_Op, rays, o.segmentation, source);
+  std::vector<LidarPlaneRays> planes =
+      segmentSweepPlanes(s.points_Op, rays, o.segmentation, source);
   in->segment_s += seconds(Clock::now() - t0);
-  if (planes.empty()) return reject("no plane of " + std::to_string(o.segmentation.min_inliers) +
-                                    " points or more");
+  if (planes.empty())
+    return reject("no plane of " + std::to_string(o.segmentation.min_inliers) + " points or more");
   size_t used = 0;
   for (const auto& p : planes) used += p.rays.size();
   std::cerr << "  " << source << ": " << s.points_Op.size() << " points, " << planes.size()
@@ -191,9 +192,8 @@ nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLi
     j["truth_x_mm"] = *in.truth_x_mm;
     j["offset_error_mm"] = r.offset_mm.x() - *in.truth_x_mm;
   }
-  j["timing_s"] = {{"sweep_assembly", in.read_s},
-                   {"segmentation", in.segment_s},
-                   {"solve", r.seconds}};
+  j["timing_s"] = {
+      {"sweep_assembly", in.read_s}, {"segmentation", in.segment_s}, {"solve", r.seconds}};
   j["out"] = written ? nlohmann::json(o.out) : nullptr;
   return j;
 }
@@ -208,7 +208,9 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   if (in.planes.empty()) {
     std::cerr << kWhat << ": no sweep with planes in the logs (" << in.rejected.size()
               << " rejected): nothing calibrated\n";
-    if (o.json) std::cout << nlohmann::json{{"sweeps_used", 0}, {"sweeps_rejected", in.rejected}}.dump(2) << "\n";
+    if (o.json)
+      std::cout << nlohmann::json{{"sweeps_used", 0}, {"sweeps_rejected", in.rejected}}.dump(2)
+                << "\n";
     return 1;
   }
   LidarAxisOffsetOptions options;
@@ -226,7 +228,8 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
     }
   }
   reportHuman(o, rig, in, r, written);
-  if (o.json) std::cout << std::setprecision(12) << resultJson(o, rig, in, r, written).dump(2) << "\n";
+  if (o.json)
+    std::cout << std::setprecision(12) << resultJson(o, rig, in, r, written).dump(2) << "\n";
   return written ? 0 : 1;
 }
 
