@@ -290,39 +290,61 @@ void standardDeviations(const LidarAxisOffsetOptions& o, size_t plane_count, Pro
   }
 }
 
+// Sums of squares for an RMS, over every plane and over the walls.
+struct RmsSums {
+  double all = 0, walls = 0;
+  size_t n = 0, wall_n = 0;
+  void add(double rms, size_t count, bool wall) {
+    const double ss = rms * rms * static_cast<double>(count);
+    all += ss;
+    n += count;
+    if (wall) {
+      walls += ss;
+      wall_n += count;
+    }
+  }
+  static double rms(double ss, size_t count) {
+    return std::sqrt(ss / static_cast<double>(std::max<size_t>(1, count)));
+  }
+};
+
 // Each plane refit by least squares with the nominal and the estimated offset; the RMS over
-// every plane and over the walls.
+// every plane and over the walls, of all their points and of the inliers (the points within
+// the Cauchy scale of their plane at the solution: the same points before and after).
 void reportPlanes(const std::vector<LidarPlaneRays>& planes, const Problem& p,
                   const LidarAxisOffsetOptions& o, LidarAxisOffsetResult* r) {
-  double ss_b = 0, ss_a = 0, ws_b = 0, ws_a = 0;
-  size_t n = 0, wn = 0;
+  RmsSums before, after, in_before, in_after;
+  const std::vector<double> e = residualsOf(p);
+  size_t next = 0;
   for (size_t k = 0; k < planes.size(); ++k) {
-    const PlaneFit before = fitPlaneTo(planes[k].rays, o.initial_offset_mm);
-    const PlaneFit after = fitPlaneTo(planes[k].rays, r->offset_mm);
     LidarFittedPlane f;
     f.source = planes[k].source;
     f.normal = p.normals[k];
     f.distance_mm = p.distances[k];
     f.rays = planes[k].rays.size();
     f.wall = std::fabs(f.normal.z()) <= o.wall_max_normal_z;
-    f.rms_before_mm = before.rms_mm;
-    f.rms_after_mm = after.rms_mm;
-    const double m = static_cast<double>(f.rays);
-    ss_b += m * before.rms_mm * before.rms_mm;
-    ss_a += m * after.rms_mm * after.rms_mm;
-    n += f.rays;
-    if (f.wall) {
-      ws_b += m * before.rms_mm * before.rms_mm;
-      ws_a += m * after.rms_mm * after.rms_mm;
-      wn += f.rays;
-      ++r->walls;
+    f.rms_before_mm = fitPlaneTo(planes[k].rays, o.initial_offset_mm).rms_mm;
+    f.rms_after_mm = fitPlaneTo(planes[k].rays, r->offset_mm).rms_mm;
+    before.add(f.rms_before_mm, f.rays, f.wall);
+    after.add(f.rms_after_mm, f.rays, f.wall);
+    std::vector<SweepRay> inliers;
+    for (const SweepRay& ray : planes[k].rays) {
+      if (std::fabs(e[next++]) <= r->cauchy_scale_mm) inliers.push_back(ray);
     }
+    if (inliers.size() >= 3) {
+      in_before.add(fitPlaneTo(inliers, o.initial_offset_mm).rms_mm, inliers.size(), f.wall);
+      in_after.add(fitPlaneTo(inliers, r->offset_mm).rms_mm, inliers.size(), f.wall);
+    }
+    if (f.wall) ++r->walls;
     r->planes.push_back(f);
   }
-  r->rms_before_mm = std::sqrt(ss_b / std::max<size_t>(1, n));
-  r->rms_after_mm = std::sqrt(ss_a / std::max<size_t>(1, n));
-  r->wall_rms_before_mm = std::sqrt(ws_b / std::max<size_t>(1, wn));
-  r->wall_rms_after_mm = std::sqrt(ws_a / std::max<size_t>(1, wn));
+  r->rms_before_mm = RmsSums::rms(before.all, before.n);
+  r->rms_after_mm = RmsSums::rms(after.all, after.n);
+  r->wall_rms_before_mm = RmsSums::rms(before.walls, before.wall_n);
+  r->wall_rms_after_mm = RmsSums::rms(after.walls, after.wall_n);
+  r->wall_inlier_rms_before_mm = RmsSums::rms(in_before.walls, in_before.wall_n);
+  r->wall_inlier_rms_after_mm = RmsSums::rms(in_after.walls, in_after.wall_n);
+  r->wall_inliers = in_after.wall_n;
 }
 
 }  // namespace

@@ -99,6 +99,11 @@ struct LidarAxisOffsetResult {
   // the nominal offset (before) and the estimate (after): over every plane, and over the walls.
   double rms_before_mm = 0.0, rms_after_mm = 0.0;
   double wall_rms_before_mm = 0.0, wall_rms_after_mm = 0.0;
+  // The same over the walls' inliers (points within the Cauchy scale of their plane at the
+  // solution; clutter in front of a wall, a door recess left out): the walls' bending alone
+  // where the range noise is small.
+  double wall_inlier_rms_before_mm = 0.0, wall_inlier_rms_after_mm = 0.0;
+  size_t wall_inliers = 0;
   size_t walls = 0;
   double cauchy_scale_mm = 0.0;
   int iterations = 0;

@@ -108,6 +108,8 @@ TEST(LidarAxisOffset, RecoversTheOffsetWithoutNoise) {
   // flat either way: a perpendicular offset moves their points within them).
   EXPECT_GT(r.wall_rms_before_mm, 0.2);
   EXPECT_LT(r.wall_rms_after_mm, 0.01);
+  EXPECT_LT(r.wall_inlier_rms_after_mm, 0.01);
+  EXPECT_GT(r.wall_inliers, 0u);
   for (const auto& p : r.planes) {
     if (!p.wall) {
       EXPECT_LT(p.rms_before_mm, 1e-3) << p.source;

@@ -30,9 +30,9 @@ int runSplit(const std::vector<std::string>& args, const fs::path& out, const fs
 }
 
 std::string offsetLog() {
-  return cachedSimLog("mode7x6_offset16", {"--rig", kRig, "--mode", "7", "--sweeps",
-                                           std::to_string(kSweeps), "--seed", "1", "--set",
-                                           "sim.lidar_offset_x_mm=16.0"});
+  return cachedSimLog("mode7x6_offset16",
+                      {"--rig", kRig, "--mode", "7", "--sweeps", std::to_string(kSweeps), "--seed",
+                       "1", "--set", "sim.lidar_offset_x_mm=16.0"});
 }
 
 // RMS distance of the walls' points to their least-squares planes, the walls found on the
@@ -88,20 +88,20 @@ TEST(CalibAxisOffsetRigA, FindsTheTrueOffsetAndReplayUsesIt) {
   const std::string log = offsetLog();
   const fs::path dir = scratchDir("calib_axis_offset_rig_a");
   const fs::path out = dir / "offset.yaml";
-  ASSERT_EQ(runSplit({"calib", "axis-offset", "--logs", log, "--rig", kRig, "--out",
-                      out.string(), "--json"},
+  ASSERT_EQ(runSplit({"calib", "axis-offset", "--logs", log, "--rig", kRig, "--out", out.string(),
+                      "--json"},
                      dir / "stdout.json", dir / "stderr.txt"),
             0)
       << readFile(dir / "stderr.txt");
   const nlohmann::json j = readJson(dir / "stdout.json");
   const double x = j.at("lidar_offset_x_mm").get<double>();
-  std::printf("calib axis-offset, %d mode-7 sweeps: x = %.4f +- %.4f mm (truth %.1f), wall RMS "
-              "%.4f -> %.4f mm, observability x %.3f y %.3f z %.2g\n",
-              kSweeps, x, j.at("sigma_x_mm").get<double>(), j.at("truth_x_mm").get<double>(),
-              j.at("wall_rms_before_mm").get<double>(), j.at("wall_rms_after_mm").get<double>(),
-              j.at("observability").at("x").get<double>(),
-              j.at("observability").at("y").get<double>(),
-              j.at("observability").at("z").get<double>());
+  std::printf(
+      "calib axis-offset, %d mode-7 sweeps: x = %.4f +- %.4f mm (truth %.1f), wall RMS "
+      "%.4f -> %.4f mm, observability x %.3f y %.3f z %.2g\n",
+      kSweeps, x, j.at("sigma_x_mm").get<double>(), j.at("truth_x_mm").get<double>(),
+      j.at("wall_rms_before_mm").get<double>(), j.at("wall_rms_after_mm").get<double>(),
+      j.at("observability").at("x").get<double>(), j.at("observability").at("y").get<double>(),
+      j.at("observability").at("z").get<double>());
   EXPECT_DOUBLE_EQ(j.at("truth_x_mm").get<double>(), 16.0);
   EXPECT_NEAR(x, 16.0, 1.0);
   EXPECT_LT(j.at("sigma_x_mm").get<double>(), 0.5);
@@ -125,16 +125,18 @@ TEST(CalibAxisOffsetRigA, FindsTheTrueOffsetAndReplayUsesIt) {
                      dir / "replay_calibrated.txt"),
             0)
       << readFile(dir / "replay_calibrated.txt");
-  ASSERT_EQ(sweepmap({"replay", log, "--rig", kRig, "--out", (dir / "nominal").string(),
-                      "--no-plots"},
-                     dir / "replay_nominal.txt"),
-            0);
+  ASSERT_EQ(
+      sweepmap({"replay", log, "--rig", kRig, "--out", (dir / "nominal").string(), "--no-plots"},
+               dir / "replay_nominal.txt"),
+      0);
   const nlohmann::json sc = readJson(dir / "calibrated" / "summary.json");
   EXPECT_NEAR(sc.at("geometry").at("lidar_offset_x_mm").get<double>(), x, 1e-8);
   EXPECT_DOUBLE_EQ(sc.at("truth").at("lidar_offset_x_mm").get<double>(), 16.0);
-  EXPECT_DOUBLE_EQ(
-      readJson(dir / "nominal" / "summary.json").at("geometry").at("lidar_offset_x_mm").get<double>(),
-      13.9);
+  EXPECT_DOUBLE_EQ(readJson(dir / "nominal" / "summary.json")
+                       .at("geometry")
+                       .at("lidar_offset_x_mm")
+                       .get<double>(),
+                   13.9);
   const WallRms rms = wallRms(dir / "nominal", dir / "calibrated");
   std::printf("replayed walls (%zu points): RMS %.4f mm nominal -> %.4f mm calibrated\n",
               rms.points, rms.nominal_mm, rms.calibrated_mm);
@@ -148,8 +150,7 @@ TEST(CalibAxisOffsetRigA, OptionsOfTheOtherKindAreRefused) {
                       (dir / "o.yaml").string(), "--step", "0.5"},
                      dir / "a.out", dir / "a.err"),
             2);
-  EXPECT_NE(readFile(dir / "a.err").find("--step is for rotating_profile rigs"),
-            std::string::npos)
+  EXPECT_NE(readFile(dir / "a.err").find("--step is for rotating_profile rigs"), std::string::npos)
       << readFile(dir / "a.err");
   EXPECT_EQ(runSplit({"calib", "axis-offset", "--logs", "x.lcmlog", "--rig", "rig_c", "--out",
                       (dir / "o.yaml").string(), "--offset-y"},

@@ -134,7 +134,9 @@ void reportHuman(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig
             << std::setprecision(2) << r.seconds << " s\n"
             << std::setprecision(4) << "  wall-plane RMS " << r.wall_rms_before_mm
             << " mm (before) -> " << r.wall_rms_after_mm << " mm (after); every plane "
-            << r.rms_before_mm << " -> " << r.rms_after_mm << " mm\n"
+            << r.rms_before_mm << " -> " << r.rms_after_mm << " mm; wall inliers ("
+            << r.wall_inliers << " points within " << r.cauchy_scale_mm << " mm) "
+            << r.wall_inlier_rms_before_mm << " -> " << r.wall_inlier_rms_after_mm << " mm\n"
             << "  observable (mm off the planes per mm, planes adjusted): x "
             << std::setprecision(3) << r.observability.x() << ", y " << r.observability.y()
             << ", z (along the axis) " << r.observability.z() << "\n";
@@ -166,6 +168,9 @@ nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLi
   j["smallest_singular_value"] = r.smallest_singular_value;
   j["wall_rms_before_mm"] = r.wall_rms_before_mm;
   j["wall_rms_after_mm"] = r.wall_rms_after_mm;
+  j["wall_inlier_rms_before_mm"] = r.wall_inlier_rms_before_mm;
+  j["wall_inlier_rms_after_mm"] = r.wall_inlier_rms_after_mm;
+  j["wall_inliers"] = r.wall_inliers;
   j["rms_before_mm"] = r.rms_before_mm;
   j["rms_after_mm"] = r.rms_after_mm;
   j["cauchy_scale_mm"] = r.cauchy_scale_mm;
