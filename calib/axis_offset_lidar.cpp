@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -370,16 +371,32 @@ std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f
   po.max_planes = o.max_planes;
   po.min_inliers = o.min_inliers;
   const std::vector<WallPlaneFit> found = extractPlanes(points_Op, po);
-  // Each point to the one plane it is near; near two (an edge, a corner): to none.
+  // Each ray to the plane whose crossing along the ray its range is within the gate of, if
+  // no other plane crosses the ray within `edge_margin` of that one (edges, corners: none).
+  // The edge rule depends on the ray and the planes alone, not on the range's noise, and the
+  // gate cuts the noise symmetrically: the kept points' noise stays centred (deciding by
+  // their noisy distances to two planes leaned the offset by ~0.1 mm).
   std::vector<int> owner(points_Op.size(), -1);
-  for (size_t k = 0; k < found.size(); ++k) {
-    const Eigen::Vector3f n = found[k].normal.cast<float>();
-    const auto d = static_cast<float>(found[k].offset);
-    const auto limit = static_cast<float>(o.assign_distance_m);
-    for (size_t i = 0; i < points_Op.size(); ++i) {
-      if (std::fabs(n.dot(points_Op[i]) + d) > limit) continue;
-      owner[i] = owner[i] == -1 ? static_cast<int>(k) : -2;
+  std::vector<double> crossing(found.size());
+  for (size_t i = 0; i < points_Op.size(); ++i) {
+    const SweepRay& ray = rays[i];
+    const Eigen::Vector3d u =
+        rotating::rotZ(ray.phi_rad) * rotating::pointInLidar(1.0, ray.theta_rad);
+    const Eigen::Vector3d origin = points_Op[i].cast<double>() - ray.range_m * u;
+    int best = -1;
+    for (size_t k = 0; k < found.size(); ++k) {
+      const double nu = found[k].normal.dot(u);
+      crossing[k] = nu != 0.0 ? -(found[k].normal.dot(origin) + found[k].offset) / nu
+                              : std::numeric_limits<double>::infinity();
+      if (std::fabs(crossing[k] - ray.range_m) <= o.assign_distance_m) best = static_cast<int>(k);
     }
+    if (best < 0) continue;
+    bool alone = true;
+    for (size_t k = 0; k < found.size() && alone; ++k) {
+      alone = static_cast<int>(k) == best ||
+              !(std::fabs(crossing[k] - crossing[static_cast<size_t>(best)]) < o.edge_margin_m);
+    }
+    if (alone) owner[i] = best;
   }
   std::vector<LidarPlaneRays> planes(found.size());
   for (size_t i = 0; i < owner.size(); ++i) {

@@ -42,14 +42,18 @@ struct LidarPlaneRays {
 struct PlaneSegmentationOptions {
   double voxel_m = 0.05;            // RANSAC on the voxel-downsampled cloud
   double ransac_distance_m = 0.03;  // RANSAC inlier threshold
-  double assign_distance_m = 0.05;  // a point belongs to the plane it is this near...
-  int max_planes = 8;               // ...unless it is as near another one (an edge)
-  int min_inliers = 300;            // after downsampling
-  int max_rays_per_plane = 5000;    // evenly strided (time order: spread over the sweep)
+  double assign_distance_m = 0.05;  // a ray's range within this of a plane's crossing...
+  double edge_margin_m = 0.15;      // ...and no other plane crossing the ray within this of it
+  int max_planes = 8;
+  int min_inliers = 300;          // after downsampling
+  int max_rays_per_plane = 5000;  // evenly strided (time order: spread over the sweep)
 };
 
 // The planes of one sweep: `points_Op` the cloud assembled with the nominal offset, `rays`
-// its rays in the same order (forEachSweepRay). Planes with fewer than 3 points are dropped.
+// its rays in the same order (forEachSweepRay). A ray belongs to the plane whose crossing
+// along the ray its range is within assign_distance_m of, unless another plane crosses the
+// ray within edge_margin_m of that crossing (edges, corners). Planes with fewer than 3 rays
+// are dropped.
 std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f>& points_Op,
                                                const std::vector<SweepRay>& rays,
                                                const PlaneSegmentationOptions& options,
