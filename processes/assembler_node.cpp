@@ -181,6 +181,7 @@ void AssemblerNode::publishSweep(int64_t now_utime, const SweepWindow& window, O
   out.publish(channels::kSweepStatus, now_utime, toStatus(sweep, static_cast<int>(chunks.size())));
   count("sweeps");
   if (!sweep.corrected) count("sweeps_uncorrected");
+  if (window_observer_) window_observer_(sweep, in_window);
   if (observer_) observer_(sweep);
 }
 

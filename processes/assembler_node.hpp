@@ -27,6 +27,12 @@ class AssemblerNode : public Node {
   void setSweepObserver(std::function<void(const AssembledSweep&)> observer) {
     observer_ = std::move(observer);
   }
+  // Called with every assembled sweep and the scans it was assembled from (calibrations that
+  // place the rays again with other parameters).
+  void setWindowObserver(
+      std::function<void(const AssembledSweep&, const std::vector<Scan2D>&)> observer) {
+    window_observer_ = std::move(observer);
+  }
 
  protected:
   void handle(const Message& msg, Outbox& out) override;
@@ -61,6 +67,7 @@ class AssemblerNode : public Node {
   int64_t candidate_skew_ = 0;
   int candidate_count_ = 0;
   std::function<void(const AssembledSweep&)> observer_;
+  std::function<void(const AssembledSweep&, const std::vector<Scan2D>&)> window_observer_;
 };
 
 }  // namespace sweepmap

@@ -80,7 +80,7 @@ nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth,
 
 void writeSummary(const fs::path& out, const std::string& log_path, const LogReadResult& read,
                   const nlohmann::json& sweeps, const MapperNode& mapper,
-                  const ReplayResult& result) {
+                  const ReplayResult& result, const RotatingLidarConfig& rig) {
   nlohmann::json summary;
   summary["log"] = fs::path(log_path).filename().string();
   summary["events"] = read.events;
@@ -97,9 +97,17 @@ void writeSummary(const fs::path& out, const std::string& log_path, const LogRea
                           {"sweeps_incomplete", read.sweeps_incomplete},
                           {"scans_missing", read.scans_missing},
                           {"windows_missing", read.windows_missing}};
+  // What the assembler placed the points with (a calibration file's values if the rig names one).
+  summary["geometry"] = {{"lidar_offset_x_mm", rig.geometry.lidar_offset_x_mm},
+                         {"calibration_file", rig.geometry.calibration_file},
+                         {"plate_alpha_deg", rig.plate.alpha_deg}};
   if (read.alpha_true_rad) {
-    summary["truth"] = {{"alpha_true_deg", roundTo(*read.alpha_true_rad * kRadToDeg, 6)},
-                        {"scene", read.scene}};
+    summary["truth"] = {
+        {"alpha_true_deg", roundTo(*read.alpha_true_rad * kRadToDeg, 6)},
+        {"lidar_offset_x_mm", read.lidar_offset_x_true_m
+                                  ? nlohmann::json(*read.lidar_offset_x_true_m * 1e3)
+                                  : nlohmann::json(nullptr)},
+        {"scene", read.scene}};
   }
   if (result.log_error) summary["error"] = result.error;
   writeFileAtomic((out / "summary.json").string(), summary.dump(2) + "\n");
@@ -158,7 +166,7 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   result.log_error = read.log_error;
   result.error = read.error;
   result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
-  writeSummary(out, options.log_path, read, sweeps, mapper, result);
+  writeSummary(out, options.log_path, read, sweeps, mapper, result, rig);
   if (options.plots && !first_O.empty()) plotFirstSweep(out, first_Op, first_O);
   return result;
 }
