@@ -19,8 +19,6 @@
 namespace sweepmap {
 namespace {
 
-std::vector<uint8_t> bytes(const std::string& s) { return {s.begin(), s.end()}; }
-
 template <class Decoder, class Event>
 std::vector<Event> decodeAll(const std::string& s, Decoder* d = nullptr) {
   Decoder local;

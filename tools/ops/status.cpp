@@ -73,7 +73,7 @@ void StatusBoard::add(const Message& msg, int64_t now_utime) {
       ++malformed_;
       return;
     }
-    sweep_ = Sweep{m.sweep_id, m.corrected, m.phi_offset_rad * kRadToDeg, m.reason};
+    sweep_ = Sweep{m.sweep_id, m.corrected != 0, m.phi_offset_rad * kRadToDeg, m.reason};
   }
 }
 
