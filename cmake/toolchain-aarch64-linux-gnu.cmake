@@ -2,7 +2,7 @@
 # on a Debian 12 amd64 host: `make pi` uses it for the on-board tree (SWEEPMAP_ONBOARD).
 # What it needs comes from `tools/ops/setup.sh --pi`:
 #  - crossbuild-essential-arm64: aarch64-linux-gnu-gcc/g++, the arm64 libc and libstdc++;
-#  - multiarch arm64 packages in /usr/lib/aarch64-linux-gnu (libgpiod, GTest, yaml-cpp's
+#  - multiarch arm64 packages in /usr/lib/aarch64-linux-gnu (libc, libgpiod, GTest, yaml-cpp's
 #    runtime, glib);
 #  - the arm64 LCM (liblcm1, liblcm-dev) and yaml-cpp -dev files, which Debian 12 cannot
 #    install next to the amd64 ones, unpacked into SWEEPMAP_ARM64_ROOT;
@@ -41,9 +41,11 @@ set(ENV{PKG_CONFIG_LIBDIR}
     "${SWEEPMAP_ARM64_ROOT}/usr/lib/aarch64-linux-gnu/pkgconfig:/usr/lib/aarch64-linux-gnu/pkgconfig:/usr/share/pkgconfig")
 set(ENV{PKG_CONFIG_PATH} "")
 
-# qemu: the arm64 loader and libc from the cross toolchain's folder; files not there (the
-# multiarch libraries) from /, and liblcm.so.1 by the build tree's RPATH.
+# qemu: the arm64 loader and libc of the multiarch libc6:arm64 (/lib/ld-linux-aarch64.so.1),
+# and liblcm.so.1 by the build tree's RPATH. Not `-L /usr/aarch64-linux-gnu`: that loader
+# (libc6-arm64-cross 2.36-8cross1) with the multiarch libc.so.6 (2.36-9+deb12uN) hangs in
+# the first pthread_create.
 find_program(SWEEPMAP_QEMU qemu-aarch64-static)
 if(SWEEPMAP_QEMU)
-  set(CMAKE_CROSSCOMPILING_EMULATOR ${SWEEPMAP_QEMU};-L;/usr/aarch64-linux-gnu)
+  set(CMAKE_CROSSCOMPILING_EMULATOR ${SWEEPMAP_QEMU})
 endif()

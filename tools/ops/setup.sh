@@ -38,7 +38,7 @@ packages=(
 # co-installable (liblcm-dev:arm64 would replace lcm-gen's liblcm-bin:amd64): see below.
 pi_packages=(
   crossbuild-essential-arm64 qemu-user-static ccache dpkg-dev
-  libyaml-cpp0.7:arm64 libgpiod-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
+  libc6:arm64 libyaml-cpp0.7:arm64 libgpiod-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
   libglib2.0-0:arm64
 )
 # Unpacked (dpkg -x) into SWEEPMAP_ARM64_ROOT, not installed: cmake/toolchain-aarch64-linux-gnu.cmake
