@@ -37,7 +37,8 @@ packages=(
 # their amd64 twins) or host tools. liblcm1, liblcm-dev and libyaml-cpp-dev are not
 # co-installable (liblcm-dev:arm64 would replace lcm-gen's liblcm-bin:amd64): see below.
 pi_packages=(
-  crossbuild-essential-arm64 qemu-user-static ccache dpkg-dev
+  crossbuild-essential-arm64 qemu-user-static ccache
+  dpkg-dev file  # dpkg-shlibdeps and file: CPack's Debian packages (make package)
   libc6:arm64 libyaml-cpp0.7:arm64 libgpiod-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
   libglib2.0-0:arm64
 )
@@ -82,7 +83,7 @@ if [ "$pi" -eq 1 ]; then
   else
     echo "setup: unpacking ${pi_unpacked[*]} into $ARM64_ROOT"
     tmp=$(mktemp -d)
-    chmod 755 "$tmp"  # apt-get download runs as _apt
+    chmod 777 "$tmp"  # apt-get download writes as _apt
     (cd "$tmp" && apt-get download -qq "${pi_unpacked[@]}")
     $SUDO rm -rf "$ARM64_ROOT"
     $SUDO mkdir -p "$ARM64_ROOT"
