@@ -8,16 +8,27 @@
 #   make fuzz           - each protocol decoder under libFuzzer (clang, ASan+UBSan) for
 #                         FUZZ_RUNS inputs (default 10 M) in build-fuzz/; new inputs that
 #                         reach new code are added to build-fuzz/corpus/
+#   make pi             - cross-build the on-board tree (sweepmap-motor, -lidar, -odometry, no
+#                         PCL/Ceres/OctoMap) for arm64 in build-pi/ and run its unit tests under
+#                         qemu-aarch64-static (setup.sh --pi installs the cross toolchain)
+#   make package        - Debian packages with CPack: sweepmap (amd64, everything) in build/,
+#                         sweepmap-onboard (arm64, on-board processes + systemd units) in build-pi/
 #   make format         - clang-format every C++ file in place (.clang-format)
 #   make format-check   - fail, listing them, when files are not formatted (part of make test)
 BUILD ?= build
 SANITIZE_BUILD ?= build-sanitize
 FUZZ_BUILD ?= build-fuzz
+PI_BUILD ?= build-pi
 FUZZ_RUNS ?= 10000000
 FUZZ_PROTOCOLS = scip x4 rplidar hi219 wheelboard
 JOBS ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 # -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable.
+# The on-board tree cross-compiled for arm64, through ccache (the cross compiler's entries
+# are its own: a first build is a cold one).
+PI_CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSWEEPMAP_ONBOARD=ON \
+                  --toolchain cmake/toolchain-aarch64-linux-gnu.cmake \
+                  -DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 SANITIZE_CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1" \
                         -DSWEEPMAP_SANITIZE=ON -DSWEEPMAP_BUILD_TESTS=ON
 CTEST = ctest --output-on-failure -j$(JOBS) --timeout 900
@@ -28,15 +39,22 @@ SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt
 # Every tracked C++ source; generated lcm-gen headers live in the build tree, not here.
 FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
 
-.PHONY: all setup build demo test test-unit test-sanitize fuzz format format-check bench clean
+.PHONY: all setup setup-pi build demo test test-unit test-sanitize fuzz pi pi-build package \
+        format format-check bench clean
 
 all: build
 
 setup:
 	@bash tools/ops/setup.sh
 
+setup-pi:
+	@bash tools/ops/setup.sh --pi
+
 $(BUILD)/Makefile: CMakeLists.txt
 	cmake -S . -B $(BUILD) $(CMAKE_FLAGS)
+
+$(PI_BUILD)/Makefile: CMakeLists.txt
+	cmake -S . -B $(PI_BUILD) $(PI_CMAKE_FLAGS)
 
 $(SANITIZE_BUILD)/Makefile: CMakeLists.txt
 	cmake -S . -B $(SANITIZE_BUILD) $(SANITIZE_CMAKE_FLAGS)
@@ -79,6 +97,19 @@ fuzz: setup
 	  if [ $$rc -ne 0 ]; then tail -40 $(FUZZ_BUILD)/fuzz_$$p.log; exit $$rc; fi; \
 	done
 
+# The unit tests run under qemu-aarch64-static (CMAKE_CROSSCOMPILING_EMULATOR in the toolchain
+# file), GTest's test discovery too.
+pi: pi-build
+	cd $(PI_BUILD) && $(CTEST) -L unit
+
+pi-build: setup-pi $(PI_BUILD)/Makefile
+	cmake --build $(PI_BUILD) -j$(JOBS)
+
+package: build pi-build
+	cd $(BUILD) && cpack -G DEB
+	cd $(PI_BUILD) && cpack -G DEB
+	@ls -l $(BUILD)/*.deb $(PI_BUILD)/*.deb
+
 format:
 	clang-format -i $(FORMAT_FILES)
 
@@ -91,4 +122,4 @@ bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench
 
 clean:
-	rm -rf $(BUILD) $(SANITIZE_BUILD) out
+	rm -rf $(BUILD) $(SANITIZE_BUILD) $(PI_BUILD) out
