@@ -11,6 +11,8 @@
 #include <mutex>
 #include <thread>
 
+#include "processes/sd_notify.hpp"
+
 namespace sweepmap {
 namespace {
 
@@ -118,11 +120,15 @@ class LiveRun {
     });
   }
 
-  // Until a signal, options.should_stop or an LCM failure.
+  // Until a signal, options.should_stop or an LCM failure. Tells the supervisor (systemd or
+  // `sweepmap launch`) READY=1 as it starts and WATCHDOG=1 from this loop only: a worker
+  // stuck in a node stops the pings and is restarted.
   void loop() {
     const auto period = std::chrono::milliseconds(std::max(1, options_.tick_period_ms));
     auto next_tick = std::chrono::steady_clock::now();
+    notifier_.ready();
     while (!g_stop && !lcm_failed_) {
+      notifier_.alive();
       receiveBuffered();
       for (const Message& m : inbox_.popUntil(next_tick)) dispatch(m);
       if (std::chrono::steady_clock::now() < next_tick) continue;
@@ -139,6 +145,7 @@ class LiveRun {
   // Drains what arrived before the stop, lets the nodes flush, stops the receiver and
   // unsubscribes. Returns false if LCM failed.
   bool finish() {
+    notifier_.stopping();
     auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
     if (!options_.wake_on_message) {
       while (!lcm_failed_ && std::chrono::steady_clock::now() < drain_until) {
@@ -211,6 +218,7 @@ class LiveRun {
   std::atomic<bool> receiving_{true};
   std::atomic<bool> lcm_failed_{false};
   int64_t dropped_total_ = 0;
+  SdNotifier notifier_;
 };
 
 }  // namespace

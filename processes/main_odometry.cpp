@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   // The odometry polls its devices (or takes its messages from LCM) every 10 ms: its
   // messages are small and cheap (a few us each), and at 400 Hz IMU thread switches per
   // message, not the EKF, were most of its CPU (sweepmap bench).
-  LiveOptions options;
+  LiveOptions options = liveOptions(common);
   options.tick_period_ms = 10;
   options.wake_on_message = false;
   if (from_lcm) {
