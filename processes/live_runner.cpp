@@ -154,6 +154,7 @@ class LiveRun {
       drain_until = std::chrono::steady_clock::now();
     }
     for (const Message& m : inbox_.popUntil(drain_until)) dispatch(m);
+    countDropped(true);
     const int64_t now = wallUtime();
     for (Node* n : nodes_) {
       Outbox out;
@@ -199,11 +200,18 @@ class LiveRun {
     }
   }
 
-  void countDropped() {
+  // Counts what the full queue refused (each node's `dropped`) and says the total on stderr,
+  // at most once a second (a storm would print every tick) and once more at the end.
+  void countDropped(bool final = false) {
     for (const auto& [channel, d] : inbox_.takeDropped()) {
       dropped_total_ += d;
       for (Node* n : subscribers_[channel]) n->countLostInput(d);
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (dropped_total_ != dropped_said_ && (final || now >= next_drop_report_)) {
       std::cerr << "receive queue full: " << dropped_total_ << " messages dropped so far\n";
+      dropped_said_ = dropped_total_;
+      next_drop_report_ = now + std::chrono::seconds(1);
     }
   }
 
@@ -218,6 +226,8 @@ class LiveRun {
   std::atomic<bool> receiving_{true};
   std::atomic<bool> lcm_failed_{false};
   int64_t dropped_total_ = 0;
+  int64_t dropped_said_ = 0;
+  std::chrono::steady_clock::time_point next_drop_report_{};
   SdNotifier notifier_;
 };
 
