@@ -320,9 +320,12 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
   EXPECT_EQ(status.process, "mapper");
 }
 
-// A log played at 10x speed into the assembler and mapper, each with a receive queue of 20
-// messages: both keep running and publishing their status, what the full queue refused is
-// counted (`dropped` in STATUS, the same total as printed), and memory stays bounded.
+// A log played at 10x speed into the assembler and mapper, each with a receive queue of 2
+// messages: both keep running and publishing their status; every message the assembler is
+// subscribed to was either handled or refused by the full queue and counted (`dropped` in
+// STATUS, the same total as printed; whether the queue overflows depends on the machine's
+// load, so the count is checked, not its size: tests/processes/test_live_runner.cpp
+// overflows a queue deterministically); memory stays bounded and flat.
 TEST_F(DeployTest, MessageStormAtTenTimesSpeed) {
   const auto dir = scratchDir("deploy_storm");
   const std::string sim_log =
@@ -388,7 +391,13 @@ TEST_F(DeployTest, MessageStormAtTenTimesSpeed) {
             << m_dropped << " dropped, peak RSS " << peak(rss_mapper) << " MB\n";
   // Statuses kept coming while the storm lasted (1 Hz each).
   EXPECT_GE(readChannel(rec, "STATUS_ASSEMBLER").size(), static_cast<size_t>(play_s) - 1);
-  EXPECT_GT(counterOf(a, "messages_in"), 1000);
+  // Handled + dropped = what was played (the kernel may lose a datagram under load: 1 %).
+  int64_t played = 0;
+  for (const char* ch : {channels::kLidarScan, channels::kScanWindow}) {
+    played += static_cast<int64_t>(readChannel(sim_log, ch).size());
+  }
+  EXPECT_LE(counterOf(a, "messages_in") + a_dropped, played);
+  EXPECT_GE(counterOf(a, "messages_in") + a_dropped, played * 99 / 100);
   // Drops are counted in STATUS and said on stderr with the same total.
   for (const auto& [name, dropped] : {std::pair{"assembler", a_dropped}, {"mapper", m_dropped}}) {
     const std::string said = readFile(dir / (std::string(name) + ".txt"));
@@ -400,7 +409,7 @@ TEST_F(DeployTest, MessageStormAtTenTimesSpeed) {
     }
     EXPECT_EQ(last, dropped) << name;
   }
-  // Bounded: a queue of 20 messages; the map of 8 sweeps. Flat: the assembler's memory at the
+  // Bounded: a queue of 2 messages; the map of 8 sweeps. Flat: the assembler's memory at the
   // end of the storm is within 50 MB of its first third's peak.
   EXPECT_LT(peak(rss_assembler), 300.0);
   EXPECT_LT(peak(rss_mapper), 600.0);
