@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "core/config.hpp"
+#include "rigs/rig_file.hpp"
 #include "tools/ops/deploy.hpp"
 #include "tools/ops/systemd_units.hpp"
 
@@ -80,6 +81,20 @@ TEST(DeployFile, ShippedFilesLoad) {
     EXPECT_NE(d.lcm_url.find("ttl=1"), std::string::npos) << name;
     EXPECT_EQ(d.host("pi").processes.size(), 2u) << name;
     EXPECT_EQ(d.host("laptop").processes.size(), 3u) << name;
+    // Every sweepmap process's rig loads with its --set overrides (the rig names resolve in
+    // the config folder, the overridden keys exist).
+    for (const auto& p : d.processes("")) {
+      std::string rig;
+      std::vector<std::string> sets;
+      for (size_t i = 0; i + 1 < p.args.size(); ++i) {
+        if (p.args[i] == "--rig") rig = p.args[i + 1];
+        if (p.args[i] == "--set") sets.push_back(p.args[i + 1]);
+      }
+      if (p.command.rfind("sweepmap-", 0) != 0) continue;
+      ASSERT_FALSE(rig.empty()) << name << " " << p.name;
+      ::setenv("SWEEPMAP_CONFIG_DIR", SWEEPMAP_SOURCE_DIR "/config", 1);
+      EXPECT_NO_THROW(loadRig(rig, sets)) << name << " " << p.name;
+    }
   }
 }
 

@@ -123,6 +123,7 @@ class Supervisor {
     for (auto& p : procs_) p.next_start = t0;
     while (!stopRequested()) {
       notify_.receive(50, [&](pid_t pid, const std::string& text) { onNotify(pid, text); });
+      if (stopRequested()) break;  // a terminal's Ctrl-C reaches the children too: no restarts
       const auto now = Clock::now();
       bool all_finished = true;
       for (auto& p : procs_) {
