@@ -23,9 +23,13 @@ Runner addLaunchCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--bin-dir", o->bin_dir,
                   "where the sweepmap executables are (default: beside this one)");
-  cmd->add_flag("!--no-watchdog", o->watchdog,
+  auto no_watchdog = std::make_shared<bool>(false);
+  cmd->add_flag("--no-watchdog", *no_watchdog,
                 "do not watch the processes' WATCHDOG=1 (a debugger's breakpoint is no hang)");
-  return [o]() { return runLaunch(*o); };
+  return [o, no_watchdog]() {
+    o->watchdog = !*no_watchdog;
+    return runLaunch(*o);
+  };
 }
 
 }  // namespace sweepmap
