@@ -13,6 +13,7 @@
 #include <sys/mount.h>
 #include <sys/statvfs.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cstdio>
@@ -253,24 +254,42 @@ TEST_F(DeployTest, LaunchWatchdogRestartsAHungProcess) {
             << " s after SIGSTOP (watchdog 1 s, restart delay 0.5 s)\n";
 }
 
+// The processes whose command line has `program` and `needle` (scanning /proc).
+int processesWith(const std::string& program, const std::string& needle) {
+  int n = 0;
+  for (const auto& entry : fs::directory_iterator("/proc")) {
+    const std::string pid = entry.path().filename().string();
+    if (pid.find_first_not_of("0123456789") != std::string::npos) continue;
+    std::string cmdline = readFile(entry.path() / "cmdline");
+    std::replace(cmdline.begin(), cmdline.end(), '\0', ' ');
+    n += cmdline.find(program) != std::string::npos && cmdline.find(needle) != std::string::npos;
+  }
+  return n;
+}
+
 // kill -9 of each process of a live rig-A run (mode 1, simulated devices) under `sweepmap
 // launch`: each is restarted within 2 s (the bound; measured from the kill to
 // launch's `start` line and to the new process's READY=1); the map the mapper saved before
 // its kill is kept and loads; sweeps resume through the restarted processes (the restarted
-// mapper saves a new map); the killed logger's file reads to its last complete event.
+// mapper saves a new map); the killed recorder's lcm-logger does not outlive it (launch kills
+// its process group), and its file reads to its last complete event.
 TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
   const auto dir = scratchDir("deploy_kill");
   const std::string map = (dir / "map.bt").string();
+  const fs::path rec = dir / "rec";
   const std::string processes =
-      "      - {name: logger, command: lcm-logger, args: [-i, " + (dir / "run.lcmlog").string() +
-      "]}\n" + rigProcess("mapper", ", --save, " + map + ", --save-every, \"1\"") +
+      "      - {name: recorder, command: sweepmap, notify: true, args: [record, --preset, all, "
+      "--out, " +
+      rec.string() + ", --split-mb, \"1000\", --min-free-mb, \"1\"]}\n" +
+      rigProcess("mapper", ", --save, " + map + ", --save-every, \"1\"") +
       rigProcess("assembler", "") +
       rigProcess("lidar", ", --sim, --scene, " + kScene + ", --seed, \"3\"") +
       rigProcess("motor", ", --sim, --seed, \"3\"");
   startLaunch(dir, deployFile(dir, processes));
   ASSERT_TRUE(waitFor([&] { return fs::exists(map); }, 60)) << "no map saved\n" << events();
+  EXPECT_EQ(processesWith("lcm-logger", rec.string()), 1);
 
-  for (const std::string name : {"motor", "lidar", "assembler", "logger", "mapper"}) {
+  for (const std::string name : {"motor", "lidar", "assembler", "recorder", "mapper"}) {
     const pid_t pid = pidOf(name);
     ASSERT_GT(pid, 0) << name;
     ASSERT_EQ(::kill(pid, SIGKILL), 0) << name;
@@ -278,13 +297,10 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
     ASSERT_TRUE(waitFor([&] { return pidOf(name) != pid; }, 10)) << name << "\n" << events();
     const double start_s = since(t0);
     const pid_t next = pidOf(name);
-    double ready_s = -1;
-    if (name != "logger") {
-      EXPECT_TRUE(waitFor([&] { return saidReady(name, next); }, 10)) << name << "\n" << events();
-      ready_s = since(t0);
-    }
-    std::cout << "kill -9 " << name << ": restarted after " << start_s << " s"
-              << (ready_s >= 0 ? ", READY=1 after " + std::to_string(ready_s) + " s" : "") << "\n";
+    EXPECT_TRUE(waitFor([&] { return saidReady(name, next); }, 10)) << name << "\n" << events();
+    const double ready_s = since(t0);
+    std::cout << "kill -9 " << name << ": restarted after " << start_s << " s, READY=1 after "
+              << ready_s << " s\n";
     EXPECT_LE(start_s, 2.0) << name;
     EXPECT_LE(ready_s, 2.0) << name;
     EXPECT_NE(events().find("exit     " + name + " (pid " + std::to_string(pid) +
@@ -292,6 +308,8 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
               std::string::npos)
         << events();
   }
+  // One lcm-logger: the killed recorder's went with it.
+  EXPECT_EQ(processesWith("lcm-logger", rec.string()), 1);
   // The map of the killed mapper: kept by its successor under a dated name, and it loads.
   std::vector<fs::path> kept;
   for (const auto& f : fs::directory_iterator(dir)) {
@@ -307,17 +325,17 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
   EXPECT_TRUE(waitFor([&] { return fs::exists(map); }, 60)) << "no sweep after the restarts";
   EXPECT_EQ(procs_.stop(launch_, 60), 0) << events();
   EXPECT_GT(OccupancyMap::loadBinary(map).stats().occupied_voxels, 1000);
-  // Both logs, the killed logger's and its successor's, read to their last complete event.
-  for (const char* log : {"run.lcmlog.00", "run.lcmlog.01"}) {
-    EventLogReader r((dir / log).string());
+  // Both recordings, the killed recorder's and its successor's, read to their last complete
+  // event (lcm-logger -i: the restarted one writes the next file).
+  for (const char* log : {"run.00", "run.01"}) {
+    EventLogReader r((rec / log).string());
     r.setResync(true);
     LogEvent e;
     int events_read = 0;
     while (r.next(&e)) ++events_read;
     EXPECT_GT(events_read, 100) << log;
   }
-  const auto status = lastStatus((dir / "run.lcmlog.01").string(), "MAPPER");
-  EXPECT_EQ(status.process, "mapper");
+  EXPECT_EQ(lastStatus((rec / "run.01").string(), "MAPPER").process, "mapper");
 }
 
 // A log played at 10x speed into the assembler and mapper, each with a receive queue of 2

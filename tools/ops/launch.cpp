@@ -123,7 +123,7 @@ class Supervisor {
     for (auto& p : procs_) p.next_start = t0;
     while (!stopRequested()) {
       notify_.receive(50, [&](pid_t pid, const std::string& text) { onNotify(pid, text); });
-      if (stopRequested()) break;  // a terminal's Ctrl-C reaches the children too: no restarts
+      if (stopRequested()) break;
       const auto now = Clock::now();
       bool all_finished = true;
       for (auto& p : procs_) {
@@ -182,6 +182,7 @@ class Supervisor {
     SpawnOptions o;
     o.log_path = (log_dir_ / (p.spec.name + ".txt")).string();
     o.append_log = true;
+    o.new_process_group = true;
     o.env = {"LCM_DEFAULT_URL=" + deploy_.lcm_url};
     if (p.spec.notify && notify_.ok()) {
       o.env.push_back("NOTIFY_SOCKET=" + notify_.name());
@@ -221,6 +222,7 @@ class Supervisor {
 
   void onExit(Proc& p, Clock::time_point now) {
     const int status = group_.wait(p.pid, 0);
+    ProcessGroup::killGroup(p.pid);  // what it left running (systemd kills its cgroup)
     const double ran_s = secondsBetween(p.started, now);
     event("exit", p.spec.name,
           pidText(p) + " " + group_.describeExit(p.pid) + " after " + fmt(ran_s) + " s" +
@@ -267,6 +269,7 @@ class Supervisor {
       event("stop", p.spec.name,
             pidText(p) + ": SIGINT, SIGKILL after " + fmt(deploy_.stopTimeout(p.spec)) + " s");
       const int status = group_.stop(p.pid, deploy_.stopTimeout(p.spec));
+      ProcessGroup::killGroup(p.pid);
       killed += status == 128 + SIGKILL;
       event("exit", p.spec.name, pidText(p) + " " + group_.describeExit(p.pid));
       p.pid = -1;

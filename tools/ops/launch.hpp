@@ -2,10 +2,12 @@
 // what systemd does on a host (`sweepmap systemd`), without installing anything.
 //
 // Starts the processes of one host (or of every host) in file order, each with its output in
-// LOG_DIR/<name>.txt (appended across restarts). A process that dies is restarted after
-// restart.delay_s, doubling per failure in a row up to restart.max_delay_s; one that ran
-// restart.stable_s starts again at delay_s. A process that exits 0 has finished and is not
-// restarted, unless its `restart` is `always`. Launch provides the children's $NOTIFY_SOCKET
+// LOG_DIR/<name>.txt (appended across restarts) and in a process group of its own (a
+// terminal's Ctrl-C reaches launch alone, which stops them in order; when a process ends,
+// what it left running in its group is killed, as systemd kills a unit's cgroup). A process that
+// dies is restarted after restart.delay_s, doubling per failure in a row up to restart.max_delay_s;
+// one that ran restart.stable_s starts again at delay_s. A process that exits 0 has finished and is
+// not restarted, unless its `restart` is `always`. Launch provides the children's $NOTIFY_SOCKET
 // (an abstract socket) and WATCHDOG_USEC: a process that speaks sd_notify and sends no
 // WATCHDOG=1 for restart.watchdog_s is hung — it is killed (SIGKILL) and restarted, as systemd
 // does. SIGINT/SIGTERM stop the processes in reverse file order (upstream first when the file

@@ -62,8 +62,15 @@ pid_t spawn(const std::vector<std::string>& argv, const SpawnOptions& o, bool qu
     env.push_back(nullptr);
     envp = env.data();
   }
+  posix_spawnattr_t attr;
+  posix_spawnattr_init(&attr);
+  if (o.new_process_group) {
+    posix_spawnattr_setpgroup(&attr, 0);
+    posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETPGROUP);
+  }
   pid_t pid = -1;
-  const int rc = posix_spawnp(&pid, args[0], &actions, nullptr, args.data(), envp);
+  const int rc = posix_spawnp(&pid, args[0], &actions, &attr, args.data(), envp);
+  posix_spawnattr_destroy(&attr);
   posix_spawn_file_actions_destroy(&actions);
   return rc == 0 ? pid : -1;
 }
@@ -125,6 +132,10 @@ bool ProcessGroup::running(pid_t pid) {
 void ProcessGroup::signal(pid_t pid, int signal) {
   const Child* c = find(pid);
   if (c && !c->reaped) ::kill(pid, signal);
+}
+
+void ProcessGroup::killGroup(pid_t leader) {
+  if (leader > 0) ::kill(-leader, SIGKILL);
 }
 
 std::string ProcessGroup::describeExit(pid_t pid) const {

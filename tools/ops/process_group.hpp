@@ -13,6 +13,9 @@ struct SpawnOptions {
   std::string log_path;          // stdout and stderr go there ("" = inherited)
   bool append_log = false;       // append (a restarted process) instead of truncating
   std::vector<std::string> env;  // "KEY=VALUE" set or replaced in the child's environment
+  // The child leads a process group of its own: a terminal's Ctrl-C does not reach it, and
+  // what it leaves behind when it dies can be killed with its group (killGroup).
+  bool new_process_group = false;
 };
 
 class ProcessGroup {
@@ -31,6 +34,9 @@ class ProcessGroup {
   const std::string& name(pid_t pid) const;
   // Sends `signal` to a child that has not been reaped.
   void signal(pid_t pid, int signal);
+  // SIGKILLs what is left of the process group a child started with new_process_group led
+  // (its own children: e.g. `sweepmap record`'s lcm-logger after the recorder was killed).
+  static void killGroup(pid_t leader);
   // How a reaped child ended: "exit status N" or "killed by signal N (SIGNAME)".
   std::string describeExit(pid_t pid) const;
 
