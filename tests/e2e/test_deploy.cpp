@@ -203,13 +203,20 @@ TEST_F(DeployTest, LaunchRejectsABadFileNamingTheKey) {
 }
 
 // A process that fails at once is restarted after 0.5, 1, 2 s...; one that exits 0 has
-// finished and is not restarted.
+// finished and is not restarted; a program that is not there is retried the same way.
 TEST_F(DeployTest, LaunchBacksOffAFailingProcessAndLeavesAFinishedOne) {
   const auto dir = scratchDir("deploy_backoff");
   startLaunch(dir, deployFile(dir,
                               "      - {name: failing, command: \"false\"}\n"
-                              "      - {name: done, command: \"true\"}\n"));
-  ASSERT_TRUE(waitFor([&] { return events().find("in 2 s") != std::string::npos; }, 20))
+                              "      - {name: done, command: \"true\"}\n"
+                              "      - {name: missing, command: /nonexistent/program}\n"));
+  ASSERT_TRUE(waitFor(
+      [&] {
+        const std::string e = events();
+        return e.find("restart  failing in 2 s") != std::string::npos &&
+               e.find("restart  missing in 2 s") != std::string::npos;
+      },
+      20))
       << events();
   EXPECT_EQ(procs_.stop(launch_, 10), 0);
   const std::string e = events();
@@ -219,6 +226,11 @@ TEST_F(DeployTest, LaunchBacksOffAFailingProcessAndLeavesAFinishedOne) {
   EXPECT_TRUE(first < second && second < third && third != std::string::npos) << e;
   EXPECT_NE(e.find("exit status 1"), std::string::npos) << e;
   EXPECT_NE(e.find("finished done exited 0: not restarted"), std::string::npos) << e;
+  // A program that is not there is one error per attempt, retried with the same backoff.
+  EXPECT_NE(e.find("error    missing cannot start missing (/nonexistent/program)"),
+            std::string::npos)
+      << e;
+  EXPECT_NE(e.find("restart  missing in 1 s (failure 2 in a row)"), std::string::npos) << e;
   const std::regex starts("start +done ");
   EXPECT_EQ(std::distance(std::sregex_iterator(e.begin(), e.end(), starts), std::sregex_iterator()),
             1);
