@@ -240,12 +240,12 @@ TEST_F(DeployTest, LaunchBacksOffAFailingProcessAndLeavesAFinishedOne) {
 // restarted; while it runs normally its pings keep the watchdog quiet.
 TEST_F(DeployTest, LaunchWatchdogRestartsAHungProcess) {
   const auto dir = scratchDir("deploy_watchdog");
-  startLaunch(dir, deployFile(dir, rigProcess("assembler", ""), 1.0));
+  startLaunch(dir, deployFile(dir, rigProcess("assembler", ""), 2.0));
   pid_t pid = -1;
   ASSERT_TRUE(
       waitFor([&] { return (pid = pidOf("assembler")) > 0 && saidReady("assembler", pid); }, 10))
       << events();
-  std::this_thread::sleep_for(std::chrono::milliseconds(2500));  // 2.5 watchdog intervals
+  std::this_thread::sleep_for(std::chrono::milliseconds(4500));  // 2.25 watchdog intervals
   EXPECT_EQ(events().find("watchdog assembler"), std::string::npos) << events();
   ::kill(pid, SIGSTOP);
   const auto t0 = Clock::now();
@@ -263,7 +263,7 @@ TEST_F(DeployTest, LaunchWatchdogRestartsAHungProcess) {
       std::string::npos)
       << e;
   std::cout << "watchdog: hung assembler restarted " << restart_s
-            << " s after SIGSTOP (watchdog 1 s, restart delay 0.5 s)\n";
+            << " s after SIGSTOP (watchdog 2 s, restart delay 0.5 s)\n";
 }
 
 // The processes whose command line has `program` and `needle` (scanning /proc).
