@@ -35,6 +35,10 @@ inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
       ->check(CLI::PositiveNumber);
 }
 
+// A device driver's worker thread silent this long is stuck (its reads, connection attempts and
+// start-up exchanges all time out sooner): the process withholds its watchdog ping.
+constexpr int64_t kDeviceWorkerStallMs = 10000;
+
 // The live runner's options with the command line's queue bound.
 inline LiveOptions liveOptions(const CommonOptions& o) {
   LiveOptions options;

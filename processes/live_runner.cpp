@@ -128,7 +128,7 @@ class LiveRun {
     auto next_tick = std::chrono::steady_clock::now();
     notifier_.ready();
     while (!g_stop && !lcm_failed_) {
-      notifier_.alive();
+      if (!options_.healthy || options_.healthy()) notifier_.alive();
       receiveBuffered();
       for (const Message& m : inbox_.popUntil(next_tick)) dispatch(m);
       if (std::chrono::steady_clock::now() < next_tick) continue;

@@ -84,6 +84,7 @@ int runDevice(const CommonOptions& common, const LidarConfig& lidar, const Devic
   installStopSignals();
   LiveOptions options = liveOptions(common);
   options.should_stop = [&node] { return node.failed(); };
+  options.healthy = [&device] { return !device->workerStalled(kDeviceWorkerStallMs); };
   const int rc = runLive(lcm, {&node}, options);
   // A device that is not the one the rig file describes: a configuration error, not a
   // crash to restart from.

@@ -172,5 +172,21 @@ TEST(SdNotify, LiveRunnerPingsFromItsWorkerLoopOnly) {
   EXPECT_GE(longest_gap, std::chrono::milliseconds(550));
 }
 
+// LiveOptions::healthy false (a device thread stuck): the worker withholds its pings.
+TEST(SdNotify, AnUnhealthyProcessWithholdsItsPings) {
+  NotifySocket s("@sweepmap-test-unhealthy-" + std::to_string(::getpid()));
+  ::setenv("WATCHDOG_USEC", "20000", 1);
+  lcm::LCM lcm("memq://");
+  HangingNode node;
+  LiveOptions options;
+  options.tick_period_ms = 5;
+  options.healthy = [] { return false; };
+  const auto start = Clock::now();
+  options.should_stop = [&] { return Clock::now() - start > std::chrono::milliseconds(300); };
+  EXPECT_EQ(runLive(lcm, {&node}, options), 0);
+  EXPECT_EQ(s.receive(), "READY=1");
+  EXPECT_EQ(s.receive(), "STOPPING=1");  // and no WATCHDOG=1 between
+}
+
 }  // namespace
 }  // namespace sweepmap
