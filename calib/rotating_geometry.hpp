@@ -31,6 +31,15 @@ inline Eigen::Vector3d lidarToOPrime(const Eigen::Vector3d& p_L, double phi_moto
   return rotZ(phi_motor_rad) * (p_L + Eigen::Vector3d(offset_x_m, 0.0, 0.0));
 }
 
+// Eq. 5-6 with R_L^O' = I and the whole offset t_L^O' = (x, y, z) [m]: x across the scan
+// plane (the paper's 13.9 mm), y within it perpendicular to the axis, z along the axis.
+// Planes see them differently (calib/axis_offset_lidar.hpp): z only moves the whole cloud
+// along the axis, never observable; x and y bend vertical walls, observable from them.
+inline Eigen::Vector3d lidarToOPrime(const Eigen::Vector3d& p_L, double phi_motor_rad,
+                                     const Eigen::Vector3d& t_L_Op_m) {
+  return rotZ(phi_motor_rad) * (p_L + t_L_Op_m);
+}
+
 // Eq. 7: phi_motor^k = k / K * sweep_angle.
 inline double motorAngleFromIndex(long k, long K, double sweep_angle_rad) {
   return static_cast<double>(k) / static_cast<double>(K) * sweep_angle_rad;

@@ -26,24 +26,15 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   size_t total = 0;
   for (const auto& s : scans) total += s.ranges_m.size();
   out.points_Op.reserve(total);
-  for (const auto& scan : scans) {
-    const double t_ray_s = 1e-9 * static_cast<double>(scan.time_increment_ns);
-    const double phi0 =
-        rotating::motorAngleFromTime(scan.utime, out.first_ray_utime, window.omega_rad_s);
-    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-      const double r = scan.ranges_m[i];
-      if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none
-      // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
-      const double phi = phi0 + window.omega_rad_s * t_ray_s * static_cast<double>(i);
-      const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
-      const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, phi, offset_x_m);
-      out.points_Op.push_back(p_Op.cast<float>());
-      const Eigen::Vector3d origin =
-          rotating::lidarToOPrime(Eigen::Vector3d::Zero(), phi, offset_x_m);
-      const Eigen::Vector3d dir = (p_Op - origin) / r;
-      if (plateRayRange(origin, dir, region)) plate_rays.push_back({origin, dir, r});
-    }
-  }
+  forEachSweepRay(scans, window.omega_rad_s, [&](const SweepRay& ray) {
+    const Eigen::Vector3d p_L = rotating::pointInLidar(ray.range_m, ray.theta_rad);
+    const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, ray.phi_rad, offset_x_m);
+    out.points_Op.push_back(p_Op.cast<float>());
+    const Eigen::Vector3d origin =
+        rotating::lidarToOPrime(Eigen::Vector3d::Zero(), ray.phi_rad, offset_x_m);
+    const Eigen::Vector3d dir = (p_Op - origin) / ray.range_m;
+    if (plateRayRange(origin, dir, region)) plate_rays.push_back({origin, dir, ray.range_m});
+  });
 
   out.plate_rays = std::move(plate_rays);
   correctSweep(rig, &out);

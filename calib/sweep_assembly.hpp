@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "calib/plate.hpp"
+#include "calib/rotating_geometry.hpp"
 #include "core/scan.hpp"
 #include "rigs/rotating_lidar.hpp"
 
@@ -35,7 +36,38 @@ struct AssembledSweep {
   double phi_offset_rad = 0.0;  // applied rotation (0 when not corrected)
   bool corrected = false;
   std::string reason;  // why not corrected
+  // Scans of the window that never reached the assembler (a gap in their seq; set by
+  // processes/assembler_node, 0 here): the sweep is incomplete.
+  int missing_scans = 0;
 };
+
+// The raw observation of one valid ray of a sweep: the shaft angle phi_motor at the ray's
+// own time (Eq. 7 by time, per-ray timing), the range and the ray's angle theta in the scan
+// (Eq. 4). Enough to place the point with any t_L^O' (calib/axis_offset_lidar.hpp).
+struct SweepRay {
+  double phi_rad = 0.0;
+  double range_m = 0.0;
+  double theta_rad = 0.0;
+};
+
+// Calls f(ray) for every valid ray of `scans` (a window's scans in time order, the first
+// scan's first ray at phi = 0), in the order assembleSweep makes points_Op: rays with range
+// 0 or outside [range_min, range_max] of their scan are skipped.
+template <class F>
+void forEachSweepRay(const std::vector<Scan2D>& scans, double omega_rad_s, F&& f) {
+  if (scans.empty()) return;
+  const int64_t first_ray_utime = scans.front().utime;
+  for (const auto& scan : scans) {
+    const double t_ray_s = 1e-9 * static_cast<double>(scan.time_increment_ns);
+    const double phi0 = rotating::motorAngleFromTime(scan.utime, first_ray_utime, omega_rad_s);
+    for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      const double r = scan.ranges_m[i];
+      if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none
+      // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
+      f(SweepRay{phi0 + omega_rad_s * t_ray_s * static_cast<double>(i), r, scan.rayAngle(i)});
+    }
+  }
+}
 
 // `scans` must be the valid scans of the window in time order. Rays with range 0 or
 // outside [range_min, range_max] of their scan are skipped.

@@ -25,25 +25,6 @@ void orientTowardOrigin(WallPlaneFit* w) {
   }
 }
 
-// Least-squares plane through the points of `idx` (smallest eigenvector of the covariance).
-bool fitPlane(const std::vector<Eigen::Vector3f>& cloud, const std::vector<int>& idx,
-              Eigen::Vector3d* normal, double* offset) {
-  if (idx.size() < 3) return false;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (int i : idx) mean += cloud[i].cast<double>();
-  mean /= static_cast<double>(idx.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (int i : idx) {
-    const Eigen::Vector3d d = cloud[i].cast<double>() - mean;
-    cov += d * d.transpose();
-  }
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  if (es.info() != Eigen::Success) return false;
-  *normal = es.eigenvectors().col(0).normalized();
-  *offset = -normal->dot(mean);
-  return true;
-}
-
 std::vector<int> pointsNear(const std::vector<Eigen::Vector3f>& cloud, const Eigen::Vector3d& n,
                             double offset, double distance_m) {
   std::vector<int> idx;
@@ -85,6 +66,24 @@ double angleBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 }  // namespace
 
+bool fitPlaneLeastSquares(const std::vector<Eigen::Vector3f>& cloud, const std::vector<int>& idx,
+                          Eigen::Vector3d* normal, double* offset) {
+  if (idx.size() < 3) return false;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (int i : idx) mean += cloud[i].cast<double>();
+  mean /= static_cast<double>(idx.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i : idx) {
+    const Eigen::Vector3d d = cloud[i].cast<double>() - mean;
+    cov += d * d.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  if (es.info() != Eigen::Success) return false;
+  *normal = es.eigenvectors().col(0).normalized();
+  *offset = -normal->dot(mean);
+  return true;
+}
+
 std::vector<WallPlaneFit> refitWalls(const std::vector<Eigen::Vector3f>& cloud,
                                      const std::vector<WallPlaneFit>& walls, double distance_m) {
   std::vector<WallPlaneFit> out;
@@ -94,7 +93,7 @@ std::vector<WallPlaneFit> refitWalls(const std::vector<Eigen::Vector3f>& cloud,
     r.offset = w.offset;
     Eigen::Vector3d n;
     double d = 0;
-    if (fitPlane(cloud, pointsNear(cloud, w.normal, w.offset, distance_m), &n, &d)) {
+    if (fitPlaneLeastSquares(cloud, pointsNear(cloud, w.normal, w.offset, distance_m), &n, &d)) {
       if (n.dot(w.normal) < 0) {
         n = -n;
         d = -d;

@@ -66,6 +66,11 @@ WallExtraction extractWalls(const std::vector<Eigen::Vector3f>& cloud_O,
 std::vector<WallPlaneFit> refitWalls(const std::vector<Eigen::Vector3f>& cloud,
                                      const std::vector<WallPlaneFit>& walls, double distance_m);
 
+// The least-squares plane through cloud[idx] (the smallest eigenvector of their covariance):
+// normal . p + offset = 0. False for fewer than 3 points.
+bool fitPlaneLeastSquares(const std::vector<Eigen::Vector3f>& cloud, const std::vector<int>& idx,
+                          Eigen::Vector3d* normal, double* offset);
+
 // Planes of any orientation, or horizontal ones (floor, ceiling, table tops), for rig B's
 // evaluation: voxel downsampling, then up to `max_planes` RANSAC planes (PCL's fixed seed:
 // deterministic), largest first, each removed before the next; each refit by least squares

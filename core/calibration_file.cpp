@@ -163,4 +163,20 @@ void writeAxisOffsetCalibration(const std::string& path, const AxisOffsetCalibra
                        c.source, c.logs);
 }
 
+LidarOffsetCalibration loadLidarOffsetCalibration(const std::string& path) {
+  const CalibrationFileContent f = loadCalibrationFile(path, "geometry", {"lidar_offset_x_mm"});
+  LidarOffsetCalibration c;
+  c.lidar_offset_x_mm = f.values.at("lidar_offset_x_mm");
+  c.source = f.source;
+  c.logs = f.logs;
+  return c;
+}
+
+void writeLidarOffsetCalibration(const std::string& path, const LidarOffsetCalibration& c) {
+  writeCalibrationFile(path,
+                       "Lidar-to-axis offset of a rotating 2D lidar (t_L^O', plane constraints); "
+                       "read via geometry.calibration_file",
+                       "geometry", {{"lidar_offset_x_mm", c.lidar_offset_x_mm}}, c.source, c.logs);
+}
+
 }  // namespace sweepmap

@@ -21,6 +21,10 @@
 //     laser_tilt_deg: 0.2
 //     encoder_zero_deg: 0          # as given: planes cannot determine it
 //   source: {...}                  # as above, with each parameter's standard deviation
+//
+//   geometry:                      # rig A (t_L^O' by plane constraints): geometry.calibration_file
+//     lidar_offset_x_mm: 16.0      # replaces the rig's geometry.lidar_offset_x_mm
+//   source: {...}                  # as above, with the standard deviation
 #pragma once
 
 #include <map>
@@ -68,5 +72,17 @@ struct AxisOffsetCalibration {
 // Same rules: `axis_offset.{m_mm,n_mm,laser_tilt_deg,encoder_zero_deg}` required and finite.
 AxisOffsetCalibration loadAxisOffsetCalibration(const std::string& path);
 void writeAxisOffsetCalibration(const std::string& path, const AxisOffsetCalibration& calibration);
+
+// Rig A's lidar-to-axis offset (t_L^O' = (x, 0, 0), Yuan 2021 Eq. 5-6).
+struct LidarOffsetCalibration {
+  double lidar_offset_x_mm = 0.0;
+  std::map<std::string, std::string> source;
+  std::vector<std::string> logs;
+};
+
+// Same rules: `geometry.lidar_offset_x_mm` required and finite, only `geometry` and `source`.
+LidarOffsetCalibration loadLidarOffsetCalibration(const std::string& path);
+void writeLidarOffsetCalibration(const std::string& path,
+                                 const LidarOffsetCalibration& calibration);
 
 }  // namespace sweepmap

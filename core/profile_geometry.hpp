@@ -34,6 +34,9 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
+#include <vector>
+
+#include "core/profile.hpp"
 
 namespace sweepmap {
 
@@ -91,6 +94,21 @@ inline SensorPose sensorPoseInRigFrame(const ProfileGeometry& g, double encoder_
   const Eigen::Vector3d o = profilePointInRigFrame(g, 0.0, 0.0, encoder_rad);
   return {o, profilePointInRigFrame(g, 1.0, 0.0, encoder_rad) - o,
           profilePointInRigFrame(g, 0.0, 1.0, encoder_rad) - o};
+}
+
+// Every point of a profile in O_r, in metres (floats): the generalised Eq. 7 at the profile's
+// latched encoder angle. The one assembly of rig C: the live assembler
+// (processes/profile_assembler_node.hpp) and therefore replay and demo use it.
+inline std::vector<Eigen::Vector3f> profilePointsInRigFrameM(const ProfileGeometry& g,
+                                                             const Profile& p) {
+  const double encoder_rad = turntableAngleRad(p.encoder_counts, p.counts_per_revolution, 0.0);
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(p.y_mm.size());
+  for (size_t i = 0; i < p.y_mm.size() && i < p.z_mm.size(); ++i) {
+    out.push_back(
+        (profilePointInRigFrame(g, p.y_mm[i], p.z_mm[i], encoder_rad) * 1e-3).cast<float>());
+  }
+  return out;
 }
 
 }  // namespace sweepmap

@@ -100,6 +100,9 @@ void MotorConfig::validate(const std::string& source, const std::string& p) cons
 void GeometryConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "lidar_offset_x_mm", &lidar_offset_x_mm, "mm",
         "distance of the scan plane from the rotation axis (t_L^O')");
+  s.add(p + "calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) whose geometry.lidar_offset_x_mm replaces "
+        "lidar_offset_x_mm (sweepmap calib axis-offset); empty: none");
 }
 
 void PlateConfig::declare(ConfigSchema& s, const std::string& p) {

@@ -57,6 +57,9 @@ struct MotorConfig {
 
 struct GeometryConfig {
   double lidar_offset_x_mm = 13.9;  // t_L^O' = (offset, 0, 0), Eq. 5-6
+  // Calibration file (relative to the rig file) whose geometry.lidar_offset_x_mm replaces
+  // lidar_offset_x_mm (sweepmap calib axis-offset); empty: use lidar_offset_x_mm.
+  std::string calibration_file;
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 

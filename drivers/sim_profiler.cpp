@@ -145,6 +145,11 @@ ProfileScene ProfileScene::testPiece(const SimProfileConfig& sim,
   return s;
 }
 
+std::optional<ProfileScene::Frame> ProfileScene::testPieceFrame() const {
+  if (!test_piece_) return std::nullopt;
+  return Frame{origin_, u_, v_, w_};
+}
+
 std::optional<double> ProfileScene::cast(const Eigen::Vector3d& origin,
                                          const Eigen::Vector3d& dir) const {
   if (test_piece_) return castTestPiece(origin, dir);
@@ -237,7 +242,6 @@ int64_t SimProfiler::sweepDurationUs() const {
 
 std::vector<Profile> SimProfiler::sweep(const ProfileScene& scene, int32_t sweep_id,
                                         int64_t start_utime) {
-  sweep_id_ = sweep_id;
   const double span_deg = turntable_.sweep_end_deg - turntable_.sweep_start_deg;
   const double duration_s = std::fabs(span_deg) / turntable_.speed_deg_s;
   const int64_t count = static_cast<int64_t>(std::floor(duration_s * profiler_.profile_rate_hz));
@@ -247,17 +251,19 @@ std::vector<Profile> SimProfiler::sweep(const ProfileScene& scene, int32_t sweep
     const double t_s = j / profiler_.profile_rate_hz;
     // The encoder angle (before the zero): constant speed from the sweep's start.
     const double encoder_deg = turntable_.sweep_start_deg + span_deg * t_s / duration_s;
-    profiles.push_back(profileAt(scene, encoder_deg * kDeg,
-                                 start_utime + static_cast<int64_t>(std::llround(t_s * 1e6))));
+    profiles.push_back(profile(scene, encoder_deg * kDeg,
+                               start_utime + static_cast<int64_t>(std::llround(t_s * 1e6)),
+                               sweep_id));
   }
   return profiles;
 }
 
-Profile SimProfiler::profileAt(const ProfileScene& scene, double encoder_rad, int64_t utime) {
+Profile SimProfiler::profile(const ProfileScene& scene, double encoder_rad, int64_t utime,
+                             int32_t sweep_id) {
   Profile p;
   p.utime = utime;
   p.sequence = sequence_++;
-  p.sweep_id = sweep_id_;
+  p.sweep_id = sweep_id;
   p.counts_per_revolution = turntable_.counts_per_revolution;
   p.column_count = profiler_.column_count;
   const double counts_exact = encoder_rad / (2 * M_PI) * turntable_.counts_per_revolution;

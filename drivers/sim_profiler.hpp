@@ -99,6 +99,12 @@ class ProfileScene {
  public:
   static ProfileScene plate(const PlatePose& pose);
   static ProfileScene testPiece(const SimProfileConfig& sim, const TurntableConfig& turntable);
+  // The test piece's frame in O_r (u along the line, v along the scan, w up; origin at the
+  // top face's centre); unset for a plate.
+  struct Frame {
+    Eigen::Vector3d origin, u, v, w;
+  };
+  std::optional<Frame> testPieceFrame() const;
   // Distance [mm] from `origin` along the unit `dir` to the first surface, if any.
   std::optional<double> cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
 
@@ -112,7 +118,9 @@ class ProfileScene {
   std::optional<double> castTestPiece(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
 };
 
-// The simulated sensor and turntable: profiles of one sweep at a time.
+// The simulated sensor and turntable. profile() is the physics of one exposure, shared by the
+// offline simulation (sweep(): a whole sweep at constant speed) and the live simulated
+// devices (drivers/sim_profile_devices.hpp: the turntable as commanded).
 class SimProfiler {
  public:
   SimProfiler(const ProfilerConfig& profiler, const TurntableConfig& turntable,
@@ -121,9 +129,12 @@ class SimProfiler {
   std::vector<Profile> sweep(const ProfileScene& scene, int32_t sweep_id, int64_t start_utime);
   // Duration of one sweep [us].
   int64_t sweepDurationUs() const;
+  // One exposure at `utime` of `scene` with the turntable at the true encoder angle
+  // `encoder_rad` (before its zero): the points the laser meets, with range noise, and the
+  // encoder count latched (noise, then quantised). Draws from the seed's streams in order.
+  Profile profile(const ProfileScene& scene, double encoder_rad, int64_t utime, int32_t sweep_id);
 
  private:
-  Profile profileAt(const ProfileScene& scene, double alpha_true_rad, int64_t utime);
   ProfilerConfig profiler_;
   TurntableConfig turntable_;
   SimProfileConfig sim_;
@@ -131,7 +142,6 @@ class SimProfiler {
   std::mt19937_64 range_rng_, encoder_rng_;
   std::normal_distribution<double> normal_;
   int64_t sequence_ = 0;
-  int32_t sweep_id_ = 0;
 };
 
 }  // namespace sweepmap

@@ -266,6 +266,13 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
   writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
   writeAxisLabels(s, options.x_label, options.y_label);
   if (options.log_y) s << "set logscale y\n";
+  if (!options.x_tics.empty()) {
+    s << "set xtics (";
+    for (size_t k = 0; k < options.x_tics.size(); ++k) {
+      s << (k ? ", " : "") << quoted(options.x_tics[k].second) << " " << options.x_tics[k].first;
+    }
+    s << ")\n";
+  }
   // Boxes: see-through, so that a series behind stays visible.
   s << "set style fill transparent solid 0.5 border -1\n";
   writeRange(s, "x", options.x_range);
@@ -304,20 +311,31 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
       with = "points pt 7 ps 0.5";
     } else if (ser.style == "linespoints") {
       with = "linespoints pt 7 ps 0.5";
+    } else if (ser.style == "yerrorbars") {
+      if (ser.y_err.size() != ser.y.size()) {
+        throw std::invalid_argument("plotSeries: y and y_err of '" + ser.title +
+                                    "' differ in length");
+      }
+      with = "yerrorbars pt 7 ps 1";
     } else {
       throw std::invalid_argument("plotSeries: unknown style '" + ser.style + "'");
     }
     if (ser.x.empty()) continue;
+    const bool bars = ser.style == "yerrorbars";
     std::vector<double> xy;
-    xy.reserve(2 * ser.x.size());
+    xy.reserve((bars ? 3 : 2) * ser.x.size());
     for (size_t k = 0; k < ser.x.size(); ++k) {
       xy.push_back(ser.x[k]);
       xy.push_back(ser.y[k]);
+      if (bars) xy.push_back(ser.y_err[k]);
     }
     const std::string data_path = temps.make(".series" + std::to_string(i) + ".tmp");
     writeRaw(data_path, xy);
     std::ostringstream c = scriptStream();
-    c << quoted(data_path) << " binary format='%float64%float64' using 1:2 with " << with;
+    c << quoted(data_path)
+      << (bars ? " binary format='%float64%float64%float64' using 1:2:3 with "
+               : " binary format='%float64%float64' using 1:2 with ")
+      << with;
     if (!ser.color.empty()) c << " lc rgb " << quoted(ser.color);
     c << (ser.title.empty() ? std::string(" notitle") : " title " + quoted(ser.title));
     plots.push_back(c.str());

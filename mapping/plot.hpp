@@ -9,6 +9,7 @@
 #include <Eigen/Core>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace sweepmap {
@@ -50,8 +51,9 @@ void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
 struct Series {
   std::string title;
   std::vector<double> x, y;     // same length
-  std::string style = "lines";  // "lines" | "points" | "linespoints" | "boxes"
+  std::string style = "lines";  // "lines" | "points" | "linespoints" | "boxes" | "yerrorbars"
   std::string color;            // empty: next default colour
+  std::vector<double> y_err{};  // "yerrorbars": the bar's half length at each point
 };
 
 struct SeriesPlotOptions {
@@ -61,6 +63,7 @@ struct SeriesPlotOptions {
   std::optional<PlotRange> x_range;
   std::optional<PlotRange> y_range;
   bool log_y = false;
+  std::vector<std::pair<double, std::string>> x_tics;  // labelled ticks instead of numbers
   int width_px = 1000;
   int height_px = 700;
 };

@@ -32,6 +32,8 @@ constexpr const char* kTruthMounting =
 constexpr const char* kProfile = "PROFILE";  // profile_t, raw (rig C): one profile + encoder
 constexpr const char* kTruthProfileRig =
     "TRUTH_PROFILE_RIG";  // truth_profile_rig_t (rig C simulation only), per sweep
+constexpr const char* kTruthTestPiece =
+    "TRUTH_TEST_PIECE";  // truth_test_piece_t (rig C simulation only), test-piece sweep
 // Health: STATUS_<PROCESS> (process_status_t), e.g. STATUS_ASSEMBLER.
 
 }  // namespace channels

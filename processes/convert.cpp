@@ -174,6 +174,20 @@ profile_t toLcm(const Profile& p) {
   return m;
 }
 
+Profile fromLcm(const profile_t& m) {
+  Profile p;
+  p.utime = m.utime;
+  p.sequence = m.sequence;
+  p.sweep_id = m.sweep_id;
+  p.encoder_counts = m.encoder_counts;
+  p.counts_per_revolution = m.counts_per_revolution;
+  p.column_count = m.column_count;
+  p.column = m.column;
+  p.y_mm = m.y_mm;
+  p.z_mm = m.z_mm;
+  return p;
+}
+
 std::string validateProfile(const profile_t& m) {
   const auto n = static_cast<size_t>(std::max(0, m.point_count));
   if (m.point_count < 0 || m.column.size() != n || m.y_mm.size() != n || m.z_mm.size() != n) {

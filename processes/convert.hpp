@@ -40,6 +40,7 @@ wheel_ticks_t toLcm(const WheelTicks& ticks);
 ShaftSegment fromLcm(const truth_shaft_t& msg);
 
 profile_t toLcm(const Profile& profile);
+Profile fromLcm(const profile_t& msg);
 // Empty when valid, else the reason: counts and sizes agree, columns in range, every
 // coordinate finite, a positive encoder resolution.
 std::string validateProfile(const profile_t& msg);

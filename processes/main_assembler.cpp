@@ -1,12 +1,14 @@
 // sweepmap-assembler, by the rig's kind: rotating_lidar: LIDAR_SCAN + SCAN_WINDOW ->
 // SWEEP_CLOUD (chunks) + SWEEP_STATUS; mobile_lidar: LIDAR_SCAN + ODOMETRY_POSE ->
-// SWEEP_CLOUD (one world-frame chunk per scan).
+// SWEEP_CLOUD (one world-frame chunk per scan); rotating_profile: PROFILE -> SWEEP_CLOUD (one
+// chunk per profile in frame O_r, Zhao 2021 Eq. 7 generalised).
 #include <lcm/lcm-cpp.hpp>
 #include <memory>
 
 #include "processes/assembler_node.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/live_runner.hpp"
+#include "processes/profile_assembler_node.hpp"
 #include "processes/world_assembler_node.hpp"
 
 int main(int argc, char** argv) {
@@ -17,7 +19,10 @@ int main(int argc, char** argv) {
       "with the triangular plate (Yuan 2021 Eq. 4-10) and publishes them in chunks on "
       "SWEEP_CLOUD. mobile_lidar: transforms every scan to the world frame with the "
       "pose (assembler.pose_channel) interpolated at each ray's time and the mounting "
-      "(Miao 2022 Eq. 11-14), one chunk per scan"};
+      "(Miao 2022 Eq. 11-14), one chunk per scan. rotating_profile: places every PROFILE "
+      "in the turntable's frame O_r by Zhao 2021 Eq. 7 (generalised with the laser plane's "
+      "tilt and the encoder's zero) with the rig's geometry (geometry.*, or its calibration "
+      "file), one chunk per profile"};
   CommonOptions common;
   addCommonOptions(app, common);
   CLI11_PARSE(app, argc, argv);
@@ -32,15 +37,10 @@ int main(int argc, char** argv) {
           return std::make_unique<WorldAssemblerNode>(c.assembler, c.mounting.toMounting());
         } else {
           static_assert(std::is_same_v<T, RotatingProfileConfig>, "a rig kind not dispatched");
-          return nullptr;  // rig C's live assembler is a later step
+          return std::make_unique<ProfileAssemblerNode>(c.geometry.toGeometry());
         }
       },
       rig->config);
-  if (!node) {
-    std::cerr << "sweepmap-assembler: " << rig->path << " is a " << rig->kindName()
-              << " rig: no live assembler for its kind yet\n";
-    return 2;
-  }
   lcm::LCM lcm(common.lcm_url);
   installStopSignals();
   return runLive(lcm, {node.get()}, liveOptions(common));

@@ -44,7 +44,8 @@ int main(int argc, char** argv) {
   using namespace sweepmap;
   CLI::App app{
       "sweepmap-mapper: inserts assembled sweeps (rotating_lidar rigs) or world-frame "
-      "scans (mobile_lidar rigs, in mapper.batch_s batches) "
+      "scans (mobile_lidar rigs) or profiles (rotating_profile rigs), in mapper.batch_s "
+      "batches, "
       "into an OctoMap OcTree, publishes MAP_STATS, saves the map (.bt, atomically) on "
       "MAP_SAVE, after every --save-every map updates and on shutdown. With --save-every, a map "
       "file left by an earlier run (one killed and restarted) is kept, renamed "
@@ -63,14 +64,7 @@ int main(int argc, char** argv) {
   CLI11_PARSE(app, argc, argv);
   const std::optional<Rig> rig = loadRigOrReport(common);
   if (!rig) return 2;
-  const auto* rotating = std::get_if<RotatingLidarConfig>(&rig->config);
-  const auto* mobile = std::get_if<MobileLidarConfig>(&rig->config);
-  if (!rotating && !mobile) {
-    std::cerr << "sweepmap-mapper: " << rig->path << " is a " << rig->kindName()
-              << " rig: no mapper for its kind\n";
-    return 2;
-  }
-  const MapperConfig config = rotating ? rotating->mapper : mobile->mapper;
+  const MapperConfig config = std::visit([](const auto& c) { return c.mapper; }, rig->config);
 
   if (save_every > 0 && !keepEarlierMap(save_path)) return 1;
   lcm::LCM lcm(common.lcm_url);

@@ -7,6 +7,7 @@
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/process_status_t.hpp"
+#include "sweepmap/profile_t.hpp"
 
 namespace sweepmap {
 namespace {
@@ -43,6 +44,14 @@ bool plausibleCounts<cloud_chunk_t>(const Message& m) {
   const size_t at = 44 + static_cast<size_t>(len) + 1 + 8 + 24;
   const int64_t n = readInt32BE(m.data, at);
   return n >= 0 && at + 4 + 12 * static_cast<uint64_t>(n) <= m.data.size();
+}
+
+// profile_t: hash 8, utime 8, sequence 8, sweep_id 4, encoder_counts 8, three int32 (the last
+// point_count), then 2 + 4 + 4 bytes per point.
+template <>
+bool plausibleCounts<profile_t>(const Message& m) {
+  const int64_t n = readInt32BE(m.data, 44);
+  return n >= 0 && 48 + 10 * static_cast<uint64_t>(n) <= m.data.size();
 }
 
 Node::Node(std::string name) : name_(std::move(name)) {}

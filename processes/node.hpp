@@ -52,10 +52,13 @@ bool plausibleCounts(const Message&) {
 }
 class lidar_scan_t;
 class cloud_chunk_t;
+class profile_t;
 template <>
 bool plausibleCounts<lidar_scan_t>(const Message& m);
 template <>
 bool plausibleCounts<cloud_chunk_t>(const Message& m);
+template <>
+bool plausibleCounts<profile_t>(const Message& m);
 
 // Decodes an lcm-gen type; false when the bytes are not exactly one valid message.
 template <class T>

@@ -4,8 +4,11 @@
 #include <cstdint>
 
 #include "drivers/scene.hpp"
+#include "drivers/sim_profiler.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
+#include "sweepmap/truth_test_piece_t.hpp"
 
 namespace sweepmap {
 
@@ -20,5 +23,13 @@ inline uint64_t lidarSeed(uint64_t seed) { return seed * 2 + 2; }
 
 truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config,
                          const Scene& scene, int64_t utime);
+
+// Rig C's truth (TRUTH_PROFILE_RIG) for sweep `sweep_id`, with the plate's true plane when
+// `plate` is given: what the offline simulation and the live simulated profiler publish.
+truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t sweep_id,
+                                        int64_t utime, const PlatePose* plate);
+// The test piece's true sizes (what Zhao 2021's CMM measured) and its frame in O_r.
+truth_test_piece_t makeTruthTestPiece(const TestPieceConfig& c, const ProfileScene::Frame& f,
+                                      int32_t sweep_id, int64_t utime);
 
 }  // namespace sweepmap

@@ -26,10 +26,18 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   schema.loadFile(path);
   for (const auto& o : overrides) schema.set(o);
   checkRigKind(path, rig.rig, "rotating_lidar");
-  if (!rig.plate.calibration_file.empty()) {
-    std::filesystem::path calib(rig.plate.calibration_file);
+  // Calibration files are named relative to the rig file.
+  const auto beside = [&](const std::string& file) {
+    std::filesystem::path calib(file);
     if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
-    rig.plate.alpha_deg = loadPlateCalibration(calib.string()).alpha_deg;
+    return calib.string();
+  };
+  if (!rig.plate.calibration_file.empty()) {
+    rig.plate.alpha_deg = loadPlateCalibration(beside(rig.plate.calibration_file)).alpha_deg;
+  }
+  if (!rig.geometry.calibration_file.empty()) {
+    rig.geometry.lidar_offset_x_mm =
+        loadLidarOffsetCalibration(beside(rig.geometry.calibration_file)).lidar_offset_x_mm;
   }
   const auto require = [&](bool ok, const char* key, const char* what) {
     if (!ok) throw ConfigError(path + ": key '" + key + "' " + what);

@@ -24,7 +24,8 @@ struct RotatingLidarConfig {
 };
 
 // Loads a rig file strictly (its `rig` key must say rotating_lidar), then applies
-// `key=value` overrides; a plate calibration file the rig names replaces plate.alpha_deg.
+// `key=value` overrides; a plate calibration file the rig names replaces plate.alpha_deg, a
+// geometry calibration file geometry.lidar_offset_x_mm.
 // Throws ConfigError naming the file and the key.
 RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
                                             const std::vector<std::string>& overrides = {});

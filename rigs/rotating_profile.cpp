@@ -32,6 +32,11 @@ void RotatingProfileConfig::declare(ConfigSchema& s) {
   profiler.declare(s, "profiler.");
   turntable.declare(s, "turntable.");
   geometry.declare(s, "geometry.");
+  mapper.declare(s, "mapper.");
+  s.add("mapper.batch_s", &mapper.batch_s, "s",
+        "profiles whose time falls in the same window of this length are inserted as one batch "
+        "(one update of the tree's inner nodes and one MAP_STATS; the map is the same); 0: "
+        "every profile on its own");
   sim.declare(s, "sim.");
 }
 
@@ -54,6 +59,9 @@ void validate(const std::string& path, const RotatingProfileConfig& rig) {
   require(t.sweep_end_deg != t.sweep_start_deg, "turntable.sweep_end_deg",
           "must differ from sweep_start_deg");
   require(t.device == "sim", "turntable.device", "must be sim (no real turntable driver yet)");
+  require(rig.mapper.resolution_m >= 0.0005, "mapper.resolution_m", "must be >= 0.0005");
+  require(rig.mapper.batch_s >= 0.0 && rig.mapper.batch_s <= 3600.0, "mapper.batch_s",
+          "must be in [0, 3600]");
   const SimProfileConfig& s = rig.sim;
   require(s.scene == "plate" || s.scene == "test_piece", "sim.scene",
           "must be plate or test_piece");

@@ -8,6 +8,7 @@
 
 #include "core/config.hpp"
 #include "core/profile_geometry.hpp"
+#include "core/rig_components.hpp"
 #include "drivers/sim_profiler.hpp"
 
 namespace sweepmap {
@@ -31,6 +32,7 @@ struct RotatingProfileConfig {
   ProfilerConfig profiler;
   TurntableConfig turntable;
   ProfileGeometryConfig geometry;
+  MapperConfig mapper;   // sweepmap-mapper: the OctoMap of the profiles (one ray cast each)
   SimProfileConfig sim;  // `sweepmap sim` only: the truth and the error sources
   void declare(ConfigSchema& s);
 };

@@ -50,7 +50,7 @@ TEST_F(CalibrationFileTest, RigFilePointsToCalibration) {
   text << in.rdbuf();
   std::string rig = text.str();
   const std::string from = "calibration_file: \"\"";
-  rig.replace(rig.find(from), from.size(), "calibration_file: plate.yaml");
+  rig.replace(rig.find(from, rig.find("plate:")), from.size(), "calibration_file: plate.yaml");
   std::ofstream(dir_ / "rig.yaml") << rig;
   EXPECT_DOUBLE_EQ(loadRotatingLidarConfig((dir_ / "rig.yaml").string()).plate.alpha_deg, 29.5);
   // A missing calibration file is an error naming it.

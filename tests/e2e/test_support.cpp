@@ -11,6 +11,8 @@
 #include <sstream>
 
 #include "core/event_log.hpp"
+#include "mapping/cloud_io.hpp"
+#include "sweepmap/truth_profile_rig_t.hpp"
 
 extern char** environ;
 
@@ -111,6 +113,23 @@ TrackError trackError(const std::vector<pose2d_t>& track, const std::vector<pose
   }
   if (e.compared > 0) e.rms_m = std::sqrt(sum2 / double(e.compared));
   return e;
+}
+
+double rmsToTruePlane(const std::string& log, const fs::path& pcd, int sweep) {
+  for (const Message& m : readChannel(log, "TRUTH_PROFILE_RIG")) {
+    truth_profile_rig_t t;
+    if (t.decode(m.data.data(), 0, static_cast<int>(m.data.size())) < 0) continue;
+    if (t.sweep_id != sweep) continue;
+    const Eigen::Vector3d n(t.plane_normal[0], t.plane_normal[1], t.plane_normal[2]);
+    double sum = 0;
+    const auto points = readPcd(pcd.string());
+    for (const auto& p : points) {
+      const double d = n.dot(p.cast<double>() * 1e3) - t.plane_distance_mm;
+      sum += d * d;
+    }
+    return std::sqrt(sum / points.size());
+  }
+  return -1;
 }
 
 }  // namespace test

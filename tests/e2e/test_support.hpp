@@ -44,6 +44,10 @@ struct TrackError {
 };
 TrackError trackError(const std::vector<pose2d_t>& track, const std::vector<pose2d_t>& truth);
 
+// Rig C: the RMS distance [mm] of a sweep's cloud (a PCD in metres, frame O_r) from the plate's
+// true plane in the log's TRUTH_PROFILE_RIG of that sweep; -1 if the log has none.
+double rmsToTruePlane(const std::string& log, const fs::path& pcd, int sweep);
+
 }  // namespace test
 }  // namespace sweepmap
 

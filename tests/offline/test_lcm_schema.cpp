@@ -27,6 +27,7 @@
 #include "sweepmap/truth_rig_t.hpp"
 #include "sweepmap/truth_shaft_t.hpp"
 #include "sweepmap/truth_sweep_t.hpp"
+#include "sweepmap/truth_test_piece_t.hpp"
 #include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 #include "tools/offline/dump.hpp"
@@ -43,7 +44,7 @@ void expectFingerprint(const char* name) {
 }
 
 TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
-  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 19u);
+  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 20u);
   expectFingerprint<cloud_chunk_t>("cloud_chunk_t");
   expectFingerprint<imu_t>("imu_t");
   expectFingerprint<lidar_scan_t>("lidar_scan_t");
@@ -61,6 +62,7 @@ TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
   expectFingerprint<truth_rig_t>("truth_rig_t");
   expectFingerprint<truth_shaft_t>("truth_shaft_t");
   expectFingerprint<truth_sweep_t>("truth_sweep_t");
+  expectFingerprint<truth_test_piece_t>("truth_test_piece_t");
   expectFingerprint<wheel_cmd_t>("wheel_cmd_t");
   expectFingerprint<wheel_ticks_t>("wheel_ticks_t");
 }

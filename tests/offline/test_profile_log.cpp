@@ -93,6 +93,42 @@ TEST(ProfileLog, ReadsEverySweepAsAPlatePose) {
   EXPECT_DOUBLE_EQ(log.truth->geometry.m_mm, 123.0);
 }
 
+TEST(ProfileLog, TheTestPiecesTruthComesFromItsOwnChannel) {
+  const std::string path = scratch("piece.lcmlog");
+  {
+    EventLogWriter w(path);
+    for (const Message& m :
+         simulate(rigC({"sim.scene=test_piece", "sim.test_piece.rect_length_mm=39.5",
+                        "turntable.sweep_start_deg=-3", "turntable.sweep_end_deg=3"}),
+                  1)) {
+      w.write(m.utime, m.channel, m.data);
+    }
+    w.close();
+  }
+  const ProfileLog log = readProfileLog(path);
+  ASSERT_TRUE(log.test_piece.has_value());
+  EXPECT_DOUBLE_EQ(log.test_piece->sizes.rect_length_mm, 39.5);  // what the simulator used
+  EXPECT_DOUBLE_EQ(log.test_piece->sizes.left_diameter_mm, 50.01);
+  EXPECT_DOUBLE_EQ(log.test_piece->sizes.rect_depth_mm, 20.01);
+  // Its frame: orthonormal, w up, the top face's centre under the sensor (300 mm down).
+  const TestPieceTruth& t = *log.test_piece;
+  EXPECT_NEAR(t.u.dot(t.v), 0.0, 1e-12);
+  EXPECT_NEAR(t.w.z(), 1.0, 1e-12);
+  EXPECT_NEAR(t.u.cross(t.v).dot(t.w), 1.0, 1e-12);
+  EXPECT_NEAR(t.origin.z(), -300.0, 2.0);
+  // A plate log has none.
+  const std::string plates = scratch("plates_no_piece.lcmlog");
+  {
+    EventLogWriter w(plates);
+    for (const Message& m :
+         simulate(rigC({"turntable.sweep_start_deg=-3", "turntable.sweep_end_deg=3"}), 1)) {
+      w.write(m.utime, m.channel, m.data);
+    }
+    w.close();
+  }
+  EXPECT_FALSE(readProfileLog(plates).test_piece.has_value());
+}
+
 TEST(ProfileLog, ALogWithoutProfilesIsAClearError) {
   const std::string path = scratch("no_profiles.lcmlog");
   {

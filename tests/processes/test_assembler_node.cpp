@@ -7,6 +7,7 @@
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
 
@@ -176,6 +177,72 @@ TEST_F(AssemblerNodeTest, FinishFlushesIncompleteWindow) {
   int chunks = 0;
   for (const auto& m : out.take()) chunks += m.channel == channels::kSweepCloud;
   EXPECT_EQ(chunks, 1);
+}
+
+// Scans lost on the way (a gap in their seq) or dropped here as out of order make the
+// sweeps whose windows they fall in incomplete: published all the same, and counted. Gaps
+// between windows count for no sweep; a lost window shows as a gap in the sweep ids.
+TEST_F(AssemblerNodeTest, SweepsWithMissingScansAreCountedIncomplete) {
+  const auto t = [](int j) { return 1000000 + 25000 * j; };
+  AssemblerNode node(rig_);
+  std::vector<int> missing_per_sweep;
+  node.setSweepObserver(
+      [&](const AssembledSweep& s) { missing_per_sweep.push_back(s.missing_scans); });
+  std::vector<Message> msgs;
+  // Sweep 0 covers scans 2..8: 1 (before it), 2, 4 and 5 are lost.
+  msgs.push_back(windowMsg(0, t(2), t(9)));
+  for (int j : {0, 3, 6, 7, 8, 9}) msgs.push_back(scanMsg(j));
+  // Scan 10, between the windows, is lost; sweep 1 (scans 12..19) is whole.
+  msgs.push_back(windowMsg(1, t(12), t(20)));
+  for (int j = 11; j <= 20; ++j) msgs.push_back(scanMsg(j));
+  // The window of sweep 2 is lost; sweep 3 (scans 21..27) gets scan 23 after 24: dropped.
+  msgs.push_back(windowMsg(3, t(21), t(28)));
+  for (int j : {21, 22, 24, 23, 25, 26, 27, 28}) msgs.push_back(scanMsg(j));
+  feed(msgs, &node);
+
+  EXPECT_EQ(missing_per_sweep, (std::vector<int>{3, 0, 1}));
+  EXPECT_EQ(node.counter("sweeps"), 3);
+  EXPECT_EQ(node.counter("sweeps_incomplete"), 2);
+  EXPECT_EQ(node.counter("scans_missing"), 4);
+  EXPECT_EQ(node.counter("windows_missing"), 1);
+  EXPECT_EQ(node.counter("dropped"), 1);  // scan 23
+}
+
+// A lidar that restarts counts from 0 again: no gap; nor does a seq far ahead overflow.
+TEST_F(AssemblerNodeTest, SeqRestartIsNoGapAndAWildSeqIsBounded) {
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs;
+  msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 10));
+  for (int j = 0; j < 5; ++j) msgs.push_back(scanMsg(j));
+  for (int j = 5; j <= 10; ++j) {
+    Message m = scanMsg(j);
+    lidar_scan_t s;
+    ASSERT_TRUE(decodeMessage(m, &s));
+    s.seq = j == 5 ? 0 : j == 7 ? std::numeric_limits<int64_t>::max() : j - 5;
+    msgs.push_back(encode(channels::kLidarScan, m.utime, s));
+  }
+  feed(msgs, &node);
+  EXPECT_EQ(node.counter("sweeps"), 1);
+  // 5 -> seq 0 (restart), 6 -> 1, 7 -> max: the gap holds at most one scan per microsecond
+  // between its neighbours (25 ms apart), all inside the window.
+  EXPECT_EQ(node.counter("scans_missing"), 25000);
+  EXPECT_EQ(node.counter("sweeps_incomplete"), 1);
+}
+
+// Without windows the assembler keeps max_pending_scans scans; the gaps among scans it has
+// evicted go with them (counted as scans_evicted, not as missing in a later sweep).
+TEST_F(AssemblerNodeTest, GapsAmongEvictedScansAreForgotten) {
+  rig_.assembler.max_pending_scans = 5;
+  AssemblerNode node(rig_);
+  std::vector<Message> msgs;
+  for (int j = 0; j <= 20; ++j) {
+    if (j != 3 && j != 7 && j != 18) msgs.push_back(scanMsg(j));
+  }
+  msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 20));
+  feed(msgs, &node);
+  EXPECT_EQ(node.counter("sweeps"), 1);
+  EXPECT_GT(node.counter("scans_evicted"), 0);
+  EXPECT_EQ(node.counter("scans_missing"), 1);  // 18, among the pending scans
 }
 
 }  // namespace

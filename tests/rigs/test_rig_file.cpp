@@ -95,6 +95,35 @@ TEST(RigFile, RigCReadsItsAxisOffsetCalibrationFile) {
   EXPECT_NE(e.find("axis_offset.n_mm"), std::string::npos) << e;
 }
 
+TEST(RigFile, RigAReadsItsLidarOffsetCalibrationFile) {
+  // What sweepmap calib axis-offset --rig rig_a writes; every rig-A load (live assembler,
+  // replay, eval) then places the points with it.
+  const fs::path dir = scratch("rig_a_offset_calibration");
+  LidarOffsetCalibration c;
+  c.lidar_offset_x_mm = 15.97;
+  c.source["tool"] = "test";
+  c.logs = {"room.lcmlog"};
+  writeLidarOffsetCalibration((dir / "offset.yaml").string(), c);
+  EXPECT_FALSE(fs::exists(dir / "offset.yaml.tmp"));
+  EXPECT_DOUBLE_EQ(loadLidarOffsetCalibration((dir / "offset.yaml").string()).lidar_offset_x_mm,
+                   15.97);
+  fs::copy_file(fs::path(SWEEPMAP_SOURCE_DIR) / "config" / "rig_a.yaml", dir / "rig.yaml");
+  const auto nominal = std::get<RotatingLidarConfig>(loadRig((dir / "rig.yaml").string()).config);
+  EXPECT_DOUBLE_EQ(nominal.geometry.lidar_offset_x_mm, 13.9);
+  const auto rig = std::get<RotatingLidarConfig>(
+      loadRig((dir / "rig.yaml").string(), {"geometry.calibration_file=offset.yaml"}).config);
+  EXPECT_DOUBLE_EQ(rig.geometry.lidar_offset_x_mm, 15.97);
+  // Another kind's file, or a missing one, names the file and the key.
+  std::ofstream(dir / "bad.yaml") << "geometry:\n  lidar_offset_mm: 16\n";
+  const std::string e = configError(
+      [&] { loadRig((dir / "rig.yaml").string(), {"geometry.calibration_file=bad.yaml"}); });
+  EXPECT_NE(e.find("geometry.lidar_offset_x_mm"), std::string::npos) << e;
+  EXPECT_NE(e.find("bad.yaml"), std::string::npos) << e;
+  EXPECT_FALSE(configError([&] {
+                 loadRig((dir / "rig.yaml").string(), {"geometry.calibration_file=none.yaml"});
+               }).empty());
+}
+
 TEST(RigFile, NamesResolveInTheInstallTreeFromAnyDirectory) {
   const fs::path here = fs::current_path();
   fs::current_path(scratch("names"));

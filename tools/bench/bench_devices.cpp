@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <optional>
 #include <thread>
 
 #include "core/device_uri.hpp"
@@ -125,10 +126,10 @@ void benchDecoders(const DevicesBenchOptions& o, std::ostream& out) {
   }
 }
 
-// The CPU share of `pid` (and of the emulator feeding it) over `seconds`, from /proc, with its
-// thread switches and peak RSS; then stops both.
-void measureProcess(ProcessGroup& procs, const std::string& name, pid_t pid, pid_t emulator,
-                    double seconds, std::ostream& out) {
+// The CPU share of `pid` (and of the emulator feeding it, if any) over `seconds`, from /proc,
+// with its thread switches and peak RSS; then stops both.
+ProcessLoad measureProcess(ProcessGroup& procs, const std::string& name, pid_t pid, pid_t emulator,
+                           double seconds, std::ostream& out) {
   const double cpu0 = processCpuSeconds(pid), emu0 = processCpuSeconds(emulator);
   const int64_t switches0 = contextSwitches(pid);
   const auto t0 = BenchClock::now();
@@ -139,11 +140,13 @@ void measureProcess(ProcessGroup& procs, const std::string& name, pid_t pid, pid
   const double switches = double(contextSwitches(pid) - switches0) / wall;
   const int64_t rss = statusKib(pid, "VmHWM:");
   procs.stop(pid, 5.0);
-  procs.stop(emulator, 5.0);
+  if (emulator > 0) procs.stop(emulator, 5.0);
   out << std::setprecision(2) << "  " << name << " " << share * 100.0 << " % of a core over "
       << std::setprecision(1) << wall << " s (" << std::setprecision(0) << switches
-      << " thread switches/s, peak RSS " << rss / 1024.0 << " MiB); the emulator "
-      << std::setprecision(1) << emu_share * 100.0 << " %\n";
+      << " thread switches/s, peak RSS " << std::setprecision(1) << rss / 1024.0 << " MiB)";
+  if (emulator > 0) out << "; the emulator " << std::setprecision(1) << emu_share * 100.0 << " %";
+  out << "\n";
+  return {name, "", share, rss};
 }
 
 // Whether the process benches can run here (the executables, a private network namespace,
@@ -162,10 +165,10 @@ bool canRunProcesses(const DevicesBenchOptions& o, std::ostream& out) {
 }
 
 // sweepmap-lidar driving the emulated UST-10LX over loopback TCP, measured from /proc.
-void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
+std::optional<ProcessLoad> benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
   out << "sweepmap-lidar process (real SCIP driver, emulated UST-10LX at 40 Hz over loopback "
          "TCP, private network namespace; share of one core = CPU s / wall s):\n";
-  if (!canRunProcesses(o, out)) return;
+  if (!canRunProcesses(o, out)) return std::nullopt;
   const fs::path bin = o.bin_dir;
   const std::string url = kDefaultLcmUrl;
   ProcessGroup procs;
@@ -179,16 +182,38 @@ void benchLidarProcess(const DevicesBenchOptions& o, std::ostream& out) {
                                    "scip://127.0.0.1:10940", "--lcm-url", url},
                                   "/dev/null");
   std::this_thread::sleep_for(std::chrono::seconds(2));  // connected, clock anchored
-  measureProcess(procs, "sweepmap-lidar", lidar, emulator, o.process_s, out);
+  ProcessLoad load = measureProcess(procs, "sweepmap-lidar", lidar, emulator, o.process_s, out);
+  load.what = "UST-10LX, SCIP over TCP, 40 Hz";
+  return load;
+}
+
+// sweepmap-motor sweeping without pause in mode 7 (MOTOR_STATE at the rig's status rate, a
+// SCAN_WINDOW per sweep) on the simulated stepper, measured from /proc. The real stepper adds
+// the GPIO step generator's thread (benchStepper) in place of the simulation.
+std::optional<ProcessLoad> benchMotorProcess(const DevicesBenchOptions& o, std::ostream& out) {
+  out << "sweepmap-motor process (simulated stepper and switch, mode-7 sweeps without end; "
+         "share of one core):\n";
+  if (!canRunProcesses(o, out)) return std::nullopt;
+  const fs::path bin = o.bin_dir;
+  ProcessGroup procs;
+  const pid_t motor =
+      procs.start("motor",
+                  {(bin / "sweepmap-motor").string(), "--rig", "rig_a", "--sim", "--set",
+                   "motor.mode=7", "--sweeps", "0", "--lcm-url", kDefaultLcmUrl},
+                  "/dev/null");
+  std::this_thread::sleep_for(std::chrono::seconds(2));  // homed, sweeping
+  ProcessLoad load = measureProcess(procs, "sweepmap-motor", motor, -1, o.process_s, out);
+  load.what = "sim stepper, mode 7";
+  return load;
 }
 
 // sweepmap-odometry reading both of rig B's devices (the real HI219 and wheel board drivers)
 // from the emulators on pseudo-terminals, at 400 Hz IMU (the 0x91 record; a real HI219 needs
 // 460800 baud for that, so the URI says so) and 100 Hz wheels, measured from /proc.
-void benchOdometryProcess(const DevicesBenchOptions& o, std::ostream& out) {
+std::optional<ProcessLoad> benchOdometryProcess(const DevicesBenchOptions& o, std::ostream& out) {
   out << "sweepmap-odometry process (real HI219 and wheel board drivers, emulated devices on "
          "ptys: 400 Hz IMU, 100 Hz wheels; share of one core):\n";
-  if (!canRunProcesses(o, out)) return;
+  if (!canRunProcesses(o, out)) return std::nullopt;
   const fs::path bin = o.bin_dir;
   const fs::path dir = fs::temp_directory_path() / ("sweepmap_bench_" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -225,16 +250,22 @@ void benchOdometryProcess(const DevicesBenchOptions& o, std::ostream& out) {
   odo_argv.insert(odo_argv.end(), sets.begin(), sets.end());
   const pid_t odometry = procs.start("odometry", odo_argv, "/dev/null");
   std::this_thread::sleep_for(std::chrono::seconds(2));  // connected, clocks synced
-  measureProcess(procs, "sweepmap-odometry", odometry, emulator, o.process_s, out);
+  ProcessLoad load =
+      measureProcess(procs, "sweepmap-odometry", odometry, emulator, o.process_s, out);
+  load.what = "HI219 400 Hz + wheel board 100 Hz, serial";
   fs::remove_all(dir);
+  return load;
 }
 
 }  // namespace
 
-int benchDevices(const DevicesBenchOptions& options, std::ostream& out) {
+int benchDevices(const DevicesBenchOptions& options, std::ostream& out,
+                 std::vector<ProcessLoad>* loads) {
   benchDecoders(options, out);
-  benchLidarProcess(options, out);
-  benchOdometryProcess(options, out);
+  for (const auto& bench : {benchMotorProcess, benchLidarProcess, benchOdometryProcess}) {
+    const std::optional<ProcessLoad> load = bench(options, out);
+    if (load && loads) loads->push_back(*load);
+  }
   return 0;
 }
 

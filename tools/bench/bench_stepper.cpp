@@ -27,7 +27,7 @@ double quantile(std::vector<double> v, double q) {
 
 }  // namespace
 
-int benchStepper(const StepperBenchOptions& o, std::ostream& out) {
+int benchStepper(const StepperBenchOptions& o, std::ostream& out, StepperBenchResult* result) {
   GpioStepperOptions options;
   options.lines.chip = "fake";
   options.lines.step = 17;
@@ -88,6 +88,7 @@ int benchStepper(const StepperBenchOptions& o, std::ostream& out) {
   out << "    CPU share of the generator thread " << 100.0 * thread_cpu_s / wall_s
       << " % (whole process incl. the 1 kHz poll loop " << 100.0 * process_cpu_s / wall_s
       << " %)\n";
+  if (result) result->thread_cpu_share = thread_cpu_s / wall_s;
   return 0;
 }
 

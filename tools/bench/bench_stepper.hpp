@@ -14,6 +14,11 @@ struct StepperBenchOptions {
   MotorConfig motor;  // steps_per_rev, microsteps, accel; mode 7 is used whatever it says
 };
 
-int benchStepper(const StepperBenchOptions& options, std::ostream& out);
+struct StepperBenchResult {
+  double thread_cpu_share = 0.0;  // the generator thread's CPU seconds / wall seconds
+};
+
+int benchStepper(const StepperBenchOptions& options, std::ostream& out,
+                 StepperBenchResult* result = nullptr);
 
 }  // namespace sweepmap

@@ -1,8 +1,10 @@
 #include "tools/bench/proc_stats.hpp"
 
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -68,6 +70,47 @@ int64_t statusKib(pid_t pid, const std::string& key) {
     }
   }
   return 0;
+}
+
+namespace {
+
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
+}
+
+// sysbench 1.0.20's cpu_execute_event (src/tests/cpu/sb_cpu.c), max_prime 10000 (read
+// through a volatile so the compiler cannot fold the loop away).
+volatile unsigned long long g_max_prime = 10000;
+
+uint64_t primeEvent() {
+  const unsigned long long max_prime = g_max_prime;
+  uint64_t n = 0;
+  for (unsigned long long c = 3; c < max_prime; c++) {
+    const double t = std::sqrt(static_cast<double>(c));
+    unsigned long long l;
+    for (l = 2; l <= t; l++) {
+      if (c % l == 0) break;
+    }
+    if (l > t) n++;
+  }
+  return n;
+}
+
+}  // namespace
+
+double referenceEventsPerCpuSecond(double min_cpu_s) {
+  const double t0 = threadCpuSeconds();
+  int64_t events = 0;
+  uint64_t primes = 0;
+  double spent = 0.0;
+  do {
+    primes += primeEvent();
+    ++events;
+    if (events % 16 == 0) spent = threadCpuSeconds() - t0;
+  } while (spent < min_cpu_s);
+  return primes > 0 ? double(events) / spent : 0.0;
 }
 
 }  // namespace sweepmap

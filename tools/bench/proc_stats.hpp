@@ -21,4 +21,10 @@ int64_t contextSwitches(pid_t pid);
 // A "Key:   value kB" line of /proc/<pid>/status, in KiB (0 if absent).
 int64_t statusKib(pid_t pid, const std::string& key);
 
+// The reference workload for comparing CPUs: sysbench 1.0's `cpu` test (every number below
+// 10000 tested for primality by trial division; one event = one pass), run on this thread for
+// at least `min_cpu_s` of its CPU time. Returns events per CPU second, which machine load
+// does not change much (sysbench prints events per wall second).
+double referenceEventsPerCpuSecond(double min_cpu_s);
+
 }  // namespace sweepmap

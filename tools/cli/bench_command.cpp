@@ -6,6 +6,8 @@
 #include "rigs/rig_file.hpp"
 #include "tools/bench/bench_devices.hpp"
 #include "tools/bench/bench_mobile.hpp"
+#include "tools/bench/bench_onboard.hpp"
+#include "tools/bench/bench_profile.hpp"
 #include "tools/bench/bench_rotating.hpp"
 #include "tools/bench/bench_stepper.hpp"
 #include "tools/cli/commands.hpp"
@@ -15,7 +17,7 @@ namespace sweepmap {
 Runner addBenchCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "bench",
-      "Measure speed and memory for each rig given (default: rig_a and rig_b). "
+      "Measure speed and memory for each rig given (default: rig_a, rig_b and rig_c). "
       "rotating_lidar: simulation and offline replay speed (assembly + plate correction + "
       "OctoMap) as real-time factors for modes 1 and 7, points per second, one sweep's plate "
       "correction and peak memory. mobile_lidar: EKF updates per second, the CPU share of the "
@@ -23,14 +25,20 @@ Runner addBenchCommand(CLI::App& app) {
       "`sweepmap replay` real-time factors on a circle and a lab loop. Then the real-device "
       "drivers: each protocol decoder's throughput (MB/s, scans/s, and as a multiple of the "
       "device's own data rate), the CPU share of sweepmap-lidar driving an emulated "
-      "UST-10LX at 40 Hz and of sweepmap-odometry reading the emulated HI219 (400 Hz) and "
-      "wheel board (100 Hz), and the GPIO step generator's timing (emitted - planned step "
-      "times, its thread's CPU share) through a mode-7 sweep on a fake chip, about 17 s "
-      "(--no-devices skips them). rotating_profile (rig C): nothing yet (the calibration's "
-      "timing is printed by its unit test). Prints figures; run on an idle machine, compare "
+      "UST-10LX at 40 Hz, of sweepmap-odometry reading the emulated HI219 (400 Hz) and "
+      "wheel board (100 Hz) and of sweepmap-motor sweeping the simulated stepper in mode 7, "
+      "with each one's peak RSS, and the GPIO step generator's timing (emitted - planned step "
+      "times, its thread's CPU share) through a mode-7 sweep on a fake chip, about 17 s; then "
+      "one line per on-board process and their estimated load on a Raspberry Pi 3B, scaled by "
+      "a reference workload measured in the same run (sysbench 1.0's cpu loop) against its "
+      "published Pi figure (--no-devices skips all this). rotating_profile (rig C): the "
+      "axis-offset calibration on the default simulated plates (calib axis-offset's default "
+      "point subset), ours (Ceres) against the paper's grid search over its interval at 1 mm "
+      "and at 0.1 mm (10x finer), as seconds and a ratio. Prints figures; run on an idle "
+      "machine, compare "
       "ratios within one run");
   struct Opts {
-    std::vector<std::string> rigs = {"rig_a", "rig_b"};
+    std::vector<std::string> rigs = {"rig_a", "rig_b", "rig_c"};
     std::string scene;
     std::string work = "build/bench";
     int sweeps = 2;
@@ -55,8 +63,8 @@ Runner addBenchCommand(CLI::App& app) {
                 "only the decoders, the device processes (lidar, odometry) and the step "
                 "generator");
   cmd->add_option("--lidar-process-s", o->lidar_process_s,
-                  "how long the CPU share of sweepmap-lidar and of sweepmap-odometry reading "
-                  "its devices is measured, each")
+                  "how long the CPU share of each device process (sweepmap-motor, -lidar, "
+                  "-odometry) is measured")
       ->capture_default_str();
   return [o]() {
     namespace fs = std::filesystem;
@@ -99,10 +107,12 @@ Runner addBenchCommand(CLI::App& app) {
           benchRigB(b, std::cout);
           break;
         }
-        case RigKind::kRotatingProfile:
-          std::cout << "  no benchmark for this kind yet (the axis-offset calibration's timing is "
-                       "printed by its unit test)\n";
+        case RigKind::kRotatingProfile: {
+          ProfileBenchOptions b;
+          b.rig = rig.path;
+          benchProfile(b, std::cout);
           break;
+        }
       }
     }
     if (!o->no_devices) {
@@ -114,7 +124,8 @@ Runner addBenchCommand(CLI::App& app) {
       if (!ec && fs::exists(self.parent_path() / "sweepmap-lidar")) {
         d.bin_dir = self.parent_path().string();
       }
-      benchDevices(d, std::cout);
+      std::vector<ProcessLoad> loads;
+      benchDevices(d, std::cout, &loads);
       StepperBenchOptions stepper;  // rig A's motor: the first rotating_lidar rig given
       for (const Rig& rig : rigs) {
         if (const auto* rotating = std::get_if<RotatingLidarConfig>(&rig.config)) {
@@ -122,7 +133,9 @@ Runner addBenchCommand(CLI::App& app) {
           break;
         }
       }
-      benchStepper(stepper, std::cout);
+      StepperBenchResult step;
+      benchStepper(stepper, std::cout, &step);
+      printOnboardEstimate(loads, step.thread_cpu_share, std::cout);
     }
     return 0;
   };

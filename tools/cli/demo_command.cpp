@@ -20,10 +20,15 @@ Runner addDemoCommand(CLI::App& app) {
       "car for the rig's sim.duration_s (a 60 s circle for rig_b), -assembler and -mapper "
       "build the world cloud and map (--devices emulated: `sweepmap emulate "
       "x4,hi219,wheel-board` on pseudo-terminals, opened by the real serial drivers). "
-      "rotating_profile (rig C): not yet (exit 2)");
+      "rotating_profile (rig C): sweepmap-profiler turns the simulated turntable through one "
+      "sweep per plate pose (sim.plate_count; --scene test_piece: one sweep of the test "
+      "piece) with the simulated profile sensor, -assembler places the profiles by Eq. 7, "
+      "-mapper maps them; only simulated devices (no real-device drivers for rig C yet)");
   auto o = std::make_shared<DemoOptions>();
   cmd->add_option("--rig", o->rig, "rig file or name")->capture_default_str();
-  cmd->add_option("--scene", o->scene, "scene file or name (default: the rig kind's scene)");
+  cmd->add_option("--scene", o->scene,
+                  "scene file or name (default: the rig kind's scene); rotating_profile: plate or "
+                  "test_piece (default sim.scene)");
   cmd->add_option("--out", o->out, "output directory")->capture_default_str();
   cmd->add_option("--set", o->overrides,
                   "override a rig key for every process: key=value (repeatable)");

@@ -27,10 +27,23 @@ const char* const kEvalFooter =
     "after calibration (Fig. 6-7), evaluates the loop with our calibration beside the mounting "
     "before it, and reports mounting_error_mrad against the truth (~3 min). --logs takes one "
     "log; --compare-uncalibrated also assembles it with no mounting error.\n\n"
+    "rotating_profile (Zhao 2021 section 4, Tables 1-2; --experiment only): simulates the plate "
+    "in its m poses (DIR/logs/plate.lcmlog), calibrates M, N by ours (Ceres, with the laser "
+    "tilt) and by the paper's grid (Algorithm 1, 1 mm over M 110-130, N 395-425), both timed, "
+    "draws S(M, N) (Fig. 6); then scans the test piece --repeats times (DIR/logs/"
+    "test_piece_K.lcmlog: seed+100+K, the piece 3 mm nearer or farther each time, the sampling "
+    "phase shifted; its true sizes from TRUTH_TEST_PIECE) and measures Table 2's features "
+    "(groove diameters by a PCL RANSAC circle + Ceres cylinder, depths and the rectangle's "
+    "width by PCL RANSAC planes, its length from the top face's edges) with ours, the grid's "
+    "result and the paper's wrong settings (truth M - 13, N - 14 and M + 7, N + 16). "
+    "report.json: offset_error_mm, feature_error_pct (mean, std per feature and setting), "
+    "paper_table2, checks, timings_s (the only part that differs between runs), ~15 s.\n\n"
     "Exit status: 0 evaluated; 1 a log is corrupt (after evaluating what came before) or holds "
-    "nothing to evaluate (the report says why); 2 bad rig, scene or option.\n"
+    "nothing to evaluate (the report says why), or (rotating_profile) a feature was not "
+    "measured under some setting or ours did not calibrate; 2 bad rig, scene or option.\n"
     "Examples: sweepmap eval --experiment paper --rig rig_a --out eval_a\n"
-    "          sweepmap eval --experiment paper --rig rig_b --out eval_b";
+    "          sweepmap eval --experiment paper --rig rig_b --out eval_b\n"
+    "          sweepmap eval --experiment paper --rig rig_c --out eval_c";
 
 }  // namespace
 
@@ -40,8 +53,8 @@ Runner addEvalCommand(CLI::App& app) {
       "Evaluate a rig with its paper's measures, against the simulator's truth where the logs "
       "carry it, into DIR/report.json, DIR/report.md and PNG figures. Either --logs LOG... "
       "(existing logs) or --experiment paper (simulates the paper's experiment into DIR/logs/, "
-      "calibrates, then evaluates). Same inputs and seed give identical files. rotating_profile "
-      "(rig C): not yet (exit 2)");
+      "calibrates, then evaluates). Same inputs and seed give identical files (rig C: report.json "
+      "but its timings_s)");
   cmd->footer(kEvalFooter);
   auto q = std::make_shared<EvalRequest>();
   auto no_plots = std::make_shared<bool>(false);
@@ -64,7 +77,8 @@ Runner addEvalCommand(CLI::App& app) {
   cmd->add_option(
          "--seed", q->seed,
          "base seed (--experiment). rotating_lidar: mode m uses seed+m, the alpha log "
-         "seed+100, the naive log seed+200; mobile_lidar: the circle seed, the loop seed+1")
+         "seed+100, the naive log seed+200; mobile_lidar: the circle seed, the loop seed+1; "
+         "rotating_profile: the plates seed, test-piece scan K seed+100+K")
       ->capture_default_str();
   cmd->add_option("--sweeps-per-mode", q->sweeps_per_mode,
                   "rotating_lidar --experiment: sweeps per mode (default 5)")
@@ -75,6 +89,9 @@ Runner addEvalCommand(CLI::App& app) {
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--no-naive", q->no_naive,
                 "rotating_lidar --experiment: skip the naive-action-sequence sweeps of mode 1");
+  cmd->add_option("--repeats", q->repeats,
+                  "rotating_profile --experiment: test-piece scans per setting (default 10, "
+                  "Table 2's ten measurements; at least 2)");
   cmd->add_flag("--compare-uncalibrated", q->compare_uncalibrated,
                 "mobile_lidar --logs: also assemble with no mounting error and compare "
                 "(--experiment always does)");

@@ -9,7 +9,7 @@ Runner addRecordCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "record",
       "Record the LCM bus with lcm-logger into --out DIR/NAME: --preset raw (what replay needs: "
-      "LIDAR_SCAN, MOTOR_STATE, MOTOR_SWITCH, SCAN_WINDOW, WHEEL_TICKS, IMU, WHEEL_CMD, "
+      "LIDAR_SCAN, MOTOR_STATE, MOTOR_SWITCH, SCAN_WINDOW, WHEEL_TICKS, IMU, WHEEL_CMD, PROFILE, "
       "STATUS_*, TRUTH_*) or all; --split-mb N starts a new file (NAME.00, NAME.01, ...) every N "
       "MB; when the free space falls below --min-free-mb the recording stops cleanly (the log "
       "ends with its last complete event; exit status 3). Stops at SIGINT/SIGTERM or after "

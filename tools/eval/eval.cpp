@@ -2,6 +2,7 @@
 
 #include "rigs/rig_file.hpp"
 #include "tools/eval/eval_mobile.hpp"
+#include "tools/eval/eval_profile.hpp"
 #include "tools/eval/eval_rotating.hpp"
 
 namespace sweepmap {
@@ -84,6 +85,37 @@ EvalRunResult evalMobile(const EvalRequest& q, const Rig& rig) {
   return {r.failed, "-> " + q.out_dir + "/report.json", r.message};
 }
 
+EvalRunResult evalProfile(const EvalRequest& q, const Rig& rig) {
+  if (q.experiment.empty()) {
+    throw ConfigError("a rotating_profile rig is evaluated by --experiment paper (" + rig.path +
+                      "); its logs are calibrated by `sweepmap calib axis-offset`");
+  }
+  if (q.sweeps_per_mode > 0 || q.calib_sweeps > 0 || q.no_naive || q.compare_uncalibrated) {
+    throw ConfigError(
+        "--sweeps-per-mode, --calib-sweeps, --no-naive and --compare-uncalibrated do not apply "
+        "to rotating_profile rigs (" +
+        rig.path + ")");
+  }
+  if (!q.scene.empty()) {
+    throw ConfigError(
+        "--scene does not apply to rotating_profile rigs: the experiment scans "
+        "the plate, then the test piece");
+  }
+  ProfileExperimentOptions po;
+  po.rig_path = rig.path;
+  po.overrides = q.overrides;
+  po.out_dir = q.out_dir;
+  po.seed = q.seed;
+  if (q.repeats >= 0) po.repeats = q.repeats;
+  po.plots = q.plots;
+  po.progress = q.progress;
+  const EvalProfileResult r = runProfilePaperExperiment(po);
+  return {r.failed,
+          std::to_string(r.scans) + " test-piece scans, " + std::to_string(r.figures) +
+              " figures -> " + q.out_dir + "/report.md",
+          r.message};
+}
+
 }  // namespace
 
 EvalRunResult runEval(const EvalRequest& q) {
@@ -93,13 +125,17 @@ EvalRunResult runEval(const EvalRequest& q) {
   // With logs the overrides are the rig's; with an experiment scene.<key> goes to the scene
   // and the loaders of the experiment apply them.
   const Rig rig = loadRig(q.rig, q.experiment.empty() ? q.overrides : std::vector<std::string>{});
+  if (q.repeats >= 0 && rig.kind() != RigKind::kRotatingProfile) {
+    throw ConfigError("--repeats applies to rotating_profile rigs; " + rig.path + " is a " +
+                      rig.kindName() + " rig");
+  }
   switch (rig.kind()) {
     case RigKind::kRotatingLidar:
       return evalRotating(q, rig);
     case RigKind::kMobileLidar:
       return evalMobile(q, rig);
     case RigKind::kRotatingProfile:
-      break;  // rig C's evaluation (Zhao 2021 Table 2) is a later step
+      return evalProfile(q, rig);
   }
   throw ConfigError(rig.path + ": no evaluation for rig kind " + rig.kindName());
 }

@@ -1,10 +1,12 @@
 // `sweepmap eval` for any rig: dispatches on the rig's kind to its paper's evaluation
 // (rotating_lidar: Yuan 2021, tools/eval/eval_rotating.hpp; mobile_lidar: Miao 2022,
-// tools/eval/eval_mobile.hpp), of existing logs or of a simulated experiment.
+// tools/eval/eval_mobile.hpp; rotating_profile: Zhao 2021, tools/eval/eval_profile.hpp), of
+// existing logs or of a simulated experiment.
 //
 // The library, by job (rotating_* for rig A, mobile_* for rig B; internal headers in
 // namespace sweepmap::eval):
 //   eval_rotating, eval_mobile  the drivers: a log or an experiment, step by step
+//   eval_profile*               rig C's experiment: driver, test-piece features, report, figures
 //   metrics, *_metrics          the measures (E_map distance, deviations, phi_error, alpha,
 //                               trajectory errors, room planes and dimensions, ghosts)
 //   *_figures                   one function per PNG (figures.hpp collects them)
@@ -34,6 +36,8 @@ struct EvalRequest {
   bool no_naive = false;
   // mobile_lidar only
   bool compare_uncalibrated = false;
+  // rotating_profile only (-1: the experiment's 10)
+  int repeats = -1;
 };
 
 struct EvalRunResult {

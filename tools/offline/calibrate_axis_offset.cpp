@@ -74,26 +74,6 @@ std::string figurePath(const AxisOffsetCalibRequest& o) {
   return (p.parent_path() / (p.stem().string() + "_S.png")).string();
 }
 
-// The paper's S(M, N) as Fig. 6; "" when drawn, else why not.
-std::string drawFigure(const std::string& png, const GridSearchResult& g) {
-  if (!gnuplotAvailable()) return "gnuplot is not installed";
-  SurfacePlotOptions p;
-  p.title = "Zhao 2021 Algorithm 1: mean plane RMSE S(M, N)";
-  p.x_label = "M [mm]";
-  p.y_label = "N [mm]";
-  p.z_label = "S [mm]";
-  p.marker = Eigen::Vector3d(g.m_mm, g.n_mm, g.s_min_mm);
-  std::ostringstream t;
-  t << "min S at M = " << g.m_mm << ", N = " << g.n_mm << " mm";
-  p.marker_title = t.str();
-  try {
-    plotSurface(png, g.m_values, g.n_values, g.s_mm, p);
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
-
 void writeCalibration(const AxisOffsetCalibRequest& o, const Inputs& in, const AxisOffsetResult& r,
                       const std::optional<GridSearchResult>& grid) {
   AxisOffsetCalibration c;
@@ -232,6 +212,25 @@ nlohmann::json resultJson(const AxisOffsetCalibRequest& o, const Inputs& in,
 
 }  // namespace
 
+std::string drawAxisOffsetSurface(const std::string& png, const GridSearchResult& g) {
+  if (!gnuplotAvailable()) return "gnuplot is not installed";
+  SurfacePlotOptions p;
+  p.title = "Zhao 2021 Algorithm 1: mean plane RMSE S(M, N)";
+  p.x_label = "M [mm]";
+  p.y_label = "N [mm]";
+  p.z_label = "S [mm]";
+  p.marker = Eigen::Vector3d(g.m_mm, g.n_mm, g.s_min_mm);
+  std::ostringstream t;
+  t << "min S at M = " << g.m_mm << ", N = " << g.n_mm << " mm";
+  p.marker_title = t.str();
+  try {
+    plotSurface(png, g.m_values, g.n_values, g.s_mm, p);
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
 int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   RotatingProfileConfig rig;
   if (!checkInputs(o, &rig)) return 2;
@@ -252,7 +251,7 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
       return 2;
     }
     figure = figurePath(o);
-    figure_error = drawFigure(figure, *grid);
+    figure_error = drawAxisOffsetSurface(figure, *grid);
   }
   AxisOffsetOptions options;
   options.initial = rig.geometry.toGeometry();

@@ -33,4 +33,8 @@ struct AxisOffsetCalibRequest {
 // output path.
 int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& request);
 
+// The paper's S(M, N) of a grid search drawn as its Fig. 6 (a surface with the minimum
+// marked) into `png`; returns "" when drawn, else why not (no gnuplot, gnuplot failed).
+std::string drawAxisOffsetSurface(const std::string& png, const GridSearchResult& grid);
+
 }  // namespace sweepmap

@@ -32,9 +32,11 @@ LogReadResult forEachSweep(
     truth_rig_t t;
     if (decodeMessage(m, &t)) {
       result.alpha_true_rad = t.alpha_true_rad;
+      result.lidar_offset_x_true_m = t.lidar_offset_x_m;
       result.scene = t.scene;
     }
   });
+  if (options.on_window_scans) assembler.setWindowObserver(options.on_window_scans);
   assembler.setSweepObserver([&](const AssembledSweep& s) {
     SweepTruth t;
     if (truth.covers(s.first_ray_utime)) {
@@ -66,6 +68,9 @@ LogReadResult forEachSweep(
   result.scans = assembler.counter("scans");
   result.invalid = assembler.counter("invalid");
   result.dropped = assembler.counter("dropped");
+  result.sweeps_incomplete = assembler.counter("sweeps_incomplete");
+  result.scans_missing = assembler.counter("scans_missing");
+  result.windows_missing = assembler.counter("windows_missing");
   return result;
 }
 

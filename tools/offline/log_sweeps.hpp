@@ -26,9 +26,13 @@ struct LogReadResult {
   int64_t last_utime = 0;
   std::map<std::string, int64_t> skipped_channels;
   int64_t scans = 0, invalid = 0, dropped = 0;  // assembler counters
+  // Sweeps published with scans missing, those scans, and sweeps whose window never came
+  // (assembler counters; see processes/assembler_node.hpp).
+  int64_t sweeps_incomplete = 0, scans_missing = 0, windows_missing = 0;
   bool log_error = false;  // truncated or corrupt log (everything before it was processed)
   std::string error;
   std::optional<double> alpha_true_rad;
+  std::optional<double> lidar_offset_x_true_m;  // TRUTH_RIG's (simulated logs)
   std::string scene;
 };
 
@@ -38,6 +42,8 @@ struct LogSweepOptions {
   std::vector<Node*> extra_nodes;
   std::function<void(const Message&)> sink;
   std::function<void(uint64_t offset, uint64_t size)> progress;
+  // Called with every sweep and the window's scans it was assembled from, before on_sweep.
+  std::function<void(const AssembledSweep&, const std::vector<Scan2D>&)> on_window_scans;
 };
 
 // Throws LogError if the log cannot be opened; a bad log later on is reported in the result.

@@ -6,6 +6,7 @@
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
+#include "sweepmap/truth_test_piece_t.hpp"
 
 namespace sweepmap {
 
@@ -19,6 +20,28 @@ T decodeOrThrow(const std::string& path, uint64_t offset, const LogEvent& e) {
                           " does not decode");
   }
   return msg;
+}
+
+TestPieceTruth testPieceTruth(const truth_test_piece_t& t) {
+  TestPieceTruth p;
+  p.sweep_id = t.sweep_id;
+  p.origin = Eigen::Vector3d(t.origin[0], t.origin[1], t.origin[2]);
+  p.u = Eigen::Vector3d(t.u_axis[0], t.u_axis[1], t.u_axis[2]);
+  p.v = Eigen::Vector3d(t.v_axis[0], t.v_axis[1], t.v_axis[2]);
+  p.w = Eigen::Vector3d(t.w_axis[0], t.w_axis[1], t.w_axis[2]);
+  TestPieceConfig& c = p.sizes;
+  c.distance_mm = 0.0;
+  c.block_length_mm = t.block_length_mm;
+  c.block_width_mm = t.block_width_mm;
+  c.spacing_mm = t.spacing_mm;
+  c.left_diameter_mm = t.left_diameter_mm;
+  c.left_depth_mm = t.left_depth_mm;
+  c.right_diameter_mm = t.right_diameter_mm;
+  c.right_depth_mm = t.right_depth_mm;
+  c.rect_length_mm = t.rect_length_mm;
+  c.rect_width_mm = t.rect_width_mm;
+  c.rect_depth_mm = t.rect_depth_mm;
+  return p;
 }
 
 }  // namespace
@@ -35,6 +58,9 @@ ProfileLog readProfileLog(const std::string& path) {
         out.truth = ProfileLogTruth{
             {t.offset_m_mm, t.offset_n_mm, t.laser_tilt_rad, t.encoder_zero_rad}, t.scene};
       }
+      if (e.channel == channels::kTruthTestPiece && !out.test_piece) {
+        out.test_piece = testPieceTruth(decodeOrThrow<truth_test_piece_t>(path, offset, e));
+      }
       if (e.channel != channels::kProfile) continue;
       const auto msg = decodeOrThrow<profile_t>(path, offset, e);
       if (const std::string why = validateProfile(msg); !why.empty()) {
@@ -48,7 +74,7 @@ ProfileLog readProfileLog(const std::string& path) {
       }
       PlanePoints& plane = out.sweeps[it->second];
       const double encoder_rad =
-          2.0 * M_PI * static_cast<double>(msg.encoder_counts) / msg.counts_per_revolution;
+          turntableAngleRad(msg.encoder_counts, msg.counts_per_revolution, 0.0);
       for (int32_t i = 0; i < msg.point_count; ++i) {
         plane.samples.push_back({msg.y_mm[i], msg.z_mm[i], encoder_rad});
       }

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "calib/axis_offset.hpp"
+#include "drivers/sim_profiler.hpp"
 
 namespace sweepmap {
 
@@ -23,9 +24,19 @@ struct ProfileLogTruth {
   std::string scene;
 };
 
+// The simulated test piece's truth (TRUTH_TEST_PIECE): its true sizes (distance_mm unused)
+// and its frame in O_r (u along the line, v along the scan, w up; origin at the top face's
+// centre).
+struct TestPieceTruth {
+  int32_t sweep_id = 0;
+  TestPieceConfig sizes;
+  Eigen::Vector3d origin, u, v, w;
+};
+
 struct ProfileLog {
   std::vector<PlanePoints> sweeps;  // one per sweep id, in order of first appearance
   std::optional<ProfileLogTruth> truth;
+  std::optional<TestPieceTruth> test_piece;  // the first TRUTH_TEST_PIECE, if any
   int64_t profiles = 0;
 };
 

@@ -61,6 +61,7 @@ nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth,
   j["window_start_utime"] = s.window.start_utime;
   j["mode"] = s.window.mode;
   j["scans"] = s.scans;
+  j["missing_scans"] = s.missing_scans;
   j["points"] = s.points.size();
   j["plate_points"] = s.plate.points;
   j["beta_deg"] = s.plate.found ? nlohmann::json(roundTo(s.plate.beta_rad * kRadToDeg, 6))
@@ -79,7 +80,7 @@ nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth,
 
 void writeSummary(const fs::path& out, const std::string& log_path, const LogReadResult& read,
                   const nlohmann::json& sweeps, const MapperNode& mapper,
-                  const ReplayResult& result) {
+                  const ReplayResult& result, const RotatingLidarConfig& rig) {
   nlohmann::json summary;
   summary["log"] = fs::path(log_path).filename().string();
   summary["events"] = read.events;
@@ -90,11 +91,23 @@ void writeSummary(const fs::path& out, const std::string& log_path, const LogRea
                     {"free_voxels", st.free_voxels},
                     {"sweeps_inserted", st.sweeps_inserted}};
   summary["skipped_channels"] = read.skipped_channels;
-  summary["assembler"] = {
-      {"scans", read.scans}, {"invalid", read.invalid}, {"dropped", read.dropped}};
+  summary["assembler"] = {{"scans", read.scans},
+                          {"invalid", read.invalid},
+                          {"dropped", read.dropped},
+                          {"sweeps_incomplete", read.sweeps_incomplete},
+                          {"scans_missing", read.scans_missing},
+                          {"windows_missing", read.windows_missing}};
+  // What the assembler placed the points with (a calibration file's values if the rig names one).
+  summary["geometry"] = {{"lidar_offset_x_mm", rig.geometry.lidar_offset_x_mm},
+                         {"calibration_file", rig.geometry.calibration_file},
+                         {"plate_alpha_deg", rig.plate.alpha_deg}};
   if (read.alpha_true_rad) {
-    summary["truth"] = {{"alpha_true_deg", roundTo(*read.alpha_true_rad * kRadToDeg, 6)},
-                        {"scene", read.scene}};
+    summary["truth"] = {
+        {"alpha_true_deg", roundTo(*read.alpha_true_rad * kRadToDeg, 6)},
+        {"lidar_offset_x_mm", read.lidar_offset_x_true_m
+                                  ? nlohmann::json(*read.lidar_offset_x_true_m * 1e3)
+                                  : nlohmann::json(nullptr)},
+        {"scene", read.scene}};
   }
   if (result.log_error) summary["error"] = result.error;
   writeFileAtomic((out / "summary.json").string(), summary.dump(2) + "\n");
@@ -147,10 +160,13 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   const LogReadResult read = forEachSweep(options.log_path, rig, onSweep, lo);
   derived.close();
   result.events = read.events;
+  result.sweeps_incomplete = static_cast<int>(read.sweeps_incomplete);
+  result.scans_missing = read.scans_missing;
+  result.windows_missing = read.windows_missing;
   result.log_error = read.log_error;
   result.error = read.error;
   result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
-  writeSummary(out, options.log_path, read, sweeps, mapper, result);
+  writeSummary(out, options.log_path, read, sweeps, mapper, result, rig);
   if (options.plots && !first_O.empty()) plotFirstSweep(out, first_Op, first_O);
   return result;
 }

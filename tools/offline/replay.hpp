@@ -17,6 +17,9 @@ struct ReplayOptions {
 
 struct ReplayResult {
   int sweeps = 0;
+  int sweeps_incomplete = 0;  // published with scans missing (lost on the way to the log)
+  int64_t scans_missing = 0;
+  int64_t windows_missing = 0;  // sweeps whose window never came
   int64_t events = 0;
   int64_t points = 0;
   double log_duration_s = 0.0;  // first to last event

@@ -2,14 +2,19 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <iostream>
 #include <map>
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.hpp"
 #include "core/event_log.hpp"
 #include "mapping/cloud_io.hpp"
+#include "mapping/occupancy_map.hpp"
+#include "mapping/plot.hpp"
 #include "processes/channels.hpp"
-#include "processes/convert.hpp"
+#include "processes/mapper_node.hpp"
+#include "processes/profile_assembler_node.hpp"
+#include "tools/offline/log_player.hpp"
 
 namespace sweepmap {
 
@@ -22,29 +27,25 @@ struct Sweep {
   std::vector<Eigen::Vector3f> points;  // [m], O_r
 };
 
-// One profile's points in O_r [m].
-void assemble(const profile_t& msg, const ProfileGeometry& g, std::vector<Eigen::Vector3f>* out) {
-  const double encoder_rad =
-      2.0 * M_PI * static_cast<double>(msg.encoder_counts) / msg.counts_per_revolution;
-  for (int32_t i = 0; i < msg.point_count; ++i) {
-    out->push_back(
-        (profilePointInRigFrame(g, msg.y_mm[i], msg.z_mm[i], encoder_rad) * 1e-3).cast<float>());
-  }
-}
-
-void writeOutputs(const fs::path& out, const std::string& log_path, const ProfileGeometry& g,
-                  const std::map<int32_t, Sweep>& sweeps, const ProfileReplayResult& r) {
+void writeClouds(const fs::path& out, const std::map<int32_t, Sweep>& sweeps) {
   fs::create_directories(out / "sweeps");
   std::vector<Eigen::Vector3f> all;
-  nlohmann::json list = nlohmann::json::array();
   for (const auto& [id, sweep] : sweeps) {
     char name[32];
     std::snprintf(name, sizeof name, "sweep_%06d.pcd", id);
     writePcdBinary((out / "sweeps" / name).string(), sweep.points);
     all.insert(all.end(), sweep.points.begin(), sweep.points.end());
-    list.push_back({{"id", id}, {"profiles", sweep.profiles}, {"points", sweep.points.size()}});
   }
   writePcdBinary((out / "cloud.pcd").string(), all);
+}
+
+void writeSummary(const fs::path& out, const std::string& log_path, const ProfileGeometry& g,
+                  const std::map<int32_t, Sweep>& sweeps, const ProfileReplayResult& r,
+                  const LogPlayResult& played, const MapperNode& mapper) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const auto& [id, sweep] : sweeps) {
+    list.push_back({{"id", id}, {"profiles", sweep.profiles}, {"points", sweep.points.size()}});
+  }
   nlohmann::json s;
   s["log"] = fs::path(log_path).filename().string();
   s["events"] = r.events;
@@ -52,51 +53,73 @@ void writeOutputs(const fs::path& out, const std::string& log_path, const Profil
   s["invalid_profiles"] = r.invalid;
   s["points"] = r.points;
   s["sweeps"] = list;
+  s["skipped_channels"] = played.skipped_channels;
   s["geometry"] = {{"m_mm", g.m_mm},
                    {"n_mm", g.n_mm},
                    {"laser_tilt_rad", g.laser_tilt_rad},
                    {"encoder_zero_rad", g.encoder_zero_rad}};
+  const MapStats st = mapper.map().stats();
+  s["map"] = {{"resolution_m", st.resolution_m},
+              {"occupied_voxels", st.occupied_voxels},
+              {"free_voxels", st.free_voxels}};
   if (r.log_error) s["error"] = r.error;
   writeFileAtomic((out / "summary.json").string(), s.dump(2) + "\n");
+}
+
+// Top view of the cloud, a colour per sweep (every 10th point: the picture is the same).
+void plotTopViewOf(const fs::path& out, const std::map<int32_t, Sweep>& sweeps) {
+  static const char* kColours[] = {"blue", "red", "dark-green", "orange", "purple", "gray40"};
+  std::vector<Layer> layers;
+  for (const auto& [id, sweep] : sweeps) {
+    Layer l{"sweep " + std::to_string(id), kColours[layers.size() % 6], {}};
+    for (size_t i = 0; i < sweep.points.size(); i += 10) l.points.push_back(sweep.points[i]);
+    layers.push_back(std::move(l));
+  }
+  PlotOptions po;
+  po.title = "Top view: the profiles in the turntable's frame O_r, a colour per sweep";
+  po.point_size = 0.2;
+  try {
+    plotTopView((out / "top_view.png").string(), layers, po);
+  } catch (const std::exception& e) {
+    std::cerr << "replay: top view not drawn: " << e.what() << "\n";
+  }
 }
 
 }  // namespace
 
 ProfileReplayResult replayProfileLog(const std::string& log_path, const RotatingProfileConfig& rig,
-                                     const std::string& out_dir) {
-  const ProfileGeometry g = rig.geometry.toGeometry();
-  ProfileReplayResult r;
+                                     const std::string& out_dir, bool plots) {
+  LogPlayer player(log_path);
+  const fs::path out(out_dir);
+  fs::create_directories(out);
+  EventLogWriter derived((out / "derived.lcmlog").string());
+  ProfileAssemblerNode assembler(rig.geometry.toGeometry());
+  MapperNode mapper(rig.mapper, (out / "map.bt").string());
   std::map<int32_t, Sweep> sweeps;
-  try {
-    // Corrupt regions are skipped (resync at the next good event) and reported.
-    EventLogReader reader(log_path);
-    reader.setResync(true);
-    LogEvent e;
-    while (reader.next(&e)) {
-      ++r.events;
-      if (e.channel != channels::kProfile) continue;
-      profile_t msg;
-      if (msg.decode(e.data.data(), 0, static_cast<int>(e.data.size())) < 0 ||
-          !validateProfile(msg).empty()) {
-        ++r.invalid;  // a bad message is counted, never fatal
-        continue;
-      }
-      ++r.profiles;
-      Sweep& sweep = sweeps[msg.sweep_id];
-      ++sweep.profiles;
-      assemble(msg, g, &sweep.points);
-      r.points += msg.point_count;
-    }
-    if (!reader.skipped().empty()) {
-      r.log_error = true;
-      r.error = describeSkipped(log_path, reader.skipped());
-    }
-  } catch (const LogError& err) {
-    r.log_error = true;
-    r.error = err.what();
-  }
+  assembler.setObserver([&](const Profile& p, const std::vector<Eigen::Vector3f>& points) {
+    Sweep& sweep = sweeps[p.sweep_id];
+    ++sweep.profiles;
+    sweep.points.insert(sweep.points.end(), points.begin(), points.end());
+  });
+  player.bus().attach(&assembler);
+  player.bus().attach(&mapper);
+  player.bus().setSink([&](const Message& m) { derived.write(m.utime, m.channel, m.data); });
+  player.addInputs({channels::kProfile});
+  const LogPlayResult played = player.play();
+  player.finish();
+  derived.close();
+
+  ProfileReplayResult r;
+  r.events = played.events;
+  r.log_error = played.log_error;
+  r.error = played.error;
+  r.profiles = assembler.counter("profiles");
+  r.invalid = assembler.counter("invalid") + assembler.counter("dropped");
+  r.points = assembler.counter("points");
   r.sweeps = static_cast<int>(sweeps.size());
-  writeOutputs(out_dir, log_path, g, sweeps, r);
+  writeClouds(out, sweeps);
+  writeSummary(out, log_path, assembler.geometry(), sweeps, r, played, mapper);
+  if (plots && !sweeps.empty()) plotTopViewOf(out, sweeps);
   return r;
 }
 

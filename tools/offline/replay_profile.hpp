@@ -1,5 +1,6 @@
-// Offline replay of a rig-C log: every PROFILE placed in frame O_r by the generalised Eq. 7
-// (core/profile_geometry.hpp) with the rig's geometry (nominal, or its calibration file).
+// Offline replay of a rig-C log through the live processes' classes on the log player: the
+// assembler (processes/profile_assembler_node.hpp: every PROFILE placed in frame O_r by the
+// generalised Eq. 7 with the rig's geometry, nominal or its calibration file) and the mapper.
 #pragma once
 
 #include <cstdint>
@@ -20,8 +21,10 @@ struct ProfileReplayResult {
 };
 
 // Writes DIR/cloud.pcd (every point, metres, frame O_r), DIR/sweeps/sweep_NNNNNN.pcd (one per
-// turntable sweep id) and DIR/summary.json.
+// turntable sweep id), DIR/map.bt, DIR/derived.lcmlog (SWEEP_CLOUD, MAP_STATS, STATUS_*),
+// DIR/summary.json and, with `plots`, DIR/top_view.png. Throws LogError if the log cannot be
+// opened.
 ProfileReplayResult replayProfileLog(const std::string& log_path, const RotatingProfileConfig& rig,
-                                     const std::string& out_dir);
+                                     const std::string& out_dir, bool plots = true);
 
 }  // namespace sweepmap

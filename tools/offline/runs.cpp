@@ -132,6 +132,14 @@ ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
                    std::ostringstream line;
                    line << r.events << " events, " << r.sweeps << " sweeps, " << r.points
                         << " points";
+                   if (r.sweeps_incomplete > 0) {
+                     line << "; " << r.sweeps_incomplete << " sweeps incomplete ("
+                          << r.scans_missing << " scans missing in their windows)";
+                   }
+                   if (r.windows_missing > 0) {
+                     line << "; " << r.windows_missing
+                          << " sweeps missing (their SCAN_WINDOW is not in the log)";
+                   }
                    return ReplayRunResult{line.str(), r.sweeps, 0, r.points, r.log_error, r.error};
                  },
                  [&](const MobileLidarConfig& config) {
@@ -144,7 +152,7 @@ ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options) {
                  },
                  [&](const RotatingProfileConfig& config) {
                    const ProfileReplayResult r =
-                       replayProfileLog(options.log_path, config, options.out_dir);
+                       replayProfileLog(options.log_path, config, options.out_dir, options.plots);
                    std::ostringstream line;
                    line << r.events << " events, " << r.profiles << " profiles in " << r.sweeps
                         << " sweeps, " << r.points << " points";

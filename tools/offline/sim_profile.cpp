@@ -2,50 +2,22 @@
 
 #include <cmath>
 
+#include "drivers/sim_profile_devices.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/sim_setup.hpp"
-#include "sweepmap/truth_profile_rig_t.hpp"
 
 namespace sweepmap {
-
-namespace {
-
-truth_profile_rig_t truthMessage(const SimProfileConfig& sim, int32_t sweep_id, int64_t utime,
-                                 const PlatePose* plate) {
-  const ProfileGeometry g = sim.trueGeometry();
-  truth_profile_rig_t t{};
-  t.utime = utime;
-  t.sweep_id = sweep_id;
-  t.offset_m_mm = g.m_mm;
-  t.offset_n_mm = g.n_mm;
-  t.laser_tilt_rad = g.laser_tilt_rad;
-  t.encoder_zero_rad = g.encoder_zero_rad;
-  t.range_noise_sigma_mm = sim.range_noise_sigma_mm;
-  t.encoder_noise_counts = sim.encoder_noise_counts;
-  t.scene = sim.scene;
-  t.has_plane = plate != nullptr;
-  if (plate) {
-    for (int i = 0; i < 3; ++i) t.plane_normal[i] = plate->normal[i];
-    t.plane_distance_mm = plate->distance();
-  }
-  return t;
-}
-
-}  // namespace
 
 SimProfileResult simulateRotatingProfile(const RotatingProfileConfig& rig, uint64_t seed,
                                          const std::function<void(const Message&)>& sink) {
   SimProfiler profiler(rig.profiler, rig.turntable, rig.sim, seed);
-  std::vector<ProfileScene> scenes;
   std::vector<PlatePose> plates;
-  if (rig.sim.scene == "plate") {
-    plates = platePoses(rig.sim, rig.turntable);
-    for (const PlatePose& p : plates) scenes.push_back(ProfileScene::plate(p));
-  } else if (rig.sim.scene == "test_piece") {
-    scenes.push_back(ProfileScene::testPiece(rig.sim, rig.turntable));
-  } else {
-    throw ConfigError("sim.scene '" + rig.sim.scene + "' is not plate or test_piece");
+  std::vector<ProfileScene> scenes;
+  try {
+    scenes = simProfileScenes(rig.sim, rig.turntable, &plates);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(e.what());
   }
   SimProfileResult result;
   int64_t start = kSimEpochUtime;
@@ -56,8 +28,13 @@ SimProfileResult simulateRotatingProfile(const RotatingProfileConfig& rig, uint6
   for (size_t k = 0; k < scenes.size(); ++k) {
     const auto sweep_id = static_cast<int32_t>(k);
     Outbox out;
-    out.publish(channels::kTruthProfileRig, start,
-                truthMessage(rig.sim, sweep_id, start, plates.empty() ? nullptr : &plates[k]));
+    out.publish(
+        channels::kTruthProfileRig, start,
+        makeTruthProfileRig(rig.sim, sweep_id, start, plates.empty() ? nullptr : &plates[k]));
+    if (const auto frame = scenes[k].testPieceFrame()) {
+      out.publish(channels::kTruthTestPiece, start,
+                  makeTruthTestPiece(rig.sim.test_piece, *frame, sweep_id, start));
+    }
     for (const Profile& p : profiler.sweep(scenes[k], sweep_id, start)) {
       out.publish(channels::kProfile, p.utime, toLcm(p));
       ++result.profiles;

@@ -1,7 +1,7 @@
 // Offline simulation of rig C (Zhao 2021): the simulated profile sensor and turntable
 // scanning the calibration plate in each of its poses (a sweep per pose) or the test piece;
-// raw PROFILE messages and the truth TRUTH_PROFILE_RIG (at each sweep's start), in time
-// order, deterministic from the seed.
+// raw PROFILE messages and the truth TRUTH_PROFILE_RIG (at each sweep's start; the test
+// piece's sizes and frame on TRUTH_TEST_PIECE), in time order, deterministic from the seed.
 #pragma once
 
 #include <cstdint>

@@ -12,6 +12,10 @@
 //     With devices "emulated" the car's three devices are `sweepmap emulate
 //     x4,hi219,wheel-board` on pseudo-terminals (symlinks in DIR/dev/), publishing the truth,
 //     and the two processes open them with the real serial drivers.
+//   rotating_profile (rig C live): sweepmap-profiler turns the simulated turntable through one
+//     sweep per plate pose (sim.plate_count; one for the test piece), publishing the simulated
+//     profile sensor's PROFILE and the truth; -assembler (Eq. 7) and -mapper process them.
+//     Only `sim` devices (no real-device drivers for rig C yet).
 #pragma once
 
 #include <cstdint>
@@ -22,7 +26,7 @@ namespace sweepmap {
 
 struct DemoOptions {
   std::string rig = "rig_a";  // path or name; its kind decides the processes
-  std::string scene;          // path or name; "" = the kind's default scene
+  std::string scene;  // path or name; "" = the kind's default scene (rig C: plate | test_piece)
   std::string out = "out";
   std::vector<std::string> overrides;  // rig keys for every process (and scene.<key>)
   int mode = 7;                        // rotating_lidar: scan mode

@@ -17,7 +17,8 @@ namespace sweepmap {
 std::string recordChannels(const std::string& preset) {
   if (preset == "all") return ".*";
   if (preset == "raw") {
-    return "LIDAR_SCAN|MOTOR_STATE|MOTOR_SWITCH|SCAN_WINDOW|WHEEL_TICKS|IMU|WHEEL_CMD|STATUS_.*|"
+    return "LIDAR_SCAN|MOTOR_STATE|MOTOR_SWITCH|SCAN_WINDOW|WHEEL_TICKS|IMU|WHEEL_CMD|PROFILE|"
+           "STATUS_.*|"
            "TRUTH_.*";
   }
   throw std::invalid_argument("--preset must be raw or all, not '" + preset + "'");

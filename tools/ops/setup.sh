@@ -11,6 +11,7 @@ packages=(
   gnuplot-nox iproute2 util-linux clang-format python3
   clang libclang-rt-14-dev
   libgpiod-dev
+  iptables libnetfilter-queue-dev  # the two-host test: loss and reordering without netem
   systemd
 )
 

@@ -1,0 +1,241 @@
+// `sweepmap calib axis-offset --rig <rotating_lidar>`'s workflow in named steps: check the
+// inputs, read the logs' sweeps and segment their planes, solve, write the file, report.
+#include "tools/offline/calibrate_lidar_axis_offset.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <sstream>
+
+#include "core/calibration_file.hpp"
+#include "core/event_log.hpp"
+#include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/log_sweeps.hpp"
+
+namespace sweepmap {
+namespace {
+
+using calib_workflow::Clock;
+using calib_workflow::seconds;
+
+const std::string kWhat = "calib axis-offset";
+
+struct Inputs {
+  std::vector<LidarPlaneRays> planes;
+  int sweeps_used = 0;
+  std::vector<std::string> rejected;    // "LOG sweep ID: why"
+  std::vector<std::string> log_errors;  // corrupt tails (the sweeps before them are used)
+  std::optional<double> truth_x_mm;     // TRUTH_RIG (simulated logs)
+  double read_s = 0.0, segment_s = 0.0;
+};
+
+bool checkInputs(const LidarAxisOffsetCalibRequest& o, RotatingLidarConfig* rig) {
+  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kWhat, rig)) return false;
+  for (const auto& log : o.logs) {
+    if (!calib_workflow::logFileExists(log, kWhat)) return false;
+  }
+  return calib_workflow::outputDirExists(o.out, kWhat);
+}
+
+// One sweep: its rays placed again (the scans it came from) and its planes into in->planes,
+// or why not into in->rejected; a line on stderr either way.
+void takeSweep(const LidarAxisOffsetCalibRequest& o, const std::string& log,
+               const AssembledSweep& s, const std::vector<Scan2D>& scans, Inputs* in) {
+  const std::string source = log + " sweep " + std::to_string(s.window.sweep_id);
+  const auto reject = [&](const std::string& why) {
+    in->rejected.push_back(source + ": " + why);
+    std::cerr << "  " << source << ": rejected: " << why << "\n";
+  };
+  // Frame O' is enough (each sweep has its own planes): a sweep without plate serves; a
+  // window with a motor ramp does not (its shaft speed was not constant).
+  if (s.window.accel_overlap) return reject("motor ramp overlapped the lidar window");
+  std::vector<SweepRay> rays;
+  rays.reserve(s.points_Op.size());
+  forEachSweepRay(scans, s.window.omega_rad_s, [&](const SweepRay& r) { rays.push_back(r); });
+  const auto t0 = Clock::now();
+  std::vector<LidarPlaneRays> planes =
+      segmentSweepPlanes(s.points_Op, rays, o.segmentation, source);
+  in->segment_s += seconds(Clock::now() - t0);
+  if (planes.empty())
+    return reject("no plane of " + std::to_string(o.segmentation.min_inliers) + " points or more");
+  size_t used = 0;
+  for (const auto& p : planes) used += p.rays.size();
+  std::cerr << "  " << source << ": " << s.points_Op.size() << " points, " << planes.size()
+            << " planes, " << used << " rays used\n";
+  ++in->sweeps_used;
+  for (auto& p : planes) in->planes.push_back(std::move(p));
+}
+
+// Every sweep of every log through takeSweep; false (after saying so) if a log cannot be
+// opened. A corrupt tail is noted and what came before used.
+bool readLogs(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig, Inputs* in) {
+  const auto t0 = Clock::now();
+  for (const auto& log : o.logs) {
+    LogSweepOptions opts;
+    opts.on_window_scans = [&](const AssembledSweep& s, const std::vector<Scan2D>& scans) {
+      takeSweep(o, log, s, scans, in);
+    };
+    LogReadResult r;
+    try {
+      r = forEachSweep(
+          log, rig, [](const AssembledSweep&, const SweepTruth&) {}, opts);
+    } catch (const LogError& e) {
+      std::cerr << kWhat << ": cannot read log '" << log << "': " << e.what() << "\n";
+      return false;
+    }
+    if (r.log_error) {
+      std::cerr << kWhat << ": " << r.error << " (the sweeps before it are used)\n";
+      in->log_errors.push_back(r.error);
+    }
+    if (r.lidar_offset_x_true_m && !in->truth_x_mm) in->truth_x_mm = *r.lidar_offset_x_true_m * 1e3;
+  }
+  in->read_s = seconds(Clock::now() - t0) - in->segment_s;
+  return true;
+}
+
+std::string num(double v) {
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return s.str();
+}
+
+void writeCalibration(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
+                      const Inputs& in, const LidarAxisOffsetResult& r) {
+  LidarOffsetCalibration c;
+  c.lidar_offset_x_mm = r.offset_mm.x();
+  c.source["tool"] = "sweepmap calib axis-offset";
+  c.source["method"] = "ceres: t_L^O' x" + std::string(r.y_estimated ? ", y" : "") +
+                       " and every plane (PCL RANSAC planes of each sweep), Cauchy weights";
+  c.source["date"] = calib_workflow::utcNow();
+  c.source["nominal_mm"] = num(rig.geometry.lidar_offset_x_mm);
+  c.source["sigma_mm"] = num(r.sigma_x_mm);
+  c.source["sweeps"] = std::to_string(in.sweeps_used);
+  c.source["planes"] = std::to_string(in.planes.size());
+  c.source["wall_rms_before_mm"] = num(r.wall_rms_before_mm);
+  c.source["wall_rms_after_mm"] = num(r.wall_rms_after_mm);
+  c.logs = o.logs;
+  writeLidarOffsetCalibration(o.out, c);
+}
+
+void reportHuman(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
+                 const Inputs& in, const LidarAxisOffsetResult& r, bool written) {
+  std::cerr << std::fixed << std::setprecision(4) << kWhat << ": t_L^O' x = " << r.offset_mm.x()
+            << " +- " << r.sigma_x_mm << " mm (the rig's " << rig.geometry.lidar_offset_x_mm
+            << " mm)";
+  if (r.y_estimated) {
+    std::cerr << ", y = " << r.offset_mm.y() << " +- " << r.sigma_y_mm
+              << " mm (reported only: the rig's model has none)";
+  }
+  std::cerr << "\n  from " << in.sweeps_used << " sweeps, " << r.planes.size() << " planes ("
+            << r.walls << " walls), " << r.residuals << " residuals, " << r.iterations
+            << " iterations" << (r.converged ? "" : " (NOT converged)") << ", "
+            << std::setprecision(2) << r.seconds << " s\n"
+            << std::setprecision(4) << "  wall-plane RMS " << r.wall_rms_before_mm
+            << " mm (before) -> " << r.wall_rms_after_mm << " mm (after); every plane "
+            << r.rms_before_mm << " -> " << r.rms_after_mm << " mm; wall inliers ("
+            << r.wall_inliers << " points within " << r.cauchy_scale_mm << " mm) "
+            << r.wall_inlier_rms_before_mm << " -> " << r.wall_inlier_rms_after_mm << " mm\n"
+            << "  observable (mm off the planes per mm, planes adjusted): x "
+            << std::setprecision(3) << r.observability.x() << ", y " << r.observability.y()
+            << ", z (along the axis) " << r.observability.z() << "\n";
+  for (const auto& w : r.warnings) std::cerr << "  warning: " << w << "\n";
+  if (in.truth_x_mm) {
+    std::cerr << std::setprecision(4) << "  truth x = " << *in.truth_x_mm << " mm: off by "
+              << r.offset_mm.x() - *in.truth_x_mm << " mm\n";
+  }
+  std::cerr << std::setprecision(2) << "  time: sweep assembly " << in.read_s
+            << " s, plane segmentation " << in.segment_s << " s, solve " << r.seconds << " s\n"
+            << "  " << (written ? "wrote " + o.out : std::string("nothing written")) << "\n";
+  std::cerr.unsetf(std::ios::floatfield);
+}
+
+nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
+                          const Inputs& in, const LidarAxisOffsetResult& r, bool written) {
+  const auto orNull = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
+  nlohmann::json j;
+  j["lidar_offset_x_mm"] = r.offset_mm.x();
+  j["sigma_x_mm"] = orNull(r.sigma_x_mm);
+  j["nominal_x_mm"] = rig.geometry.lidar_offset_x_mm;
+  if (r.y_estimated) {
+    j["lidar_offset_y_mm"] = r.offset_mm.y();
+    j["sigma_y_mm"] = orNull(r.sigma_y_mm);
+  }
+  j["observable"] = r.observable;
+  j["observability"] = {
+      {"x", r.observability.x()}, {"y", r.observability.y()}, {"z", r.observability.z()}};
+  j["smallest_singular_value"] = r.smallest_singular_value;
+  j["wall_rms_before_mm"] = r.wall_rms_before_mm;
+  j["wall_rms_after_mm"] = r.wall_rms_after_mm;
+  j["wall_inlier_rms_before_mm"] = r.wall_inlier_rms_before_mm;
+  j["wall_inlier_rms_after_mm"] = r.wall_inlier_rms_after_mm;
+  j["wall_inliers"] = r.wall_inliers;
+  j["rms_before_mm"] = r.rms_before_mm;
+  j["rms_after_mm"] = r.rms_after_mm;
+  j["cauchy_scale_mm"] = r.cauchy_scale_mm;
+  j["iterations"] = r.iterations;
+  j["converged"] = r.converged;
+  j["residuals"] = r.residuals;
+  j["sweeps_used"] = in.sweeps_used;
+  j["sweeps_rejected"] = in.rejected;
+  j["log_errors"] = in.log_errors;
+  j["walls"] = r.walls;
+  nlohmann::json planes = nlohmann::json::array();
+  for (const auto& p : r.planes) {
+    planes.push_back({{"source", p.source},
+                      {"rays", p.rays},
+                      {"wall", p.wall},
+                      {"normal", {p.normal.x(), p.normal.y(), p.normal.z()}},
+                      {"distance_mm", p.distance_mm},
+                      {"rms_before_mm", p.rms_before_mm},
+                      {"rms_after_mm", p.rms_after_mm}});
+  }
+  j["planes"] = planes;
+  j["warnings"] = r.warnings;
+  if (in.truth_x_mm) {
+    j["truth_x_mm"] = *in.truth_x_mm;
+    j["offset_error_mm"] = r.offset_mm.x() - *in.truth_x_mm;
+  }
+  j["timing_s"] = {
+      {"sweep_assembly", in.read_s}, {"segmentation", in.segment_s}, {"solve", r.seconds}};
+  j["out"] = written ? nlohmann::json(o.out) : nullptr;
+  return j;
+}
+
+}  // namespace
+
+int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
+  RotatingLidarConfig rig;
+  if (!checkInputs(o, &rig)) return 2;
+  Inputs in;
+  if (!readLogs(o, rig, &in)) return 2;
+  if (in.planes.empty()) {
+    std::cerr << kWhat << ": no sweep with planes in the logs (" << in.rejected.size()
+              << " rejected): nothing calibrated\n";
+    if (o.json)
+      std::cout << nlohmann::json{{"sweeps_used", 0}, {"sweeps_rejected", in.rejected}}.dump(2)
+                << "\n";
+    return 1;
+  }
+  LidarAxisOffsetOptions options;
+  options.initial_offset_mm = Eigen::Vector3d(rig.geometry.lidar_offset_x_mm, 0.0, 0.0);
+  options.estimate_y = o.estimate_y;
+  const LidarAxisOffsetResult r = solveLidarAxisOffset(in.planes, options);
+  bool written = false;
+  if (r.observable) {
+    try {
+      writeCalibration(o, rig, in, r);
+      written = true;
+    } catch (const std::exception& e) {
+      std::cerr << kWhat << ": " << e.what() << "\n";
+      return 2;
+    }
+  }
+  reportHuman(o, rig, in, r, written);
+  if (o.json)
+    std::cout << std::setprecision(12) << resultJson(o, rig, in, r, written).dump(2) << "\n";
+  return written ? 0 : 1;
+}
+
+}  // namespace sweepmap
