@@ -49,8 +49,28 @@ StreamDevice::StreamDevice(const DeviceUri& uri, const StreamDeviceOptions& opti
 
 StreamDevice::~StreamDevice() { stopWorker(); }
 
+namespace {
+int64_t steadyMs() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
 void StreamDevice::startWorker() {
-  if (!worker_.joinable()) worker_ = std::thread([this] { run(); });
+  if (worker_.joinable()) return;
+  beat();
+  running_ = true;
+  worker_ = std::thread([this] {
+    run();
+    running_ = false;
+  });
+}
+
+void StreamDevice::beat() { beat_ms_ = steadyMs(); }
+
+bool StreamDevice::workerStalled(int64_t max_silence_ms) const {
+  return running_ && !stop_ && steadyMs() - beat_ms_ > max_silence_ms;
 }
 
 void StreamDevice::stopWorker() {
@@ -99,10 +119,12 @@ void StreamDevice::run() {
   const auto sleepInterruptibly = [this](int ms) {
     const auto until = std::chrono::steady_clock::now() + std::chrono::milliseconds(ms);
     while (!stop_ && std::chrono::steady_clock::now() < until) {
+      beat();
       std::this_thread::sleep_for(std::chrono::milliseconds(10));
     }
   };
   while (!stop_) {
+    beat();
     std::unique_ptr<ByteStream> stream;
     try {
       stream = uri_.protocol == DeviceProtocol::kScip
@@ -167,6 +189,7 @@ void StreamDevice::streamOnce(ByteStream& stream) {
   int errors_in_a_row = 0;
   bool first = true;  // decode what startSession read ahead
   while (!stop_) {
+    beat();
     const size_t n = first ? 0 : stream.read(buffer.data(), buffer.size(), options_.read_poll_ms);
     const int64_t now = now_();
     service(stream, now);

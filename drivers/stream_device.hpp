@@ -61,6 +61,11 @@ class StreamDevice {
   DeviceHealth health();
   // Between a successful startSession and the end of that connection.
   bool streaming() const { return streaming_.load(); }
+  // Whether the worker, started and not finished, has gone `max_silence_ms` without a turn of
+  // its loops (a read, a connection attempt, a step of its backoff): stuck in a call that does
+  // not return. The process then withholds its watchdog ping (LiveOptions::healthy), so that
+  // its supervisor restarts it.
+  bool workerStalled(int64_t max_silence_ms) const;
   const DeviceUri& uri() const { return uri_; }
 
  protected:
@@ -103,6 +108,9 @@ class StreamDevice {
   std::thread worker_;
   std::atomic<bool> stop_{false};
   std::atomic<bool> streaming_{false};
+  std::atomic<bool> running_{false};  // the worker is in run()
+  std::atomic<int64_t> beat_ms_{0};   // the worker's last turn, steady clock [ms]
+  void beat();
 
   std::mutex mutex_;  // guards everything below
   std::vector<std::string> events_;

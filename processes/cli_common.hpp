@@ -1,5 +1,5 @@
 // Command-line options every process shares: --rig (a rig file of any kind, or a rig's
-// name such as rig_a), --set and --lcm-url.
+// name such as rig_a), --set, --lcm-url and --queue-capacity.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "processes/channels.hpp"
+#include "processes/live_runner.hpp"
 #include "rigs/rig_file.hpp"
 
 namespace sweepmap {
@@ -17,6 +18,7 @@ struct CommonOptions {
   std::string rig_path;
   std::vector<std::string> overrides;
   std::string lcm_url = kDefaultLcmUrl;
+  size_t queue_capacity = LiveOptions{}.queue_capacity;
 };
 
 inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
@@ -26,6 +28,22 @@ inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
       ->required();
   app.add_option("--set", o.overrides, "override a rig config key: key=value (repeatable)");
   app.add_option("--lcm-url", o.lcm_url, "LCM provider URL")->capture_default_str();
+  app.add_option("--queue-capacity", o.queue_capacity,
+                 "receive queue bound [messages]; a message that finds it full is dropped and "
+                 "counted (`dropped` in the status)")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+}
+
+// A device driver's worker thread silent this long is stuck (its reads, connection attempts and
+// start-up exchanges all time out sooner): the process withholds its watchdog ping.
+constexpr int64_t kDeviceWorkerStallMs = 10000;
+
+// The live runner's options with the command line's queue bound.
+inline LiveOptions liveOptions(const CommonOptions& o) {
+  LiveOptions options;
+  options.queue_capacity = o.queue_capacity;
+  return options;
 }
 
 // Loads the rig; on error prints "config error: ..." (naming file and key) and returns

@@ -11,6 +11,8 @@
 #include <mutex>
 #include <thread>
 
+#include "processes/sd_notify.hpp"
+
 namespace sweepmap {
 namespace {
 
@@ -118,11 +120,15 @@ class LiveRun {
     });
   }
 
-  // Until a signal, options.should_stop or an LCM failure.
+  // Until a signal, options.should_stop or an LCM failure. Tells the supervisor (systemd or
+  // `sweepmap launch`) READY=1 as it starts and WATCHDOG=1 from this loop only: a worker
+  // stuck in a node stops the pings and is restarted.
   void loop() {
     const auto period = std::chrono::milliseconds(std::max(1, options_.tick_period_ms));
     auto next_tick = std::chrono::steady_clock::now();
+    notifier_.ready();
     while (!g_stop && !lcm_failed_) {
+      if (!options_.healthy || options_.healthy()) notifier_.alive();
       receiveBuffered();
       for (const Message& m : inbox_.popUntil(next_tick)) dispatch(m);
       if (std::chrono::steady_clock::now() < next_tick) continue;
@@ -139,6 +145,7 @@ class LiveRun {
   // Drains what arrived before the stop, lets the nodes flush, stops the receiver and
   // unsubscribes. Returns false if LCM failed.
   bool finish() {
+    notifier_.stopping();
     auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
     if (!options_.wake_on_message) {
       while (!lcm_failed_ && std::chrono::steady_clock::now() < drain_until) {
@@ -147,6 +154,7 @@ class LiveRun {
       drain_until = std::chrono::steady_clock::now();
     }
     for (const Message& m : inbox_.popUntil(drain_until)) dispatch(m);
+    countDropped(true);
     const int64_t now = wallUtime();
     for (Node* n : nodes_) {
       Outbox out;
@@ -192,11 +200,18 @@ class LiveRun {
     }
   }
 
-  void countDropped() {
+  // Counts what the full queue refused (each node's `dropped`) and says the total on stderr,
+  // at most once a second (a storm would print every tick) and once more at the end.
+  void countDropped(bool final = false) {
     for (const auto& [channel, d] : inbox_.takeDropped()) {
       dropped_total_ += d;
       for (Node* n : subscribers_[channel]) n->countLostInput(d);
+    }
+    const auto now = std::chrono::steady_clock::now();
+    if (dropped_total_ != dropped_said_ && (final || now >= next_drop_report_)) {
       std::cerr << "receive queue full: " << dropped_total_ << " messages dropped so far\n";
+      dropped_said_ = dropped_total_;
+      next_drop_report_ = now + std::chrono::seconds(1);
     }
   }
 
@@ -211,6 +226,9 @@ class LiveRun {
   std::atomic<bool> receiving_{true};
   std::atomic<bool> lcm_failed_{false};
   int64_t dropped_total_ = 0;
+  int64_t dropped_said_ = 0;
+  std::chrono::steady_clock::time_point next_drop_report_{};
+  SdNotifier notifier_;
 };
 
 }  // namespace

@@ -29,6 +29,9 @@ struct LiveOptions {
   size_t queue_capacity_bytes = 64u << 20;  // and bytes (a Pi has little memory)
   // Polled after every tick: return true to stop (e.g. the motor has done its sweeps).
   std::function<bool()> should_stop;
+  // Polled before each sd_notify WATCHDOG=1 (under systemd or `sweepmap launch`): false
+  // withholds the ping, so that a process whose device thread is stuck is restarted too.
+  std::function<bool()> healthy;
 };
 
 // Wall-clock time [us] (LCM's utime convention), read once and then advanced monotonically.

@@ -43,5 +43,5 @@ int main(int argc, char** argv) {
       rig->config);
   lcm::LCM lcm(common.lcm_url);
   installStopSignals();
-  return runLive(lcm, {node.get()}, LiveOptions{});
+  return runLive(lcm, {node.get()}, liveOptions(common));
 }

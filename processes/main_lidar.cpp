@@ -40,7 +40,7 @@ int runSimulatedCar(const CommonOptions& common, const Rig& loaded, const std::s
   SimCarLidar device(car.get());
   LidarNode node(rig.lidar, &device);
   installStopSignals();
-  return runLive(lcm, {&node}, LiveOptions{});
+  return runLive(lcm, {&node}, liveOptions(common));
 }
 
 // The simulated UST-10LX of a rotating rig, following the simulated shaft (TRUTH_SHAFT).
@@ -68,7 +68,7 @@ int runSimulated(const CommonOptions& common, const Rig& loaded, const std::stri
   const truth_rig_t truth_rig = makeTruthRig(rig, scene_config, scene, wallUtime());
   lcm.publish(channels::kTruthRig, &truth_rig);
   installStopSignals();
-  return runLive(lcm, {&follower, &node, &truth_sweep}, LiveOptions{});
+  return runLive(lcm, {&follower, &node, &truth_sweep}, liveOptions(common));
 }
 
 // A real lidar: the driver's worker thread reads the device, the node publishes.
@@ -82,8 +82,9 @@ int runDevice(const CommonOptions& common, const LidarConfig& lidar, const Devic
   LidarNode node(lidar, device.get());
   device->start();
   installStopSignals();
-  LiveOptions options;
+  LiveOptions options = liveOptions(common);
   options.should_stop = [&node] { return node.failed(); };
+  options.healthy = [&device] { return !device->workerStalled(kDeviceWorkerStallMs); };
   const int rc = runLive(lcm, {&node}, options);
   // A device that is not the one the rig file describes: a configuration error, not a
   // crash to restart from.

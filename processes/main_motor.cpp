@@ -23,11 +23,10 @@ namespace {
 // process then stops with status 1.
 int runController(
     lcm::LCM& lcm, const RotatingLidarConfig& rig, StepperDevice& stepper, int sweeps,
-    int64_t start,
+    int64_t start, LiveOptions options,
     const std::function<std::string()>& device_fault = [] { return std::string(); }) {
   MotorController controller(rig, &stepper, sweeps, start);
   installStopSignals();
-  LiveOptions options;
   options.should_stop = [&] { return controller.done() || !device_fault().empty(); };
   const int rc = runLive(lcm, {&controller}, options);
   if (rc != 0) return rc;
@@ -38,19 +37,19 @@ int runController(
   return controller.phase() == MotorController::Phase::kFault ? 1 : 0;
 }
 
-int runSim(const RotatingLidarConfig& rig, const std::string& lcm_url, uint64_t seed, int sweeps) {
-  lcm::LCM lcm(lcm_url);
+int runSim(const RotatingLidarConfig& rig, const CommonOptions& common, uint64_t seed, int sweeps) {
+  lcm::LCM lcm(common.lcm_url);
   const int64_t start = wallUtime();
   SimStepper stepper(rig.motor, rig.sim, stepperSeed(seed), kSimInitialShaftAngleRad, start,
                      [&lcm](const ShaftSegment& s) {
                        const truth_shaft_t m = toLcm(s, wallUtime());
                        lcm.publish(channels::kTruthShaft, &m);
                      });
-  return runController(lcm, rig, stepper, sweeps, start);
+  return runController(lcm, rig, stepper, sweeps, start, liveOptions(common));
 }
 
 // The real stepper: a chip or line that cannot be had is one message and exit status 1.
-int runGpio(const RotatingLidarConfig& rig, const std::string& lcm_url, int sweeps) {
+int runGpio(const RotatingLidarConfig& rig, const CommonOptions& common, int sweeps) {
   GpioStepperOptions options = gpioStepperOptions(rig.motor);
   options.utime_ns_minus_clock_ns = wallMinusMonotonicNs();
   std::unique_ptr<GpioBackend> gpio;
@@ -66,8 +65,9 @@ int runGpio(const RotatingLidarConfig& rig, const std::string& lcm_url, int swee
   }
   std::cerr << "sweepmap-motor: " << rig.motor.device << ", step thread "
             << (stepper->realtime() ? "SCHED_FIFO" : "at normal priority (no SCHED_FIFO)") << "\n";
-  lcm::LCM lcm(lcm_url);
-  return runController(lcm, rig, *stepper, sweeps, start, [&] { return stepper->fault(); });
+  lcm::LCM lcm(common.lcm_url);
+  return runController(lcm, rig, *stepper, sweeps, start, liveOptions(common),
+                       [&] { return stepper->fault(); });
 }
 
 }  // namespace
@@ -99,7 +99,7 @@ int main(int argc, char** argv) {
   if (!rig_config) return 2;
   const RotatingLidarConfig& rig = *rig_config;
   if (sim || parseDeviceUri(rig.motor.device).protocol == DeviceProtocol::kSim) {
-    return runSim(rig, common.lcm_url, seed, sweeps);
+    return runSim(rig, common, seed, sweeps);
   }
-  return runGpio(rig, common.lcm_url, sweeps);
+  return runGpio(rig, common, sweeps);
 }

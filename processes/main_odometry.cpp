@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
   // The odometry polls its devices (or takes its messages from LCM) every 10 ms: its
   // messages are small and cheap (a few us each), and at 400 Hz IMU thread switches per
   // message, not the EKF, were most of its CPU (sweepmap bench).
-  LiveOptions options;
+  LiveOptions options = liveOptions(common);
   options.tick_period_ms = 10;
   options.wake_on_message = false;
   if (from_lcm) {
@@ -98,11 +98,13 @@ int main(int argc, char** argv) {
   OdometryDriverOptions driver_options;
   std::unique_ptr<ImuDevice> imu;
   std::unique_ptr<WheelDevice> wheels;
+  std::vector<const StreamDevice*> drivers;  // their worker threads must not get stuck
   if (imu_dev.protocol == DeviceProtocol::kSim) {
     imu = std::make_unique<SimImu>(car.get());
   } else {
     auto d = std::make_unique<Hi219Driver>(imu_dev, driver_options, wallUtime);
     d->start();
+    drivers.push_back(d.get());
     imu = std::move(d);
   }
   if (wheels_dev.protocol == DeviceProtocol::kSim) {
@@ -110,6 +112,7 @@ int main(int argc, char** argv) {
   } else {
     auto d = std::make_unique<WheelBoardDriver>(wheels_dev, driver_options, wallUtime);
     d->start();
+    drivers.push_back(d.get());
     wheels = std::move(d);
   }
   OdometryNode node(config->odometry, imu.get(), wheels.get());
@@ -119,5 +122,11 @@ int main(int argc, char** argv) {
     truth = std::make_unique<SimCarTruthNode>(rig_config, scene_config, car.get());
     nodes.push_back(truth.get());
   }
+  options.healthy = [&drivers] {
+    for (const StreamDevice* d : drivers) {
+      if (d->workerStalled(kDeviceWorkerStallMs)) return false;
+    }
+    return true;
+  };
   return runLive(lcm, nodes, options);
 }

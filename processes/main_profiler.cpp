@@ -58,7 +58,7 @@ int main(int argc, char** argv) {
   ProfileTruthNode truth(world.get());
   lcm::LCM lcm(common.lcm_url);
   installStopSignals();
-  LiveOptions live;
+  LiveOptions live = liveOptions(common);
   live.should_stop = [&node] { return node.done() || node.failed(); };
   const int rc = runLive(lcm, {&truth, &node}, live);
   if (rc != 0) return rc;

@@ -13,10 +13,11 @@
 
 namespace sweepmap {
 
-MapperNode::MapperNode(const MapperConfig& config, std::string save_path)
+MapperNode::MapperNode(const MapperConfig& config, std::string save_path, int save_every)
     : Node("mapper"),
       config_(config),
       save_path_(std::move(save_path)),
+      save_every_(save_every),
       map_(std::make_unique<OccupancyMap>(config)) {}
 
 MapperNode::~MapperNode() = default;
@@ -124,6 +125,7 @@ void MapperNode::insert(int64_t now_utime, SweepKey key, Outbox& out) {
   ++sweeps_inserted_;
   count("sweeps");
   publishStats(now_utime, out);
+  autosave();
 }
 
 void MapperNode::flushBatch(int64_t now_utime, Outbox& out) {
@@ -141,6 +143,13 @@ void MapperNode::flushBatch(int64_t now_utime, Outbox& out) {
   sweeps_inserted_ += inserted;
   count("sweeps", inserted);
   publishStats(now_utime, out);
+  autosave();
+}
+
+void MapperNode::autosave() {
+  if (save_every_ <= 0 || save_path_.empty() || ++updates_since_save_ < save_every_) return;
+  updates_since_save_ = 0;
+  save(save_path_);
 }
 
 void MapperNode::publishStats(int64_t now_utime, Outbox& out) {
@@ -162,7 +171,7 @@ void MapperNode::save(const std::string& path) {
     map_->saveBinaryAtomic(path);
     count("saves");
   } catch (const std::exception& e) {
-    reportError("errors", e.what());
+    reportError("save_errors", e.what());
   }
 }
 

@@ -26,8 +26,10 @@ namespace sweepmap {
 class MapperNode : public Node {
  public:
   // `save_path`: where the map goes at finish() and on a MAP_SAVE request ("" = none). A
-  // request may name another file, but only inside save_path's directory.
-  MapperNode(const MapperConfig& config, std::string save_path);
+  // request may name another file, but only inside save_path's directory. `save_every` > 0:
+  // also after every that many map updates (a sweep, or a batch of a mobile rig), so that a
+  // process killed (kill -9, power loss) leaves its last saved map behind.
+  MapperNode(const MapperConfig& config, std::string save_path, int save_every = 0);
   ~MapperNode() override;
   std::vector<std::string> subscriptions() const override;
   void finish(int64_t now_utime, Outbox& out) override;
@@ -50,10 +52,13 @@ class MapperNode : public Node {
   void insert(int64_t now_utime, SweepKey key, Outbox& out);
   void flushBatch(int64_t now_utime, Outbox& out);
   void publishStats(int64_t now_utime, Outbox& out);
+  void autosave();
   void save(const std::string& path);
 
   MapperConfig config_;
   std::string save_path_;
+  int save_every_ = 0;
+  int updates_since_save_ = 0;
   std::unique_ptr<OccupancyMap> map_;
   std::map<SweepKey, PendingSweep> pending_;
   std::set<SweepKey> inserted_;

@@ -162,6 +162,42 @@ TEST(RealLidar, StreamsAndReconnectsAfterAHangUp) {
   EXPECT_EQ(tapped.load(), 2 * 7 + 28);  // the tap sees everything
 }
 
+// A session stuck in a call that does not return (here: onBytes on a "HANG" line, until
+// released): the worker's loop stops turning and workerStalled() says so — the process then
+// withholds its watchdog ping. Waiting on a silent device (reads with timeouts, reconnect
+// backoff) is no stall.
+class HangingSession : public LineSession {
+ public:
+  explicit HangingSession(std::atomic<bool>* hang) : LineSession("UST"), hang_(hang) {}
+  void onBytes(const uint8_t* data, size_t size, int64_t arrival, std::vector<Scan2D>* scans,
+               std::vector<std::string>* errors) override {
+    if (std::string(reinterpret_cast<const char*>(data), size).find("HANG") != std::string::npos) {
+      while (*hang_) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+      return;
+    }
+    LineSession::onBytes(data, size, arrival, scans, errors);
+  }
+
+ private:
+  std::atomic<bool>* hang_;
+};
+
+TEST(RealLidar, AStuckWorkerIsStalledAWaitingOneIsNot) {
+  FakeDevice dev;
+  std::atomic<bool> hang{true};
+  RealLidar lidar(tcpUri(dev.port()), std::make_unique<HangingSession>(&hang), RealLidarOptions{},
+                  nowUs);
+  EXPECT_FALSE(lidar.workerStalled(0));  // not started
+  lidar.start();
+  dev.accept("UST");
+  std::this_thread::sleep_for(std::chrono::milliseconds(600));  // silent, reading with timeouts
+  EXPECT_FALSE(lidar.workerStalled(400));
+  dev.send("HANG\n");
+  EXPECT_TRUE(eventually([&] { return lidar.workerStalled(400); }));
+  hang = false;
+  EXPECT_TRUE(eventually([&] { return !lidar.workerStalled(400); }));
+}
+
 TEST(RealLidar, SilenceIsATimeoutThenAReconnect) {
   FakeDevice dev;
   RealLidarOptions o;

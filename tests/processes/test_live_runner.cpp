@@ -52,5 +52,41 @@ TEST(LiveRunner, WakingPerMessageDeliversEverythingInOrder) { runWith(true); }
 
 TEST(LiveRunner, WakingOnlyAtTicksDeliversEverythingInOrder) { runWith(false); }
 
+// The receive queue is bounded: 100 messages waiting in LCM when the worker takes them at a
+// tick (the node publishes them itself at its first tick), with room for 10 — the first 10
+// reach the node, the other 90 are dropped and counted in the node's `dropped` (its status).
+class FloodingNode : public RecordingNode {
+ public:
+  explicit FloodingNode(lcm::LCM* lcm) : lcm_(lcm) {}
+  int ticks = 0;
+
+ protected:
+  void advance(int64_t, Outbox&) override {
+    if (++ticks != 1) return;
+    for (int i = 0; i < 100; ++i) {
+      const uint8_t byte = static_cast<uint8_t>(i);
+      lcm_->publish("IN", &byte, 1);
+    }
+  }
+
+ private:
+  lcm::LCM* lcm_;
+};
+
+TEST(LiveRunner, AFullQueueDropsAndCountsTheRest) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  FloodingNode node(&lcm);
+  LiveOptions options;
+  options.wake_on_message = false;
+  options.queue_capacity = 10;
+  options.should_stop = [&] { return node.ticks >= 3; };
+  EXPECT_EQ(runLive(lcm, {&node}, options), 0);
+  ASSERT_EQ(node.seen.size(), 10u);
+  for (int i = 0; i < 10; ++i) EXPECT_EQ(node.seen[i], i);
+  EXPECT_EQ(node.counter("dropped"), 90);
+  EXPECT_EQ(node.counter("messages_in"), 10);
+}
+
 }  // namespace
 }  // namespace sweepmap

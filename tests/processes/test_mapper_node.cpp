@@ -77,6 +77,34 @@ TEST(MapperNode, InsertsOnStatusAndCountsMissingChunks) {
   EXPECT_FALSE(node.map().occupiedAt({2.0, 0.0, 0.2}));  // the lost chunk's points
 }
 
+// --save-every 2: the map file is written after every second sweep, before any MAP_SAVE or
+// finish(), so a mapper killed with kill -9 leaves its last saved map behind.
+TEST(MapperNode, SavesEveryNSweeps) {
+  const fs::path dir = fs::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / "mapper_save_every";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string path = (dir / "map.bt").string();
+  MapperNode node(MapperConfig{}, path, 2);
+  const auto sweep = [&](int64_t id) {
+    auto msgs = wallChunks(id, 2);
+    sweep_status_t st{};
+    st.utime = 1000000 * (id + 1);
+    st.sweep_id = id;
+    msgs.push_back(encode(channels::kSweepStatus, st));
+    deliver(node, msgs);
+  };
+  sweep(0);
+  EXPECT_FALSE(fs::exists(path));
+  sweep(1);
+  ASSERT_TRUE(fs::exists(path));
+  EXPECT_EQ(node.counter("saves"), 1);
+  EXPECT_TRUE(OccupancyMap::loadBinary(path).occupiedAt({2.0, 0.0, 0.0}));
+  sweep(2);
+  EXPECT_EQ(node.counter("saves"), 1);
+  sweep(3);
+  EXPECT_EQ(node.counter("saves"), 2);
+}
+
 TEST(MapperNode, NewerSweepFlushesOlderWhenStatusLost) {
   MapperConfig c;
   MapperNode node(c, "");

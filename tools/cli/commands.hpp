@@ -24,5 +24,7 @@ Runner addDecodeCommand(CLI::App& app);
 Runner addDumpCommand(CLI::App& app);
 Runner addStatusCommand(CLI::App& app);
 Runner addRecordCommand(CLI::App& app);
+Runner addSystemdCommand(CLI::App& app);
+Runner addLaunchCommand(CLI::App& app);
 
 }  // namespace sweepmap

@@ -1,5 +1,6 @@
 // sweepmap: one tool, one subcommand per job (sim, replay, demo, spy, bench, calib, eval,
-// import, emulate, capture, decode, dump); each serves every rig kind its rig file names.
+// import, emulate, capture, decode, dump, status, record, systemd, launch); each serves every rig
+// kind its rig file names.
 #include <iostream>
 #include <map>
 
@@ -24,6 +25,8 @@ int main(int argc, char** argv) {
   add(sweepmap::addDumpCommand(app));
   add(sweepmap::addStatusCommand(app));
   add(sweepmap::addRecordCommand(app));
+  add(sweepmap::addSystemdCommand(app));
+  add(sweepmap::addLaunchCommand(app));
   CLI11_PARSE(app, argc, argv);
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {

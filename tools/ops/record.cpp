@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "processes/live_runner.hpp"
+#include "processes/sd_notify.hpp"
 #include "tools/ops/process_group.hpp"
 
 namespace sweepmap {
@@ -71,8 +72,12 @@ int runRecord(const RecordOptions& o) {
             << " (stops below " << o.min_free_mb << " MB free)\n";
   const auto start = std::chrono::steady_clock::now();
   int status = 0;
+  // Under systemd or `sweepmap launch`: ready once lcm-logger runs, alive from this loop.
+  SdNotifier notifier;
+  notifier.ready();
   while (!stopRequested()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    notifier.alive();
     if (!procs.running(logger)) {
       std::cerr << "record: lcm-logger ended (status " << procs.wait(logger, 0) << ")\n";
       return 1;
@@ -89,6 +94,7 @@ int runRecord(const RecordOptions& o) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (o.duration_s > 0 && elapsed >= o.duration_s) break;
   }
+  notifier.stopping();
   const int rc = procs.stop(logger, 10.0);
   if (rc != 0 && status == 0) {
     std::cerr << "record: lcm-logger exited with status " << rc << "\n";

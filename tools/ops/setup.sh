@@ -32,6 +32,7 @@ packages=(
   clang libclang-rt-14-dev
   libgpiod-dev
   iptables libnetfilter-queue-dev  # the two-host test: loss and reordering without netem
+  systemd
 )
 # The on-board tree for arm64: only packages that are Multi-Arch: same (co-installable with
 # their amd64 twins) or host tools. liblcm1, liblcm-dev and libyaml-cpp-dev are not
