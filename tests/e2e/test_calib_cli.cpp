@@ -99,9 +99,13 @@ TEST(CalibCli, PlateAngleFromFiftyMode7Sweeps) {
   EXPECT_EQ(c.logs, std::vector<std::string>{log});
 
   std::string rig_text = readFile(kRig);
+  // plate.calibration_file (geometry: has a key of the same name before it).
   const std::string key = "calibration_file: \"\"";
-  ASSERT_NE(rig_text.find(key), std::string::npos);
-  rig_text.replace(rig_text.find(key), key.size(), "calibration_file: plate_calibration.yaml");
+  const size_t plate = rig_text.find("\nplate:");
+  ASSERT_NE(plate, std::string::npos);
+  const size_t at = rig_text.find(key, plate);
+  ASSERT_NE(at, std::string::npos);
+  rig_text.replace(at, key.size(), "calibration_file: plate_calibration.yaml");
   std::ofstream(dir / "rig.yaml") << rig_text;
   const RotatingLidarConfig rig = loadRotatingLidarConfig((dir / "rig.yaml").string());
   EXPECT_NEAR(rig.plate.alpha_deg, alpha, 1e-9);
