@@ -100,8 +100,9 @@ TEST(Scene, RejectsAStandWithNoHeight) {
   EXPECT_THROW(Scene(c, PlateConfig()), ConfigError);
 }
 
-// Every ray from inside the closed room hits something; reports the ray caster's speed.
-TEST_F(SceneTest, ClosedRoomAndRaycastSpeed) {
+// Every ray from inside the closed room hits something; prints the ray caster's speed (a
+// figure, not asserted: `make bench` measures speed).
+TEST_F(SceneTest, ClosedRoomEveryRayHits) {
   std::mt19937_64 rng(7);
   std::normal_distribution<double> n(0.0, 1.0);
   const Eigen::Vector3d origin = scene_.T_room_rig().translation();
@@ -123,10 +124,6 @@ TEST_F(SceneTest, ClosedRoomAndRaycastSpeed) {
   std::cout << "[ raycast  ] " << scene_.boxes().size() << " boxes: " << rays_per_s / 1e6
             << " M rays/s (mean range " << sum_m / hits << " m)\n";
   EXPECT_EQ(hits, kRays);
-#ifdef NDEBUG  // timing means something in optimised builds only
-  // A simulated second needs 43k rays; keep well ahead of real time on a loaded machine.
-  EXPECT_GT(rays_per_s, 5e5);
-#endif
 }
 
 class SceneFileTest : public ::testing::Test {
