@@ -50,6 +50,26 @@ class LiveTest : public ::testing::Test {
     }
     return out;
   }
+  // A stage of a live pipeline: its pid, its log, how long it may take to stop.
+  struct Stage {
+    pid_t pid;
+    fs::path log;
+    double stop_s;
+  };
+  // Plays `log` into the running pipeline, lets it drain, then stops the stages upstream first
+  // (each hands its last messages on before the next one stops), then the logger.
+  static void playThenStop(ProcessGroup& procs, const fs::path& dir, const std::string& log,
+                           double play_timeout_s, const std::vector<Stage>& stages, pid_t logger) {
+    const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, log},
+                                     (dir / "logplayer.txt").string());
+    ASSERT_EQ(procs.wait(player, play_timeout_s), 0) << readFile(dir / "logplayer.txt");
+    std::this_thread::sleep_for(std::chrono::milliseconds(800));
+    for (const Stage& stage : stages) {
+      EXPECT_EQ(procs.stop(stage.pid, stage.stop_s), 0) << readFile(stage.log);
+      std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    }
+    EXPECT_EQ(procs.stop(logger, 10.0), 0);
+  }
   static bool netns_ok_;
   static std::string netns_why_;
 };
@@ -165,17 +185,12 @@ TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
       procs.start("mapper", procB("mapper", {"--save", (dir / "live_map.bt").string()}),
                   (dir / "mapper.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
-  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
-                                   (dir / "logplayer.txt").string());
-  ASSERT_EQ(procs.wait(player, 120.0), 0) << readFile(dir / "logplayer.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(800));
-  EXPECT_EQ(procs.stop(odometry, 10.0), 0) << readFile(dir / "odometry.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  EXPECT_EQ(procs.stop(assembler, 10.0), 0) << readFile(dir / "assembler.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  EXPECT_EQ(procs.stop(mapper, 60.0), 0) << readFile(dir / "mapper.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+  playThenStop(procs, dir, sim_log, 120.0,
+               {{odometry, dir / "odometry.txt", 10.0},
+                {assembler, dir / "assembler.txt", 10.0},
+                {mapper, dir / "mapper.txt", 60.0}},
+               logger);
+  if (HasFatalFailure()) return;
 
   const auto offline_dir = dir / "offline";
   ASSERT_EQ(
@@ -243,15 +258,10 @@ TEST_F(LiveTest, RigCLogplayerIntoLiveProcessesMatchesReplay) {
       procs.start("mapper", procC("mapper", {"--save", (dir / "live_map.bt").string()}),
                   (dir / "mapper.txt").string());
   std::this_thread::sleep_for(std::chrono::milliseconds(700));
-  const pid_t player = procs.start("logplayer", {"lcm-logplayer", "--lcm-url=" + kUrl, sim_log},
-                                   (dir / "logplayer.txt").string());
-  ASSERT_EQ(procs.wait(player, 60.0), 0) << readFile(dir / "logplayer.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(800));
-  EXPECT_EQ(procs.stop(assembler, 10.0), 0) << readFile(dir / "assembler.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  EXPECT_EQ(procs.stop(mapper, 60.0), 0) << readFile(dir / "mapper.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  EXPECT_EQ(procs.stop(logger, 10.0), 0);
+  playThenStop(procs, dir, sim_log, 60.0,
+               {{assembler, dir / "assembler.txt", 10.0}, {mapper, dir / "mapper.txt", 60.0}},
+               logger);
+  if (HasFatalFailure()) return;
 
   const auto offline_dir = dir / "offline";
   ASSERT_EQ(
