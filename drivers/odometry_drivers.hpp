@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "drivers/clock_sync.hpp"
-#include "drivers/odometry_devices.hpp"
+#include "devices/odometry_devices.hpp"
 #include "drivers/protocols/hi219.hpp"
 #include "drivers/protocols/wheelboard.hpp"
 #include "drivers/stream_device.hpp"

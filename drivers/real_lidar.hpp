@@ -12,7 +12,7 @@
 #include "core/device_uri.hpp"
 #include "core/rig_components.hpp"
 #include "drivers/io/byte_stream.hpp"
-#include "drivers/lidar_device.hpp"
+#include "devices/lidar_device.hpp"
 #include "drivers/protocols/decoder.hpp"
 #include "drivers/stream_device.hpp"
 

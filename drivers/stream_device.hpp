@@ -23,7 +23,7 @@
 
 #include "core/device_uri.hpp"
 #include "drivers/io/byte_stream.hpp"
-#include "drivers/lidar_device.hpp"
+#include "devices/lidar_device.hpp"
 #include "drivers/protocols/decoder.hpp"
 
 namespace sweepmap {

@@ -5,8 +5,8 @@
 #pragma once
 
 #include "core/rig_components.hpp"
-#include "drivers/lidar_device.hpp"
-#include "drivers/shaft_trajectory.hpp"
+#include "devices/lidar_device.hpp"
+#include "devices/shaft_trajectory.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {

@@ -4,9 +4,9 @@
 
 #include "core/device_uri.hpp"
 #include "drivers/real_lidar.hpp"
-#include "drivers/scene.hpp"
-#include "drivers/sim_car_devices.hpp"
-#include "drivers/sim_lidar.hpp"
+#include "sim/scene.hpp"
+#include "sim/car_devices.hpp"
+#include "sim/lidar.hpp"
 #include "processes/channels.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/lidar_node.hpp"

@@ -8,7 +8,7 @@
 
 #include "drivers/gpio/gpio_stepper.hpp"
 #include "drivers/gpio/gpiod_backend.hpp"
-#include "drivers/sim_stepper.hpp"
+#include "sim/stepper.hpp"
 #include "processes/channels.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/convert.hpp"

@@ -6,7 +6,7 @@
 
 #include "core/device_uri.hpp"
 #include "drivers/odometry_drivers.hpp"
-#include "drivers/sim_car_devices.hpp"
+#include "sim/car_devices.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/odometry_node.hpp"

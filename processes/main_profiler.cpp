@@ -1,11 +1,11 @@
 // sweepmap-profiler (rig C): drives the turntable through its sweeps and publishes the
 // profile sensor's raw profiles on PROFILE (processes/profile_scan_node.hpp). The devices
 // are the rig's profiler.device and turntable.device: `sim` (or --sim), the simulated rig C
-// (drivers/sim_profile_devices.hpp), which also publishes TRUTH_PROFILE_RIG. No real-device
+// (sim/profile_devices.hpp), which also publishes TRUTH_PROFILE_RIG. No real-device
 // driver exists yet (no protocol chosen): another device is a config error.
 #include <lcm/lcm-cpp.hpp>
 
-#include "drivers/sim_profile_devices.hpp"
+#include "sim/profile_devices.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/profile_scan_node.hpp"

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "core/angles.hpp"
-#include "drivers/motion_profile.hpp"
+#include "devices/motion_profile.hpp"
 #include "processes/channels.hpp"
 #include "sweepmap/motor_state_t.hpp"
 #include "sweepmap/scan_window_t.hpp"

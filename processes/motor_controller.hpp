@@ -8,12 +8,12 @@
 // home angle. Naive sequence: window and motor start together (shape error of Fig. 1).
 //
 // The shaft angle is open loop: the controller's model of what it commanded
-// (drivers/motion_profile.hpp at nominal acceleration, no delays), referenced to the
+// (devices/motion_profile.hpp at nominal acceleration, no delays), referenced to the
 // switch edge at homing.
 #pragma once
 
-#include "drivers/shaft_trajectory.hpp"
-#include "drivers/stepper_device.hpp"
+#include "devices/shaft_trajectory.hpp"
+#include "devices/stepper_device.hpp"
 #include "processes/node.hpp"
 #include "rigs/rotating_lidar.hpp"
 

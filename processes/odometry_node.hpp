@@ -18,7 +18,7 @@
 
 #include <optional>
 
-#include "drivers/odometry_devices.hpp"
+#include "devices/odometry_devices.hpp"
 #include "odometry/ekf.hpp"
 #include "odometry/odometry_config.hpp"
 #include "processes/node.hpp"

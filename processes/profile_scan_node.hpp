@@ -14,9 +14,9 @@
 
 #include <cstdint>
 
-#include "drivers/profiler_device.hpp"
-#include "drivers/sim_profile_devices.hpp"
-#include "drivers/turntable_device.hpp"
+#include "devices/profiler_device.hpp"
+#include "sim/profile_devices.hpp"
+#include "devices/turntable_device.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {

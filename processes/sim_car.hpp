@@ -7,9 +7,9 @@
 #include <memory>
 #include <string>
 
-#include "drivers/scene.hpp"
-#include "drivers/sim_car_devices.hpp"
-#include "drivers/sim_mobile.hpp"
+#include "sim/scene.hpp"
+#include "sim/car_devices.hpp"
+#include "sim/mobile.hpp"
 #include "processes/node.hpp"
 #include "rigs/mobile_lidar.hpp"
 #include "sweepmap/pose2d_t.hpp"

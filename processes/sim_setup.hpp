@@ -3,8 +3,8 @@
 
 #include <cstdint>
 
-#include "drivers/scene.hpp"
-#include "drivers/sim_profiler.hpp"
+#include "sim/scene.hpp"
+#include "sim/profiler.hpp"
 #include "rigs/rotating_lidar.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"

@@ -5,7 +5,7 @@
 
 #include <deque>
 
-#include "drivers/shaft_trajectory.hpp"
+#include "devices/shaft_trajectory.hpp"
 #include "processes/node.hpp"
 
 namespace sweepmap {

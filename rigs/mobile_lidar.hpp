@@ -9,7 +9,7 @@
 #include "core/config.hpp"
 #include "core/mounting.hpp"
 #include "core/rig_components.hpp"
-#include "drivers/sim_mobile.hpp"
+#include "sim/mobile.hpp"
 #include "odometry/odometry_config.hpp"
 
 namespace sweepmap {

@@ -9,7 +9,7 @@
 #include "core/config.hpp"
 #include "core/profile_geometry.hpp"
 #include "core/rig_components.hpp"
-#include "drivers/sim_profiler.hpp"
+#include "sim/profiler.hpp"
 
 namespace sweepmap {
 

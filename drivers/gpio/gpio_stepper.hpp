@@ -24,7 +24,7 @@
 #include "drivers/gpio/step_clock.hpp"
 #include "drivers/gpio/step_generator.hpp"
 #include "drivers/gpio/switch_debouncer.hpp"
-#include "drivers/stepper_device.hpp"
+#include "devices/stepper_device.hpp"
 
 namespace sweepmap {
 

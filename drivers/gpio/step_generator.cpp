@@ -9,7 +9,7 @@
 #include <limits>
 #include <mutex>
 
-#include "drivers/motion_profile.hpp"
+#include "devices/motion_profile.hpp"
 
 namespace sweepmap {
 namespace {

@@ -1,7 +1,7 @@
 // Turns the planned shaft motion into STEP/DIR pulses on a monotonic clock.
 //
 // The plan is a ShaftTrajectory of constant-acceleration segments made by planMotion from
-// the StepperCommands (drivers/motion_profile.hpp): the generator does not re-derive the
+// the StepperCommands (devices/motion_profile.hpp): the generator does not re-derive the
 // kinematics, it solves for the times at which the planned angle crosses the step angles.
 // With step angle d = 2 pi / (steps_per_rev * microsteps), position p (steps from the start,
 // where the angle was 0) moves to p + 1 when the planned angle rises through (p + 1) d and
@@ -31,8 +31,8 @@
 #include "drivers/gpio/gpio_backend.hpp"
 #include "drivers/gpio/priority_inheritance_mutex.hpp"
 #include "drivers/gpio/step_clock.hpp"
-#include "drivers/shaft_trajectory.hpp"
-#include "drivers/stepper_device.hpp"
+#include "devices/shaft_trajectory.hpp"
+#include "devices/stepper_device.hpp"
 
 namespace sweepmap {
 

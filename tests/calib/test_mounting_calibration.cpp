@@ -9,7 +9,7 @@
 #include <iostream>
 
 #include "calib/mounting_calibration.hpp"
-#include "drivers/sim_mobile.hpp"
+#include "sim/mobile.hpp"
 
 namespace sweepmap {
 namespace {

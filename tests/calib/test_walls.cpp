@@ -10,7 +10,7 @@
 #include "calib/rotating_geometry.hpp"
 #include "calib/walls.hpp"
 #include "core/event_log.hpp"
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 #include "tools/offline/log_sweeps.hpp"
 #include "tools/offline/runs.hpp"
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "drivers/sim_stepper.hpp"
+#include "sim/stepper.hpp"
 #include "processes/channels.hpp"
 #include "processes/motor_controller.hpp"
 #include "processes/offline_bus.hpp"

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <map>
 
-#include "drivers/sim_profile_devices.hpp"
+#include "sim/profile_devices.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/profile_assembler_node.hpp"

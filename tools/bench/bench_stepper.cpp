@@ -12,7 +12,7 @@
 #include "core/angles.hpp"
 #include "drivers/gpio/fake_gpio_backend.hpp"
 #include "drivers/gpio/gpio_stepper.hpp"
-#include "drivers/motion_profile.hpp"
+#include "devices/motion_profile.hpp"
 #include "tools/bench/proc_stats.hpp"
 
 namespace sweepmap {

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/odometry_devices.hpp"
+#include "devices/odometry_devices.hpp"
 #include "drivers/protocols/wheelboard.hpp"
 #include "tools/emulate/emulated_lidar.hpp"
 

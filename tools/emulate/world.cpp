@@ -5,11 +5,11 @@
 #include <random>
 
 #include "core/config.hpp"
-#include "drivers/scene.hpp"
-#include "drivers/shaft_trajectory.hpp"
-#include "drivers/sim_car_devices.hpp"
-#include "drivers/sim_lidar.hpp"
-#include "drivers/sim_mobile.hpp"
+#include "sim/scene.hpp"
+#include "devices/shaft_trajectory.hpp"
+#include "sim/car_devices.hpp"
+#include "sim/lidar.hpp"
+#include "sim/mobile.hpp"
 #include "processes/channels.hpp"
 #include "processes/lidar_node.hpp"
 #include "processes/sim_car.hpp"

@@ -9,7 +9,7 @@
 #include "calib/mounting_calibration.hpp"
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 #include "mapping/cloud_io.hpp"
 #include "tools/eval/common.hpp"
 #include "tools/eval/mobile_figures.hpp"

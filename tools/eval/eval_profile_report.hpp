@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "calib/axis_offset.hpp"
-#include "drivers/sim_profiler.hpp"
+#include "sim/profiler.hpp"
 #include "tools/eval/eval_profile_features.hpp"
 #include "tools/eval/figures.hpp"
 

@@ -1,7 +1,7 @@
 #include "tools/offline/log_sweeps.hpp"
 
 #include "calib/rotating_geometry.hpp"
-#include "drivers/shaft_trajectory.hpp"
+#include "devices/shaft_trajectory.hpp"
 #include "processes/assembler_node.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"

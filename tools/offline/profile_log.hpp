@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "calib/axis_offset.hpp"
-#include "drivers/sim_profiler.hpp"
+#include "sim/profiler.hpp"
 
 namespace sweepmap {
 

@@ -32,7 +32,7 @@ SimSetup loadSimSetup(const std::string& rig, const std::string& scene,
   SimSetup s;
   s.rig = loadRig(rig, rig_sets);
   if (auto* profile = std::get_if<RotatingProfileConfig>(&s.rig.config)) {
-    // Rig C's scenes are built in (drivers/sim_profiler.hpp), sized by the rig's sim.* keys.
+    // Rig C's scenes are built in (sim/profiler.hpp), sized by the rig's sim.* keys.
     if (!scene_sets.empty()) {
       throw ConfigError("scene." + scene_sets.front() + ": " + s.rig.path +
                         " is a rotating_profile rig: its scene is set by sim.* keys");

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 #include "processes/node.hpp"
 #include "rigs/rig_file.hpp"
 

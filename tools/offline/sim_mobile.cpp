@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "core/rig_components.hpp"
-#include "drivers/sim_mobile.hpp"
+#include "sim/mobile.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/sim_car.hpp"

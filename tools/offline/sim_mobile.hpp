@@ -1,4 +1,4 @@
-// Offline simulation of rig B (Miao 2022): the simulated car of drivers/sim_mobile.hpp
+// Offline simulation of rig B (Miao 2022): the simulated car of sim/mobile.hpp
 // driving through the scene; raw WHEEL_TICKS, IMU, LIDAR_SCAN and ground truth TRUTH_POSE,
 // in time order, deterministic from the seed.
 #pragma once
@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 #include "processes/node.hpp"
 #include "rigs/mobile_lidar.hpp"
 

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "drivers/sim_profile_devices.hpp"
+#include "sim/profile_devices.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/sim_setup.hpp"

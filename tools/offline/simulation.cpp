@@ -1,7 +1,7 @@
 #include "tools/offline/simulation.hpp"
 
-#include "drivers/sim_lidar.hpp"
-#include "drivers/sim_stepper.hpp"
+#include "sim/lidar.hpp"
+#include "sim/stepper.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/lidar_node.hpp"

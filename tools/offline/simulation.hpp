@@ -6,7 +6,7 @@
 #include <functional>
 #include <string>
 
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 #include "processes/node.hpp"
 #include "rigs/rotating_lidar.hpp"
 

@@ -1,11 +1,11 @@
 // Rig B's odometry devices as sweepmap-odometry sees them, real (drivers/odometry_drivers.hpp)
-// or simulated (drivers/sim_car_devices.hpp): the IMU and the wheel board.
+// or simulated (sim/car_devices.hpp): the IMU and the wheel board.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
-#include "drivers/lidar_device.hpp"
+#include "devices/lidar_device.hpp"
 
 namespace sweepmap {
 

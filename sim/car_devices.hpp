@@ -1,6 +1,6 @@
 // The simulated rig-B car's devices behind the same interfaces as the real drivers: its IMU,
 // its wheel board and its lidar, each handing out what the car's simulation
-// (drivers/sim_mobile.hpp) produced for the whole run once its time has come (a scan when it
+// (sim/mobile.hpp) produced for the whole run once its time has come (a scan when it
 // is delivered, SimMobile::scanDeliveryUtime). Before the start and after the run
 // (sim.duration_s) the car stands, and each device streams at its rate repeating its first or
 // last output (a real one standing still reads about the same), so a process that opens it
@@ -12,9 +12,9 @@
 #include <cstdint>
 #include <vector>
 
-#include "drivers/lidar_device.hpp"
-#include "drivers/odometry_devices.hpp"
-#include "drivers/sim_mobile.hpp"
+#include "devices/lidar_device.hpp"
+#include "devices/odometry_devices.hpp"
+#include "sim/mobile.hpp"
 
 namespace sweepmap {
 

@@ -3,7 +3,7 @@
 // Transport-free: it produces plain structs; tools/sim_mobile.cpp turns them into messages.
 //
 // Frames.
-//  - Room frame (drivers/scene.hpp): origin on the floor at the room's centre, Z up.
+//  - Room frame (sim/scene.hpp): origin on the floor at the room's centre, Z up.
 //  - Body frame B: origin on the floor under the axle's midpoint, x forward, y left, z up;
 //    the body's xOy plane is the floor, so the lidar's height h is mounting z_m.
 //  - World frame W (the odometry's): the body frame at the start of the run. TRUTH_POSE is
@@ -30,8 +30,8 @@
 
 #include "core/config.hpp"
 #include "core/scan.hpp"
-#include "drivers/odometry_devices.hpp"
-#include "drivers/scene.hpp"
+#include "devices/odometry_devices.hpp"
+#include "sim/scene.hpp"
 #include "odometry/wheel_odometry.hpp"
 
 namespace sweepmap {

@@ -5,7 +5,7 @@
 #include <memory>
 #include <stdexcept>
 
-#include "drivers/sim_stepper.hpp"
+#include "sim/stepper.hpp"
 
 namespace sweepmap {
 namespace {

@@ -22,9 +22,9 @@
 #include <vector>
 
 #include "core/rig_components.hpp"
-#include "drivers/lidar_device.hpp"
-#include "drivers/scene.hpp"
-#include "drivers/shaft_trajectory.hpp"
+#include "devices/lidar_device.hpp"
+#include "sim/scene.hpp"
+#include "devices/shaft_trajectory.hpp"
 
 namespace sweepmap {
 

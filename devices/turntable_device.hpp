@@ -1,5 +1,5 @@
 // A turntable with an encoder on its axis (rig C, Zhao 2021), as sweepmap-profiler sees it:
-// real (no driver yet: no protocol chosen) or simulated (drivers/sim_profile_devices.hpp).
+// real (no driver yet: no protocol chosen) or simulated (sim/profile_devices.hpp).
 // Angles are encoder angles: 2 pi counts / counts_per_revolution, before the encoder's zero
 // (core/profile_geometry.hpp), positive clockwise seen from above.
 #pragma once
@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "drivers/lidar_device.hpp"
+#include "devices/lidar_device.hpp"
 
 namespace sweepmap {
 

@@ -6,8 +6,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "drivers/shaft_trajectory.hpp"
-#include "drivers/stepper_device.hpp"
+#include "devices/shaft_trajectory.hpp"
+#include "devices/stepper_device.hpp"
 
 namespace sweepmap {
 

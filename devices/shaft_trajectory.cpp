@@ -1,4 +1,4 @@
-#include "drivers/shaft_trajectory.hpp"
+#include "devices/shaft_trajectory.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "drivers/sim_profile_devices.hpp"
+#include "sim/profile_devices.hpp"
 
 #include <algorithm>
 #include <cmath>

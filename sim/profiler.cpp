@@ -1,4 +1,4 @@
-#include "drivers/sim_profiler.hpp"
+#include "sim/profiler.hpp"
 
 #include <Eigen/Geometry>
 #include <algorithm>

@@ -1,4 +1,4 @@
-#include "drivers/sim_mobile.hpp"
+#include "sim/mobile.hpp"
 
 #include <yaml-cpp/yaml.h>
 

@@ -2,7 +2,7 @@
 // Room 8 x 6 x 3 m centred on the origin; walls at x = +-4, y = +-3, ceiling at z = 3.
 #pragma once
 
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 namespace testing_scene {

@@ -7,7 +7,7 @@
 #include <random>
 #include <sstream>
 
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 #include "hand_scene.hpp"
 
 namespace sweepmap {

@@ -1,4 +1,4 @@
-#include "drivers/sim_car_devices.hpp"
+#include "sim/car_devices.hpp"
 
 #include <cmath>
 

@@ -2,7 +2,7 @@
 
 #include <stdexcept>
 
-#include "drivers/shaft_trajectory.hpp"
+#include "devices/shaft_trajectory.hpp"
 
 namespace sweepmap {
 namespace {

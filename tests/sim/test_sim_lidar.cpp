@@ -5,7 +5,7 @@
 #include <iostream>
 #include <memory>
 
-#include "drivers/sim_lidar.hpp"
+#include "sim/lidar.hpp"
 #include "hand_scene.hpp"
 
 namespace sweepmap {

@@ -1,4 +1,4 @@
-#include "drivers/scene.hpp"
+#include "sim/scene.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // A line-structured-light profile sensor (rig C, Zhao 2021) as sweepmap-profiler sees it:
-// real (no driver yet: no protocol chosen) or simulated (drivers/sim_profile_devices.hpp).
+// real (no driver yet: no protocol chosen) or simulated (sim/profile_devices.hpp).
 // A profile is the valid points (0, y, z) of one exposure in the laser plane, stamped with
 // the exposure time, with the turntable encoder's count latched at the exposure (the
 // profiler's encoder input, as a Gocator's: core/profile.hpp).
@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "core/profile.hpp"
-#include "drivers/lidar_device.hpp"
+#include "devices/lidar_device.hpp"
 
 namespace sweepmap {
 

@@ -1,11 +1,11 @@
-#include "drivers/sim_stepper.hpp"
+#include "sim/stepper.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
 #include "core/angles.hpp"
-#include "drivers/motion_profile.hpp"
+#include "devices/motion_profile.hpp"
 
 namespace sweepmap {
 namespace {

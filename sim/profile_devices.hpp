@@ -19,9 +19,9 @@
 #include <utility>
 #include <vector>
 
-#include "drivers/profiler_device.hpp"
-#include "drivers/sim_profiler.hpp"
-#include "drivers/turntable_device.hpp"
+#include "devices/profiler_device.hpp"
+#include "sim/profiler.hpp"
+#include "devices/turntable_device.hpp"
 
 namespace sweepmap {
 

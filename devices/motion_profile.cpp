@@ -1,4 +1,4 @@
-#include "drivers/motion_profile.hpp"
+#include "devices/motion_profile.hpp"
 
 #include <algorithm>
 #include <cmath>

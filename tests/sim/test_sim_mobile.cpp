@@ -1,11 +1,11 @@
-// The simulated rig-B car (drivers/sim_mobile.hpp) on hand cases: encoder counts of a straight
+// The simulated rig-B car (sim/mobile.hpp) on hand cases: encoder counts of a straight
 // drive, wheel slip, IMU bias and noise statistics, lidar ranges to known surfaces.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <numeric>
 
-#include "drivers/sim_mobile.hpp"
+#include "sim/mobile.hpp"
 
 namespace sweepmap {
 namespace {

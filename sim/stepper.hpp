@@ -32,8 +32,8 @@
 #include <vector>
 
 #include "core/rig_components.hpp"
-#include "drivers/shaft_trajectory.hpp"
-#include "drivers/stepper_device.hpp"
+#include "devices/shaft_trajectory.hpp"
+#include "devices/stepper_device.hpp"
 
 namespace sweepmap {
 

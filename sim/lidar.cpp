@@ -1,4 +1,4 @@
-#include "drivers/sim_lidar.hpp"
+#include "sim/lidar.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -120,7 +120,7 @@ class ProfileScene {
 
 // The simulated sensor and turntable. profile() is the physics of one exposure, shared by the
 // offline simulation (sweep(): a whole sweep at constant speed) and the live simulated
-// devices (drivers/sim_profile_devices.hpp: the turntable as commanded).
+// devices (sim/profile_devices.hpp: the turntable as commanded).
 class SimProfiler {
  public:
   SimProfiler(const ProfilerConfig& profiler, const TurntableConfig& turntable,
