@@ -29,11 +29,18 @@ std::string corpusPath(const std::string& name) {
   return std::string(SWEEPMAP_SOURCE_DIR) + "/tests/data/real/" + name;
 }
 
+// A file's bytes as they are; nullopt if it cannot be read.
+std::optional<std::string> readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return std::nullopt;
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
 // A .bin capture: its bytes as they are.
 std::string readBinary(const std::string& name) {
-  std::ifstream in(corpusPath(name), std::ios::binary);
-  if (!in) throw std::runtime_error("cannot read " + corpusPath(name));
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  auto bytes = readFile(corpusPath(name));
+  if (!bytes) throw std::runtime_error("cannot read " + corpusPath(name));
+  return *bytes;
 }
 
 // A .hex capture: bytes as two-digit hex tokens separated by white space; '#' starts a
@@ -202,9 +209,7 @@ TEST(RealCapturesHi219, ManualImusolRecord) {
 std::optional<std::string> externalCapture(const std::string& file) {
   const char* dir = std::getenv("SWEEPMAP_EXTERNAL_CAPTURES");
   if (!dir) return std::nullopt;
-  std::ifstream in(std::string(dir) + "/" + file, std::ios::binary);
-  if (!in) return std::nullopt;
-  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+  return readFile(std::string(dir) + "/" + file);
 }
 
 struct X4Stream {
