@@ -477,14 +477,30 @@ Occupancy OccupancyMap::occupancyAt(const Eigen::Vector3d& p_m) const {
   return impl_->tree.isNodeOccupied(node) ? Occupancy::kOccupied : Occupancy::kFree;
 }
 
+namespace {
+
+// What OcTree::writeBinaryConst() writes (the .bt header, then the tree's binary data; like it,
+// without pruning or modifying the tree, unlike writeBinary()), less the " done." that
+// Debian 12's liboctomap prints on stderr after every write: the header is written here and
+// only the data by the library, which prints nothing. A test checks the bytes are the same.
+void writeBinaryQuietly(const octomap::OcTree& tree, std::ostream& s) {
+  s << "# Octomap OcTree binary file\n"
+       "# (feel free to add / change comments, but leave the first line as it is!)\n#\n";
+  s << "id " << tree.getTreeType() << "\n";
+  s << "size " << tree.size() << "\n";
+  s << "res " << tree.getResolution() << "\n";
+  s << "data\n";
+  tree.writeBinaryData(s);
+}
+
+}  // namespace
+
 void OccupancyMap::saveBinaryAtomic(const std::string& path) const {
   // Serialise in memory first (a room at 5 cm is a few MB), so that a failure leaves
-  // neither a partial file nor a temporary one. writeBinaryConst() does not prune or
-  // modify the tree, unlike writeBinary().
+  // neither a partial file nor a temporary one.
   std::ostringstream bytes(std::ios::binary);
-  if (!impl_->tree.writeBinaryConst(bytes)) {
-    throw std::runtime_error("cannot save " + path + ": OctoMap serialisation failed");
-  }
+  writeBinaryQuietly(impl_->tree, bytes);
+  if (!bytes) throw std::runtime_error("cannot save " + path + ": OctoMap serialisation failed");
   writeFileAtomic(path, bytes.str());
 }
 

@@ -176,6 +176,13 @@ void render(const std::string& png_path, const std::string& script, TempFiles& t
   commitTmpFile(png_tmp, png_path);
 }
 
+// "plot A, B, ..." (one clause per line).
+void writePlotCommand(std::ostringstream& s, const std::vector<std::string>& plots) {
+  s << "plot ";
+  for (size_t i = 0; i < plots.size(); ++i) s << (i ? ", \\\n     " : "") << plots[i];
+  s << "\n";
+}
+
 }  // namespace
 
 bool gnuplotAvailable() {
@@ -250,20 +257,14 @@ void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
     if (!options.y_range_m) s << "set yrange [-1:1]\n";
     plots.push_back("NaN notitle");
   }
-  s << "plot ";
-  for (size_t i = 0; i < plots.size(); ++i) s << (i ? ", \\\n     " : "") << plots[i];
-  s << "\n";
+  writePlotCommand(s, plots);
   render(png_path, s.str(), temps, png_tmp);
 }
 
-void plotSeries(const std::string& png_path, const std::vector<Series>& series,
-                const SeriesPlotOptions& options) {
-  checkPath(png_path);
-  TempFiles temps(png_path);
-  const std::string png_tmp = tmpPathFor(png_path);
+namespace {
 
-  std::ostringstream s = scriptStream();
-  writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
+// The axes of a series plot: labels, log scale, labelled ticks, ranges, box fill.
+void writeSeriesAxes(std::ostringstream& s, const SeriesPlotOptions& options) {
   writeAxisLabels(s, options.x_label, options.y_label);
   if (options.log_y) s << "set logscale y\n";
   if (!options.x_tics.empty()) {
@@ -277,8 +278,12 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
   s << "set style fill transparent solid 0.5 border -1\n";
   writeRange(s, "x", options.x_range);
   writeRange(s, "y", options.y_range);
-  // A box is as wide as the gap to its neighbour: keep the outer half-boxes in the autoscaled
-  // x range, and the bars' base (y = 0) in the y range.
+}
+
+// A box is as wide as the gap to its neighbour: keep the outer half-boxes in the autoscaled
+// x range, and the bars' base (y = 0) in the y range.
+void writeRoomForBoxes(std::ostringstream& s, const std::vector<Series>& series,
+                       const SeriesPlotOptions& options) {
   double half_box = 0.0;
   for (const Series& ser : series) {
     if (ser.style != "boxes" || ser.x.size() < 2) continue;
@@ -297,57 +302,73 @@ void plotSeries(const std::string& png_path, const std::vector<Series>& series,
     s << "set offsets " << half_box << ", " << half_box << ", 0, 0\n";
   }
   if (!options.y_range && has_boxes && !options.log_y) s << "set yrange [*<0:0<*]\n";
+}
 
+// The series' gnuplot `with` clause; throws std::invalid_argument for an unknown style or
+// arrays of different lengths.
+std::string seriesStyle(const Series& ser) {
+  if (ser.x.size() != ser.y.size()) {
+    throw std::invalid_argument("plotSeries: x and y of '" + ser.title + "' differ in length");
+  }
+  if (ser.style == "lines" || ser.style == "boxes") return ser.style;
+  if (ser.style == "points") return "points pt 7 ps 0.5";
+  if (ser.style == "linespoints") return "linespoints pt 7 ps 0.5";
+  if (ser.style == "yerrorbars") {
+    if (ser.y_err.size() != ser.y.size()) {
+      throw std::invalid_argument("plotSeries: y and y_err of '" + ser.title +
+                                  "' differ in length");
+    }
+    return "yerrorbars pt 7 ps 1";
+  }
+  throw std::invalid_argument("plotSeries: unknown style '" + ser.style + "'");
+}
+
+// Writes the series' points to a temporary binary file; returns its plot clause.
+std::string seriesClause(const Series& ser, const std::string& with, size_t index,
+                         TempFiles& temps) {
+  const bool bars = ser.style == "yerrorbars";
+  std::vector<double> xy;
+  xy.reserve((bars ? 3 : 2) * ser.x.size());
+  for (size_t k = 0; k < ser.x.size(); ++k) {
+    xy.push_back(ser.x[k]);
+    xy.push_back(ser.y[k]);
+    if (bars) xy.push_back(ser.y_err[k]);
+  }
+  const std::string data_path = temps.make(".series" + std::to_string(index) + ".tmp");
+  writeRaw(data_path, xy);
+  std::ostringstream c = scriptStream();
+  c << quoted(data_path)
+    << (bars ? " binary format='%float64%float64%float64' using 1:2:3 with "
+             : " binary format='%float64%float64' using 1:2 with ")
+    << with;
+  if (!ser.color.empty()) c << " lc rgb " << quoted(ser.color);
+  c << (ser.title.empty() ? std::string(" notitle") : " title " + quoted(ser.title));
+  return c.str();
+}
+
+}  // namespace
+
+void plotSeries(const std::string& png_path, const std::vector<Series>& series,
+                const SeriesPlotOptions& options) {
+  checkPath(png_path);
+  TempFiles temps(png_path);
+  const std::string png_tmp = tmpPathFor(png_path);
+
+  std::ostringstream s = scriptStream();
+  writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
+  writeSeriesAxes(s, options);
+  writeRoomForBoxes(s, series, options);
   std::vector<std::string> plots;
   for (size_t i = 0; i < series.size(); ++i) {
-    const Series& ser = series[i];
-    if (ser.x.size() != ser.y.size()) {
-      throw std::invalid_argument("plotSeries: x and y of '" + ser.title + "' differ in length");
-    }
-    std::string with;
-    if (ser.style == "lines" || ser.style == "boxes") {
-      with = ser.style;
-    } else if (ser.style == "points") {
-      with = "points pt 7 ps 0.5";
-    } else if (ser.style == "linespoints") {
-      with = "linespoints pt 7 ps 0.5";
-    } else if (ser.style == "yerrorbars") {
-      if (ser.y_err.size() != ser.y.size()) {
-        throw std::invalid_argument("plotSeries: y and y_err of '" + ser.title +
-                                    "' differ in length");
-      }
-      with = "yerrorbars pt 7 ps 1";
-    } else {
-      throw std::invalid_argument("plotSeries: unknown style '" + ser.style + "'");
-    }
-    if (ser.x.empty()) continue;
-    const bool bars = ser.style == "yerrorbars";
-    std::vector<double> xy;
-    xy.reserve((bars ? 3 : 2) * ser.x.size());
-    for (size_t k = 0; k < ser.x.size(); ++k) {
-      xy.push_back(ser.x[k]);
-      xy.push_back(ser.y[k]);
-      if (bars) xy.push_back(ser.y_err[k]);
-    }
-    const std::string data_path = temps.make(".series" + std::to_string(i) + ".tmp");
-    writeRaw(data_path, xy);
-    std::ostringstream c = scriptStream();
-    c << quoted(data_path)
-      << (bars ? " binary format='%float64%float64%float64' using 1:2:3 with "
-               : " binary format='%float64%float64' using 1:2 with ")
-      << with;
-    if (!ser.color.empty()) c << " lc rgb " << quoted(ser.color);
-    c << (ser.title.empty() ? std::string(" notitle") : " title " + quoted(ser.title));
-    plots.push_back(c.str());
+    const std::string with = seriesStyle(series[i]);
+    if (!series[i].x.empty()) plots.push_back(seriesClause(series[i], with, i, temps));
   }
-  if (plots.empty()) {
+  if (plots.empty()) {  // an empty frame: gnuplot refuses an empty data file
     if (!options.x_range) s << "set xrange [0:1]\n";
     if (!options.y_range) s << "set yrange [" << (options.log_y ? "1:10" : "0:1") << "]\n";
     plots.push_back("NaN notitle");
   }
-  s << "plot ";
-  for (size_t i = 0; i < plots.size(); ++i) s << (i ? ", \\\n     " : "") << plots[i];
-  s << "\n";
+  writePlotCommand(s, plots);
   render(png_path, s.str(), temps, png_tmp);
 }
 

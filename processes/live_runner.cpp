@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <mutex>
+#include <string>
 #include <thread>
 
 #include "processes/sd_notify.hpp"
@@ -19,6 +20,13 @@ namespace {
 std::atomic<bool> g_stop{false};
 
 void onSignal(int) { g_stop = true; }
+
+// This executable's name without the "sweepmap-" prefix (glibc's short invocation name).
+std::string thisProcessName() {
+  const std::string name = program_invocation_short_name;
+  const std::string prefix = "sweepmap-";
+  return name.rfind(prefix, 0) == 0 ? name.substr(prefix.size()) : name;
+}
 
 class Inbox {
  public:
@@ -289,6 +297,8 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     std::cerr << "LCM initialisation failed\n";
     return 2;
   }
+  const std::string process = options.process.empty() ? thisProcessName() : options.process;
+  for (Node* n : nodes) n->setProcess(process);
   LiveRun run(lcm, nodes, options);
   run.subscribe();
   run.startReceiver();

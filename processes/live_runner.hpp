@@ -32,6 +32,9 @@ struct LiveOptions {
   // Polled before each sd_notify WATCHDOG=1 (under systemd or `sweepmap launch`): false
   // withholds the ping, so that a process whose device thread is stuck is restarted too.
   std::function<bool()> healthy;
+  // The process named in the nodes' status messages; "" = this executable's name without
+  // its "sweepmap-" prefix (sweepmap-lidar: "lidar").
+  std::string process;
 };
 
 // Wall-clock time [us] (LCM's utime convention), read once and then advanced monotonically.

@@ -126,7 +126,7 @@ void Node::clearDegraded(const std::string& what) {
 void Node::publishStatus(int64_t now_utime, Outbox& out) {
   process_status_t s;
   s.utime = now_utime;
-  s.process = name_;
+  s.process = process_.empty() ? name_ : process_;
   const bool errors = counter("errors") + counter("dropped") + counter("invalid") > 0;
   s.health =
       failed_ ? process_status_t::FAILED

@@ -89,6 +89,9 @@ class Node {
   void countLostInput(int64_t n) { counters_["dropped"] += n; }
   void publishStatus(int64_t now_utime, Outbox& out);
   bool failed() const { return failed_; }
+  // The process this node runs in, named in its status (process_status_t.process) so that a
+  // monitor shows one row per process; the node's own name until set (runLive sets it).
+  void setProcess(std::string process) { process_ = std::move(process); }
 
  protected:
   virtual void handle(const Message& msg, Outbox& out) = 0;
@@ -109,6 +112,7 @@ class Node {
 
  private:
   std::string name_;
+  std::string process_;
   std::map<std::string, int64_t> counters_;
   std::string detail_;
   bool failed_ = false;

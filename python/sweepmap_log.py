@@ -13,8 +13,16 @@ Each event: sync word 0xEDA1DA01, event number, timestamp [us], channel length, 
 (big-endian), channel, data. A corrupt region or a truncated tail is skipped to the next
 event header that holds up (as sweepmap replay does); each skipped byte range is reported
 through `on_skip(begin, end, why)` (default: a line on stderr).
+
+As a command (`python3 sweepmap_log.py LOG [CHANNEL]`) it follows sweepmap's exit statuses:
+0 success; 1 the log held a problem (corrupt bytes, each skipped range named with its byte
+offsets on stderr, or no event at all); 2 usage (bad arguments, a missing log, a CHANNEL the
+log does not have); 4 the log cannot be read. Each error is one line on stderr, never a
+traceback; a closed pipe (`... | head -1`) ends it quietly, as it ends `cat`.
 """
 
+import os
+import signal
 import struct
 import sys
 from typing import Callable, Iterator, NamedTuple, Optional, Set
@@ -80,22 +88,74 @@ def events(path: str, channels: Optional[Set[str]] = None,
             yield ev
 
 
-def main(argv) -> int:
-    """python3 sweepmap_log.py LOG [CHANNEL]: event counts per channel, or one line per event."""
-    if len(argv) < 2:
-        print(main.__doc__, file=sys.stderr)
-        return 2
-    if len(argv) > 2:
-        for ev in events(argv[1], {argv[2]}):
-            print(ev.utime, ev.channel, len(ev.data))
-        return 0
+EXIT_OK, EXIT_BAD_INPUT, EXIT_USAGE, EXIT_IO = 0, 1, 2, 4  # core/exit_codes.hpp
+_PROG = "sweepmap_log.py"
+
+
+def _fail(status: int, message: str) -> int:
+    print(f"{_PROG}: {message}", file=sys.stderr)
+    return status
+
+
+def _read_all(path: str, channel: Optional[str]):
+    """Every event's channel in the log (all of it) and the events of `channel` (or none);
+    whether any byte range was skipped. Raises OSError."""
+    skipped = []
+
+    def on_skip(begin: int, end: int, why: str) -> None:
+        skipped.append(begin)
+        _report(path)(begin, end, why)
+
     counts = {}
-    for ev in events(argv[1]):
+    for ev in events(path, on_skip=on_skip):
         counts[ev.channel] = counts.get(ev.channel, 0) + 1
-    for channel, n in sorted(counts.items()):
-        print(f"{channel} {n}")
-    return 0
+        if channel is not None and ev.channel == channel:
+            print(ev.utime, ev.channel, len(ev.data))
+    return counts, bool(skipped)
+
+
+def main(argv) -> int:
+    """python3 sweepmap_log.py LOG [CHANNEL]: event counts per channel, or one line per event
+    of CHANNEL (log time [us], channel, bytes)."""
+    if len(argv) not in (2, 3) or argv[1] in ("-h", "--help"):
+        print(main.__doc__, file=sys.stderr)
+        return EXIT_USAGE if len(argv) not in (2, 3) else EXIT_OK
+    path = argv[1]
+    channel = argv[2] if len(argv) > 2 else None
+    try:
+        counts, corrupt = _read_all(path, channel)
+    except (FileNotFoundError, IsADirectoryError, NotADirectoryError) as e:
+        return _fail(EXIT_USAGE, f"{path}: {e.strerror.lower()}")
+    except OSError as e:
+        return _fail(EXIT_IO, f"{path}: cannot read: {e.strerror or e}")
+    if not counts:
+        return _fail(EXIT_BAD_INPUT, f"{path}: holds no event"
+                     + (" (corrupt throughout)" if corrupt else ""))
+    if channel is None:
+        for name, n in sorted(counts.items()):
+            print(f"{name} {n}")
+    elif channel not in counts:
+        have = ", ".join(f"{name} ({n})" for name, n in sorted(counts.items()))
+        return _fail(EXIT_USAGE, f"{path}: no channel {channel}; its channels (events): {have}")
+    return EXIT_BAD_INPUT if corrupt else EXIT_OK
+
+
+def _run() -> int:
+    # A closed pipe ends the program as it ends `cat`: by SIGPIPE, silently. Where SIGPIPE does
+    # not exist, the BrokenPipeError is caught instead and stdout pointed at /dev/null so that
+    # the interpreter's last flush does not raise again.
+    if hasattr(signal, "SIGPIPE"):
+        signal.signal(signal.SIGPIPE, signal.SIG_DFL)
+    try:
+        status = main(sys.argv)
+        sys.stdout.flush()
+        return status
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return EXIT_OK
+    except KeyboardInterrupt:
+        return 130
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv))
+    sys.exit(_run())

@@ -29,8 +29,8 @@ struct Rig {
 };
 
 // The folder of the default rig and scene files: $SWEEPMAP_CONFIG_DIR if set, else
-// <executable's folder>/../share/sweepmap/config (the build tree links it to the source
-// config/ folder; `make install` copies it there).
+// <executable's folder>/../share/sweepmap/config (the build copies the source config/ folder
+// there, again whenever a file changes; `make install` copies it there too).
 std::filesystem::path configDir();
 
 // A config file given by path or by name: an existing path is returned as is; otherwise

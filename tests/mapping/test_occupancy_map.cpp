@@ -1,7 +1,11 @@
 #include <gtest/gtest.h>
+#include <octomap/OcTree.h>
 
 #include <cmath>
+#include <fstream>
+#include <iterator>
 #include <limits>
+#include <sstream>
 
 #include "mapping/occupancy_map.hpp"
 #include "mapping/synthetic_room.hpp"
@@ -292,6 +296,31 @@ TEST_F(BoxRoomTest, SaveReplacesAndReportsFailures) {
     EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
   }
   EXPECT_THROW(OccupancyMap::loadBinary((dir / "missing.bt").string()), std::runtime_error);
+}
+
+// Saving prints nothing (Debian 12's liboctomap says " done." on stderr after every
+// writeBinaryConst()), and the file holds exactly the bytes OctoMap's own writer makes.
+TEST_F(BoxRoomTest, SaveIsSilentAndWritesOctoMapsOwnBytes) {
+  const auto dir = freshTestDir();
+  const auto path = dir / "map.bt";
+  const OccupancyMap map = buildMap();
+  testing::internal::CaptureStderr();
+  testing::internal::CaptureStdout();
+  map.saveBinaryAtomic(path.string());
+  const std::string out = testing::internal::GetCapturedStdout();
+  const std::string err = testing::internal::GetCapturedStderr();
+  EXPECT_EQ(out + err, "");
+
+  std::ifstream in(path, std::ios::binary);
+  const std::string saved((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  octomap::OcTree tree(0.1);
+  std::istringstream read(saved);
+  ASSERT_TRUE(tree.readBinary(read));
+  EXPECT_GT(tree.size(), 100u);
+  std::ostringstream theirs;
+  ASSERT_TRUE(tree.writeBinaryConst(theirs));
+  EXPECT_TRUE(saved == theirs.str())
+      << saved.size() << " bytes saved, OctoMap writes " << theirs.str().size();
 }
 
 }  // namespace

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/event_log.hpp"
@@ -112,6 +114,36 @@ TEST(LcmSchema, ParsesNestedArraysConstsAndComments) {
     EXPECT_NE(std::string(e.what()).find("outer_t.s"), std::string::npos) << e.what();
   }
   EXPECT_THROW(LcmSchema(Sources{{"bad.lcm", "struct x_t { int32_t a[n]; }"}}), LcmSchemaError);
+  // The constants are kept; a member whose comment names none of them is no enum.
+  ASSERT_EQ(o->constants.size(), 2u);
+  EXPECT_EQ(o->constants[1].name, "B");
+  EXPECT_EQ(o->constants[1].value, "2");
+  EXPECT_TRUE(o->members[0].enum_names.empty());
+}
+
+// An integer member is an enum of the constants of its type that its comment names (or that
+// it calls "the constants"); each declaration is its own group.
+TEST(LcmSchema, MembersTakeTheConstantsTheirCommentNames) {
+  using Sources = std::vector<std::pair<std::string, std::string>>;
+  const LcmSchema schema(
+      Sources{{"e.lcm",
+               "struct e_t {\n  int8_t health; // OK or BAD\n  int8_t kind; // one of the "
+               "constants below\n  int32_t mode; // OK? no: int32_t\n  int8_t other;\n"
+               "  const int8_t OK = 0, BAD = 0x2;\n  const int8_t RED = -1, BLUE = 5;\n}\n"}});
+  const LcmStruct* e = schema.find("e_t");
+  ASSERT_NE(e, nullptr);
+  EXPECT_EQ(e->members[0].enum_names, (std::map<int64_t, std::string>{{0, "OK"}, {2, "BAD"}}));
+  EXPECT_EQ(e->members[1].enum_names, (std::map<int64_t, std::string>{{0, "OK"}, {2, "BAD"}}));
+  EXPECT_TRUE(e->members[2].enum_names.empty());  // another type
+  EXPECT_TRUE(e->members[3].enum_names.empty());  // no comment
+  EXPECT_THROW(LcmSchema(Sources{{"c.lcm", "struct c_t { const int8_t A = x; }"}}), LcmSchemaError);
+  // The shipped types: the motor's state, a status's health, a window's action sequence.
+  const LcmSchema& built = LcmSchema::builtIn();
+  EXPECT_EQ(built.find("motor_state_t")->members[1].enum_names.at(4), "SCANNING");
+  EXPECT_EQ(built.find("process_status_t")->members[2].enum_names.at(1), "DEGRADED");
+  for (const LcmMember& m : built.find("scan_window_t")->members) {
+    EXPECT_EQ(m.enum_names.empty(), m.name != "action_sequence") << m.name;
+  }
 }
 
 TEST(LcmSchema, HostileCountIsAnErrorNotAnAllocation) {
@@ -169,12 +201,63 @@ TEST(Dump, HumanAndJsonFormsAndATruncatedLog) {
   runDump({path, "", true, false}, all, err);
   EXPECT_NE(all.str().find("\"ranges_m\":[1.25,1.25,1.25,null,1.25"), std::string::npos)
       << all.str();
+  // A channel the log does not have: a usage error that lists those it has.
+  std::ostringstream none, none_err;
+  EXPECT_EQ(runDump({path, "NOPE", false, false}, none, none_err), 2);
+  EXPECT_EQ(none.str(), "");
+  EXPECT_EQ(none_err.str(), "sweepmap dump: --channel NOPE: no such channel in " + path +
+                                "; its channels (messages): LIDAR_SCAN (1) OTHER (1) "
+                                "WHEEL_TICKS (1)\n");
   // Cut the log inside its last event: the ones before are printed, then the error.
   std::filesystem::resize_file(path, std::filesystem::file_size(path) - 2);
   std::ostringstream cut, cut_err;
   EXPECT_EQ(runDump({path, "", false, false}, cut, cut_err), 1);
   EXPECT_NE(cut.str().find("WHEEL_TICKS"), std::string::npos);
   EXPECT_NE(cut_err.str().find("byte"), std::string::npos) << cut_err.str();
+}
+
+// Enum members print as their constant's name beside the number (an unknown value as "?").
+TEST(Dump, EnumsByName) {
+  const std::string path =
+      (std::filesystem::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / "dump_enums.lcmlog").string();
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  {
+    EventLogWriter w(path);
+    Outbox out;
+    motor_state_t m{};
+    m.state = motor_state_t::SCANNING;
+    m.mode = 7;
+    out.publish("MOTOR_STATE", 1, m);
+    m.state = 42;
+    out.publish("MOTOR_STATE", 2, m);
+    process_status_t s{};
+    s.health = process_status_t::DEGRADED;
+    out.publish("STATUS_MOTOR", 3, s);
+    for (const Message& msg : out.take()) w.write(msg.utime, msg.channel, msg.data);
+    w.close();
+  }
+  std::ostringstream human, err;
+  EXPECT_EQ(runDump({path, "", false, false}, human, err), 0) << err.str();
+  const std::string h = human.str();
+  EXPECT_NE(h.find("  state = 4 (SCANNING)\n"), std::string::npos) << h;
+  EXPECT_NE(h.find("  state = 42 (?)\n"), std::string::npos) << h;
+  EXPECT_NE(h.find("  mode = 7\n"), std::string::npos) << h;  // no constants: a number
+  EXPECT_NE(h.find("  health = 1 (DEGRADED)\n"), std::string::npos) << h;
+  // JSON keeps the numbers (the field's type).
+  std::ostringstream json;
+  EXPECT_EQ(runDump({path, "STATUS_MOTOR", true, false}, json, err), 0);
+  EXPECT_NE(json.str().find("\"health\":1,"), std::string::npos) << json.str();
+}
+
+// A log without a message is an error that says so.
+TEST(Dump, EmptyLogIsAnError) {
+  const std::string path =
+      (std::filesystem::path(SWEEPMAP_BINARY_DIR) / "test_scratch" / "dump_empty.lcmlog").string();
+  std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+  { std::ofstream(path, std::ios::trunc); }
+  std::ostringstream out, err;
+  EXPECT_EQ(runDump({path, "", false, false}, out, err), 1);
+  EXPECT_EQ(err.str(), "sweepmap dump: " + path + " holds no message\n");
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "processes/live_runner.hpp"
+#include "sweepmap/process_status_t.hpp"
 
 namespace sweepmap {
 namespace {
@@ -86,6 +87,33 @@ TEST(LiveRunner, AFullQueueDropsAndCountsTheRest) {
   for (int i = 0; i < 10; ++i) EXPECT_EQ(node.seen[i], i);
   EXPECT_EQ(node.counter("dropped"), 90);
   EXPECT_EQ(node.counter("messages_in"), 10);
+}
+
+// The status of a node names the process it runs in (so that `sweepmap status` shows one row
+// per process): its own name offline, this executable's name (less "sweepmap-") or
+// LiveOptions::process live.
+std::string processInStatus(Node& node) {
+  Outbox out;
+  node.publishStatus(0, out);
+  process_status_t s;
+  const std::vector<Message> sent = out.take();
+  EXPECT_EQ(sent.size(), 1u);
+  EXPECT_TRUE(!sent.empty() && decodeMessage(sent.front(), &s));
+  return s.process;
+}
+
+TEST(LiveRunner, NodesNameTheirProcessInTheirStatus) {
+  lcm::LCM lcm("memq://");
+  ASSERT_TRUE(lcm.good());
+  RecordingNode node;
+  EXPECT_EQ(processInStatus(node), "recorder");
+  LiveOptions options;
+  options.should_stop = [] { return true; };
+  EXPECT_EQ(runLive(lcm, {&node}, options), 0);
+  EXPECT_EQ(processInStatus(node), "test_processes");
+  options.process = "lidar";
+  EXPECT_EQ(runLive(lcm, {&node}, options), 0);
+  EXPECT_EQ(processInStatus(node), "lidar");
 }
 
 }  // namespace

@@ -8,12 +8,14 @@ namespace sweepmap {
 Runner addStatusCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "status",
-      "A live dashboard of every sweepmap process on the LCM URL, from their STATUS_* messages: "
-      "health (OK, DEGRADED, FAILED, or STALE when a process's status stops for --stale-s), "
-      "counters, last detail; the message rate of every channel; the mapper's progress "
-      "(MAP_STATS) and the assembler's last sweep (SWEEP_STATUS). Refreshes every second until "
-      "Ctrl-C. --once listens for --window seconds and prints one snapshot (--json: one JSON "
-      "object), its exit status the number of stale or failed processes");
+      "A live dashboard of every sweepmap process on the LCM URL, from the STATUS_* messages of "
+      "the nodes they run: one row per process with its STATUS (OK, DEGRADED, FAILED: the worst "
+      "of its nodes; STALE when its status stops for --stale-s), the AGE of its last status and "
+      "its detail, each node's state and counters beneath; the message rate of every channel; "
+      "the mapper's progress (MAP_STATS) and the assembler's last sweep (SWEEP_STATUS). "
+      "Refreshes every second until Ctrl-C. --once listens for --window seconds and prints one "
+      "snapshot (--json: one JSON object with the same fields); its exit status is 1 when no "
+      "process was seen or one is STALE or FAILED, else 0");
   auto o = std::make_shared<StatusOptions>();
   o->lcm_url = kDefaultLcmUrl;
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL the processes publish on")

@@ -2,10 +2,12 @@
 
 #include <cmath>
 #include <iomanip>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/event_log.hpp"
+#include "core/exit_codes.hpp"
 #include "tools/offline/lcm_schema.hpp"
 
 namespace sweepmap {
@@ -67,7 +69,9 @@ void human(const std::string& name, const LcmValue& v, const std::string& indent
     return;
   }
   if (v.kind != LcmValue::Kind::kArray) {
-    out << indent << name << " = " << scalar(v) << "\n";
+    out << indent << name << " = " << scalar(v);
+    if (!v.enum_name.empty()) out << " (" << v.enum_name << ")";
+    out << "\n";
     return;
   }
   out << indent << name << "[" << v.items.size() << "] =";
@@ -93,6 +97,60 @@ std::string hexHead(const std::vector<uint8_t>& data, size_t n) {
   return s.str();
 }
 
+// One event, decoded when its type is known.
+void printEvent(const LcmSchema& schema, const LogEvent& ev, const DumpOptions& o,
+                std::ostream& out) {
+  LcmValue value;
+  const LcmStruct* type = nullptr;
+  std::string problem;
+  try {
+    type = schema.decode(ev.data.data(), ev.data.size(), &value);
+    if (!type) problem = "unknown type";
+  } catch (const LcmSchemaError& e) {
+    problem = e.what();
+  }
+  if (o.json) {
+    Json j = Json::object();
+    j["channel"] = ev.channel;
+    j["log_utime"] = ev.utime;
+    if (type && problem.empty()) {
+      j["type"] = type->package + "." + type->name;
+      for (const auto& [k, f] : value.fields) j[k] = toJson(f);
+    } else {
+      j["type"] = "unknown";
+      j["size"] = ev.data.size();
+      j["error"] = problem;
+      j["head_hex"] = hexHead(ev.data, 32);
+    }
+    out << j.dump() << "\n";
+    return;
+  }
+  out << ev.utime << " " << ev.channel;
+  if (type && problem.empty()) {
+    out << " (" << type->package << "." << type->name << ", " << ev.data.size() << " bytes)\n";
+    for (const auto& [k, f] : value.fields) human(k, f, "  ", o.full, out);
+  } else {
+    out << " (" << problem << ", " << ev.data.size() << " bytes: " << hexHead(ev.data, 32)
+        << (ev.data.size() > 32 ? "…" : "") << ")\n";
+  }
+}
+
+// After the log: a log without a message, or a --channel it does not have, is an error that
+// says what there is.
+int checkWhatWasFound(const DumpOptions& o, const std::map<std::string, int64_t>& channels,
+                      std::ostream& err) {
+  if (channels.empty()) {
+    err << "sweepmap dump: " << o.log << " holds no message\n";
+    return kExitBadInput;
+  }
+  if (o.channel.empty() || channels.count(o.channel)) return kExitOk;
+  err << "sweepmap dump: --channel " << o.channel << ": no such channel in " << o.log
+      << "; its channels (messages):";
+  for (const auto& [name, n] : channels) err << " " << name << " (" << n << ")";
+  err << "\n";
+  return kExitUsage;
+}
+
 }  // namespace
 
 int runDump(const DumpOptions& o, std::ostream& out, std::ostream& err) {
@@ -100,60 +158,31 @@ int runDump(const DumpOptions& o, std::ostream& out, std::ostream& err) {
   EventLogReader reader(o.log);
   reader.setResync(true);
   LogEvent ev;
-  int status = 0;
-  size_t reported = 0;  // skipped ranges reported so far
+  int status = kExitOk;
+  size_t reported = 0;                      // skipped ranges reported so far
+  std::map<std::string, int64_t> channels;  // every channel of the log, with its messages
   for (;;) {
     bool more = false;
     try {
       more = reader.next(&ev);
     } catch (const LogError& e) {
       err << "sweepmap dump: " << e.what() << "\n";
-      status = 1;
+      status = kExitBadInput;
       break;
     }
     for (; reported < reader.skipped().size(); ++reported) {
       const SkippedRange& r = reader.skipped()[reported];
       err << "sweepmap dump: " << o.log << ": byte " << r.begin << " to " << r.end
           << " skipped: " << r.why << "\n";
-      status = 1;
+      status = kExitBadInput;
     }
     if (!more) break;
+    ++channels[ev.channel];
     if (!o.channel.empty() && ev.channel != o.channel) continue;
-    LcmValue value;
-    const LcmStruct* type = nullptr;
-    std::string problem;
-    try {
-      type = schema.decode(ev.data.data(), ev.data.size(), &value);
-      if (!type) problem = "unknown type";
-    } catch (const LcmSchemaError& e) {
-      problem = e.what();
-    }
-    if (o.json) {
-      Json j = Json::object();
-      j["channel"] = ev.channel;
-      j["log_utime"] = ev.utime;
-      if (type && problem.empty()) {
-        j["type"] = type->package + "." + type->name;
-        for (const auto& [k, f] : value.fields) j[k] = toJson(f);
-      } else {
-        j["type"] = "unknown";
-        j["size"] = ev.data.size();
-        j["error"] = problem;
-        j["head_hex"] = hexHead(ev.data, 32);
-      }
-      out << j.dump() << "\n";
-    } else {
-      out << ev.utime << " " << ev.channel;
-      if (type && problem.empty()) {
-        out << " (" << type->package << "." << type->name << ", " << ev.data.size() << " bytes)\n";
-        for (const auto& [k, f] : value.fields) human(k, f, "  ", o.full, out);
-      } else {
-        out << " (" << problem << ", " << ev.data.size() << " bytes: " << hexHead(ev.data, 32)
-            << (ev.data.size() > 32 ? "…" : "") << ")\n";
-      }
-    }
+    printEvent(schema, ev, o, out);
   }
-  return status;
+  const int found = checkWhatWasFound(o, channels, err);
+  return found != kExitOk ? found : status;
 }
 
 }  // namespace sweepmap

@@ -14,8 +14,10 @@ struct DumpOptions {
   bool full = false;    // human form: every array element, not the first few
 };
 
-// Writes to `out`; returns 0, or 1 when the log ends in a truncated or corrupt event (after
-// printing every message before it; the error, with the byte offset, goes to `err`).
+// Writes to `out`, errors to `err`. Returns 0 (kExitOk); 1 (kExitBadInput) when the log holds
+// corrupt or truncated bytes (every message outside them is printed; each skipped range, with
+// its byte offsets, goes to `err`) or no message at all; 2 (kExitUsage) when `channel` is not
+// in the log (`err` lists the channels it has).
 int runDump(const DumpOptions& options, std::ostream& out, std::ostream& err);
 
 }  // namespace sweepmap

@@ -1,5 +1,6 @@
 #include "tools/offline/lcm_schema.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstring>
 #include <functional>
@@ -121,85 +122,185 @@ size_t minSize(const LcmSchema& schema, const std::string& type) {
 
 }  // namespace
 
-LcmSchema::LcmSchema(const std::vector<std::pair<std::string, std::string>>& sources) {
-  for (const auto& [file, text] : sources) {
-    const std::vector<Token> t = tokenize(file, text);
-    size_t i = 0;
+namespace {
+
+// One .lcm file's tokens to structs: `package NAME;` then `struct NAME { members and
+// constants }`, each error naming the file and line.
+class Parser {
+ public:
+  Parser(std::string file, std::vector<Token> tokens)
+      : file_(std::move(file)), t_(std::move(tokens)) {}
+
+  void parse(std::vector<LcmStruct>* out) {
     std::string package;
-    const auto where = [&](size_t k) {
-      return file + ":" +
-             std::to_string(k < t.size() ? t[k].line : (t.empty() ? 1 : t.back().line));
-    };
-    const auto expect = [&](const std::string& s) {
-      if (i >= t.size() || t[i].text != s) {
-        throw LcmSchemaError(where(i) + ": expected '" + s + "'" +
-                             (i < t.size() ? ", found '" + t[i].text + "'" : ""));
-      }
-      ++i;
-    };
-    while (i < t.size()) {
-      if (t[i].text == "package") {
-        ++i;
-        if (i >= t.size()) throw LcmSchemaError(where(i) + ": package name missing");
-        package = t[i++].text;
+    while (i_ < t_.size()) {
+      if (t_[i_].text == "package") {
+        ++i_;
+        package = take("package name");
         expect(";");
         continue;
       }
-      expect("struct");
-      if (i >= t.size()) throw LcmSchemaError(where(i) + ": struct name missing");
-      LcmStruct s;
-      s.package = package;
-      s.name = t[i++].text;
-      expect("{");
-      while (i < t.size() && t[i].text != "}") {
-        if (t[i].text == "const") {  // const TYPE NAME = VALUE [, NAME = VALUE]... ;
-          while (i < t.size() && t[i].text != ";") ++i;
-          expect(";");
-          continue;
-        }
-        LcmMember m;
-        m.type = t[i++].text;
-        if (m.type.find('.') != std::string::npos) m.type = m.type.substr(m.type.rfind('.') + 1);
-        if (i >= t.size()) throw LcmSchemaError(where(i) + ": member name missing");
-        m.comment = t[i].comment;
-        m.name = t[i++].text;
-        while (i < t.size() && t[i].text == "[") {
-          ++i;
-          if (i >= t.size()) throw LcmSchemaError(where(i) + ": array size missing");
-          m.dims.push_back(t[i++].text);
-          expect("]");
-        }
-        if (i < t.size() && t[i].text == ";" && m.comment.empty()) m.comment = t[i].comment;
-        expect(";");
-        for (const std::string& d : m.dims) {
-          if (isNumber(d)) continue;
-          const auto it = std::find_if(s.members.begin(), s.members.end(),
-                                       [&](const LcmMember& o) { return o.name == d; });
-          if (it == s.members.end() || !it->dims.empty() || !isIntegerType(it->type)) {
-            throw LcmSchemaError(where(i) + ": " + m.name + "[" + d +
-                                 "]: the size must be a number or an earlier integer member");
-          }
-        }
-        s.members.push_back(std::move(m));
-      }
-      expect("}");
-      // lcm-gen: member names, primitive type names, dimensions (mode: 0 const, 1 variable).
-      int64_t v = 0x12345678;
-      for (const LcmMember& m : s.members) {
-        v = hashString(v, m.name);
-        if (kPrimitive.count(m.type)) v = hashString(v, m.type);
-        v = hashUpdate(v, static_cast<char>(m.dims.size()));
-        for (const std::string& d : m.dims) {
-          v = hashUpdate(v, isNumber(d) ? 0 : 1);
-          v = hashString(v, d);
-        }
-      }
-      s.base_hash = v;
-      structs_.push_back(std::move(s));
+      out->push_back(parseStruct(package));
     }
   }
-  // Fingerprints: the base hash plus those of the member structs, rotated left by one
-  // (lcm-gen's _computeHash; a type met again on the way in counts 0).
+
+ private:
+  std::string where() const {
+    const int line = i_ < t_.size() ? t_[i_].line : (t_.empty() ? 1 : t_.back().line);
+    return file_ + ":" + std::to_string(line);
+  }
+  void expect(const std::string& s) {
+    if (i_ >= t_.size() || t_[i_].text != s) {
+      throw LcmSchemaError(where() + ": expected '" + s + "'" +
+                           (i_ < t_.size() ? ", found '" + t_[i_].text + "'" : ""));
+    }
+    ++i_;
+  }
+  std::string take(const std::string& what) {
+    if (i_ >= t_.size()) throw LcmSchemaError(where() + ": " + what + " missing");
+    return t_[i_++].text;
+  }
+
+  LcmStruct parseStruct(const std::string& package) {
+    expect("struct");
+    LcmStruct s;
+    s.package = package;
+    s.name = take("struct name");
+    expect("{");
+    int groups = 0;
+    while (i_ < t_.size() && t_[i_].text != "}") {
+      if (t_[i_].text == "const") {
+        parseConstants(&s, groups++);
+      } else {
+        parseMember(&s);
+      }
+    }
+    expect("}");
+    return s;
+  }
+
+  // TYPE NAME [DIM]... ; with its line's comment.
+  void parseMember(LcmStruct* s) {
+    LcmMember m;
+    m.type = t_[i_++].text;
+    if (m.type.find('.') != std::string::npos) m.type = m.type.substr(m.type.rfind('.') + 1);
+    if (i_ >= t_.size()) throw LcmSchemaError(where() + ": member name missing");
+    m.comment = t_[i_].comment;
+    m.name = t_[i_++].text;
+    while (i_ < t_.size() && t_[i_].text == "[") {
+      ++i_;
+      m.dims.push_back(take("array size"));
+      expect("]");
+    }
+    if (i_ < t_.size() && t_[i_].text == ";" && m.comment.empty()) m.comment = t_[i_].comment;
+    expect(";");
+    for (const std::string& d : m.dims) {
+      if (isNumber(d)) continue;
+      const auto it = std::find_if(s->members.begin(), s->members.end(),
+                                   [&](const LcmMember& o) { return o.name == d; });
+      if (it == s->members.end() || !it->dims.empty() || !isIntegerType(it->type)) {
+        throw LcmSchemaError(where() + ": " + m.name + "[" + d +
+                             "]: the size must be a number or an earlier integer member");
+      }
+    }
+    s->members.push_back(std::move(m));
+  }
+
+  // const TYPE NAME = VALUE [, NAME = VALUE]... ;
+  void parseConstants(LcmStruct* s, int group) {
+    expect("const");
+    const std::string type = take("constant type");
+    for (;;) {
+      LcmConst c;
+      c.type = type;
+      c.group = group;
+      c.name = take("constant name");
+      expect("=");
+      c.value = take("constant value");
+      if (isIntegerType(type)) {
+        try {
+          std::stoll(c.value, nullptr, 0);
+        } catch (const std::exception&) {
+          throw LcmSchemaError(where() + ": " + c.name + " = " + c.value + ": not an integer");
+        }
+      }
+      s->constants.push_back(std::move(c));
+      if (i_ < t_.size() && t_[i_].text == ",") {
+        ++i_;
+        continue;
+      }
+      expect(";");
+      return;
+    }
+  }
+
+  std::string file_;
+  std::vector<Token> t_;
+  size_t i_ = 0;
+};
+
+bool mentionsWord(const std::string& text, const std::string& word) {
+  for (size_t at = text.find(word); at != std::string::npos; at = text.find(word, at + 1)) {
+    const auto isWordChar = [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    };
+    const bool starts = at == 0 || !isWordChar(text[at - 1]);
+    const bool ends = at + word.size() == text.size() || !isWordChar(text[at + word.size()]);
+    if (starts && ends) return true;
+  }
+  return false;
+}
+
+// An integer member takes a group of constants of its type as its enum when its comment names
+// one of them or says "constants" (see LcmConst).
+void linkEnums(LcmStruct* s) {
+  for (LcmMember& m : s->members) {
+    if (!m.dims.empty() || !isIntegerType(m.type)) continue;
+    for (const LcmConst& c : s->constants) {
+      if (c.type != m.type) continue;
+      if (!mentionsWord(m.comment, c.name) && m.comment.find("constants") == std::string::npos) {
+        continue;
+      }
+      for (const LcmConst& e : s->constants) {
+        if (e.group == c.group) m.enum_names.emplace(std::stoll(e.value, nullptr, 0), e.name);
+      }
+      break;
+    }
+  }
+}
+
+// lcm-gen: member names, primitive type names, dimensions (mode: 0 const, 1 variable).
+int64_t baseHash(const LcmStruct& s) {
+  int64_t v = 0x12345678;
+  for (const LcmMember& m : s.members) {
+    v = hashString(v, m.name);
+    if (kPrimitive.count(m.type)) v = hashString(v, m.type);
+    v = hashUpdate(v, static_cast<char>(m.dims.size()));
+    for (const std::string& d : m.dims) {
+      v = hashUpdate(v, isNumber(d) ? 0 : 1);
+      v = hashString(v, d);
+    }
+  }
+  return v;
+}
+
+}  // namespace
+
+LcmSchema::LcmSchema(const std::vector<std::pair<std::string, std::string>>& sources) {
+  for (const auto& [file, text] : sources) {
+    const size_t first = structs_.size();
+    Parser(file, tokenize(file, text)).parse(&structs_);
+    for (size_t k = first; k < structs_.size(); ++k) {
+      linkEnums(&structs_[k]);
+      structs_[k].base_hash = baseHash(structs_[k]);
+    }
+  }
+  computeFingerprints();
+}
+
+// Fingerprints: the base hash plus those of the member structs, rotated left by one
+// (lcm-gen's _computeHash; a type met again on the way in counts 0).
+void LcmSchema::computeFingerprints() {
   std::function<int64_t(const LcmStruct&, std::vector<const LcmStruct*>&)> compute =
       [&](const LcmStruct& s, std::vector<const LcmStruct*>& parents) -> int64_t {
     if (std::find(parents.begin(), parents.end(), &s) != parents.end()) return 0;
@@ -312,7 +413,12 @@ void decodeStruct(const LcmSchema& schema, const LcmStruct& s, Reader& r, LcmVal
   for (const LcmMember& m : s.members) {
     const std::string what = s.name + "." + m.name;
     if (m.dims.empty()) {
-      out->fields.emplace_back(m.name, decodeOne(schema, m.type, r, what, depth));
+      LcmValue v = decodeOne(schema, m.type, r, what, depth);
+      if (!m.enum_names.empty()) {
+        const auto it = m.enum_names.find(v.i);
+        v.enum_name = it == m.enum_names.end() ? "?" : it->second;
+      }
+      out->fields.emplace_back(m.name, std::move(v));
       continue;
     }
     std::vector<int64_t> dims;

@@ -22,11 +22,22 @@ struct LcmMember {
   std::string name;
   std::vector<std::string> dims;  // each a number or the name of an earlier integer member
   std::string comment;            // the line's // comment, if any (units)
+  // An enum: the names of the values it takes, from the struct's constants (see LcmConst).
+  std::map<int64_t, std::string> enum_names;
+};
+
+// A `const TYPE NAME = VALUE, ...;` of a struct. The constants of one declaration form a
+// group; an integer member of their type takes the group as its enum when its comment names
+// one of them or says "constants" (`int8_t health; // OK, DEGRADED or FAILED`).
+struct LcmConst {
+  std::string type, name, value;  // value as written
+  int group = 0;                  // the declaration's index within the struct
 };
 
 struct LcmStruct {
   std::string package, name;  // name without the package
   std::vector<LcmMember> members;
+  std::vector<LcmConst> constants;
   int64_t base_hash = 0;    // lcm-gen's hash of the members
   int64_t fingerprint = 0;  // what a message starts with (the generated getHash())
 };
@@ -44,11 +55,13 @@ struct LcmValue {
   std::string s;
   std::vector<LcmValue> items;                           // array elements
   std::vector<std::pair<std::string, LcmValue>> fields;  // struct members in order
+  std::string enum_name;  // an enum member's value: its constant's name, "?" for none
 };
 
 class LcmSchema {
  public:
-  // Parses `sources`; throws LcmSchemaError naming the file and line.
+  // Parses `sources` (their structs, members, constants and the enums these make) and computes
+  // the fingerprints; throws LcmSchemaError naming the file and line.
   explicit LcmSchema(const std::vector<std::pair<std::string, std::string>>& sources);
   // The embedded definitions.
   static const LcmSchema& builtIn();
@@ -64,6 +77,8 @@ class LcmSchema {
   const LcmStruct* decode(const uint8_t* data, size_t size, LcmValue* out) const;
 
  private:
+  void computeFingerprints();
+
   std::vector<LcmStruct> structs_;
   std::map<int64_t, size_t> by_fingerprint_;
 };

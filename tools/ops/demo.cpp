@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <thread>
 
@@ -175,14 +176,76 @@ int64_t wallClockUtime() {
       .count();
 }
 
+// Rig B's device processes: sweepmap-lidar and sweepmap-odometry, and with emulated devices
+// the emulator behind them (-1 when not started).
+struct CarProcesses {
+  pid_t emulator = -1, lidar = -1, odometry = -1;
+};
+
+// The simulated car in the device processes (--devices sim), starting at `start`.
+CarProcesses startSimulatedCar(DemoRun& run, const std::string& scene, const std::string& seed,
+                               const std::string& start) {
+  const std::vector<std::string> sim = {"--sim", "--scene",           scene, "--seed",
+                                        seed,    "--sim-start-utime", start};
+  CarProcesses car;
+  car.lidar = run.startProcess("lidar", sim);
+  car.odometry = run.startProcess("odometry", sim);
+  return car;
+}
+
+// The simulated car behind the X4's, the HI219's and the wheel board's serial protocols, each
+// on a pseudo-terminal (a symlink to it in DIR/dev/), publishing the truth; the device
+// processes open them with the real serial drivers. nullopt (said on stderr) when the
+// emulator made no pseudo-terminals.
+std::optional<CarProcesses> startEmulatedCar(DemoRun& run, const std::string& scene,
+                                             const std::string& seed, const std::string& start) {
+  fs::create_directories(run.out / "dev");
+  const std::vector<std::string> links = {(run.out / "dev" / "x4").string(),
+                                          (run.out / "dev" / "hi219").string(),
+                                          (run.out / "dev" / "wheelboard").string()};
+  for (const auto& l : links) fs::remove(l);
+  std::vector<std::string> argv = {(run.bin / "sweepmap").string(), "emulate",
+                                   "x4,hi219,wheel-board", "--pty"};
+  for (const auto& l : links) argv.insert(argv.end(), {"--link", l});
+  argv.insert(argv.end(), {"--rig", run.rig, "--scene", scene, "--seed", seed, "--start-utime",
+                           start, "--publish-truth", "--lcm-url", run.url});
+  for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
+  CarProcesses car;
+  car.emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
+  if (!waitForPaths(links, 10.0)) {
+    std::cerr << "demo: the emulator made no pseudo-terminals; see " << run.logFile("emulator")
+              << "\n";
+    return std::nullopt;
+  }
+  car.lidar = run.startProcess("lidar", {"--device", "ydlidar://" + links[0]});
+  car.odometry = run.startProcess("odometry", {"--imu-device", "hi219://" + links[1],
+                                               "--wheels-device", "wheelboard://" + links[2]});
+  return car;
+}
+
+// Waits until the wall clock passes `end_utime`; false (said on stderr) as soon as one of
+// the car's processes ends before.
+bool driveUntil(DemoRun& run, const CarProcesses& car, int64_t end_utime) {
+  while (wallClockUtime() < end_utime) {
+    pause(200);
+    for (pid_t p : {car.lidar, car.odometry, car.emulator}) {
+      if (p > 0 && !run.procs.running(p)) {
+        std::cerr << "demo: " << run.procs.name(p) << " ended early; see its log in "
+                  << (run.out / "logs").string() << "\n";
+        return false;
+      }
+    }
+  }
+  return true;
+}
+
 // Rig B live: sweepmap-lidar (X4) and sweepmap-odometry (wheel board + IMU) on one simulated
 // car, started at one agreed wall-clock time: in-process (--devices sim) or behind the
 // devices' serial protocols on pseudo-terminals (--devices emulated).
 int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& rig_sets,
                const std::string& scene) {
   DemoRun run = prepare(o, rig, rig_sets);
-  MobileLidarConfig config = std::get<MobileLidarConfig>(rig.config);
-  const double duration_s = config.sim.duration_s;
+  const double duration_s = std::get<MobileLidarConfig>(rig.config).sim.duration_s;
   const pid_t logger = run.startLogger();
   const pid_t assembler = run.startProcess("assembler", {});
   const pid_t mapper = run.startProcess("mapper", {"--save", (run.out / "live_map.bt").string()});
@@ -190,70 +253,18 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
   // The car starts when every device process is up and has opened its devices.
   const int64_t start_utime = wallClockUtime() + 2'000'000;
   const std::string seed = std::to_string(o.seed), start = std::to_string(start_utime);
-  pid_t emulator = -1, lidar = -1, odometry = -1;
-  if (o.devices == "emulated") {
-    // The simulated car behind the X4's, the HI219's and the wheel board's serial protocols,
-    // each on a pseudo-terminal (a symlink to it in DIR/dev/), publishing the truth.
-    fs::create_directories(run.out / "dev");
-    const std::vector<std::string> links = {(run.out / "dev" / "x4").string(),
-                                            (run.out / "dev" / "hi219").string(),
-                                            (run.out / "dev" / "wheelboard").string()};
-    for (const auto& l : links) fs::remove(l);
-    std::vector<std::string> argv = {(run.bin / "sweepmap").string(),
-                                     "emulate",
-                                     "x4,hi219,wheel-board",
-                                     "--pty",
-                                     "--link",
-                                     links[0],
-                                     "--link",
-                                     links[1],
-                                     "--link",
-                                     links[2],
-                                     "--rig",
-                                     run.rig,
-                                     "--scene",
-                                     scene,
-                                     "--seed",
-                                     seed,
-                                     "--start-utime",
-                                     start,
-                                     "--publish-truth",
-                                     "--lcm-url",
-                                     run.url};
-    for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
-    emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
-    if (!waitForPaths(links, 10.0)) {
-      std::cerr << "demo: the emulator made no pseudo-terminals; see " << run.logFile("emulator")
-                << "\n";
-      return 1;
-    }
-    lidar = run.startProcess("lidar", {"--device", "ydlidar://" + links[0]});
-    odometry = run.startProcess("odometry", {"--imu-device", "hi219://" + links[1],
-                                             "--wheels-device", "wheelboard://" + links[2]});
-  } else {
-    const std::vector<std::string> sim = {"--sim", "--scene",           scene, "--seed",
-                                          seed,    "--sim-start-utime", start};
-    lidar = run.startProcess("lidar", sim);
-    odometry = run.startProcess("odometry", sim);
-  }
+  const std::optional<CarProcesses> car = o.devices == "emulated"
+                                              ? startEmulatedCar(run, scene, seed, start)
+                                              : startSimulatedCar(run, scene, seed, start);
+  if (!car) return 1;
   std::cout << "demo: rig B drives for " << duration_s << " s on " << o.devices
             << " devices; processes log to " << (run.out / "logs").string() << "\n";
-  const int64_t end_utime = start_utime + static_cast<int64_t>((duration_s + 1.0) * 1e6);
-  int failures = 0;
-  while (wallClockUtime() < end_utime) {
-    pause(200);
-    for (pid_t p : {lidar, odometry, emulator}) {
-      if (p > 0 && !run.procs.running(p)) {
-        std::cerr << "demo: " << run.procs.name(p) << " ended early; see its log in "
-                  << (run.out / "logs").string() << "\n";
-        failures = 1;
-      }
-    }
-    if (failures) break;
-  }
+  int failures =
+      !driveUntil(run, *car, start_utime + static_cast<int64_t>((duration_s + 1.0) * 1e6));
   failures += run.stopInOrder(
-      {{lidar, 5.0}, {odometry, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 300);
-  if (emulator > 0) failures += run.procs.stop(emulator, 5.0) != 0;
+      {{car->lidar, 5.0}, {car->odometry, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}},
+      300);
+  if (car->emulator > 0) failures += run.procs.stop(car->emulator, 5.0) != 0;
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.scans == 0;

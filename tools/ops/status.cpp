@@ -1,6 +1,7 @@
 #include "tools/ops/status.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <iomanip>
 #include <iostream>
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/exit_codes.hpp"
 #include "processes/live_runner.hpp"
 #include "sweepmap/map_stats_t.hpp"
 #include "sweepmap/process_status_t.hpp"
@@ -47,18 +49,7 @@ void StatusBoard::add(const Message& msg, int64_t now_utime) {
   while (!c.rx.empty() && c.rx.front() <= now_utime - window) c.rx.pop_front();
 
   if (msg.channel.rfind(kStatusPrefix, 0) == 0) {
-    process_status_t s;
-    if (!decodeMessage(msg, &s)) {
-      ++malformed_;
-      return;
-    }
-    Process& p = processes_[s.process.empty() ? msg.channel.substr(7) : s.process];
-    p.last_rx = now_utime;
-    p.health = s.health;
-    p.detail = s.detail;
-    p.counters.clear();
-    for (int i = 0; i < s.ncounters; ++i)
-      p.counters.emplace_back(s.counter_names[i], s.counter_values[i]);
+    addStatus(msg, now_utime);
   } else if (msg.channel == "MAP_STATS") {
     map_stats_t m;
     if (!decodeMessage(msg, &m)) {
@@ -77,8 +68,56 @@ void StatusBoard::add(const Message& msg, int64_t now_utime) {
   }
 }
 
-bool StatusBoard::stale(const Process& p, int64_t now) const {
-  return seconds(now - p.last_rx) > options_.stale_s;
+// One node's status: the node is the channel's suffix, the process the message names (a
+// status of an older build names none: the node is its own process).
+void StatusBoard::addStatus(const Message& msg, int64_t now_utime) {
+  process_status_t s;
+  if (!decodeMessage(msg, &s)) {
+    ++malformed_;
+    return;
+  }
+  std::string node = msg.channel.substr(std::string(kStatusPrefix).size());
+  std::transform(node.begin(), node.end(), node.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  NodeStatus& n = processes_[s.process.empty() ? node : s.process].nodes[node];
+  n.last_rx = now_utime;
+  n.health = s.health;
+  n.detail = s.detail;
+  n.counters.clear();
+  for (int i = 0; i < s.ncounters; ++i)
+    n.counters.emplace_back(s.counter_names[i], s.counter_values[i]);
+}
+
+bool StatusBoard::stale(int64_t last_rx, int64_t now) const {
+  return seconds(now - last_rx) > options_.stale_s;
+}
+
+std::string StatusBoard::nodeState(const NodeStatus& n, int64_t now) const {
+  return stale(n.last_rx, now) ? "STALE" : healthName(n.health);
+}
+
+StatusBoard::Row StatusBoard::row(const std::string& name, const Process& p, int64_t now) const {
+  int64_t newest = 0;
+  for (const auto& [node, n] : p.nodes) newest = std::max(newest, n.last_rx);
+  Row r;
+  r.age_s = seconds(now - newest);
+  if (stale(newest, now)) {
+    r.state = "STALE";
+    const auto own = p.nodes.find(name);
+    r.detail = (own != p.nodes.end() ? own : p.nodes.begin())->second.detail;
+    return r;
+  }
+  // The worst of the live nodes; on a tie the node named after the process, else the first.
+  const NodeStatus* worst = nullptr;
+  for (const auto& [node, n] : p.nodes) {
+    if (stale(n.last_rx, now)) continue;
+    if (!worst || n.health > worst->health || (n.health == worst->health && node == name)) {
+      worst = &n;
+    }
+  }
+  r.state = healthName(worst->health);
+  r.detail = worst->detail;
+  return r;
 }
 
 double StatusBoard::rateHz(const Channel& c, int64_t now) const {
@@ -92,9 +131,66 @@ double StatusBoard::rateHz(const Channel& c, int64_t now) const {
 int StatusBoard::unhealthy(int64_t now_utime) const {
   int n = 0;
   for (const auto& [name, p] : processes_) {
-    n += stale(p, now_utime) || p.health == process_status_t::FAILED;
+    const std::string state = row(name, p, now_utime).state;
+    n += state == "STALE" || state == "FAILED";
   }
   return n;
+}
+
+namespace {
+
+// `counters` as name=value items, wrapped at 100 columns, each line indented by `indent`.
+void countersText(std::ostream& o, const std::vector<std::pair<std::string, int64_t>>& counters,
+                  const std::string& indent) {
+  std::string line = indent;
+  for (const auto& [k, v] : counters) {
+    const std::string item = k + "=" + std::to_string(v) + "  ";
+    if (line.size() + item.size() > 100 && line.size() > indent.size()) {
+      o << line << "\n";
+      line = indent;
+    }
+    line += item;
+  }
+  if (line.size() > indent.size()) o << line << "\n";
+}
+
+std::string ageText(double age_s) {
+  std::ostringstream age;
+  age << std::fixed << std::setprecision(1) << age_s << " s";
+  return age.str();
+}
+
+}  // namespace
+
+// One row per process; beneath it its nodes (a process of one node named after it: just the
+// counters).
+void StatusBoard::processesText(std::ostream& o, int64_t now) const {
+  o << std::left << std::setw(20) << "PROCESS" << std::setw(10) << "STATUS" << std::setw(9) << "AGE"
+    << "DETAIL\n";
+  for (const auto& [name, p] : processes_) {
+    const Row r = row(name, p, now);
+    o << std::setw(20) << name << std::setw(10) << r.state << std::setw(9) << ageText(r.age_s)
+      << r.detail << "\n";
+    if (p.nodes.size() == 1 && p.nodes.begin()->first == name) {
+      countersText(o, p.nodes.begin()->second.counters, "    ");
+      continue;
+    }
+    for (const auto& [node, n] : p.nodes) {
+      o << "    node " << node << " " << nodeState(n, now) << ", "
+        << ageText(seconds(now - n.last_rx)) << (n.detail.empty() ? "" : ": " + n.detail) << "\n";
+      countersText(o, n.counters, "      ");
+    }
+  }
+}
+
+void StatusBoard::channelsText(std::ostream& o, int64_t now) const {
+  o << std::setw(28) << "CHANNEL" << std::right << std::setw(10) << "RATE Hz" << std::setw(12)
+    << "MESSAGES" << std::setw(12) << "LAST BYTES" << std::left << "\n";
+  for (const auto& [name, c] : channels_) {
+    o << std::setw(28) << name << std::right << std::setw(10) << std::setprecision(1)
+      << rateHz(c, now) << std::setw(12) << c.total << std::setw(12) << c.last_size << std::left
+      << "\n";
+  }
 }
 
 std::string StatusBoard::text(int64_t now) const {
@@ -103,34 +199,9 @@ std::string StatusBoard::text(int64_t now) const {
   o << "sweepmap status: " << processes_.size() << " processes, " << channels_.size()
     << " channels, listening for " << std::setprecision(1)
     << (first_rx_ < 0 ? 0.0 : seconds(now - first_rx_)) << " s\n\n";
-  o << std::left << std::setw(20) << "PROCESS" << std::setw(10) << "HEALTH" << std::setw(9)
-    << "STATUS"
-    << "DETAIL\n";
-  for (const auto& [name, p] : processes_) {
-    std::ostringstream age;
-    age << std::fixed << std::setprecision(1) << seconds(now - p.last_rx) << " s";
-    o << std::setw(20) << name << std::setw(10)
-      << (stale(p, now) ? std::string("STALE") : std::string(healthName(p.health))) << std::setw(9)
-      << age.str() << p.detail << "\n";
-    std::string line = "    ";
-    for (const auto& [k, v] : p.counters) {
-      const std::string item = k + "=" + std::to_string(v) + "  ";
-      if (line.size() + item.size() > 100) {
-        o << line << "\n";
-        line = "    ";
-      }
-      line += item;
-    }
-    if (line.size() > 4) o << line << "\n";
-  }
-  o << "\n"
-    << std::setw(28) << "CHANNEL" << std::right << std::setw(10) << "RATE Hz" << std::setw(12)
-    << "MESSAGES" << std::setw(12) << "LAST BYTES" << std::left << "\n";
-  for (const auto& [name, c] : channels_) {
-    o << std::setw(28) << name << std::right << std::setw(10) << std::setprecision(1)
-      << rateHz(c, now) << std::setw(12) << c.total << std::setw(12) << c.last_size << std::left
-      << "\n";
-  }
+  processesText(o, now);
+  o << "\n";
+  channelsText(o, now);
   if (map_) {
     o << "\nmapper: " << map_->sweeps << " sweeps, " << map_->points << " points, "
       << map_->occupied << " occupied / " << map_->free << " free voxels at "
@@ -153,13 +224,18 @@ std::string StatusBoard::json(int64_t now) const {
   j["listened_s"] = first_rx_ < 0 ? 0.0 : seconds(now - first_rx_);
   j["processes"] = nlohmann::json::object();
   for (const auto& [name, p] : processes_) {
-    nlohmann::json c = nlohmann::json::object();
-    for (const auto& [k, v] : p.counters) c[k] = v;
-    j["processes"][name] = {{"health", healthName(p.health)},
-                            {"stale", stale(p, now)},
-                            {"age_s", seconds(now - p.last_rx)},
-                            {"detail", p.detail},
-                            {"counters", c}};
+    const Row r = row(name, p, now);
+    nlohmann::json nodes = nlohmann::json::object();
+    for (const auto& [node, n] : p.nodes) {
+      nlohmann::json c = nlohmann::json::object();
+      for (const auto& [k, v] : n.counters) c[k] = v;
+      nodes[node] = {{"status", nodeState(n, now)},
+                     {"age_s", seconds(now - n.last_rx)},
+                     {"detail", n.detail},
+                     {"counters", c}};
+    }
+    j["processes"][name] = {
+        {"status", r.state}, {"age_s", r.age_s}, {"detail", r.detail}, {"nodes", nodes}};
   }
   j["channels"] = nlohmann::json::object();
   for (const auto& [name, c] : channels_) {
@@ -207,13 +283,29 @@ class Listener {
   StatusBoard* board_;
 };
 
+// --once's exit status: a health check fails while nothing runs, or while a process is
+// stale or FAILED (DEGRADED still runs: 0).
+int onceStatus(const StatusBoard& board, int64_t now, const StatusOptions& o) {
+  if (board.processes() == 0) {
+    std::cerr << "sweepmap status: no process seen on " << o.lcm_url << " in " << o.window_s
+              << " s\n";
+    return kExitBadInput;
+  }
+  if (const int n = board.unhealthy(now); n > 0) {
+    std::cerr << "sweepmap status: " << n << " of " << board.processes()
+              << " processes stale or FAILED\n";
+    return kExitBadInput;
+  }
+  return kExitOk;
+}
+
 }  // namespace
 
 int runStatus(const StatusOptions& o) {
   lcm::LCM lcm(o.lcm_url);
   if (!lcm.good()) {
     std::cerr << "sweepmap status: cannot open LCM at '" << o.lcm_url << "'\n";
-    return 2;
+    return kExitUsage;
   }
   StatusBoard board(o.board);
   Listener listener(&board);
@@ -226,15 +318,15 @@ int runStatus(const StatusOptions& o) {
     const int64_t now = nowUtime();
     if (o.once) {
       if (seconds(now - start) < o.window_s) continue;
-      std::cout << (o.json ? board.json(now) : board.text(now));
-      return std::min(board.unhealthy(now), 100);
+      std::cout << (o.json ? board.json(now) : board.text(now)) << std::flush;
+      return onceStatus(board, now, o);
     }
     if (now >= next_draw) {
       std::cout << "\033[H\033[2J" << board.text(now) << std::flush;
       next_draw += 1'000'000;
     }
   }
-  return 0;
+  return kExitOk;
 }
 
 }  // namespace sweepmap

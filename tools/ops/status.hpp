@@ -1,11 +1,13 @@
 // `sweepmap status`: every process's health at a glance, from what they publish.
 //
 // StatusBoard is fed every message seen on the bus (any channel) with its receive time, and
-// renders the board: per process (from STATUS_<NAME>, process_status_t) its health, counters,
-// last detail and the age of its last status — stale when no status came for stale_s (the
-// processes publish one a second); per channel the message rate over the last rate_window_s;
-// the mapper's progress (MAP_STATS: sweeps, voxels, memory, incomplete sweeps) and the
-// rotating assembler's last sweep (SWEEP_STATUS: corrected, phi_offset, reason). It reads no
+// renders the board: one row per process, from the STATUS_<NODE> messages (process_status_t)
+// of the nodes it runs (its `process` field names the process, the channel the node): its
+// state (OK, DEGRADED, FAILED: the worst of its live nodes; STALE when no status of it came for
+// stale_s — the processes publish one a second), the age of its last status and its detail;
+// each node's state, detail and counters beneath it; per channel the message rate over the last
+// rate_window_s; the mapper's progress (MAP_STATS: sweeps, voxels, memory, incomplete sweeps) and
+// the rotating assembler's last sweep (SWEEP_STATUS: corrected, phi_offset, reason). It reads no
 // clock: times come with the messages, so tests drive it directly.
 #pragma once
 
@@ -13,6 +15,7 @@
 #include <deque>
 #include <map>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -33,15 +36,26 @@ class StatusBoard {
   // The board as text (a terminal table) and as JSON (one object), at `now_utime`.
   std::string text(int64_t now_utime) const;
   std::string json(int64_t now_utime) const;
-  // Processes whose status is stale or whose health is FAILED (for scripts: exit status).
+  // Processes whose status is stale or whose state is FAILED (for scripts: exit status).
   int unhealthy(int64_t now_utime) const;
+  // Processes seen (any status of theirs, stale or not).
+  size_t processes() const { return processes_.size(); }
 
  private:
-  struct Process {
+  struct NodeStatus {
     int64_t last_rx = 0;
     int health = 0;
     std::string detail;
     std::vector<std::pair<std::string, int64_t>> counters;
+  };
+  struct Process {
+    std::map<std::string, NodeStatus> nodes;  // by node name (STATUS_<NODE>, lower case)
+  };
+  // A process's row: its state, the age of its newest status, the detail of its worst node.
+  struct Row {
+    std::string state;
+    double age_s = 0.0;
+    std::string detail;
   };
   struct Channel {
     std::deque<int64_t> rx;  // receive times within the rate window
@@ -58,7 +72,12 @@ class StatusBoard {
     double phi_offset_deg = 0.0;
     std::string reason;
   };
-  bool stale(const Process& p, int64_t now) const;
+  bool stale(int64_t last_rx, int64_t now) const;
+  std::string nodeState(const NodeStatus& n, int64_t now) const;
+  Row row(const std::string& name, const Process& p, int64_t now) const;
+  void addStatus(const Message& msg, int64_t now_utime);
+  void processesText(std::ostream& o, int64_t now) const;
+  void channelsText(std::ostream& o, int64_t now) const;
   double rateHz(const Channel& c, int64_t now) const;
 
   StatusBoardOptions options_;
@@ -79,7 +98,8 @@ struct StatusOptions {
 };
 
 // Runs the dashboard (refreshing once a second until SIGINT/SIGTERM) or one snapshot. Returns
-// 0, or with `once` the number of unhealthy processes (capped at 100); 2 if LCM cannot start.
+// 0 (kExitOk); with `once` 1 (kExitBadInput) when no process was seen or one is stale or
+// FAILED (the message on stderr); 2 (kExitUsage) if LCM cannot start on the URL.
 int runStatus(const StatusOptions& options);
 
 }  // namespace sweepmap
