@@ -63,7 +63,7 @@ def subcommands(help_text: str) -> List[str]:
     """Names listed under a CLI11 help's "Subcommands:" heading."""
     names, inside = [], False
     for line in help_text.splitlines():
-        if line.strip() == "Subcommands:" or line.startswith("Subcommands:"):
+        if line.strip().lower() == "subcommands:":
             inside = True
             continue
         if inside:
