@@ -15,6 +15,8 @@
 #                         sweepmap-onboard (arm64, on-board processes + systemd units) in build-pi/
 #   make format         - clang-format every C++ file in place (.clang-format)
 #   make format-check   - fail, listing them, when files are not formatted (part of make test)
+#   make docs           - regenerate docs/reference/{cli,config,channels}.md from the built
+#                         commands and the code (the test docs_reference_is_current checks them)
 BUILD ?= build
 SANITIZE_BUILD ?= build-sanitize
 FUZZ_BUILD ?= build-fuzz
@@ -40,7 +42,7 @@ SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt
 FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
 
 .PHONY: all setup setup-pi build demo test test-unit test-sanitize fuzz pi pi-build package \
-        format format-check bench clean
+        format format-check bench docs clean
 
 all: build
 
@@ -117,6 +119,13 @@ format-check: setup
 	@bad=$$(for f in $(FORMAT_FILES); do clang-format --dry-run --Werror "$$f" >/dev/null 2>&1 || echo "$$f"; done); \
 	if [ -n "$$bad" ]; then echo "format-check: not clang-formatted (run make format):"; echo "$$bad"; exit 1; fi; \
 	echo "format-check: $(words $(FORMAT_FILES)) files formatted"
+
+# The generated reference pages need only the commands, not the tests.
+DOC_TARGETS = sweepmap sweepmap-motor sweepmap-lidar sweepmap-odometry sweepmap-assembler \
+              sweepmap-mapper sweepmap-profiler
+docs: setup $(BUILD)/Makefile
+	cmake --build $(BUILD) -j$(JOBS) --target $(DOC_TARGETS)
+	python3 tools/docs/generate_reference.py $(BUILD)/bin
 
 bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench

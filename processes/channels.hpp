@@ -1,4 +1,4 @@
-// LCM channel names. The README's channel table lists them with their types.
+// LCM channel names, with their types: docs/reference/channels.md is generated from this file.
 #pragma once
 
 namespace sweepmap {

@@ -1,4 +1,4 @@
-"""The README's Python example, checked: python/sweepmap_log.py and the lcm-gen Python types
+"""The Python example of docs/how-to/python-logs.md, checked: python/sweepmap_log.py and the lcm-gen Python types
 read a simulated rig-B log as sweepmap's own `dump` does (every LIDAR_SCAN, same times and
 ranges), and skip a corrupt region to the same byte ranges as sweepmap's reader.
 
@@ -22,7 +22,7 @@ def main(bin_dir: str, python_dir: str, work: str) -> int:
     subprocess.run([sweepmap_bin, "sim", "--rig", "rig_b", "--set", "sim.duration_s=3",
                     "--seed", "2", "--out", log], check=True, stdout=subprocess.DEVNULL)
 
-    # The README's example.
+    # The docs' example.
     scans = []
     for ev in sweepmap_log.events(log, channels={"LIDAR_SCAN"}):
         scan = sweepmap.lidar_scan_t.decode(ev.data)
