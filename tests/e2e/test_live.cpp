@@ -25,6 +25,30 @@ class LiveTest : public PrivateNetworkTest {
   // Rig A's processes in mode 1.
   const ProcessCommand proc{{"--rig", kRig, "--set", "motor.mode=1", "--lcm-url", kUrl}};
   Launcher procs;
+
+  // Plays `log` into the `upstream` processes (name, arguments), sweepmap-assembler and
+  // sweepmap-mapper (its map in DIR/live_map.bt), all made by `command`, with lcm-logger
+  // recording `channels` into DIR/recorded.lcmlog; then stops them upstream first, the logger
+  // last.
+  using Stages = std::vector<std::pair<std::string, std::vector<std::string>>>;
+  void playIntoLive(const fs::path& dir, const ProcessCommand& command, const std::string& log,
+                    double timeout_s, const std::string& channels, const Stages& upstream = {}) {
+    procs.setDir(dir);
+    const pid_t logger =
+        procs.start("logger", loggerCommand(kUrl, (dir / "recorded.lcmlog").string(), channels));
+    std::vector<Stop> stops;
+    for (const auto& [name, args] : upstream) {
+      stops.push_back({procs.start(name, command(name, args)), 10.0});
+    }
+    stops.push_back({procs.start("assembler", command("assembler")), 10.0});
+    stops.push_back(
+        {procs.start("mapper", command("mapper", {"--save", (dir / "live_map.bt").string()})),
+         60.0});
+    stops.push_back({logger, 10.0});
+    sleepS(0.7);
+    ASSERT_EQ(procs.play(kUrl, log, timeout_s), 0) << procs.said("logplayer");
+    procs.stopInOrder(stops, 0.8);
+  }
 };
 
 // What `sweepmap demo` leaves in its --out folder.
@@ -61,19 +85,12 @@ TEST_F(LiveTest, LiveCloudsEqualOfflineReplayOfTheirLog) {
 
 TEST_F(LiveTest, LogplayerIntoLiveProcessesMatchesReplay) {
   const auto dir = scratchDir("logplayer");
-  procs.setDir(dir);
   const std::string sim_log = (dir / "sim.lcmlog").string();
   ASSERT_EQ(sweepmap({"sim", "--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "2",
                       "--seed", "8", "--out", sim_log}),
             0);
   const std::string rec = (dir / "recorded.lcmlog").string();
-  const pid_t logger = procs.start("logger", loggerCommand(kUrl, rec, "SWEEP_.*|MAP_STATS"));
-  const pid_t assembler = procs.start("assembler", proc("assembler"));
-  const pid_t mapper =
-      procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}));
-  sleepS(0.7);
-  ASSERT_EQ(procs.play(kUrl, sim_log, 120.0), 0) << procs.said("logplayer");
-  procs.stopInOrder({{assembler, 10.0}, {mapper, 60.0}, {logger, 10.0}}, 0.8);
+  ASSERT_NO_FATAL_FAILURE(playIntoLive(dir, proc, sim_log, 120.0, "SWEEP_.*|MAP_STATS"));
   EXPECT_TRUE(fs::exists(dir / "live_map.bt"));
 
   ASSERT_EQ(replayInto(dir / "offline", sim_log, {"--rig", kRig, "--set", "motor.mode=1"}), 0)
@@ -87,23 +104,15 @@ TEST_F(LiveTest, LogplayerIntoLiveProcessesMatchesReplay) {
 
 TEST_F(LiveTest, RigBLogplayerIntoLiveProcessesMatchesReplayMobile) {
   const auto dir = scratchDir("live_rig_b");
-  procs.setDir(dir);
   const std::string rig_b = sourcePath("config/rig_b.yaml");
   const std::string sim_log = (dir / "sim.lcmlog").string();
   ASSERT_EQ(sweepmap({"sim", "--rig", rig_b, "--scene", sourcePath("config/scene_lab.yaml"),
                       "--set", "sim.duration_s=12", "--seed", "5", "--out", sim_log}),
             0);
   const std::string rec = (dir / "recorded.lcmlog").string();
-  const ProcessCommand procB({"--rig", rig_b, "--lcm-url", kUrl});
-  const pid_t logger =
-      procs.start("logger", loggerCommand(kUrl, rec, "ODOMETRY_POSE|WHEEL_ODOMETRY|SWEEP_CLOUD"));
-  const pid_t odometry = procs.start("odometry", procB("odometry", {"--from-lcm"}));
-  const pid_t assembler = procs.start("assembler", procB("assembler"));
-  const pid_t mapper =
-      procs.start("mapper", procB("mapper", {"--save", (dir / "live_map.bt").string()}));
-  sleepS(0.7);
-  ASSERT_EQ(procs.play(kUrl, sim_log, 120.0), 0) << procs.said("logplayer");
-  procs.stopInOrder({{odometry, 10.0}, {assembler, 10.0}, {mapper, 60.0}, {logger, 10.0}}, 0.8);
+  ASSERT_NO_FATAL_FAILURE(playIntoLive(dir, ProcessCommand({"--rig", rig_b, "--lcm-url", kUrl}),
+                                       sim_log, 120.0, "ODOMETRY_POSE|WHEEL_ODOMETRY|SWEEP_CLOUD",
+                                       {{"odometry", {"--from-lcm"}}}));
 
   const auto offline_dir = dir / "offline";
   ASSERT_EQ(replayInto(offline_dir, sim_log, {"--rig", rig_b}), 0) << readFile(dir / "replay.txt");
@@ -137,20 +146,13 @@ TEST_F(LiveTest, RigBDemoLiveMapEqualsReplayedMap) {
 // replay`: the offline simulation's raw messages are what the live processes take.
 TEST_F(LiveTest, RigCLogplayerIntoLiveProcessesMatchesReplay) {
   const auto dir = scratchDir("live_rig_c");
-  procs.setDir(dir);
   const std::string sim_log = (dir / "sim.lcmlog").string();
   ASSERT_EQ(
       sweepmap({"sim", "--rig", "rig_c", "--scene", "test_piece", "--seed", "6", "--out", sim_log}),
       0);
   const std::string rec = (dir / "recorded.lcmlog").string();
-  const ProcessCommand procC({"--rig", "rig_c", "--lcm-url", kUrl});
-  const pid_t logger = procs.start("logger", loggerCommand(kUrl, rec, "SWEEP_CLOUD"));
-  const pid_t assembler = procs.start("assembler", procC("assembler"));
-  const pid_t mapper =
-      procs.start("mapper", procC("mapper", {"--save", (dir / "live_map.bt").string()}));
-  sleepS(0.7);
-  ASSERT_EQ(procs.play(kUrl, sim_log, 60.0), 0) << procs.said("logplayer");
-  procs.stopInOrder({{assembler, 10.0}, {mapper, 60.0}, {logger, 10.0}}, 0.8);
+  ASSERT_NO_FATAL_FAILURE(playIntoLive(dir, ProcessCommand({"--rig", "rig_c", "--lcm-url", kUrl}),
+                                       sim_log, 60.0, "SWEEP_CLOUD"));
 
   const auto offline_dir = dir / "offline";
   ASSERT_EQ(replayInto(offline_dir, sim_log, {"--rig", "rig_c"}), 0)
