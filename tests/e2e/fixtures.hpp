@@ -22,6 +22,7 @@
 namespace sweepmap {
 namespace test {
 
+// Waits `s` seconds: for subscribers to be ready, or the last messages to arrive.
 void sleepS(double s);
 
 // ---- Network namespaces ------------------------------------------------------------------
