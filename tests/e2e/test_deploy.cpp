@@ -8,16 +8,13 @@
 // - disk full while saving a map (a small tmpfs in a private mount namespace): a clear error
 //   naming the file, the previous map intact.
 #include <gtest/gtest.h>
-#include <sched.h>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/statvfs.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -30,11 +27,8 @@
 #include "processes/channels.hpp"
 #include "sweepmap/map_save_t.hpp"
 #include "sweepmap/map_stats_t.hpp"
-#include "sweepmap/process_status_t.hpp"
-#include "tests/e2e/test_support.hpp"
+#include "tests/e2e/fixtures.hpp"
 #include "tools/ops/deploy.hpp"
-#include "tools/ops/netns.hpp"
-#include "tools/ops/process_group.hpp"
 #include "tools/ops/systemd_units.hpp"
 
 namespace sweepmap {
@@ -80,30 +74,8 @@ double rssMb(pid_t pid) {
   return 0.0;
 }
 
-// The last STATUS_<NAME> of a log, decoded.
-process_status_t lastStatus(const std::string& log, const std::string& name) {
-  process_status_t s;
-  const auto m = readChannel(log, "STATUS_" + name);
-  if (!m.empty()) decodeMessage(m.back(), &s);
-  return s;
-}
-int64_t counterOf(const process_status_t& s, const std::string& name) {
-  for (int i = 0; i < s.ncounters; ++i) {
-    if (s.counter_names[i] == name) return s.counter_values[i];
-  }
-  return 0;
-}
-
-class DeployTest : public ::testing::Test {
+class DeployTest : public PrivateNetworkTest {
  protected:
-  static void SetUpTestSuite() {
-    std::string why;
-    netns_ok_ = enterPrivateNetwork(&why);
-    netns_why_ = why;
-  }
-  void SetUp() override {
-    if (!netns_ok_) GTEST_SKIP() << "no private network namespace: " << netns_why_;
-  }
   // A rig-A process for a deployment file: sweepmap-NAME args in YAML flow syntax.
   static std::string rigProcess(const std::string& name, const std::string& extra) {
     return "      - {name: " + name + ", command: sweepmap-" + name + ", args: [--rig, " + kRig +
@@ -123,9 +95,9 @@ class DeployTest : public ::testing::Test {
   // `sweepmap launch DEPLOY --log-dir DIR/logs` in the background.
   void startLaunch(const fs::path& dir, const std::string& deploy) {
     dir_ = dir;
-    launch_ = procs_.start(
-        "launch", {binPath("sweepmap"), "launch", deploy, "--log-dir", (dir / "logs").string()},
-        (dir / "launch_out.txt").string());
+    procs_.setDir(dir);
+    launch_ = procs_.start("launch_out", {binPath("sweepmap"), "launch", deploy, "--log-dir",
+                                          (dir / "logs").string()});
   }
   std::string events() const { return readFile(dir_ / "logs" / "launch.txt"); }
   // The pid of `name`'s latest start (-1 if none).
@@ -145,14 +117,9 @@ class DeployTest : public ::testing::Test {
   }
 
   fs::path dir_;
-  ProcessGroup procs_;
+  Launcher procs_;
   pid_t launch_ = -1;
-  static bool netns_ok_;
-  static std::string netns_why_;
 };
-
-bool DeployTest::netns_ok_ = false;
-std::string DeployTest::netns_why_;
 
 // The units of every host of the shipped deployment files pass `systemd-analyze verify`
 // (which also checks that ExecStart's executables exist: those of this build), with nothing
@@ -347,8 +314,46 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
     while (r.next(&e)) ++events_read;
     EXPECT_GT(events_read, 100) << log;
   }
-  EXPECT_EQ(lastStatus((rec / "run.01").string(), "MAPPER").process, "mapper");
+  EXPECT_EQ(lastStatus((rec / "run.01").string(), "STATUS_MAPPER").message.process, "mapper");
 }
+
+// The rig-A log of both message tests: 8 sweeps in mode 1, made once per build.
+std::string stormLog() {
+  return cachedSimLog("storm_rig_a",
+                      {"--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "8", "--seed",
+                       "6", "--set", "motor.rehome_every_sweep=false"});
+}
+
+// Resident memory of the assembler and the mapper [MB], every 50 ms while the player plays
+// (120 s at most), and how long it played.
+struct RssTrace {
+  std::vector<double> assembler, mapper;
+  double play_s = 0.0;
+};
+RssTrace traceRss(Launcher& procs, pid_t player, pid_t assembler, pid_t mapper) {
+  RssTrace rss;
+  const auto t0 = Clock::now();
+  while (procs.running(player) && since(t0) < 120) {
+    rss.assembler.push_back(rssMb(assembler));
+    rss.mapper.push_back(rssMb(mapper));
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  }
+  rss.play_s = since(t0);
+  return rss;
+}
+
+// The last total a process said in "receive queue full: N messages dropped so far" (0: none).
+int64_t droppedSaid(const std::string& said) {
+  const std::regex total("receive queue full: ([0-9]+) messages dropped so far");
+  int64_t last = 0;
+  for (auto it = std::sregex_iterator(said.begin(), said.end(), total);
+       it != std::sregex_iterator(); ++it) {
+    last = std::stoll((*it)[1]);
+  }
+  return last;
+}
+
+double peak(const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); }
 
 // A log played at 10x speed into the assembler and mapper, each with a receive queue of 2
 // messages: both keep running and publishing their status; what the full queue refuses is
@@ -357,96 +362,57 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
 // overflows a queue deterministically); memory stays bounded and flat.
 TEST_F(DeployTest, MessageStormAtTenTimesSpeed) {
   const auto dir = scratchDir("deploy_storm");
-  const std::string sim_log =
-      cachedSimLog("storm_rig_a", {"--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "8",
-                                   "--seed", "6", "--set", "motor.rehome_every_sweep=false"});
+  procs_.setDir(dir);
+  const std::string sim_log = stormLog();
   const std::string rec = (dir / "status.lcmlog").string();
-  const auto proc = [&](const std::string& name, std::vector<std::string> extra) {
-    std::vector<std::string> a = {binPath("sweepmap-" + name),
-                                  "--rig",
-                                  kRig,
-                                  "--set",
-                                  "motor.mode=1",
-                                  "--set",
-                                  "motor.rehome_every_sweep=false",
-                                  "--lcm-url",
-                                  kUrl,
-                                  "--queue-capacity",
-                                  "20"};
-    a.insert(a.end(), extra.begin(), extra.end());
-    return a;
-  };
-  const pid_t logger = procs_.start(
-      "logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c", "STATUS_.*|MAP_STATS", rec},
-      (dir / "logger.txt").string());
-  const pid_t assembler =
-      procs_.start("assembler", proc("assembler", {}), (dir / "assembler.txt").string());
-  const pid_t mapper = procs_.start("mapper", proc("mapper", {"--save", (dir / "map.bt").string()}),
-                                    (dir / "mapper.txt").string());
-  std::this_thread::sleep_for(std::chrono::milliseconds(700));
-  const pid_t player =
-      procs_.start("player", {"lcm-logplayer", "--speed=10", "--lcm-url=" + kUrl, sim_log},
-                   (dir / "player.txt").string());
-  std::vector<double> rss_assembler, rss_mapper;
-  const auto t0 = Clock::now();
-  while (procs_.running(player) && since(t0) < 120) {
-    rss_assembler.push_back(rssMb(assembler));
-    rss_mapper.push_back(rssMb(mapper));
-    std::this_thread::sleep_for(std::chrono::milliseconds(50));
-  }
-  const double play_s = since(t0);
-  ASSERT_EQ(procs_.wait(player, 1), 0) << readFile(dir / "player.txt");
-  std::this_thread::sleep_for(std::chrono::milliseconds(1500));
-  EXPECT_TRUE(procs_.running(assembler)) << readFile(dir / "assembler.txt");
-  EXPECT_TRUE(procs_.running(mapper)) << readFile(dir / "mapper.txt");
-  EXPECT_EQ(procs_.stop(assembler, 10), 0);
-  EXPECT_EQ(procs_.stop(mapper, 30), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
-  EXPECT_EQ(procs_.stop(logger, 10), 0);
+  const ProcessCommand proc({"--rig", kRig, "--set", "motor.mode=1", "--set",
+                             "motor.rehome_every_sweep=false", "--lcm-url", kUrl,
+                             "--queue-capacity", "20"});
+  const pid_t logger = procs_.start("logger", loggerCommand(kUrl, rec, "STATUS_.*|MAP_STATS"));
+  const pid_t assembler = procs_.start("assembler", proc("assembler"));
+  const pid_t mapper =
+      procs_.start("mapper", proc("mapper", {"--save", (dir / "map.bt").string()}));
+  sleepS(0.7);
+  const pid_t player = procs_.start("logplayer", playerCommand(kUrl, sim_log, {"--speed=10"}));
+  const RssTrace rss = traceRss(procs_, player, assembler, mapper);
+  ASSERT_EQ(procs_.wait(player, 1), 0) << procs_.said(player);
+  sleepS(1.5);
+  EXPECT_TRUE(procs_.running(assembler)) << procs_.said(assembler);
+  EXPECT_TRUE(procs_.running(mapper)) << procs_.said(mapper);
+  procs_.stopInOrder({{assembler, 10}, {mapper, 30}, {logger, 10}});
 
-  ASSERT_GT(rss_assembler.size(), 10u);
-  const auto peak = [](const std::vector<double>& v) {
-    return *std::max_element(v.begin(), v.end());
-  };
-  const size_t third = rss_assembler.size() / 3;
+  ASSERT_GT(rss.assembler.size(), 10u);
+  const size_t third = rss.assembler.size() / 3;
   const double assembler_early =
-      *std::max_element(rss_assembler.begin(), rss_assembler.begin() + third);
-  const auto a = lastStatus(rec, "ASSEMBLER"), m = lastStatus(rec, "MAPPER");
-  const int64_t a_dropped = counterOf(a, "dropped"), m_dropped = counterOf(m, "dropped");
-  std::cout << "storm: " << play_s
-            << " s of play at 10x; assembler: " << counterOf(a, "messages_in") << " messages in, "
-            << a_dropped << " dropped, peak RSS " << peak(rss_assembler) << " MB (first third "
-            << assembler_early << " MB); mapper: " << counterOf(m, "messages_in") << " in, "
-            << m_dropped << " dropped, peak RSS " << peak(rss_mapper) << " MB\n";
+      *std::max_element(rss.assembler.begin(), rss.assembler.begin() + third);
+  const LastStatus a = lastStatus(rec, "STATUS_ASSEMBLER"), m = lastStatus(rec, "STATUS_MAPPER");
+  const int64_t a_dropped = a.counter("dropped"), m_dropped = m.counter("dropped");
+  std::cout << "storm: " << rss.play_s
+            << " s of play at 10x; assembler: " << a.counter("messages_in") << " messages in, "
+            << a_dropped << " dropped, peak RSS " << peak(rss.assembler) << " MB (first third "
+            << assembler_early << " MB); mapper: " << m.counter("messages_in") << " in, "
+            << m_dropped << " dropped, peak RSS " << peak(rss.mapper) << " MB\n";
   // Statuses kept coming while the storm lasted (1 Hz each).
-  EXPECT_GE(readChannel(rec, "STATUS_ASSEMBLER").size(), static_cast<size_t>(play_s) - 1);
+  EXPECT_GE(readChannel(rec, "STATUS_ASSEMBLER").size(), static_cast<size_t>(rss.play_s) - 1);
   // Handled + dropped by the full queue never exceed what was played; the rest was lost before
   // it reached the process (the socket's or LCM's own buffer under load: not ours to count).
   int64_t played = 0;
   for (const char* ch : {channels::kLidarScan, channels::kScanWindow}) {
     played += static_cast<int64_t>(readChannel(sim_log, ch).size());
   }
-  const int64_t reached = counterOf(a, "messages_in") + a_dropped;
+  const int64_t reached = a.counter("messages_in") + a_dropped;
   std::cout << "storm: " << played << " messages played to the assembler, " << reached
             << " reached it\n";
   EXPECT_LE(reached, played);
   EXPECT_GT(reached, played / 2);
   // Drops are counted in STATUS and said on stderr with the same total.
-  for (const auto& [name, dropped] : {std::pair{"assembler", a_dropped}, {"mapper", m_dropped}}) {
-    const std::string said = readFile(dir / (std::string(name) + ".txt"));
-    const std::regex total("receive queue full: ([0-9]+) messages dropped so far");
-    int64_t last = 0;
-    for (auto it = std::sregex_iterator(said.begin(), said.end(), total);
-         it != std::sregex_iterator(); ++it) {
-      last = std::stoll((*it)[1]);
-    }
-    EXPECT_EQ(last, dropped) << name;
-  }
+  EXPECT_EQ(droppedSaid(procs_.said(assembler)), a_dropped) << "assembler";
+  EXPECT_EQ(droppedSaid(procs_.said(mapper)), m_dropped) << "mapper";
   // Bounded: a queue of 2 messages; the map of 8 sweeps. Flat: the assembler's memory at the
   // end of the storm is within 50 MB of its first third's peak.
-  EXPECT_LT(peak(rss_assembler), 300.0);
-  EXPECT_LT(peak(rss_mapper), 600.0);
-  EXPECT_LT(rss_assembler.back(), assembler_early + 50.0);
+  EXPECT_LT(peak(rss.assembler), 300.0);
+  EXPECT_LT(peak(rss.mapper), 600.0);
+  EXPECT_LT(rss.assembler.back(), assembler_early + 50.0);
 }
 
 // Disk full while saving a map: the mapper's map on a 4 MB tmpfs in a private mount
@@ -455,36 +421,28 @@ TEST_F(DeployTest, MessageStormAtTenTimesSpeed) {
 // so), and the map saved before is intact: the same bytes, no temporary left, it loads.
 TEST_F(DeployTest, DiskFullWhileSavingAMapKeepsThePreviousMap) {
   const auto dir = scratchDir("deploy_disk_full");
+  procs_.setDir(dir);
   const fs::path disk = dir / "disk";
   fs::create_directories(disk);
-  if (::unshare(CLONE_NEWNS) != 0 ||
-      ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
-      ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=4m") != 0) {
-    GTEST_SKIP() << "no private mount namespace: " << std::strerror(errno);
-  }
-  const std::string sim_log =
-      cachedSimLog("storm_rig_a", {"--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "8",
-                                   "--seed", "6", "--set", "motor.rehome_every_sweep=false"});
-  const fs::path replayed = cachedReplay("deploy_disk_full_replay", sim_log,
+  std::string why;
+  if (!mountPrivateTmpfs(disk, "4m", &why)) GTEST_SKIP() << "no private mount namespace: " << why;
+  const fs::path replayed = cachedReplay("deploy_disk_full_replay", stormLog(),
                                          {"--rig", kRig, "--set", "motor.mode=1", "--set",
                                           "motor.rehome_every_sweep=false", "--no-plots"});
   const std::string map = (disk / "map.bt").string();
   const pid_t mapper = procs_.start(
-      "mapper", {binPath("sweepmap-mapper"), "--rig", kRig, "--lcm-url", kUrl, "--save", map},
-      (dir / "mapper.txt").string());
-  std::this_thread::sleep_for(std::chrono::milliseconds(700));
-  const pid_t player = procs_.start("player",
-                                    {"lcm-logplayer", "--speed=10", "--regexp=SWEEP_.*",
-                                     "--lcm-url=" + kUrl, (replayed / "derived.lcmlog").string()},
-                                    (dir / "player.txt").string());
-  ASSERT_EQ(procs_.wait(player, 120), 0);
-  std::this_thread::sleep_for(std::chrono::milliseconds(500));
+      "mapper", {binPath("sweepmap-mapper"), "--rig", kRig, "--lcm-url", kUrl, "--save", map});
+  sleepS(0.7);
+  ASSERT_EQ(procs_.play(kUrl, (replayed / "derived.lcmlog").string(), 120,
+                        {"--speed=10", "--regexp=SWEEP_.*"}),
+            0);
+  sleepS(0.5);
   lcm::LCM lcm(kUrl);
   ASSERT_TRUE(lcm.good());
   map_save_t save;
   save.utime = 0;
   lcm.publish(channels::kMapSave, &save);
-  ASSERT_TRUE(waitFor([&] { return fs::exists(map); }, 20)) << readFile(dir / "mapper.txt");
+  ASSERT_TRUE(waitFor([&] { return fs::exists(map); }, 20)) << procs_.said(mapper);
   const std::string saved = readFile(map);
   ASSERT_GT(saved.size(), 10000u);
 
@@ -497,12 +455,11 @@ TEST_F(DeployTest, DiskFullWhileSavingAMapKeepsThePreviousMap) {
       << std::string(free_bytes - saved.size() / 2, 'x');
   lcm.publish(channels::kMapSave, &save);
   const std::string error = "cannot save " + map + ": write failed: No space left on device";
-  EXPECT_TRUE(
-      waitFor([&] { return readFile(dir / "mapper.txt").find(error) != std::string::npos; }, 20))
-      << readFile(dir / "mapper.txt");
+  EXPECT_TRUE(waitFor([&] { return procs_.said(mapper).find(error) != std::string::npos; }, 20))
+      << procs_.said(mapper);
   EXPECT_TRUE(procs_.running(mapper));
   EXPECT_EQ(procs_.stop(mapper, 30), 1);  // the save at shutdown failed too
-  const std::string said = readFile(dir / "mapper.txt");
+  const std::string said = procs_.said(mapper);
   EXPECT_NE(said.find("saves failed (see above); the map file holds the last good save"),
             std::string::npos)
       << said;

@@ -7,16 +7,13 @@
 // check, capture -> decode, and rig B live on its three emulated devices (EKF against the
 // truth, an IMU hang-up).
 #include <gtest/gtest.h>
-#include <sched.h>
 #include <signal.h>
 #include <sys/mount.h>
 #include <sys/wait.h>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
 #include <fstream>
 #include <thread>
 
@@ -28,17 +25,13 @@
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/process_status_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
-#include "tests/e2e/test_support.hpp"
-#include "tools/ops/netns.hpp"
-#include "tools/ops/process_group.hpp"
+#include "tests/e2e/fixtures.hpp"
 
 namespace sweepmap {
 namespace test {
 namespace {
 
 const std::string kUrl = kDefaultLcmUrl;
-
-void sleepS(double s) { std::this_thread::sleep_for(std::chrono::duration<double>(s)); }
 
 std::vector<lidar_scan_t> scansIn(const std::string& log, const std::string& channel) {
   std::vector<lidar_scan_t> out;
@@ -50,22 +43,11 @@ std::vector<lidar_scan_t> scansIn(const std::string& log, const std::string& cha
   return out;
 }
 
-// The last counters of a process's status channel in the log.
-std::map<std::string, int64_t> statusCounters(const std::string& log, const std::string& channel,
-                                              std::string* detail) {
-  std::map<std::string, int64_t> out;
-  for (const Message& m : readChannel(log, channel)) {
-    process_status_t s;
-    if (!decodeMessage(m, &s)) continue;
-    out.clear();
-    for (int i = 0; i < s.ncounters; ++i) out[s.counter_names[i]] = s.counter_values[i];
-    if (detail) *detail = s.detail;
-  }
-  return out;
-}
-
+// The last counters of sweepmap-lidar's status in the log (its detail in `detail`).
 std::map<std::string, int64_t> lidarCounters(const std::string& log, std::string* detail) {
-  return statusCounters(log, "STATUS_LIDAR", detail);
+  const LastStatus status = lastStatus(log, "STATUS_LIDAR");
+  if (detail) *detail = status.message.detail;
+  return status.counters;
 }
 
 struct Match {
@@ -123,47 +105,36 @@ Match compare(const std::vector<lidar_scan_t>& got, const std::vector<lidar_scan
   return m;
 }
 
-class DevicesTest : public ::testing::Test {
+class DevicesTest : public PrivateNetworkTest {
  protected:
-  static void SetUpTestSuite() {
-    std::string why;
-    netns_ok_ = enterPrivateNetwork(&why);
-    netns_why_ = why;
-  }
-  void SetUp() override {
-    if (!netns_ok_) GTEST_SKIP() << "no private network namespace: " << netns_why_;
-  }
   pid_t emulator(const std::string& model, std::vector<std::string> args) {
     args.insert(args.begin(), {binPath("sweepmap"), "emulate", model});
-    return procs_.start("emulator", args,
-                        (dir_ / ("emulator_" + std::to_string(++n_) + ".txt")).string());
+    return procs_.start("emulator_" + std::to_string(++n_), args);
   }
   pid_t lidar(const std::string& rig, const std::string& device,
               std::vector<std::string> sets = {}) {
     std::vector<std::string> argv = {
         binPath("sweepmap-lidar"), "--rig", rig, "--device", device, "--lcm-url", kUrl};
     for (const auto& s : sets) argv.insert(argv.end(), {"--set", s});
-    return procs_.start("lidar", argv, (dir_ / "lidar.txt").string());
+    return procs_.start("lidar", argv);
   }
-  pid_t logger() {
-    return procs_.start("logger", {"lcm-logger", "--lcm-url=" + kUrl, "-f", log_},
-                        (dir_ / "logger.txt").string());
+  pid_t logger() { return procs_.start("logger", loggerCommand(kUrl, log_)); }
+  // sweepmap-odometry of rig B on its simulated devices.
+  pid_t simOdometry(const std::string& name) {
+    return procs_.start(
+        name, {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl});
   }
   void prepare(const std::string& name) {
     dir_ = scratchDir("devices_" + name);
+    procs_.setDir(dir_);
     log_ = (dir_ / "live.lcmlog").string();
     truth_ = (dir_ / "truth.lcmlog").string();
   }
   fs::path dir_;
   std::string log_, truth_;
-  ProcessGroup procs_;
+  Launcher procs_;
   int n_ = 0;
-  static bool netns_ok_;
-  static std::string netns_why_;
 };
-
-bool DevicesTest::netns_ok_ = false;
-std::string DevicesTest::netns_why_;
 
 // UST-10LX over TCP, its clock 100 ppm fast and wrapping 4 s in: scans on time to 1 ms, ranges
 // to the protocol's 1 mm, intensities from ME, the wrap counted, no reset.
@@ -176,13 +147,10 @@ TEST_F(DevicesTest, ScipOverTcpWithDriftAndWrap) {
   sleepS(0.5);
   const pid_t drv = lidar("rig_a", "scip://127.0.0.1:10940");
   sleepS(12.0);
-  EXPECT_EQ(procs_.stop(drv, 5.0), 0);
-  sleepS(0.3);
-  EXPECT_EQ(procs_.stop(log, 5.0), 0);
-  EXPECT_EQ(procs_.stop(emu, 5.0), 0);
+  procs_.stopInOrder({{drv, 5.0}, {log, 5.0}, {emu, 5.0}});
   const auto got = scansIn(log_, channels::kLidarScan);
   const auto truth = scansIn(truth_, "TRUTH_LIDAR_SCAN");
-  ASSERT_GT(got.size(), 300u) << readFile(dir_ / "lidar.txt");
+  ASSERT_GT(got.size(), 300u) << procs_.said("lidar");
   const Match m = compare(got, truth, 0.025, 0.0);
   std::cout << "scip: " << m.scans << " scans, " << m.matched << " matched, time error 99 % "
             << m.p99_time_us << " us, worst " << m.worst_time_us << " us, worst range error "
@@ -221,10 +189,7 @@ TEST_F(DevicesTest, ScipDriverReconnectsWithinTwoSeconds) {
   const auto back = std::chrono::system_clock::now();
   emu = emulator("ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a"});
   sleepS(4.0);
-  EXPECT_EQ(procs_.stop(drv, 5.0), 0);
-  sleepS(0.3);
-  EXPECT_EQ(procs_.stop(log, 5.0), 0);
-  procs_.stop(emu, 5.0);
+  procs_.stopInOrder({{drv, 5.0}, {log, 5.0}, {emu, 5.0, std::nullopt}});
   const auto got = scansIn(log_, channels::kLidarScan);
   const int64_t back_utime =
       std::chrono::duration_cast<std::chrono::microseconds>(back.time_since_epoch()).count();
@@ -236,7 +201,7 @@ TEST_F(DevicesTest, ScipDriverReconnectsWithinTwoSeconds) {
       ++after;
     }
   }
-  ASSERT_GT(first_after, 0) << readFile(dir_ / "lidar.txt");
+  ASSERT_GT(first_after, 0) << procs_.said("lidar");
   std::cout << "scip reconnect: first scan " << (first_after - back_utime) * 1e-3
             << " ms after the emulator was started again, " << after << " scans after\n";
   EXPECT_LT(first_after - back_utime, 2000000);
@@ -254,7 +219,7 @@ TEST_F(DevicesTest, IdentityMismatchIsOneClearError) {
       lidar("rig_a", "scip://127.0.0.1:10940", {"lidar.beam_count=721", "lidar.angle_min_deg=-90"});
   EXPECT_EQ(procs_.wait(drv, 10.0), 3);
   procs_.stop(emu, 5.0);
-  const std::string out = readFile(dir_ / "lidar.txt");
+  const std::string out = procs_.said("lidar");
   EXPECT_NE(out.find("721"), std::string::npos) << out;
   EXPECT_NE(out.find("1081"), std::string::npos) << out;
 }
@@ -266,9 +231,8 @@ TEST_F(DevicesTest, RefusedConnectionIsOneLineThenRetries) {
   sleepS(2.5);
   const pid_t emu = emulator("ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a"});
   sleepS(2.5);
-  EXPECT_EQ(procs_.stop(drv, 5.0), 0);
-  procs_.stop(emu, 5.0);
-  const std::string out = readFile(dir_ / "lidar.txt");
+  procs_.stopInOrder({{drv, 5.0}, {emu, 5.0, std::nullopt}});
+  const std::string out = procs_.said("lidar");
   size_t lines = 0;
   for (size_t at = out.find("refused"); at != std::string::npos; at = out.find("refused", at + 1))
     ++lines;
@@ -287,10 +251,7 @@ TEST_F(DevicesTest, ScipSurvivesCorruptionAndAStall) {
   sleepS(0.5);
   const pid_t drv = lidar("rig_a", "scip://127.0.0.1:10940");
   sleepS(8.0);
-  EXPECT_EQ(procs_.stop(drv, 5.0), 0);
-  sleepS(0.3);
-  EXPECT_EQ(procs_.stop(log, 5.0), 0);
-  procs_.stop(emu, 5.0);
+  procs_.stopInOrder({{drv, 5.0}, {log, 5.0}, {emu, 5.0, std::nullopt}});
   const auto got = scansIn(log_, channels::kLidarScan);
   std::string detail;
   const auto c = lidarCounters(log_, &detail);
@@ -380,13 +341,10 @@ TEST_P(SerialDevicesTest, PtyStreamsAndComesBackAfterHangUp) {
   sleepS(0.5);
   const pid_t drv = lidar(sourcePath("config/rig_b.yaml"), c.scheme + "://" + link, c.sets);
   sleepS(10.0);
-  EXPECT_EQ(procs_.stop(drv, 5.0), 0);
-  sleepS(0.3);
-  EXPECT_EQ(procs_.stop(log, 5.0), 0);
-  EXPECT_EQ(procs_.stop(emu, 5.0), 0);
+  procs_.stopInOrder({{drv, 5.0}, {log, 5.0}, {emu, 5.0}});
   const auto got = scansIn(log_, channels::kLidarScan);
   const auto truth = scansIn(truth_, "TRUTH_LIDAR_SCAN");
-  ASSERT_GT(got.size(), 20u) << readFile(dir_ / "lidar.txt");
+  ASSERT_GT(got.size(), 20u) << procs_.said("lidar");
   const Match m = compare(got, truth, c.period_s, 0.0);
   std::cout << c.model << ": " << m.scans << " scans, " << m.matched
             << " matched, worst time error " << m.worst_time_us << " us, worst range error "
@@ -557,14 +515,26 @@ TEST_F(DevicesTest, RigBLiveOnEmulatedDevicesTracksTheTruth) {
   EXPECT_LE(2.0 * e_ekf.rms_m, e_wheels.rms_m);
   EXPECT_LT(e_ekf.max_m, e_offline.max_m + 0.005);
   // The drivers saw clean lines: no frame lost, no checksum error, no reconnect.
-  const auto c = statusCounters(log, "STATUS_ODOMETRY", nullptr);
+  const auto c = lastStatus(log, "STATUS_ODOMETRY").counters;
   for (const char* k : {"imu_checksum_errors", "imu_reconnects", "wheels_frames_lost",
                         "wheels_checksum_errors", "wheels_reconnects"}) {
     EXPECT_EQ(c.at(k), 0) << k;
   }
   EXPECT_GT(c.at("imu_imu_samples"), 200 * 20);
-  EXPECT_TRUE(readFile(out / "live_map.bt") == readFile(out / "map.bt"))
+  EXPECT_TRUE(sameBytes(out / "live_map.bt", out / "map.bt"))
       << "the live mapper's map differs from the replay of the recorded log";
+}
+
+// The longest silence between two consecutive messages: the utimes either side of it.
+std::pair<int64_t, int64_t> longestGap(const std::vector<Message>& messages) {
+  int64_t from = 0, to = 0;
+  for (size_t i = 1; i < messages.size(); ++i) {
+    if (messages[i].utime - messages[i - 1].utime > to - from) {
+      from = messages[i - 1].utime;
+      to = messages[i].utime;
+    }
+  }
+  return {from, to};
 }
 
 // The IMU's pty hangs up 6 s into the drive and comes back 2 s later: the odometry says
@@ -580,51 +550,26 @@ TEST_F(DevicesTest, RigBImuHangUpDegradesThenRecovers) {
                                   .count() +
                               1'500'000;
   const pid_t log = logger();
-  const pid_t emu = emulator("hi219,wheel-board", {"--pty",
-                                                   "--link",
-                                                   imu,
-                                                   "--link",
-                                                   board,
-                                                   "--rig",
-                                                   "rig_b",
-                                                   "--set",
-                                                   sets[0],
-                                                   "--seed",
-                                                   "4",
-                                                   "--start-utime",
-                                                   std::to_string(start_utime),
-                                                   "--publish-truth",
-                                                   "--lcm-url",
-                                                   kUrl,
-                                                   "--fault-device",
-                                                   "hi219",
-                                                   "--hangup-at",
-                                                   "6",
-                                                   "--down-s",
-                                                   "2"});
+  // The emulated IMU and wheel board on ptys, the IMU's hanging up 6 s in for 2 s.
+  std::vector<std::string> emu_args = {"--pty", "--link", imu, "--link", board, "--rig", "rig_b"};
+  emu_args.insert(emu_args.end(), {"--set", sets[0], "--seed", "4", "--start-utime",
+                                   std::to_string(start_utime), "--publish-truth"});
+  emu_args.insert(emu_args.end(), {"--lcm-url", kUrl, "--fault-device", "hi219", "--hangup-at", "6",
+                                   "--down-s", "2"});
+  const pid_t emu = emulator("hi219,wheel-board", emu_args);
   for (int i = 0; i < 100 && !(fs::exists(imu) && fs::exists(board)); ++i) sleepS(0.05);
-  ASSERT_TRUE(fs::exists(imu) && fs::exists(board)) << readFile(dir_ / "emulator_1.txt");
-  const pid_t odo = procs_.start(
-      "odometry",
-      {binPath("sweepmap-odometry"), "--rig", "rig_b", "--set", sets[0], "--imu-device",
-       "hi219://" + imu, "--wheels-device", "wheelboard://" + board, "--lcm-url", kUrl},
-      (dir_ / "odometry.txt").string());
+  ASSERT_TRUE(fs::exists(imu) && fs::exists(board)) << procs_.said("emulator_1");
+  const pid_t odo =
+      procs_.start("odometry", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--set", sets[0],
+                                "--imu-device", "hi219://" + imu, "--wheels-device",
+                                "wheelboard://" + board, "--lcm-url", kUrl});
   sleepS(1.5 + 14.0 + 1.0);
-  EXPECT_EQ(procs_.stop(odo, 5.0), 0) << readFile(dir_ / "odometry.txt");
-  sleepS(0.3);
-  EXPECT_EQ(procs_.stop(log, 5.0), 0);
-  procs_.stop(emu, 5.0);
+  procs_.stopInOrder({{odo, 5.0}, {log, 5.0}, {emu, 5.0, std::nullopt}});
 
   // The IMU's silence, and the poses published through it.
   const auto imu_msgs = readChannel(log_, channels::kImu);
-  ASSERT_GT(imu_msgs.size(), 1000u) << readFile(dir_ / "odometry.txt");
-  int64_t gap_from = 0, gap_to = 0;
-  for (size_t i = 1; i < imu_msgs.size(); ++i) {
-    if (imu_msgs[i].utime - imu_msgs[i - 1].utime > gap_to - gap_from) {
-      gap_from = imu_msgs[i - 1].utime;
-      gap_to = imu_msgs[i].utime;
-    }
-  }
+  ASSERT_GT(imu_msgs.size(), 1000u) << procs_.said("odometry");
+  const auto [gap_from, gap_to] = longestGap(imu_msgs);
   std::cout << "IMU silent for " << (gap_to - gap_from) * 1e-3 << " ms\n";
   EXPECT_GT(gap_to - gap_from, 1'500'000);
   const auto ekf = poses(log_, channels::kOdometryPose);
@@ -645,7 +590,7 @@ TEST_F(DevicesTest, RigBImuHangUpDegradesThenRecovers) {
   }
   EXPECT_TRUE(degraded_seen);
   EXPECT_TRUE(ok_after);
-  const auto c = statusCounters(log_, "STATUS_ODOMETRY", nullptr);
+  const auto c = lastStatus(log_, "STATUS_ODOMETRY").counters;
   EXPECT_GE(c.at("imu_reconnects"), 1);
   EXPECT_EQ(c.at("imu_outages"), 1);
   EXPECT_EQ(c.at("wheels_reconnects"), 0);
@@ -668,9 +613,7 @@ TEST_F(DevicesTest, StatusShowsLiveProcessesAndMarksAStoppedOneStale) {
   EXPECT_EQ(sweepmap({"status", "--once", "--window", "0.5", "--lcm-url", kUrl}, none), 1)
       << readFile(none);
   EXPECT_NE(readFile(none).find("no process seen on " + kUrl), std::string::npos) << readFile(none);
-  const pid_t odo = procs_.start(
-      "odometry", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl},
-      (dir_ / "odometry.txt").string());
+  const pid_t odo = simOdometry("odometry");
   sleepS(1.0);
   const fs::path live = dir_ / "live.json";
   ASSERT_EQ(sweepmap({"status", "--once", "--json", "--window", "2.5", "--lcm-url", kUrl}, live), 0)
@@ -686,9 +629,7 @@ TEST_F(DevicesTest, StatusShowsLiveProcessesAndMarksAStoppedOneStale) {
   // A status process that listens 3 s with --stale-s 1.5 sees a status, then silence: the
   // odometry process is stale.
   const fs::path after = dir_ / "after.json";
-  const pid_t late_odo = procs_.start(
-      "odometry2", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl},
-      (dir_ / "odometry2.txt").string());
+  const pid_t late_odo = simOdometry("odometry2");
   sleepS(1.2);
   const pid_t killer =
       procs_.start("stopper", {"sh", "-c", "sleep 0.3; kill -INT " + std::to_string(late_odo)});
@@ -718,9 +659,7 @@ std::map<std::string, int> channelCounts(const std::string& log) {
 // statuses, the truth) and nothing derived; `--preset all` keeps everything.
 TEST_F(DevicesTest, RecordPresets) {
   prepare("record");
-  const pid_t odo = procs_.start(
-      "odometry", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl},
-      (dir_ / "odometry.txt").string());
+  const pid_t odo = simOdometry("odometry");
   for (const std::string preset : {"raw", "all"}) {
     const fs::path out = dir_ / preset;
     ASSERT_EQ(sweepmap({"record", "--preset", preset, "--out", out.string(), "--duration", "2.5",
@@ -745,14 +684,10 @@ TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
   prepare("record_full");
   const fs::path disk = dir_ / "disk";
   fs::create_directories(disk);
-  if (::unshare(CLONE_NEWNS) != 0 ||
-      ::mount(nullptr, "/", nullptr, MS_REC | MS_PRIVATE, nullptr) != 0 ||
-      ::mount("tmpfs", disk.c_str(), "tmpfs", 0, "size=1200k") != 0) {
-    GTEST_SKIP() << "no private mount namespace: " << std::strerror(errno);
-  }
-  const pid_t odo = procs_.start(
-      "odometry", {binPath("sweepmap-odometry"), "--rig", "rig_b", "--sim", "--lcm-url", kUrl},
-      (dir_ / "odometry.txt").string());
+  std::string why;
+  if (!mountPrivateTmpfs(disk, "1200k", &why))
+    GTEST_SKIP() << "no private mount namespace: " << why;
+  const pid_t odo = simOdometry("odometry");
   const int rc = sweepmap({"record", "--preset", "all", "--out", disk.string(), "--min-free-mb",
                            "1", "--duration", "60", "--lcm-url", kUrl},
                           dir_ / "record.txt");

@@ -10,15 +10,11 @@
 
 #include <map>
 #include <set>
-#include <thread>
 
 #include "processes/channels.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
-#include "sweepmap/process_status_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
-#include "tests/e2e/test_support.hpp"
-#include "tools/ops/netns.hpp"
-#include "tools/ops/process_group.hpp"
+#include "tests/e2e/fixtures.hpp"
 
 namespace sweepmap {
 namespace test {
@@ -31,8 +27,6 @@ const std::string kUrl = "udpm://239.255.76.67:7667?ttl=1&recv_buf_size=2097152"
 const VethEnd kPiEnd{"veth-pi", "10.77.0.1/24"};
 const VethEnd kLaptopEnd{"veth-laptop", "10.77.0.2/24"};
 constexpr int kQueue = 7;
-
-void pause(int ms) { std::this_thread::sleep_for(std::chrono::milliseconds(ms)); }
 
 // How the link was impaired.
 enum class Impairment { kNone, kNetem, kNfqueue };
@@ -53,19 +47,6 @@ class TwoHostsTest : public ::testing::Test {
     ASSERT_TRUE(joinByVeth(*pi_, kPiEnd, *laptop_, kLaptopEnd, &why)) << why;
   }
 
-  std::vector<std::string> proc(const std::string& name, std::vector<std::string> args,
-                                const std::string& mode) {
-    args.insert(args.begin(), binPath("sweepmap-" + name));
-    args.insert(args.end(), {"--rig", kRig, "--set", "motor.mode=" + mode, "--lcm-url", kUrl});
-    return args;
-  }
-  pid_t startIn(const NetworkNamespace& ns, const std::string& name,
-                const std::vector<std::string>& argv, const fs::path& dir) {
-    pid_t pid = -1;
-    ns.run([&] { pid = procs_.start(name, argv, (dir / (name + ".txt")).string()); });
-    return pid;
-  }
-
   // 1 % loss and reordering of the frames the Pi sends to the laptop: netem on the Pi's
   // side of the veth where the kernel has it, else impair_link behind an NFQUEUE rule on
   // the laptop's, matching the Pi's address only (the laptop's own multicast, looped back
@@ -73,7 +54,7 @@ class TwoHostsTest : public ::testing::Test {
   // reassembly (nothing in this namespace asks for conntrack's early defragmentation), so
   // it sees frames as netem does: a scan of ~9 frames is lost when any of them is, and a
   // held frame makes its scan complete after the next one.
-  Impairment impair(const fs::path& dir, pid_t* helper) {
+  Impairment impair(pid_t* helper) {
     // netem sends `reorder` of the packets at once and delays the rest: 2 % arrive 40 ms
     // late, after the next scan (25 ms apart).
     if (pi_->command({"tc", "qdisc", "add", "dev", kPiEnd.interface, "root", "netem", "loss", "1%",
@@ -81,13 +62,13 @@ class TwoHostsTest : public ::testing::Test {
       return Impairment::kNetem;
     }
 #ifdef SWEEPMAP_IMPAIR_LINK
-    *helper = startIn(*laptop_, "impair_link",
-                      {SWEEPMAP_IMPAIR_LINK, "--queue", std::to_string(kQueue), "--loss", "0.01",
-                       "--reorder", "0.02", "--seed", "5"},
-                      dir);
+    *helper = procs_.start("impair_link",
+                           {SWEEPMAP_IMPAIR_LINK, "--queue", std::to_string(kQueue), "--loss",
+                            "0.01", "--reorder", "0.02", "--seed", "5"},
+                           laptop_.get());
     // Bound to its queue once it has said so; until then the rule would drop everything.
-    for (int i = 0; i < 100 && readFile(dir / "impair_link.txt").empty(); ++i) pause(50);
-    EXPECT_FALSE(readFile(dir / "impair_link.txt").empty()) << "impair_link did not start";
+    for (int i = 0; i < 100 && procs_.said(*helper).empty(); ++i) sleepS(0.05);
+    EXPECT_FALSE(procs_.said(*helper).empty()) << "impair_link did not start";
     const std::vector<std::string> rule = {
         "iptables-legacy",     "-t", "raw",       "-A", "PREROUTING", "-i",
         kLaptopEnd.interface,  "-s", "10.77.0.1", "-j", "NFQUEUE",    "--queue-num",
@@ -108,48 +89,40 @@ class TwoHostsTest : public ::testing::Test {
     RunResult r;
     r.dir = scratchDir(name);
     const fs::path& dir = r.dir;
+    procs_.setDir(dir);
     pid_t helper = -1;
-    if (impaired) r.impairment = impair(dir, &helper);
-    const pid_t pi_logger = startIn(*pi_, "pi_logger",
-                                    {"lcm-logger", "--lcm-url=" + kUrl, "-f", "-c",
-                                     "LIDAR_SCAN|SCAN_WINDOW", (dir / "pi.lcmlog").string()},
-                                    dir);
-    const pid_t logger =
-        startIn(*laptop_, "laptop_logger",
-                {"lcm-logger", "--lcm-url=" + kUrl, "-f", (dir / "laptop.lcmlog").string()}, dir);
-    const pid_t assembler = startIn(*laptop_, "assembler", proc("assembler", {}, mode), dir);
-    const pid_t mapper = startIn(
-        *laptop_, "mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}, mode), dir);
-    const pid_t lidar = startIn(
-        *pi_, "lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "4"}, mode), dir);
-    pause(700);  // subscribers ready
-    const pid_t motor = startIn(
-        *pi_, "motor",
-        proc("motor", {"--sim", "--sweeps", std::to_string(sweeps), "--seed", "4"}, mode), dir);
-    EXPECT_EQ(procs_.wait(motor, 120.0), 0) << readFile(dir / "motor.txt");
-    pause(800);  // the last scans delivered
-    EXPECT_EQ(procs_.stop(lidar, 5.0), 0) << readFile(dir / "lidar.txt");
-    pause(300);
-    EXPECT_EQ(procs_.stop(assembler, 10.0), 0) << readFile(dir / "assembler.txt");
-    pause(300);
-    EXPECT_EQ(procs_.stop(mapper, 60.0), 0) << readFile(dir / "mapper.txt");
-    pause(300);
-    EXPECT_EQ(procs_.stop(logger, 10.0), 0);
-    EXPECT_EQ(procs_.stop(pi_logger, 10.0), 0);
-    if (helper > 0) {
-      EXPECT_EQ(procs_.stop(helper, 5.0), 0);
-      r.impair_output = readFile(dir / "impair_link.txt");
-    }
-    EXPECT_EQ(sweepmap({"replay", (dir / "laptop.lcmlog").string(), "--rig", kRig, "--set",
-                        "motor.mode=" + mode, "--out", (dir / "offline").string(), "--no-plots"},
-                       dir / "replay.txt"),
+    if (impaired) r.impairment = impair(&helper);
+    const ProcessCommand proc({"--rig", kRig, "--set", "motor.mode=" + mode, "--lcm-url", kUrl});
+    NetworkNamespace* pi = pi_.get();
+    NetworkNamespace* laptop = laptop_.get();
+    const pid_t pi_logger = procs_.start(
+        "pi_logger", loggerCommand(kUrl, (dir / "pi.lcmlog").string(), "LIDAR_SCAN|SCAN_WINDOW"),
+        pi);
+    const pid_t logger = procs_.start(
+        "laptop_logger", loggerCommand(kUrl, (dir / "laptop.lcmlog").string()), laptop);
+    const pid_t assembler = procs_.start("assembler", proc("assembler"), laptop);
+    const pid_t mapper =
+        procs_.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), laptop);
+    const pid_t lidar =
+        procs_.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "4"}), pi);
+    sleepS(0.7);  // subscribers ready
+    const pid_t motor = procs_.start(
+        "motor", proc("motor", {"--sim", "--sweeps", std::to_string(sweeps), "--seed", "4"}), pi);
+    EXPECT_EQ(procs_.wait(motor, 120.0), 0) << procs_.said(motor);
+    std::vector<Stop> stops = {
+        {lidar, 5.0}, {assembler, 10.0}, {mapper, 60.0}, {logger, 10.0}, {pi_logger, 10.0}};
+    if (helper > 0) stops.push_back({helper, 5.0});
+    procs_.stopInOrder(stops, 0.8);  // after the last scans are delivered
+    if (helper > 0) r.impair_output = procs_.said(helper);
+    EXPECT_EQ(replayInto(dir / "offline", (dir / "laptop.lcmlog").string(),
+                         {"--rig", kRig, "--set", "motor.mode=" + mode}),
               0)
         << readFile(dir / "replay.txt");
     return r;
   }
 
   std::unique_ptr<NetworkNamespace> pi_, laptop_;
-  ProcessGroup procs_;
+  Launcher procs_;
 };
 
 // What the Pi sent: each window's scans, from the Pi side's log.
@@ -188,17 +161,6 @@ std::set<int64_t> windowIds(const std::string& log) {
   return ids;
 }
 
-// The live assembler's last STATUS_ASSEMBLER (it publishes one when it stops).
-std::map<std::string, int64_t> lastAssemblerCounters(const std::string& log) {
-  std::map<std::string, int64_t> counters;
-  const auto msgs = readChannel(log, "STATUS_ASSEMBLER");
-  if (msgs.empty()) return counters;
-  process_status_t s;
-  EXPECT_TRUE(decodeMessage(msgs.back(), &s));
-  for (int i = 0; i < s.ncounters; ++i) counters[s.counter_names[i]] = s.counter_values[i];
-  return counters;
-}
-
 // Every sweep's missing scans against what the Pi sent; returns the number of sweeps
 // that lost scans.
 int checkSweepsAgainstSent(const fs::path& dir, const nlohmann::json& summary) {
@@ -227,16 +189,18 @@ int checkSweepsAgainstSent(const fs::path& dir, const nlohmann::json& summary) {
     }
   }
   EXPECT_EQ(a["windows_missing"].get<int64_t>(), lost_windows);
-  // The live assembler counted the same as its replay.
-  const auto live = lastAssemblerCounters((dir / "laptop.lcmlog").string());
-  EXPECT_EQ(live.count("sweeps_incomplete") ? live.at("sweeps_incomplete") : 0, incomplete);
-  EXPECT_EQ(live.count("scans_missing") ? live.at("scans_missing") : 0, missing);
+  // The live assembler counted the same as its replay (in its last STATUS_ASSEMBLER: it
+  // publishes one when it stops).
+  const LastStatus live = lastStatus((dir / "laptop.lcmlog").string(), "STATUS_ASSEMBLER");
+  EXPECT_TRUE(live.found);
+  EXPECT_EQ(live.counter("sweeps_incomplete"), incomplete);
+  EXPECT_EQ(live.counter("scans_missing"), missing);
   return incomplete;
 }
 
 void expectLiveMapEqualsReplay(const fs::path& dir) {
   ASSERT_TRUE(fs::exists(dir / "live_map.bt")) << readFile(dir / "mapper.txt");
-  EXPECT_TRUE(readFile(dir / "live_map.bt") == readFile(dir / "offline" / "map.bt"))
+  EXPECT_TRUE(sameBytes(dir / "live_map.bt", dir / "offline" / "map.bt"))
       << "the live mapper's map differs from the replay of the laptop's log";
 }
 
