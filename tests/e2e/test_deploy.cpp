@@ -250,7 +250,7 @@ int processesWith(const std::string& program, const std::string& needle) {
 // launch`: each is restarted within 2 s (the bound; measured from the kill to
 // launch's `start` line and to the new process's READY=1); the map the mapper saved before
 // its kill is kept and loads; sweeps resume through the restarted processes (the restarted
-// mapper saves a new map); the killed recorder's lcm-logger does not outlive it (launch kills
+// mapper saves a new map); no second recorder outlives the killed one (launch kills
 // its process group), and its file reads to its last complete event.
 TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
   const auto dir = scratchDir("deploy_kill");
@@ -266,7 +266,7 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
       rigProcess("motor", ", --sim, --seed, \"3\"");
   startLaunch(dir, deployFile(dir, processes));
   ASSERT_TRUE(waitFor([&] { return fs::exists(map); }, 60)) << "no map saved\n" << events();
-  EXPECT_EQ(processesWith("lcm-logger", rec.string()), 1);
+  EXPECT_EQ(processesWith("sweepmap record", rec.string()), 1);
 
   for (const std::string name : {"motor", "lidar", "assembler", "recorder", "mapper"}) {
     const pid_t pid = pidOf(name);
@@ -287,8 +287,8 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
               std::string::npos)
         << events();
   }
-  // One lcm-logger: the killed recorder's went with it.
-  EXPECT_EQ(processesWith("lcm-logger", rec.string()), 1);
+  // One recorder: the killed one is gone, its successor records.
+  EXPECT_EQ(processesWith("sweepmap record", rec.string()), 1);
   // The map of the killed mapper: kept by its successor under a dated name, and it loads.
   std::vector<fs::path> kept;
   for (const auto& f : fs::directory_iterator(dir)) {
@@ -305,7 +305,7 @@ TEST_F(DeployTest, KillNineOfEachProcessUnderLaunch) {
   EXPECT_EQ(procs_.stop(launch_, 60), 0) << events();
   EXPECT_GT(OccupancyMap::loadBinary(map).stats().occupied_voxels, 1000);
   // Both recordings, the killed recorder's and its successor's, read to their last complete
-  // event (lcm-logger -i: the restarted one writes the next file).
+  // event (with --split-mb the restarted one writes the next file, as lcm-logger -i).
   for (const char* log : {"run.00", "run.01"}) {
     EventLogReader r((rec / log).string());
     r.setResync(true);
