@@ -678,8 +678,8 @@ TEST_F(DevicesTest, RecordPresets) {
 }
 
 // Recording onto a small file system (a 1.2 MB tmpfs in a private mount namespace): it stops
-// by itself below --min-free-mb with a clear message and exit status 3, and the log it leaves
-// reads to its end without a broken event.
+// by itself below --min-free-mb with a clear message and exit status 4 (an I/O failure), and
+// the log it leaves reads to its end without a broken event.
 TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
   prepare("record_full");
   const fs::path disk = dir_ / "disk";
@@ -693,12 +693,36 @@ TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
                           dir_ / "record.txt");
   EXPECT_EQ(procs_.stop(odo, 5.0), 0);
   const std::string said = readFile(dir_ / "record.txt");
-  EXPECT_EQ(rc, 3) << said;
+  EXPECT_EQ(rc, 4) << said;
   EXPECT_NE(said.find("below --min-free-mb 1"), std::string::npos) << said;
   EXPECT_EQ(sweepmap({"dump", (disk / "run").string()}, dir_ / "dump.txt"), 0)
       << readFile(dir_ / "dump.txt").substr(0, 2000);
   const auto n = channelCounts((disk / "run").string());
   EXPECT_GT(n.count("IMU") ? n.at("IMU") : 0, 300);  // ~200 kB recorded
+  ::umount(disk.c_str());
+}
+
+// A disk filled faster than the recorder checks (no --min-free-mb margin): the write the disk
+// refuses is cut back, so the log ends with its last complete event, and the exit status is 4.
+TEST_F(DevicesTest, RecordEndsItsLogAtAnEventWhenTheDiskRefusesAWrite) {
+  prepare("record_enospc");
+  const fs::path disk = dir_ / "disk";
+  fs::create_directories(disk);
+  std::string why;
+  if (!mountPrivateTmpfs(disk, "300k", &why))
+    GTEST_SKIP() << "no private mount namespace: " << why;
+  const pid_t odo = simOdometry("odometry");
+  const int rc = sweepmap({"record", "--preset", "all", "--out", disk.string(), "--min-free-mb",
+                           "0", "--duration", "60", "--lcm-url", kUrl},
+                          dir_ / "record.txt");
+  EXPECT_EQ(procs_.stop(odo, 5.0), 0);
+  const std::string said = readFile(dir_ / "record.txt");
+  EXPECT_EQ(rc, 4) << said;
+  EXPECT_NE(said.find("the log ends after its last complete event"), std::string::npos) << said;
+  EXPECT_EQ(sweepmap({"dump", (disk / "run").string()}, dir_ / "dump.txt"), 0)
+      << readFile(dir_ / "dump.txt").substr(0, 2000);
+  const auto n = channelCounts((disk / "run").string());
+  EXPECT_GT(n.count("IMU") ? n.at("IMU") : 0, 100);
   ::umount(disk.c_str());
 }
 
