@@ -42,6 +42,7 @@ constexpr int64_t kDeviceWorkerStallMs = 10000;
 // The live runner's options with the command line's queue bound.
 inline LiveOptions liveOptions(const CommonOptions& o) {
   LiveOptions options;
+  options.lcm_url = o.lcm_url;
   options.queue_capacity = o.queue_capacity;
   return options;
 }

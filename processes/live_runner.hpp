@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,14 @@ class LCM;
 namespace sweepmap {
 
 struct LiveOptions {
+  // The provider URL the LCM handle was made with. An udpm:// URL (or "" under
+  // LCM_DEFAULT_URL=udpm://...) is received by sweepmap's own validating receiver
+  // (net/udpm_receiver.hpp), never by liblcm 1.3.1's, which one malformed datagram crashes;
+  // liblcm then only publishes. Other providers (memq://, file://) are in-process: liblcm
+  // receives them. Processes set it from --lcm-url (liveOptions in cli_common.hpp).
+  std::string lcm_url = "memq://";
+  // Receive only from these IPv4 senders (host byte order); empty: any.
+  std::set<uint32_t> allowed_senders;
   int tick_period_ms = 1;
   // true: a receiver thread wakes the worker for every message. false: no receiver thread;
   // the worker takes the messages LCM has buffered at each tick (they wait at most
