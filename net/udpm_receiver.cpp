@@ -94,6 +94,25 @@ UdpmUrl parseUdpmUrl(const std::string& given) {
   return u;
 }
 
+ReceiverOptions securityOptions(const std::string& url,
+                                const std::vector<std::string>& allow_senders,
+                                const std::string& key_file) {
+  ReceiverOptions o;
+  for (const std::string& a : allow_senders) {
+    in_addr addr{};
+    if (inet_pton(AF_INET, a.c_str(), &addr) != 1) {
+      throw std::invalid_argument("--allow-senders: '" + a + "' is not an IPv4 address");
+    }
+    o.allowed_senders.insert(ntohl(addr.s_addr));
+  }
+  if (!isUdpmUrl(url) && (!allow_senders.empty() || !key_file.empty())) {
+    throw std::invalid_argument("--allow-senders and --key-file apply to udpm:// URLs, not '" +
+                                url + "'");
+  }
+  if (!key_file.empty()) o.auth = MessageAuth::fromKeyFile(key_file);
+  return o;
+}
+
 int64_t monotonicUs() {
   timespec ts{};
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -103,9 +122,11 @@ int64_t monotonicUs() {
 // The socket liblcm 1.3.1 opens (lcm_udpm.c, _setup_recv_parts): SO_REUSEADDR and
 // SO_REUSEPORT so that every process on the host binds the port, the group joined on the
 // default interface, loopback on, a 2 MiB receive buffer unless the URL asks otherwise.
-UdpmReceiver::UdpmReceiver(const std::string& url, std::set<uint32_t> allowed,
-                           ReassemblyLimits limits)
-    : allowed_(std::move(allowed)), reassembler_(limits), buffer_(kReceiveBufferBytes) {
+UdpmReceiver::UdpmReceiver(const std::string& url, ReceiverOptions options)
+    : allowed_(std::move(options.allowed_senders)),
+      auth_(std::move(options.auth)),
+      reassembler_(options.limits),
+      buffer_(kReceiveBufferBytes) {
   const UdpmUrl u = parseUdpmUrl(url);
   fd_ = ::socket(AF_INET, SOCK_DGRAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
   try {
@@ -181,20 +202,31 @@ int UdpmReceiver::readQueued() {
     }
     std::optional<LcmMessage> m =
         reassembler_.feed(buffer_.data(), static_cast<size_t>(n), sender, monotonicUs());
-    if (!m) continue;
-    bool wanted = false;
-    for (const Subscription& s : subscriptions_) {
-      if (!std::regex_match(m->channel, s.pattern)) continue;
-      wanted = true;
-      s.handler(m->channel, m->data.data(), m->data.size());
-    }
-    if (wanted) {
-      ++handled;
-    } else {
-      ++counters_.unsubscribed;
-    }
+    if (m) handled += dispatch(*m);
   }
   return handled;
+}
+
+// Hands a complete message to the handlers whose pattern matches its channel (with a key:
+// only when its signature holds, and without the trailer). Returns 1 if anyone took it.
+int UdpmReceiver::dispatch(const LcmMessage& m) {
+  size_t size = m.data.size();
+  if (auth_) {
+    const std::optional<size_t> payload = auth_->verify(m.channel, m.data.data(), size);
+    if (!payload) {
+      ++counters_.not_signed;
+      return 0;
+    }
+    size = *payload;
+  }
+  bool wanted = false;
+  for (const Subscription& s : subscriptions_) {
+    if (!std::regex_match(m.channel, s.pattern)) continue;
+    wanted = true;
+    s.handler(m.channel, m.data.data(), size);
+  }
+  if (!wanted) ++counters_.unsubscribed;
+  return wanted ? 1 : 0;
 }
 
 }  // namespace sweepmap::net

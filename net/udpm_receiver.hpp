@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "net/lcm_datagram.hpp"
+#include "net/message_auth.hpp"
 
 namespace sweepmap::net {
 
@@ -35,17 +36,30 @@ struct ReceiverCounters {
   uint64_t truncated = 0;     // larger than any LCM datagram can be
   uint64_t not_allowed = 0;   // from an address outside the allow-list
   uint64_t unsubscribed = 0;  // complete messages on channels nobody here wants
+  uint64_t not_signed = 0;    // with a key: unsigned or wrongly signed messages
   ReassemblyCounters reassembly;
 };
+
+// Who may be heard. Both empty: everyone (a bench); the generated systemd units set both.
+struct ReceiverOptions {
+  std::set<uint32_t> allowed_senders;  // IPv4 addresses, host byte order; empty: any
+  std::optional<MessageAuth> auth;     // set: only messages signed with this key pass
+  ReassemblyLimits limits;
+};
+
+// --allow-senders (IPv4 addresses) and --key-file as every command takes them, for `url`.
+// Throws std::invalid_argument naming the option and what is wrong.
+ReceiverOptions securityOptions(const std::string& url,
+                                const std::vector<std::string>& allow_senders,
+                                const std::string& key_file);
 
 class UdpmReceiver {
  public:
   using Handler = std::function<void(const std::string& channel, const uint8_t* data, size_t size)>;
 
-  // Joins the group of `url` (see parseUdpmUrl). `allowed` (IPv4 addresses in host byte
-  // order) empty: every sender. Throws std::runtime_error on a socket error (naming the call).
-  explicit UdpmReceiver(const std::string& url, std::set<uint32_t> allowed = {},
-                        ReassemblyLimits limits = {});
+  // Joins the group of `url` (see parseUdpmUrl). Throws std::invalid_argument for a bad URL,
+  // std::runtime_error on a socket error (naming the call).
+  explicit UdpmReceiver(const std::string& url, ReceiverOptions options = {});
   ~UdpmReceiver();
   UdpmReceiver(const UdpmReceiver&) = delete;
   UdpmReceiver& operator=(const UdpmReceiver&) = delete;
@@ -64,9 +78,11 @@ class UdpmReceiver {
 
  private:
   int readQueued();
+  int dispatch(const LcmMessage& m);
 
   int fd_ = -1;
   std::set<uint32_t> allowed_;
+  std::optional<MessageAuth> auth_;
   LcmReassembler reassembler_;
   struct Subscription {
     std::regex pattern;

@@ -103,7 +103,10 @@ class LiveRun {
         inbox_(options.queue_capacity, options.queue_capacity_bytes),
         handler_(&inbox_, options.wake_on_message) {
     if (net::isUdpmUrl(options.lcm_url)) {
-      udpm_ = std::make_unique<net::UdpmReceiver>(options.lcm_url, options.allowed_senders);
+      net::ReceiverOptions receive;
+      receive.allowed_senders = options.allowed_senders;
+      if (options.auth) receive.auth = *options.auth;
+      udpm_ = std::make_unique<net::UdpmReceiver>(options.lcm_url, std::move(receive));
     }
   }
 
@@ -178,7 +181,7 @@ class LiveRun {
       Outbox out;
       n->finish(now, out);
       n->publishStatus(now, out);
-      publishAll(lcm_, out.take());
+      publishAll(lcm_, out.take(), options_.auth.get());
     }
     receiving_ = false;
     if (receiver_.joinable()) receiver_.join();
@@ -214,6 +217,7 @@ class LiveRun {
       n->setTransportCounter("refused",
                              static_cast<int64_t>(c.reassembly.refusedTotal() + c.truncated));
       n->setTransportCounter("not_allowed", static_cast<int64_t>(c.not_allowed));
+      n->setTransportCounter("not_signed", static_cast<int64_t>(c.not_signed));
       for (size_t r = 0; r < c.reassembly.refused.size(); ++r) {
         if (c.reassembly.refused[r] == 0) continue;
         n->setTransportCounter(
@@ -237,7 +241,7 @@ class LiveRun {
     for (Node* n : it->second) {
       Outbox out;
       n->receive(m, out);
-      publishAll(lcm_, out.take());
+      publishAll(lcm_, out.take(), options_.auth.get());
     }
   }
 
@@ -247,7 +251,7 @@ class LiveRun {
     for (Node* n : nodes_) {
       Outbox out;
       n->tick(now, out);
-      publishAll(lcm_, out.take());
+      publishAll(lcm_, out.take(), options_.auth.get());
     }
   }
 
@@ -325,13 +329,18 @@ void installStopSignals() {
 
 bool stopRequested() { return g_stop; }
 
-void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages) {
+void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages, const net::MessageAuth* auth) {
   // A sweep leaves as a burst of ~48 kB chunks; back to back they overflow a receiver's
   // default socket buffer (~208 kB) and whole chunks are lost. Pace large messages.
   constexpr size_t kLargeMessageBytes = 16 * 1024;
   for (size_t i = 0; i < messages.size(); ++i) {
     const auto& m = messages[i];
-    lcm.publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+    if (auth) {
+      const std::vector<uint8_t> signed_data = auth->sign(m.channel, m.data.data(), m.data.size());
+      lcm.publish(m.channel, signed_data.data(), static_cast<unsigned int>(signed_data.size()));
+    } else {
+      lcm.publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+    }
     if (m.data.size() >= kLargeMessageBytes && i + 1 < messages.size()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }

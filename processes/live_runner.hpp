@@ -6,6 +6,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -14,6 +15,9 @@
 
 namespace lcm {
 class LCM;
+}
+namespace sweepmap::net {
+class MessageAuth;
 }
 
 namespace sweepmap {
@@ -25,8 +29,11 @@ struct LiveOptions {
   // liblcm then only publishes. Other providers (memq://, file://) are in-process: liblcm
   // receives them. Processes set it from --lcm-url (liveOptions in cli_common.hpp).
   std::string lcm_url = "memq://";
-  // Receive only from these IPv4 senders (host byte order); empty: any.
+  // Receive only from these IPv4 senders (host byte order); empty: any (udpm:// only).
   std::set<uint32_t> allowed_senders;
+  // Set: every message published is signed with this key, and only messages signed with it
+  // are received (net/message_auth.hpp; udpm:// only).
+  std::shared_ptr<const net::MessageAuth> auth;
   int tick_period_ms = 1;
   // true: a receiver thread wakes the worker for every message. false: no receiver thread;
   // the worker takes the messages LCM has buffered at each tick (they wait at most
@@ -56,7 +63,8 @@ bool stopRequested();
 // Returns 0 after a clean stop (signal or should_stop), non-zero if LCM failed.
 int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options);
 
-// Publishes already encoded messages.
-void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages);
+// Publishes already encoded messages, signed when `auth` is given.
+void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages,
+                const net::MessageAuth* auth = nullptr);
 
 }  // namespace sweepmap

@@ -115,18 +115,21 @@ TEST(LcmDatagram, TwoSendersInterleavedStayApart) {
   EXPECT_EQ(got[1].data, b);
 }
 
-// Issue 21: the 131-byte datagram that crashes every liblcm 1.3.1 receiver.
+// Issue 21: the 131-byte datagram that crashes every liblcm 1.3.1 receiver (fragment 0 on a
+// subscribed channel, offset 0xFFFFFFFF), and the same offset on a later fragment.
 TEST(LcmDatagram, FragmentOffsetThatWrapsIn32BitsIsRefused) {
-  const Bytes d = fragment(1, 100000, 0xFFFFFFFFu, 1, 2, payload(111));
+  const Bytes d = fragment(1, 100000, 0xFFFFFFFFu, 0, 2, channelThen("MAP_SAVE", payload(102)));
   ASSERT_EQ(d.size(), 131u);
   LcmReassembler r;
   EXPECT_FALSE(feed(r, d));
-  EXPECT_EQ(refused(r, Refusal::kFragmentOutOfRange), 1u);
+  EXPECT_FALSE(feed(r, fragment(1, 100000, 0xFFFFFFFFu, 1, 2, payload(111))));
+  EXPECT_EQ(refused(r, Refusal::kFragmentOutOfRange), 2u);
+  EXPECT_EQ(r.pendingBytes(), 0u);
   // Also after a good fragment 0 of the same message.
   const Bytes first = fragment(2, 100000, 0, 0, 2, channelThen("MAP_SAVE", payload(1000)));
   EXPECT_FALSE(feed(r, first));
   EXPECT_FALSE(feed(r, fragment(2, 100000, 0xFFFFFF00u, 1, 2, payload(300))));
-  EXPECT_EQ(refused(r, Refusal::kFragmentOutOfRange), 2u);
+  EXPECT_EQ(refused(r, Refusal::kFragmentOutOfRange), 3u);
 }
 
 TEST(LcmDatagram, ChannelWithoutNulOrTooLongOrNotPrintableIsRefused) {

@@ -107,9 +107,13 @@ TEST(UdpmReceiver, SurvivesTheDatagramsThatCrashLiblcmAndReceivesAfterThem) {
   UdpmReceiver receiver(kUrl);
   Received got;
   got.attach(receiver, ".*");
-  // Issue 21: an LC03 fragment whose offset wraps liblcm's 32-bit check (131 bytes) ...
+  // Issue 21: fragment 0 of an LC03 message on a subscribed channel, its offset 0xFFFFFFFF:
+  // liblcm 1.3.1 allocates the message, then its 32-bit check wraps and memcpy writes 4 GiB
+  // before the buffer (131 bytes in all) ...
   std::vector<uint8_t> wrap = {'L',  'C',  '0',  '3',  0,    0,    0, 1, 0, 1,
-                               0x86, 0xa0, 0xff, 0xff, 0xff, 0xff, 0, 1, 0, 2};
+                               0x86, 0xa0, 0xff, 0xff, 0xff, 0xff, 0, 0, 0, 2};
+  for (char c : std::string("MAP_SAVE")) wrap.push_back(static_cast<uint8_t>(c));
+  wrap.push_back(0);
   wrap.resize(131, 0x41);
   sendRaw(wrap);
   // ... and an LC02 whose channel has no NUL.
@@ -132,7 +136,9 @@ TEST(UdpmReceiver, AnAllowListDropsEveryOtherSender) {
   if (!privateNetwork(&why)) GTEST_SKIP() << why;
   in_addr other{};
   inet_pton(AF_INET, "10.77.0.2", &other);
-  UdpmReceiver receiver(kUrl, {ntohl(other.s_addr)});
+  ReceiverOptions options;
+  options.allowed_senders = {ntohl(other.s_addr)};
+  UdpmReceiver receiver(kUrl, options);
   Received got;
   got.attach(receiver, ".*");
   lcm::LCM lcm(kUrl);
@@ -141,6 +147,31 @@ TEST(UdpmReceiver, AnAllowListDropsEveryOtherSender) {
   pump(receiver, got, 1);
   EXPECT_TRUE(got.messages.empty());
   EXPECT_EQ(receiver.counters().not_allowed, 3u);
+}
+
+TEST(UdpmReceiver, WithAKeyOnlySignedMessagesPassAndLoseTheirSignature) {
+  std::string why;
+  if (!privateNetwork(&why)) GTEST_SKIP() << why;
+  std::array<uint8_t, kAuthKeyBytes> key{};
+  key.fill(5);
+  ReceiverOptions options;
+  options.auth = MessageAuth(key);
+  UdpmReceiver receiver(kUrl, options);
+  Received got;
+  got.attach(receiver, ".*");
+  lcm::LCM lcm(kUrl);
+  const std::vector<uint8_t> data(10, 1);
+  lcm.publish("UNSIGNED", data.data(), 10);
+  const std::vector<uint8_t> forged =
+      MessageAuth(std::array<uint8_t, kAuthKeyBytes>{}).sign("FORGED", data.data(), data.size());
+  lcm.publish("FORGED", forged.data(), static_cast<unsigned>(forged.size()));
+  const std::vector<uint8_t> good = MessageAuth(key).sign("SIGNED", data.data(), data.size());
+  lcm.publish("SIGNED", good.data(), static_cast<unsigned>(good.size()));
+  pump(receiver, got, 1);
+  ASSERT_EQ(got.messages.size(), 1u);
+  EXPECT_EQ(got.messages[0].first, "SIGNED");
+  EXPECT_EQ(got.messages[0].second, data);
+  EXPECT_EQ(receiver.counters().not_signed, 2u);
 }
 
 }  // namespace

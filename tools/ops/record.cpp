@@ -179,7 +179,8 @@ int runRecord(const RecordOptions& o) {
   std::unique_ptr<net::UdpmReceiver> receiver;
   std::unique_ptr<RecordFiles> files;
   try {
-    receiver = std::make_unique<net::UdpmReceiver>(o.lcm_url);
+    receiver = std::make_unique<net::UdpmReceiver>(
+        o.lcm_url, net::securityOptions(o.lcm_url, o.allow_senders, o.key_file));
     files = std::make_unique<RecordFiles>(o);
   } catch (const std::invalid_argument& e) {
     std::cerr << "record: " << e.what() << "\n";

@@ -15,6 +15,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 namespace sweepmap {
 
@@ -25,7 +26,9 @@ struct RecordOptions {
   double split_mb = 0.0;
   double min_free_mb = 100.0;
   std::string lcm_url;
-  double duration_s = 0.0;  // 0: until SIGINT/SIGTERM
+  double duration_s = 0.0;                 // 0: until SIGINT/SIGTERM
+  std::vector<std::string> allow_senders;  // IPv4 addresses; empty: any sender
+  std::string key_file;                    // set: only messages signed with this key
 };
 
 // The channel regex of a preset; throws std::invalid_argument for an unknown one.
