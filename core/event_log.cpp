@@ -1,5 +1,9 @@
 #include "core/event_log.hpp"
 
+#include <stdio_ext.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
@@ -156,23 +160,51 @@ void EventLogWriter::write(int64_t utime, const std::string& channel, const uint
   if (!file_) throw std::logic_error(path_ + ": write after close");
   uint8_t header[28];
   writeBE(header, kSync, 4);
-  writeBE(header + 4, static_cast<uint64_t>(next_eventnum_++), 8);
+  writeBE(header + 4, static_cast<uint64_t>(next_eventnum_), 8);
   writeBE(header + 12, static_cast<uint64_t>(utime), 8);
   writeBE(header + 20, channel.size(), 4);
   writeBE(header + 24, size, 4);
   if (std::fwrite(header, 1, sizeof header, file_) != sizeof header ||
       std::fwrite(channel.data(), 1, channel.size(), file_) != channel.size() ||
       (size && std::fwrite(data, 1, size, file_) != size)) {
-    throw std::runtime_error(path_ + ": write failed: " + std::strerror(errno));
+    fail("write failed: " + std::string(std::strerror(errno)));
   }
+  ++next_eventnum_;
+  end_ += sizeof header + channel.size() + size;
+  unflushed_ends_.push_back(end_);
 }
 
 void EventLogWriter::flush() {
-  if (file_) std::fflush(file_);
+  if (!file_) return;
+  if (std::fflush(file_) != 0) fail("write failed: " + std::string(std::strerror(errno)));
+  flushed_end_ = end_;
+  unflushed_ends_.clear();
+}
+
+// Cuts the file back to the last event that reached it whole, closes it and throws.
+void EventLogWriter::fail(const std::string& what) {
+  __fpurge(file_);  // what stdio still holds must not follow the cut at fclose
+  const int fd = ::fileno(file_);
+  struct stat st {};
+  uint64_t keep = flushed_end_;
+  if (::fstat(fd, &st) == 0) {
+    for (uint64_t e : unflushed_ends_) {
+      if (e <= static_cast<uint64_t>(st.st_size)) keep = e;
+    }
+  }
+  const int truncated = ::ftruncate(fd, static_cast<off_t>(keep));
+  std::fclose(file_);
+  file_ = nullptr;
+  throw std::runtime_error(
+      path_ + ": " + what +
+      (truncated == 0
+           ? "; the log ends after its last complete event, at byte " + std::to_string(keep)
+           : "; could not cut the log back to byte " + std::to_string(keep)));
 }
 
 void EventLogWriter::close() {
   if (!file_) return;
+  flush();
   const bool ok = std::fclose(file_) == 0;
   file_ = nullptr;
   if (!ok) throw std::runtime_error(path_ + ": close failed");

@@ -78,6 +78,9 @@ class EventLogReader {
   uint64_t nextSyncAt(uint64_t from);
 };
 
+// Writes an LCM event log. A write or flush that fails (a full disk) never leaves half an
+// event: the file is cut back to the end of its last complete event, closed, and the error
+// (std::runtime_error) says where the log now ends.
 class EventLogWriter {
  public:
   explicit EventLogWriter(const std::string& path);  // truncates; throws std::runtime_error
@@ -89,14 +92,20 @@ class EventLogWriter {
   void write(int64_t utime, const std::string& channel, const std::vector<uint8_t>& data) {
     write(utime, channel, data.data(), data.size());
   }
-  void flush();
+  void flush();  // throws on I/O error, as write
   void close();  // flushes; throws on I/O error
   int64_t events() const { return next_eventnum_; }
+  uint64_t bytes() const { return end_; }  // written so far, complete events only
 
  private:
+  [[noreturn]] void fail(const std::string& what);
+
   std::string path_;
   std::FILE* file_ = nullptr;
   int64_t next_eventnum_ = 0;
+  uint64_t end_ = 0;                      // where the next event starts
+  std::vector<uint64_t> unflushed_ends_;  // ends of the events written since the last flush
+  uint64_t flushed_end_ = 0;              // end of the last event known to be on disk
 };
 
 }  // namespace sweepmap

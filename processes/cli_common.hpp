@@ -1,13 +1,18 @@
 // Command-line options every process shares: --rig (a rig file of any kind, or a rig's
-// name such as rig_a), --set, --lcm-url and --queue-capacity.
+// name such as rig_a), --set, --lcm-url, --queue-capacity, --allow-senders and --key-file.
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <iostream>
+#include <memory>
 #include <optional>
+#include <set>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "net/message_auth.hpp"
+#include "net/udpm_receiver.hpp"
 #include "processes/channels.hpp"
 #include "processes/live_runner.hpp"
 #include "rigs/rig_file.hpp"
@@ -19,6 +24,11 @@ struct CommonOptions {
   std::vector<std::string> overrides;
   std::string lcm_url = kDefaultLcmUrl;
   size_t queue_capacity = LiveOptions{}.queue_capacity;
+  std::vector<std::string> allow_senders;  // --allow-senders
+  std::string key_file;                    // --key-file
+  // Parsed from the two above by loadRigOrReport.
+  std::set<uint32_t> allowed_senders;
+  std::shared_ptr<const net::MessageAuth> auth;
 };
 
 inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
@@ -33,6 +43,21 @@ inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
                  "counted (`dropped` in the status)")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  app.add_option("--allow-senders", o.allow_senders,
+                 "receive only from these IPv4 addresses (comma-separated; counted as "
+                 "`net_not_allowed` in the status); default: any sender")
+      ->delimiter(',');
+  app.add_option("--key-file", o.key_file,
+                 "shared key (32 bytes or 64 hex digits, chmod 600): sign every message "
+                 "published and drop every message received unsigned or wrongly signed "
+                 "(`net_not_signed`); default: no signing");
+}
+
+// --allow-senders and --key-file into `o`; throws std::invalid_argument naming the option.
+inline void parseSecurityOptions(CommonOptions& o) {
+  net::ReceiverOptions r = net::securityOptions(o.lcm_url, o.allow_senders, o.key_file);
+  o.allowed_senders = std::move(r.allowed_senders);
+  if (r.auth) o.auth = std::make_shared<net::MessageAuth>(*r.auth);
 }
 
 // A device driver's worker thread silent this long is stuck (its reads, connection attempts and
@@ -42,14 +67,19 @@ constexpr int64_t kDeviceWorkerStallMs = 10000;
 // The live runner's options with the command line's queue bound.
 inline LiveOptions liveOptions(const CommonOptions& o) {
   LiveOptions options;
+  options.lcm_url = o.lcm_url;
+  options.allowed_senders = o.allowed_senders;
+  options.auth = o.auth;
   options.queue_capacity = o.queue_capacity;
   return options;
 }
 
-// Loads the rig; on error prints "config error: ..." (naming file and key) and returns
-// nothing: the process's main() then exits with status 2.
-inline std::optional<Rig> loadRigOrReport(const CommonOptions& o) {
+// Loads the rig and reads the security options; on error prints "config error: ..." (naming
+// file and key, or the option) and returns nothing: the process's main() then exits with
+// status 2.
+inline std::optional<Rig> loadRigOrReport(CommonOptions& o) {
   try {
+    parseSecurityOptions(o);
     return loadRig(o.rig_path, o.overrides);
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";

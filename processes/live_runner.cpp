@@ -8,10 +8,12 @@
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
 
+#include "net/udpm_receiver.hpp"
 #include "processes/sd_notify.hpp"
 
 namespace sweepmap {
@@ -85,6 +87,13 @@ class RawHandler {
     m.data.assign(p, p + rbuf->data_size);
     self->inbox_->push(std::move(m), self->wake_);
   }
+  void onDatagramMessage(const std::string& channel, const uint8_t* data, size_t size) {
+    Message m;
+    m.utime = wallUtime();
+    m.channel = channel;
+    m.data.assign(data, data + size);
+    inbox_->push(std::move(m), wake_);
+  }
 
  private:
   Inbox* inbox_;
@@ -100,12 +109,23 @@ class LiveRun {
         nodes_(nodes),
         options_(options),
         inbox_(options.queue_capacity, options.queue_capacity_bytes),
-        handler_(&inbox_, options.wake_on_message) {}
+        handler_(&inbox_, options.wake_on_message) {
+    if (net::isUdpmUrl(options.lcm_url)) {
+      net::ReceiverOptions receive;
+      receive.allowed_senders = options.allowed_senders;
+      if (options.auth) receive.auth = *options.auth;
+      udpm_ = std::make_unique<net::UdpmReceiver>(options.lcm_url, std::move(receive));
+    }
+  }
 
   void subscribe() {
     for (Node* n : nodes_) {
       for (const auto& ch : n->subscriptions()) {
-        if (subscribers_[ch].empty()) {
+        if (subscribers_[ch].empty() && udpm_) {
+          udpm_->subscribe(ch, [this](const std::string& c, const uint8_t* d, size_t n) {
+            handler_.onDatagramMessage(c, d, n);
+          });
+        } else if (subscribers_[ch].empty()) {
           subscriptions_.push_back(lcm_.subscribeFunction(ch, &RawHandler::onMessage, &handler_));
         }
         subscribers_[ch].push_back(n);
@@ -120,7 +140,7 @@ class LiveRun {
     if (!options_.wake_on_message) return;
     receiver_ = std::thread([this] {
       while (receiving_) {
-        if (failed(lcm_.handleTimeout(50))) {
+        if (failed(handleTimeout(50))) {
           lcm_failed_ = true;
           break;
         }
@@ -157,18 +177,19 @@ class LiveRun {
     auto drain_until = std::chrono::steady_clock::now() + std::chrono::milliseconds(200);
     if (!options_.wake_on_message) {
       while (!lcm_failed_ && std::chrono::steady_clock::now() < drain_until) {
-        if (failed(lcm_.handleTimeout(20))) lcm_failed_ = true;
+        if (failed(handleTimeout(20))) lcm_failed_ = true;
       }
       drain_until = std::chrono::steady_clock::now();
     }
     for (const Message& m : inbox_.popUntil(drain_until)) dispatch(m);
     countDropped(true);
+    reportTransportCounters();
     const int64_t now = wallUtime();
     for (Node* n : nodes_) {
       Outbox out;
       n->finish(now, out);
       n->publishStatus(now, out);
-      publishAll(lcm_, out.take());
+      publishAll(lcm_, out.take(), options_.auth.get());
     }
     receiving_ = false;
     if (receiver_.joinable()) receiver_.join();
@@ -181,10 +202,43 @@ class LiveRun {
   // signal arriving while this thread waits is no failure of LCM).
   static bool failed(int rc) { return rc < 0 && errno != EINTR; }
 
+  // One wait for traffic on whichever receive path this run has; the receive path's counters
+  // are copied for the worker (the receiver thread may be the caller).
+  int handleTimeout(int ms) {
+    if (!udpm_) return lcm_.handleTimeout(ms);
+    const int rc = udpm_->handleTimeout(ms);
+    std::lock_guard<std::mutex> lock(net_mutex_);
+    net_counters_ = udpm_->counters();
+    return rc;
+  }
+
+  // The datagrams refused before any node saw them, in every node's status.
+  void reportTransportCounters() {
+    if (!udpm_) return;
+    net::ReceiverCounters c;
+    {
+      std::lock_guard<std::mutex> lock(net_mutex_);
+      c = net_counters_;
+    }
+    for (Node* n : nodes_) {
+      n->setTransportCounter("datagrams", static_cast<int64_t>(c.datagrams));
+      n->setTransportCounter("refused",
+                             static_cast<int64_t>(c.reassembly.refusedTotal() + c.truncated));
+      n->setTransportCounter("not_allowed", static_cast<int64_t>(c.not_allowed));
+      n->setTransportCounter("not_signed", static_cast<int64_t>(c.not_signed));
+      for (size_t r = 0; r < c.reassembly.refused.size(); ++r) {
+        if (c.reassembly.refused[r] == 0) continue;
+        n->setTransportCounter(
+            std::string("refused_") + net::refusalName(static_cast<net::Refusal>(r)),
+            static_cast<int64_t>(c.reassembly.refused[r]));
+      }
+    }
+  }
+
   void receiveBuffered() {
     if (options_.wake_on_message) return;
     int rc = 0;
-    while ((rc = lcm_.handleTimeout(0)) > 0) {
+    while ((rc = handleTimeout(0)) > 0) {
     }
     if (failed(rc)) lcm_failed_ = true;
   }
@@ -195,16 +249,17 @@ class LiveRun {
     for (Node* n : it->second) {
       Outbox out;
       n->receive(m, out);
-      publishAll(lcm_, out.take());
+      publishAll(lcm_, out.take(), options_.auth.get());
     }
   }
 
   void tickNodes() {
+    reportTransportCounters();
     const int64_t now = wallUtime();
     for (Node* n : nodes_) {
       Outbox out;
       n->tick(now, out);
-      publishAll(lcm_, out.take());
+      publishAll(lcm_, out.take(), options_.auth.get());
     }
   }
 
@@ -228,6 +283,9 @@ class LiveRun {
   const LiveOptions& options_;
   Inbox inbox_;
   RawHandler handler_;
+  std::unique_ptr<net::UdpmReceiver> udpm_;  // udpm:// URLs: our receive path, not liblcm's
+  std::mutex net_mutex_;
+  net::ReceiverCounters net_counters_;
   std::map<std::string, std::vector<Node*>> subscribers_;
   std::vector<lcm::Subscription*> subscriptions_;
   std::thread receiver_;
@@ -279,13 +337,18 @@ void installStopSignals() {
 
 bool stopRequested() { return g_stop; }
 
-void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages) {
+void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages, const net::MessageAuth* auth) {
   // A sweep leaves as a burst of ~48 kB chunks; back to back they overflow a receiver's
   // default socket buffer (~208 kB) and whole chunks are lost. Pace large messages.
   constexpr size_t kLargeMessageBytes = 16 * 1024;
   for (size_t i = 0; i < messages.size(); ++i) {
     const auto& m = messages[i];
-    lcm.publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+    if (auth) {
+      const std::vector<uint8_t> signed_data = auth->sign(m.channel, m.data.data(), m.data.size());
+      lcm.publish(m.channel, signed_data.data(), static_cast<unsigned int>(signed_data.size()));
+    } else {
+      lcm.publish(m.channel, m.data.data(), static_cast<unsigned int>(m.data.size()));
+    }
     if (m.data.size() >= kLargeMessageBytes && i + 1 < messages.size()) {
       std::this_thread::sleep_for(std::chrono::milliseconds(2));
     }
@@ -299,7 +362,14 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
   }
   const std::string process = options.process.empty() ? thisProcessName() : options.process;
   for (Node* n : nodes) n->setProcess(process);
-  LiveRun run(lcm, nodes, options);
+  std::unique_ptr<LiveRun> live;
+  try {
+    live = std::make_unique<LiveRun>(lcm, nodes, options);
+  } catch (const std::exception& e) {
+    std::cerr << "LCM receive: " << e.what() << "\n";
+    return 2;
+  }
+  LiveRun& run = *live;
   run.subscribe();
   run.startReceiver();
   run.loop();

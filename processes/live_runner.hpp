@@ -6,6 +6,8 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -14,10 +16,24 @@
 namespace lcm {
 class LCM;
 }
+namespace sweepmap::net {
+class MessageAuth;
+}
 
 namespace sweepmap {
 
 struct LiveOptions {
+  // The provider URL the LCM handle was made with. An udpm:// URL (or "" under
+  // LCM_DEFAULT_URL=udpm://...) is received by sweepmap's own validating receiver
+  // (net/udpm_receiver.hpp), never by liblcm 1.3.1's, which one malformed datagram crashes;
+  // liblcm then only publishes. Other providers (memq://, file://) are in-process: liblcm
+  // receives them. Processes set it from --lcm-url (liveOptions in cli_common.hpp).
+  std::string lcm_url = "memq://";
+  // Receive only from these IPv4 senders (host byte order); empty: any (udpm:// only).
+  std::set<uint32_t> allowed_senders;
+  // Set: every message published is signed with this key, and only messages signed with it
+  // are received (net/message_auth.hpp; udpm:// only).
+  std::shared_ptr<const net::MessageAuth> auth;
   int tick_period_ms = 1;
   // true: a receiver thread wakes the worker for every message. false: no receiver thread;
   // the worker takes the messages LCM has buffered at each tick (they wait at most
@@ -50,7 +66,8 @@ bool stopRequested();
 // Returns 0 after a clean stop (signal or should_stop), non-zero if LCM failed.
 int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options);
 
-// Publishes already encoded messages.
-void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages);
+// Publishes already encoded messages, signed when `auth` is given.
+void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages,
+                const net::MessageAuth* auth = nullptr);
 
 }  // namespace sweepmap

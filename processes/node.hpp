@@ -87,6 +87,11 @@ class Node {
   int64_t counter(const std::string& name) const;
   // Input lost before it reached the node (e.g. the live receive queue was full).
   void countLostInput(int64_t n) { counters_["dropped"] += n; }
+  // The receive path's own counters (datagrams refused before any node saw them), shown in
+  // this node's status as `net_<name>`.
+  void setTransportCounter(const std::string& name, int64_t value) {
+    counters_["net_" + name] = value;
+  }
   void publishStatus(int64_t now_utime, Outbox& out);
   bool failed() const { return failed_; }
   // The process this node runs in, named in its status (process_status_t.process) so that a

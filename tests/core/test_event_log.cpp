@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
+#include <sys/resource.h>
 
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 
@@ -40,6 +42,37 @@ class EventLogTest : public ::testing::Test {
 
   fs::path dir_;
 };
+
+// A disk that refuses a write (here the file-size limit, EFBIG, as a full disk's ENOSPC)
+// leaves a log that ends with its last complete event, and the error says where.
+TEST_F(EventLogTest, AWriteTheDiskRefusesCutsTheLogBackToAnEventBoundary) {
+  const std::string p = path("full.lcmlog");
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  const auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit small = old;
+  small.rlim_cur = 1000;
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  std::string error;
+  {
+    EventLogWriter w(p);
+    try {
+      for (int i = 0; i < 10; ++i) w.write(i, "CHAN", std::vector<uint8_t>(100, 1));  // 132 B
+      w.flush();
+    } catch (const std::runtime_error& e) {
+      error = e.what();
+    }
+  }
+  setrlimit(RLIMIT_FSIZE, &old);
+  std::signal(SIGXFSZ, previous);
+  EXPECT_NE(error.find("last complete event, at byte 924"), std::string::npos) << error;
+  EXPECT_EQ(fs::file_size(p), 7u * 132u);
+  EventLogReader r(p);
+  LogEvent e;
+  int events = 0;
+  while (r.next(&e)) ++events;  // throws on a cut event
+  EXPECT_EQ(events, 7);
+}
 
 TEST_F(EventLogTest, RoundTrip) {
   writeThree(path("a.lcmlog"));

@@ -131,6 +131,7 @@ int runEmulate(const EmulateOptions& o) {
     if (!lcm->good()) throw ConfigError("cannot open LCM at '" + o.lcm_url + "'");
     publishAll(*lcm, world->startMessages(wallUtime()));
     LiveOptions lo;
+    lo.lcm_url = o.lcm_url;
     lo.should_stop = [&stop] { return stop.load(); };
     lcm_thread = std::thread([&lcm, nodes, lo] { runLive(*lcm, nodes, lo); });
   }

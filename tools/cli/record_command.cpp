@@ -1,4 +1,5 @@
-// `sweepmap record`: lcm-logger with presets, splitting and a disk guard (tools/ops/record.hpp).
+// `sweepmap record`: our own LCM logger with presets, splitting and a disk guard
+// (tools/ops/record.hpp).
 #include "processes/channels.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/ops/record.hpp"
@@ -8,11 +9,13 @@ namespace sweepmap {
 Runner addRecordCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "record",
-      "Record the LCM bus with lcm-logger into --out DIR/NAME: --preset raw (what replay needs: "
+      "Record the LCM bus into the LCM event log --out DIR/NAME (received through sweepmap's "
+      "validating receive path, not liblcm's): --preset raw (what replay needs: "
       "LIDAR_SCAN, MOTOR_STATE, MOTOR_SWITCH, SCAN_WINDOW, WHEEL_TICKS, IMU, WHEEL_CMD, PROFILE, "
       "STATUS_*, TRUTH_*) or all; --split-mb N starts a new file (NAME.00, NAME.01, ...) every N "
-      "MB; when the free space falls below --min-free-mb the recording stops cleanly (the log "
-      "ends with its last complete event; exit status 3). Stops at SIGINT/SIGTERM or after "
+      "MB; when the free space falls below --min-free-mb, or the disk refuses a write, the "
+      "recording stops (the log ends with its last complete event; exit status 4). Stops at "
+      "SIGINT/SIGTERM or after "
       "--duration seconds");
   auto o = std::make_shared<RecordOptions>();
   o->lcm_url = kDefaultLcmUrl;
@@ -32,6 +35,12 @@ Runner addRecordCommand(CLI::App& app) {
   cmd->add_option("--duration", o->duration_s, "stop after [s] (0: at SIGINT/SIGTERM)")
       ->capture_default_str()
       ->check(CLI::NonNegativeNumber);
+  cmd->add_option("--allow-senders", o->allow_senders,
+                  "record only what these IPv4 addresses send (comma-separated); default: any")
+      ->delimiter(',');
+  cmd->add_option("--key-file", o->key_file,
+                  "shared key (chmod 600): record only messages signed with it (the log holds "
+                  "them without their signature); default: no check");
   return [o]() { return runRecord(*o); };
 }
 

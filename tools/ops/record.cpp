@@ -2,16 +2,24 @@
 
 #include <sys/statvfs.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <iostream>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
+#include "core/event_log.hpp"
+#include "core/exit_codes.hpp"
+#include "net/udpm_receiver.hpp"
 #include "processes/live_runner.hpp"
+#include "processes/node.hpp"
 #include "processes/sd_notify.hpp"
-#include "tools/ops/process_group.hpp"
 
 namespace sweepmap {
 std::string recordChannels(const std::string& preset) {
@@ -30,64 +38,101 @@ double freeMb(const std::string& path) {
   return static_cast<double>(s.f_bavail) * static_cast<double>(s.f_frsize) / 1e6;
 }
 
-int runRecord(const RecordOptions& o) {
-  namespace fs = std::filesystem;
-  std::string channels;
-  try {
-    channels = recordChannels(o.preset);
-  } catch (const std::invalid_argument& e) {
-    std::cerr << "record: " << e.what() << "\n";
-    return 2;
+namespace {
+
+// Messages from the receive thread to the writer: bounded in bytes, drops counted (as
+// lcm-logger's callback only enqueues and its writer thread does the disk I/O).
+class RecordQueue {
+ public:
+  explicit RecordQueue(size_t capacity_bytes) : capacity_bytes_(capacity_bytes) {}
+  void push(int64_t utime, const std::string& channel, const uint8_t* data, size_t size) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (bytes_ + size > capacity_bytes_) {
+      ++dropped_;
+      return;
+    }
+    bytes_ += size;
+    queue_.push_back({utime, channel, std::vector<uint8_t>(data, data + size)});
   }
-  std::error_code ec;
-  fs::create_directories(o.out, ec);
-  if (ec) {
-    std::cerr << "record: cannot create " << o.out << ": " << ec.message() << "\n";
-    return 2;
+  std::deque<Message> take() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    std::deque<Message> out;
+    out.swap(queue_);
+    bytes_ = 0;
+    return out;
   }
-  const double free0 = freeMb(o.out);
-  if (free0 >= 0 && free0 < o.min_free_mb) {
-    std::cerr << "record: only " << std::lround(free0) << " MB free on " << o.out
-              << ", below --min-free-mb " << o.min_free_mb << "; not starting\n";
-    return 3;
+  int64_t dropped() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return dropped_;
   }
-  const std::string file = (fs::path(o.out) / o.name).string();
-  std::vector<std::string> argv = {"lcm-logger", "--lcm-url=" + o.lcm_url, "-c", channels, "-q"};
-  if (o.split_mb > 0) {
-    argv.insert(argv.end(), {"-i", "--split-mb=" + std::to_string(o.split_mb)});
-  } else {
-    argv.push_back("-f");
+
+ private:
+  std::mutex mutex_;
+  std::deque<Message> queue_;
+  size_t capacity_bytes_;
+  size_t bytes_ = 0;
+  int64_t dropped_ = 0;
+};
+
+// The log files of one recording: NAME (replaced), or NAME.NN every split_mb, NN counting
+// from the first number no file has yet, so that a restarted recorder continues the series
+// (lcm-logger's -f and -i).
+class RecordFiles {
+ public:
+  explicit RecordFiles(const RecordOptions& o)
+      : base_((std::filesystem::path(o.out) / o.name).string()), split_mb_(o.split_mb) {
+    open();
   }
-  argv.push_back(file);
-  installStopSignals();
-  ProcessGroup procs;
-  pid_t logger = -1;
-  try {
-    logger = procs.start("lcm-logger", argv);
-  } catch (const std::exception& e) {
-    std::cerr << "record: " << e.what() << "\n";
-    return 2;
+  const std::string& path() const { return path_; }
+  int64_t events() const { return events_ + (writer_ ? writer_->events() : 0); }
+  // Throws std::runtime_error when the disk refuses (the file then ends at an event).
+  void write(const Message& m) {
+    if (split_mb_ > 0 && static_cast<double>(writer_->bytes()) >= split_mb_ * 1e6) {
+      writer_->close();
+      events_ += writer_->events();
+      ++part_;
+      open();
+    }
+    writer_->write(m.utime, m.channel, m.data);
   }
-  std::cout << "record: " << o.preset << " channels to " << file << (o.split_mb > 0 ? ".NN" : "")
-            << " (stops below " << o.min_free_mb << " MB free)\n";
+  void flush() { writer_->flush(); }
+  void close() { writer_->close(); }
+
+ private:
+  void open() {
+    for (;; ++part_) {
+      char suffix[16] = "";
+      if (split_mb_ > 0) std::snprintf(suffix, sizeof suffix, ".%02d", part_);
+      path_ = base_ + suffix;
+      if (split_mb_ <= 0 || !std::filesystem::exists(path_)) break;
+    }
+    writer_ = std::make_unique<EventLogWriter>(path_);
+  }
+  std::string base_;
+  double split_mb_;
+  int part_ = 0;
+  int64_t events_ = 0;
+  std::string path_;
+  std::unique_ptr<EventLogWriter> writer_;
+};
+
+// Writes what arrives until a stop, the duration or a low disk; returns the exit status.
+int writeUntilStopped(const RecordOptions& o, RecordQueue& queue, RecordFiles& files) {
   const auto start = std::chrono::steady_clock::now();
-  int status = 0;
-  // Under systemd or `sweepmap launch`: ready once lcm-logger runs, alive from this loop.
-  SdNotifier notifier;
+  SdNotifier notifier;  // under systemd or `sweepmap launch`: ready now, alive from this loop
   notifier.ready();
+  int status = kExitOk;
   while (!stopRequested()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     notifier.alive();
-    if (!procs.running(logger)) {
-      std::cerr << "record: lcm-logger ended (status " << procs.wait(logger, 0) << ")\n";
-      return 1;
-    }
+    for (const Message& m : queue.take()) files.write(m);
+    files.flush();
     const double free = freeMb(o.out);
     if (free >= 0 && free < o.min_free_mb) {
       std::cerr << "record: stopped: " << std::lround(free) << " MB free on " << o.out
                 << ", below --min-free-mb " << o.min_free_mb
-                << " (the log is closed after its last complete event)\n";
-      status = 3;
+                << " (the log ends with its last complete event)\n";
+      status = kExitDeviceIo;
       break;
     }
     const double elapsed =
@@ -95,11 +140,78 @@ int runRecord(const RecordOptions& o) {
     if (o.duration_s > 0 && elapsed >= o.duration_s) break;
   }
   notifier.stopping();
-  const int rc = procs.stop(logger, 10.0);
-  if (rc != 0 && status == 0) {
-    std::cerr << "record: lcm-logger exited with status " << rc << "\n";
-    return 1;
+  if (status == kExitOk) {
+    for (const Message& m : queue.take()) files.write(m);
   }
+  files.close();
+  return status;
+}
+
+}  // namespace
+
+int runRecord(const RecordOptions& o) {
+  namespace fs = std::filesystem;
+  std::string channels;
+  try {
+    channels = recordChannels(o.preset);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "record: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  if (!net::isUdpmUrl(o.lcm_url)) {
+    std::cerr << "record: --lcm-url '" << o.lcm_url << "': record listens on udpm:// URLs\n";
+    return kExitUsage;
+  }
+  std::error_code ec;
+  fs::create_directories(o.out, ec);
+  if (ec) {
+    std::cerr << "record: cannot create " << o.out << ": " << ec.message() << "\n";
+    return kExitDeviceIo;
+  }
+  const double free0 = freeMb(o.out);
+  if (free0 >= 0 && free0 < o.min_free_mb) {
+    std::cerr << "record: only " << std::lround(free0) << " MB free on " << o.out
+              << ", below --min-free-mb " << o.min_free_mb << "; not starting\n";
+    return kExitDeviceIo;
+  }
+  installStopSignals();
+  RecordQueue queue(64u << 20);
+  std::unique_ptr<net::UdpmReceiver> receiver;
+  std::unique_ptr<RecordFiles> files;
+  try {
+    receiver = std::make_unique<net::UdpmReceiver>(
+        o.lcm_url, net::securityOptions(o.lcm_url, o.allow_senders, o.key_file));
+    files = std::make_unique<RecordFiles>(o);
+  } catch (const std::invalid_argument& e) {
+    std::cerr << "record: " << e.what() << "\n";
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::cerr << "record: " << e.what() << "\n";
+    return kExitDeviceIo;
+  }
+  receiver->subscribe(channels, [&queue](const std::string& c, const uint8_t* d, size_t n) {
+    queue.push(wallUtime(), c, d, n);
+  });
+  std::cout << "record: " << o.preset << " channels to " << files->path()
+            << (o.split_mb > 0 ? " (then .01, .02, ...)" : "") << " (stops below " << o.min_free_mb
+            << " MB free)" << std::endl;
+  std::atomic<bool> receiving{true};
+  std::thread receive([&] {
+    while (receiving) receiver->handleTimeout(50);
+  });
+  int status = kExitOk;
+  try {
+    status = writeUntilStopped(o, queue, *files);
+  } catch (const std::exception& e) {
+    std::cerr << "record: " << e.what() << "\n";
+    status = kExitDeviceIo;
+  }
+  receiving = false;
+  receive.join();
+  const net::ReceiverCounters c = receiver->counters();
+  std::cerr << "record: " << files->events() << " events; " << queue.dropped()
+            << " dropped (queue full), " << c.reassembly.refusedTotal() + c.truncated
+            << " datagrams refused\n";
   return status;
 }
 

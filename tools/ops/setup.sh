@@ -31,6 +31,7 @@ packages=(
   gnuplot-nox iproute2 util-linux clang-format python3
   clang libclang-rt-14-dev
   libgpiod-dev
+  libsodium-dev  # signed LCM messages (net/message_auth.hpp)
   iptables libnetfilter-queue-dev  # the two-host test: loss and reordering without netem
   systemd
 )
@@ -39,6 +40,7 @@ packages=(
 # co-installable (liblcm-dev:arm64 would replace lcm-gen's liblcm-bin:amd64): see below.
 pi_packages=(
   crossbuild-essential-arm64 qemu-user-static ccache
+  libsodium-dev:arm64
   dpkg-dev file  # dpkg-shlibdeps and file: CPack's Debian packages (make package)
   libc6:arm64 libyaml-cpp0.7:arm64 libgpiod-dev:arm64 libgtest-dev:arm64 libgmock-dev:arm64
   libglib2.0-0:arm64
