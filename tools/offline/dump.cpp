@@ -50,7 +50,7 @@ std::string scalar(const LcmValue& v) {
       s << std::setprecision(9) << v.d;
       break;
     case LcmValue::Kind::kString:
-      s << Json(v.s).dump();
+      s << Json(v.s).dump(-1, ' ', false, Json::error_handler_t::replace);  // not UTF-8: U+FFFD
       break;
     case LcmValue::Kind::kBool:
       s << (v.i ? "true" : "false");
@@ -122,7 +122,7 @@ void printEvent(const LcmSchema& schema, const LogEvent& ev, const DumpOptions& 
       j["error"] = problem;
       j["head_hex"] = hexHead(ev.data, 32);
     }
-    out << j.dump() << "\n";
+    out << j.dump(-1, ' ', false, Json::error_handler_t::replace) << "\n";
     return;
   }
   out << ev.utime << " " << ev.channel;

@@ -6,10 +6,13 @@
 #include <iomanip>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <stdexcept>
 
 #include "core/exit_codes.hpp"
+#include "net/udpm_receiver.hpp"
 #include "processes/live_runner.hpp"
 #include "sweepmap/map_stats_t.hpp"
 #include "sweepmap/process_status_t.hpp"
@@ -259,7 +262,8 @@ std::string StatusBoard::json(int64_t now) const {
   }
   j["malformed"] = malformed_;
   j["unhealthy"] = unhealthy(now);
-  return j.dump(2) + "\n";
+  // A detail of bytes that are not UTF-8 (the network is not trusted) is escaped, not fatal.
+  return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
 }
 
 namespace {
@@ -299,22 +303,54 @@ int onceStatus(const StatusBoard& board, int64_t now, const StatusOptions& o) {
   return kExitOk;
 }
 
+// The bus to listen on: an udpm:// URL through sweepmap's validating receive path (a monitor
+// that one malformed datagram kills is no monitor), any other provider through liblcm.
+class StatusSource {
+ public:
+  explicit StatusSource(const std::string& url, StatusBoard* board) : board_(board) {
+    if (net::isUdpmUrl(url)) {
+      udpm_ = std::make_unique<net::UdpmReceiver>(url);
+      udpm_->subscribe(".*", [this](const std::string& c, const uint8_t* d, size_t n) {
+        board_->add(Message{nowUtime(), c, std::vector<uint8_t>(d, d + n)}, nowUtime());
+      });
+      return;
+    }
+    lcm_ = std::make_unique<lcm::LCM>(url);
+    if (!lcm_->good()) throw std::runtime_error("cannot open LCM at '" + url + "'");
+    listener_ = std::make_unique<Listener>(board);
+    lcm_->subscribe(".*", &Listener::onMessage, listener_.get());
+  }
+  void wait(int ms) {
+    if (udpm_) {
+      udpm_->handleTimeout(ms);
+    } else {
+      lcm_->handleTimeout(ms);
+    }
+  }
+
+ private:
+  StatusBoard* board_;
+  std::unique_ptr<net::UdpmReceiver> udpm_;
+  std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<Listener> listener_;
+};
+
 }  // namespace
 
 int runStatus(const StatusOptions& o) {
-  lcm::LCM lcm(o.lcm_url);
-  if (!lcm.good()) {
-    std::cerr << "sweepmap status: cannot open LCM at '" << o.lcm_url << "'\n";
+  StatusBoard board(o.board);
+  std::unique_ptr<StatusSource> source;
+  try {
+    source = std::make_unique<StatusSource>(o.lcm_url, &board);
+  } catch (const std::exception& e) {
+    std::cerr << "sweepmap status: " << e.what() << "\n";
     return kExitUsage;
   }
-  StatusBoard board(o.board);
-  Listener listener(&board);
-  lcm.subscribe(".*", &Listener::onMessage, &listener);
   installStopSignals();
   const int64_t start = nowUtime();
   int64_t next_draw = start + 1'000'000;
   while (!stopRequested()) {
-    lcm.handleTimeout(100);
+    source->wait(100);
     const int64_t now = nowUtime();
     if (o.once) {
       if (seconds(now - start) < o.window_s) continue;
