@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <regex>
 
 #include "mapping/occupancy_map.hpp"
 #include "processes/channels.hpp"
@@ -52,10 +53,13 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
     p.origin = Eigen::Vector3d(c.sensor_origin_m[0], c.sensor_origin_m[1], c.sensor_origin_m[2])
                    .cast<float>();
     std::vector<float>& xyz = p.chunks[c.chunk_index];
+    pending_points_ -= xyz.size() / 3;  // a repeated chunk replaces its first copy
     xyz.clear();
     xyz.reserve(c.xyz_m.size() * 3);
     for (const auto& q : c.xyz_m) xyz.insert(xyz.end(), q.begin(), q.end());
+    pending_points_ += c.xyz_m.size();
     last_sweep_utime_ = c.utime;
+    boundPending(msg.utime, out);
     count("chunks");
   } else if (msg.channel == channels::kSweepStatus) {
     sweep_status_t s;
@@ -66,24 +70,66 @@ void MapperNode::handle(const Message& msg, Outbox& out) {
     const SweepKey key{s.utime, s.sweep_id};
     if (pending_.count(key)) insert(msg.utime, key, out);
   } else if (msg.channel == channels::kMapSave) {
-    map_save_t r;
-    if (!decodeMessage(msg, &r)) {
-      reportError("invalid", "malformed map_save_t");
-      return;
-    }
-    if (save_path_.empty()) {
-      reportError("errors", "MAP_SAVE: this mapper has no --save path");
-      return;
-    }
-    // Only a file name is taken from the request: the map stays in save_path's directory.
-    const std::filesystem::path name = std::filesystem::path(r.path).filename();
-    if (!r.path.empty() && (name.empty() || name == "." || name == "..")) {
-      reportError("invalid", "MAP_SAVE: bad file name '" + r.path + "'");
-      return;
-    }
-    flushBatch(msg.utime, out);  // a save holds every sweep received so far
-    save(r.path.empty() ? save_path_
-                        : (std::filesystem::path(save_path_).parent_path() / name).string());
+    handleMapSave(msg, out);
+  }
+}
+
+void MapperNode::handleMapSave(const Message& msg, Outbox& out) {
+  map_save_t r;
+  if (!decodeMessage(msg, &r)) {
+    reportError("invalid", "malformed map_save_t");
+    return;
+  }
+  if (save_path_.empty()) {
+    reportError("refused_saves", "MAP_SAVE: this mapper has no --save path");
+    return;
+  }
+  // Only a file name is taken from the request: the map stays in save_path's folder.
+  const std::string name =
+      std::filesystem::path(r.path.empty() ? save_path_ : r.path).filename().string();
+  if (const std::string why = refuseMapSave(name, msg.utime); !why.empty()) {
+    reportError("refused_saves", "MAP_SAVE refused: " + why);
+    return;
+  }
+  last_requested_save_utime_ = msg.utime;
+  requested_save_done_ = true;
+  flushBatch(msg.utime, out);  // a save holds every sweep received so far
+  save((std::filesystem::path(save_path_).parent_path() / name).string());
+}
+
+std::string MapperNode::refuseMapSave(const std::string& name, int64_t utime) const {
+  static const std::regex kSafeName("[A-Za-z0-9][A-Za-z0-9_.-]{0,63}\\.bt");
+  std::string shown = name.substr(0, 80);
+  for (char& c : shown) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) > 0x7e) c = '?';
+  }
+  if (!std::regex_match(name, kSafeName)) {
+    return "'" + shown + "' is not a file name of the pattern [A-Za-z0-9][A-Za-z0-9_.-]{0,63}.bt";
+  }
+  if (requested_save_done_ &&
+      utime - last_requested_save_utime_ < static_cast<int64_t>(kMapSaveIntervalS * 1e6)) {
+    return "one request per " + std::to_string(static_cast<int>(kMapSaveIntervalS)) + " s";
+  }
+  const bool own = name == std::filesystem::path(save_path_).filename().string();
+  if (!own && !written_.count(name) && written_.size() >= kMaxRequestedFiles + 1) {
+    return "this mapper has written " + std::to_string(kMaxRequestedFiles) +
+           " requested files already";
+  }
+  const std::filesystem::path target = std::filesystem::path(save_path_).parent_path() / name;
+  std::error_code ec;
+  if (!own && !written_.count(name) && std::filesystem::exists(target, ec)) {
+    return "'" + shown + "' exists and was not written by this mapper";
+  }
+  return {};
+}
+
+// Sweeps that never complete (a lost status, a forged chunk) must not pile up: over the bounds,
+// the oldest pending sweep goes into the map as it is.
+void MapperNode::boundPending(int64_t now_utime, Outbox& out) {
+  while (pending_.size() > kMaxPendingSweeps ||
+         (pending_points_ > kMaxPendingPoints && pending_.size() > 1)) {
+    count("pending_evicted");
+    insert(now_utime, pending_.begin()->first, out);
   }
 }
 
@@ -103,6 +149,7 @@ void MapperNode::insert(int64_t now_utime, SweepKey key, Outbox& out) {
                                          std::to_string(it->second.chunk_count) + " chunks");
   }
   const Eigen::Vector3f it_origin = it->second.origin;
+  pending_points_ -= points.size();
   pending_.erase(it);
   inserted_.insert(key);
   while (inserted_.size() > 1000) inserted_.erase(inserted_.begin());
@@ -169,6 +216,7 @@ void MapperNode::publishStats(int64_t now_utime, Outbox& out) {
 void MapperNode::save(const std::string& path) {
   try {
     map_->saveBinaryAtomic(path);
+    written_.insert(std::filesystem::path(path).filename().string());
     count("saves");
   } catch (const std::exception& e) {
     reportError("save_errors", e.what());

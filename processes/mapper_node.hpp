@@ -29,6 +29,17 @@ class MapperNode : public Node {
   // request may name another file, but only inside save_path's directory. `save_every` > 0:
   // also after every that many map updates (a sweep, or a batch of a mobile rig), so that a
   // process killed (kill -9, power loss) leaves its last saved map behind.
+  //
+  // A MAP_SAVE request comes from the network: it is a request, not a command. It is honoured
+  // only for a name of the pattern [A-Za-z0-9][A-Za-z0-9_.-]{0,63}.bt, never over a file this
+  // mapper did not write, at most once every kMapSaveIntervalS and for at most
+  // kMaxRequestedFiles names per run; everything refused is counted (`refused_saves`).
+  // Sweeps being assembled are bounded too (kMaxPendingSweeps, kMaxPendingPoints): the oldest
+  // goes into the map as it is (counted as incomplete) when a bound is reached.
+  static constexpr double kMapSaveIntervalS = 5.0;
+  static constexpr size_t kMaxRequestedFiles = 16;
+  static constexpr size_t kMaxPendingSweeps = 4;
+  static constexpr size_t kMaxPendingPoints = 4'000'000;  // 48 MB of xyz floats
   MapperNode(const MapperConfig& config, std::string save_path, int save_every = 0);
   ~MapperNode() override;
   std::vector<std::string> subscriptions() const override;
@@ -54,6 +65,10 @@ class MapperNode : public Node {
   void publishStats(int64_t now_utime, Outbox& out);
   void autosave();
   void save(const std::string& path);
+  void handleMapSave(const Message& msg, Outbox& out);
+  // Why a MAP_SAVE to `name` is refused ("" when it is not).
+  std::string refuseMapSave(const std::string& name, int64_t utime) const;
+  void boundPending(int64_t now_utime, Outbox& out);
 
   MapperConfig config_;
   std::string save_path_;
@@ -61,7 +76,11 @@ class MapperNode : public Node {
   int updates_since_save_ = 0;
   std::unique_ptr<OccupancyMap> map_;
   std::map<SweepKey, PendingSweep> pending_;
-  std::set<SweepKey> inserted_;
+  std::set<SweepKey> inserted_;  // the last kMaxPendingSweeps * 16 keys (late chunks)
+  size_t pending_points_ = 0;
+  std::set<std::string> written_;  // file names this mapper wrote in save_path's folder
+  int64_t last_requested_save_utime_ = 0;
+  bool requested_save_done_ = false;
   int64_t sweeps_inserted_ = 0;
   int64_t incomplete_ = 0;
   int64_t last_sweep_utime_ = 0;

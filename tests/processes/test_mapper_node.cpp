@@ -140,6 +140,74 @@ TEST(MapperNode, BadChunksRejectedAndSaveIsAtomic) {
   fs::remove_all(dir);
 }
 
+// MAP_SAVE comes from the network: only safe *.bt names, never over a file this mapper did
+// not write, one per 5 s of message time, and every refusal counted.
+TEST(MapperNode, MapSaveIsARequestNotACommand) {
+  const fs::path dir = fs::temp_directory_path() / "sweepmap_mapper_node_save_rules";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  std::ofstream(dir / "run.lcmlog") << "a log";
+  std::ofstream(dir / "other.bt") << "not ours";
+  MapperNode node(MapperConfig{}, (dir / "map.bt").string());
+  deliver(node, wallChunks(0, 1));
+  int64_t t = 10'000'000;
+  auto request = [&](const std::string& path, int64_t dt_s = 6) {
+    map_save_t m{};
+    m.path = path;
+    Message msg = encode(channels::kMapSave, m);
+    t += dt_s * 1'000'000;
+    msg.utime = t;
+    deliver(node, {msg});
+  };
+  for (const std::string bad : {"-rf", "evil\nname.bt", "run.lcmlog", ".hidden.bt", "x.bt\n",
+                                std::string(70, 'a') + ".bt", "other.bt"}) {
+    request(bad);
+  }
+  EXPECT_EQ(node.counter("refused_saves"), 7);
+  EXPECT_EQ(node.counter("saves"), 0);
+  std::ifstream log(dir / "run.lcmlog");
+  EXPECT_EQ(std::string(std::istreambuf_iterator<char>(log), {}), "a log");
+  EXPECT_FALSE(fs::exists(dir / "-rf"));
+  request("../../elsewhere.bt");  // only the name counts: saved in the mapper's folder
+  EXPECT_TRUE(fs::exists(dir / "elsewhere.bt"));
+  request("again.bt", 1);  // too soon after the last one
+  EXPECT_EQ(node.counter("refused_saves"), 8);
+  request("elsewhere.bt");  // its own file again: fine
+  request("");              // the configured path
+  EXPECT_EQ(node.counter("saves"), 2 + 0 + 1);
+  int accepted = 0;
+  for (int i = 0; i < 30; ++i) {
+    const int64_t before = node.counter("saves");
+    request("m" + std::to_string(i) + ".bt");
+    accepted += node.counter("saves") > before;
+  }
+  EXPECT_EQ(accepted,
+            static_cast<int>(MapperNode::kMaxRequestedFiles) - 1);  // elsewhere.bt was one
+  fs::remove_all(dir);
+}
+
+// Sweeps that never complete (a forged or lost chunk stream) are bounded: the oldest goes into
+// the map as it is, counted, and nothing piles up.
+TEST(MapperNode, PendingSweepsAreBounded) {
+  MapperNode node(MapperConfig{}, "");
+  std::vector<Message> msgs;
+  for (int k = 0; k < 50; ++k) {
+    cloud_chunk_t m{};
+    m.utime = 1'000'000 - 1000 * k;  // ever older: no newer sweep flushes them
+    m.sweep_id = k;
+    m.chunk_index = 0;
+    m.chunk_count = 3;  // never completes
+    m.xyz_m.push_back({1.0f, 0.0f, 0.0f});
+    m.npoints = m.total_points = 1;
+    msgs.push_back(encode(channels::kSweepCloud, m));
+  }
+  deliver(node, msgs);
+  EXPECT_EQ(node.counter("pending_evicted"),
+            50 - static_cast<int64_t>(MapperNode::kMaxPendingSweeps));
+  EXPECT_EQ(node.counter("incomplete_sweeps"),
+            50 - static_cast<int64_t>(MapperNode::kMaxPendingSweeps));
+}
+
 // Rig B: one single-chunk world-frame sweep per lidar scan (7 Hz), the sensor moving.
 std::vector<Message> worldScans(int count) {
   std::vector<Message> out;
