@@ -333,6 +333,7 @@ int64_t wallMinusMonotonicNs() {
 void installStopSignals() {
   std::signal(SIGINT, onSignal);
   std::signal(SIGTERM, onSignal);
+  std::signal(SIGHUP, onSignal);  // a closed terminal or ssh session stops us cleanly too
 }
 
 bool stopRequested() { return g_stop; }

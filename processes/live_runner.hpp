@@ -59,7 +59,7 @@ int64_t wallUtime();
 // timestamp (CLOCK_MONOTONIC) to utime and a utime to a monotonic deadline.
 int64_t wallMinusMonotonicNs();
 
-// Installs SIGINT/SIGTERM handlers that make runLive return after finish().
+// Installs SIGINT/SIGTERM/SIGHUP handlers that make runLive return after finish().
 void installStopSignals();
 bool stopRequested();
 

@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <functional>
 #include <iostream>
@@ -201,6 +202,36 @@ TEST_F(DeployTest, LaunchBacksOffAFailingProcessAndLeavesAFinishedOne) {
   const std::regex starts("start +done ");
   EXPECT_EQ(std::distance(std::sregex_iterator(e.begin(), e.end(), starts), std::sregex_iterator()),
             1);
+}
+
+// A closed ssh session (SIGHUP to launch) stops every child in order; launch killed outright
+// (SIGKILL, no chance to stop anything) still leaves no child running: each gets SIGTERM
+// from the kernel when its parent dies (PR_SET_PDEATHSIG).
+TEST_F(DeployTest, LaunchStopsItsChildrenOnHangUpAndWhenKilled) {
+  for (const int signal : {SIGHUP, SIGKILL}) {
+    const auto dir = scratchDir(signal == SIGHUP ? "deploy_hup" : "deploy_kill_launch");
+    startLaunch(dir, deployFile(dir, rigProcess("assembler", "") + rigProcess("mapper", "")));
+    pid_t assembler = -1, mapper = -1;
+    ASSERT_TRUE(waitFor(
+        [&] {
+          assembler = pidOf("assembler");
+          mapper = pidOf("mapper");
+          return assembler > 0 && mapper > 0 && saidReady("assembler", assembler) &&
+                 saidReady("mapper", mapper);
+        },
+        15))
+        << events();
+    ASSERT_EQ(::kill(launch_, signal), 0);
+    const int status = procs_.wait(launch_, 20);
+    EXPECT_EQ(status, signal == SIGHUP ? 0 : 128 + SIGKILL) << events();
+    for (const pid_t child : {assembler, mapper}) {
+      EXPECT_TRUE(waitFor([&] { return ::kill(child, 0) != 0; }, 10))
+          << "child " << child << " outlived launch (" << strsignal(signal) << ")";
+    }
+    if (signal == SIGHUP) {
+      EXPECT_NE(events().find("launch   stopped"), std::string::npos) << events();
+    }
+  }
 }
 
 // A process whose worker stops (SIGSTOP: no more WATCHDOG=1) is killed after watchdog_s and

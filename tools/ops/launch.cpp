@@ -183,6 +183,7 @@ class Supervisor {
     o.log_path = (log_dir_ / (p.spec.name + ".txt")).string();
     o.append_log = true;
     o.new_process_group = true;
+    o.parent_death_signal = SIGTERM;  // launch killed (even by SIGKILL): its children stop
     o.env = {"LCM_DEFAULT_URL=" + deploy_.lcm_url};
     if (p.spec.notify && notify_.ok()) {
       o.env.push_back("NOTIFY_SOCKET=" + notify_.name());
@@ -260,6 +261,20 @@ class Supervisor {
     }
   }
 
+  // SIGINT, then SIGKILL after timeout_s; the notify socket is served meanwhile, so that no
+  // child (the one stopping, or one stopped later) blocks on a full socket and misses its own
+  // stop timeout. Returns the exit status (128 + signal if killed).
+  int stopServingNotify(pid_t pid, double timeout_s) {
+    if (!group_.running(pid)) return group_.wait(pid, 0);
+    group_.signal(pid, SIGINT);
+    const auto deadline = Clock::now() + std::chrono::duration<double>(timeout_s);
+    while (group_.running(pid) && Clock::now() < deadline) {
+      notify_.receive(20, [&](pid_t from, const std::string& text) { onNotify(from, text); });
+    }
+    if (group_.running(pid)) group_.signal(pid, SIGKILL);
+    return group_.wait(pid, 5.0);
+  }
+
   // In reverse file order: SIGINT, then SIGKILL after the stop timeout.
   int stopAll() {
     int killed = 0;
@@ -268,7 +283,7 @@ class Supervisor {
       if (p.pid <= 0) continue;
       event("stop", p.spec.name,
             pidText(p) + ": SIGINT, SIGKILL after " + fmt(deploy_.stopTimeout(p.spec)) + " s");
-      const int status = group_.stop(p.pid, deploy_.stopTimeout(p.spec));
+      const int status = stopServingNotify(p.pid, deploy_.stopTimeout(p.spec));
       ProcessGroup::killGroup(p.pid);
       killed += status == 128 + SIGKILL;
       event("exit", p.spec.name, pidText(p) + " " + group_.describeExit(p.pid));

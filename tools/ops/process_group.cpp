@@ -3,10 +3,12 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <spawn.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -37,7 +39,59 @@ std::vector<std::string> environment(const std::vector<std::string>& overrides) 
   return env;
 }
 
+// argv[0] as execvp would find it, or "" when it is nowhere in PATH.
+std::string resolve(const std::string& program) {
+  if (program.find('/') != std::string::npos)
+    return ::access(program.c_str(), X_OK) == 0 ? program : "";
+  const char* path = std::getenv("PATH");
+  std::string dirs = path ? path : "/usr/local/bin:/usr/bin:/bin";
+  size_t start = 0;
+  while (start <= dirs.size()) {
+    size_t end = dirs.find(':', start);
+    if (end == std::string::npos) end = dirs.size();
+    const std::string candidate =
+        (end > start ? dirs.substr(start, end - start) : std::string(".")) + "/" + program;
+    if (::access(candidate.c_str(), X_OK) == 0) return candidate;
+    start = end + 1;
+  }
+  return "";
+}
+
+// fork and exec, for what posix_spawn cannot set (the parent-death signal). Everything the
+// child needs is made before the fork: between fork and exec it only calls what is safe in
+// a child of a threaded process.
+pid_t forkExec(const std::vector<std::string>& argv, const SpawnOptions& o, char** envp) {
+  const std::string program = resolve(argv[0]);
+  if (program.empty()) return -1;
+  std::vector<char*> args;
+  for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+  args.push_back(nullptr);
+  const pid_t parent = ::getpid();
+  const int log_flags = O_WRONLY | O_CREAT | (o.append_log ? O_APPEND : O_TRUNC) | O_CLOEXEC;
+  const pid_t pid = ::fork();
+  if (pid != 0) return pid;
+  ::prctl(PR_SET_PDEATHSIG, o.parent_death_signal);
+  if (::getppid() != parent) ::_exit(127);  // the parent died before prctl
+  if (o.new_process_group) ::setpgid(0, 0);
+  if (!o.log_path.empty()) {
+    const int fd = ::open(o.log_path.c_str(), log_flags, 0644);
+    if (fd < 0 || ::dup2(fd, 1) < 0 || ::dup2(fd, 2) < 0) ::_exit(127);
+  }
+  sigset_t none;
+  sigemptyset(&none);
+  ::sigprocmask(SIG_SETMASK, &none, nullptr);
+  ::execve(program.c_str(), args.data(), envp);
+  ::_exit(127);
+}
+
 pid_t spawn(const std::vector<std::string>& argv, const SpawnOptions& o, bool quiet) {
+  if (o.parent_death_signal != 0 && !quiet) {
+    std::vector<std::string> env_strings = environment(o.env);
+    std::vector<char*> env;
+    for (auto& e : env_strings) env.push_back(e.data());
+    env.push_back(nullptr);
+    return forkExec(argv, o, env.data());
+  }
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
   const std::string& log_path = o.log_path;

@@ -16,6 +16,9 @@ struct SpawnOptions {
   // The child leads a process group of its own: a terminal's Ctrl-C does not reach it, and
   // what it leaves behind when it dies can be killed with its group (killGroup).
   bool new_process_group = false;
+  // Non-zero: the child gets this signal when its parent dies (PR_SET_PDEATHSIG), so that a
+  // supervisor killed with SIGKILL leaves no process running behind it.
+  int parent_death_signal = 0;
 };
 
 class ProcessGroup {
