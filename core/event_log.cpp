@@ -36,13 +36,16 @@ LogError::LogError(const std::string& path, uint64_t offset, const std::string& 
       detail_(what) {}
 
 EventLogReader::EventLogReader(const std::string& path) : path_(path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) {
+    throw LogError(path, 0, std::string("cannot open: ") + std::strerror(errno));
+  }
+  if (!S_ISREG(st.st_mode)) {
+    throw LogError(path, 0, "not a regular file (a device, FIFO or folder is no log)");
+  }
   file_ = std::fopen(path.c_str(), "rb");
   if (!file_) throw LogError(path, 0, std::string("cannot open: ") + std::strerror(errno));
-  if (std::fseek(file_, 0, SEEK_END) == 0) {
-    const long end = std::ftell(file_);
-    size_ = end > 0 ? static_cast<uint64_t>(end) : 0;
-  }
-  std::fseek(file_, 0, SEEK_SET);
+  size_ = static_cast<uint64_t>(st.st_size);
 }
 
 EventLogReader::~EventLogReader() {
@@ -65,84 +68,103 @@ bool EventLogReader::next(LogEvent* event) {
     if (!resync_) throw;
     const uint64_t bad = offset_;
     uint64_t good = nextSyncAt(bad + 1);
-    while (good < size_ && !plausibleEventAt(good)) good = nextSyncAt(good + 1);
+    while (good < size_ && !problemAt(good).empty()) good = nextSyncAt(good + 1);
     skipped_.push_back({bad, good, e.detail()});
     offset_ = std::min(good, size_);
-    std::clearerr(file_);
-    std::fseek(file_, static_cast<long>(offset_), SEEK_SET);
     return offset_ < size_ && readAt(event);
   }
 }
 
-uint64_t EventLogReader::nextSyncAt(uint64_t from) {
-  std::vector<uint8_t> buf(1 << 16);
-  for (uint64_t at = from; at < size_;) {
-    if (std::fseek(file_, static_cast<long>(at), SEEK_SET) != 0) break;
-    const size_t n = std::fread(buf.data(), 1, buf.size(), file_);
-    if (n < 4) break;
-    for (size_t i = 0; i + 4 <= n; ++i) {
-      if (buf[i] == 0xED && readBE(&buf[i], 4) == kSync) return at + i;
+const uint8_t* EventLogReader::view(uint64_t at, size_t n) {
+  if (at + n > size_) return nullptr;
+  if (at < window_start_ || at + n > window_start_ + window_.size()) {
+    constexpr size_t kWindow = 1 << 20;
+    window_.resize(std::min<uint64_t>(std::max(kWindow, n), size_ - at));
+    window_start_ = at;
+    std::clearerr(file_);
+    if (std::fseek(file_, static_cast<long>(at), SEEK_SET) != 0 ||
+        std::fread(window_.data(), 1, window_.size(), file_) != window_.size()) {
+      window_.clear();
+      return nullptr;
     }
-    at += n - 3;  // a sync word across the chunk boundary is found in the next chunk
+  }
+  return window_.data() + (at - window_start_);
+}
+
+uint64_t EventLogReader::nextSyncAt(uint64_t from) {
+  while (from + 4 <= size_) {
+    const uint8_t* p = view(from, 4);
+    if (!p) break;
+    const uint8_t* end = window_.data() + window_.size();
+    for (const uint8_t* q = p; q + 4 <= end; ++q) {
+      q = static_cast<const uint8_t*>(std::memchr(q, 0xED, static_cast<size_t>(end - q)));
+      if (!q || q + 4 > end) break;
+      if (readBE(q, 4) == kSync) return window_start_ + static_cast<uint64_t>(q - window_.data());
+    }
+    from = window_start_ + window_.size() - 3;  // a sync word across the edge: next window
   }
   return size_;
 }
 
-bool EventLogReader::plausibleEventAt(uint64_t offset) {
-  const auto headerAt = [this](uint64_t at, uint8_t* h) {
-    return std::fseek(file_, static_cast<long>(at), SEEK_SET) == 0 &&
-           std::fread(h, 1, 28, file_) == 28 && readBE(h, 4) == kSync;
-  };
-  uint8_t h[28];
-  if (offset + 28 > size_ || !headerAt(offset, h)) return false;
+std::string EventLogReader::problemAt(uint64_t at) {
+  if (size_ - at < 28) {
+    return "truncated event header (" + std::to_string(size_ - at) + " of 28 bytes)";
+  }
+  const uint8_t* h = view(at, 28);
+  if (!h) return "cannot read the event header";
+  if (readBE(h, 4) != kSync) return "bad sync word (corrupt log)";
   const uint64_t channel_len = readBE(h + 20, 4), data_len = readBE(h + 24, 4);
-  if (channel_len == 0 || channel_len > kMaxChannelLength || data_len > kMaxDataLength) {
-    return false;
+  if (channel_len == 0 || channel_len > kMaxChannelLength) {
+    return "bad channel length " + std::to_string(channel_len);
   }
-  const uint64_t end = offset + 28 + channel_len + data_len;
-  if (end > size_) return false;
-  char channel[kMaxChannelLength];
-  if (std::fread(channel, 1, channel_len, file_) != channel_len) return false;
+  if (data_len > kMaxDataLength) return "bad data length " + std::to_string(data_len);
+  const uint64_t end = at + 28 + channel_len + data_len;
+  if (end > size_) {
+    return "truncated event: needs " + std::to_string(end - at) + " bytes, " +
+           std::to_string(size_ - at) + " left";
+  }
+  const uint8_t* channel = view(at + 28, channel_len);
+  if (!channel) return "cannot read the channel name";
   for (uint64_t i = 0; i < channel_len; ++i) {
-    if (channel[i] < 0x20 || channel[i] > 0x7e) return false;
+    if (channel[i] < 0x20 || channel[i] > 0x7e) return "channel name not printable";
   }
-  uint8_t next[28];
-  return end == size_ || (end + 28 <= size_ && headerAt(end, next)) ||
-         (end + 28 > size_ && end < size_);  // a cut event after it is the next range's
+  if (size_ - end >= 28) {
+    const uint8_t* next = view(end, 4);
+    if (!next || readBE(next, 4) != kSync) {
+      return "event of " + std::to_string(end - at) +
+             " bytes is not followed by an event at byte " + std::to_string(end) +
+             " (a damaged length)";
+    }
+  }
+  return {};
 }
 
 bool EventLogReader::readAt(LogEvent* event) {
-  uint8_t header[28];
-  const size_t got = std::fread(header, 1, sizeof header, file_);
-  if (got == 0 && std::feof(file_)) return false;
-  if (got != sizeof header) {
-    throw LogError(path_, offset_,
-                   "truncated event header (" + std::to_string(got) + " of 28 bytes)");
+  if (offset_ >= size_) return false;
+  if (const std::string why = problemAt(offset_); !why.empty()) {
+    throw LogError(path_, offset_, why);
   }
-  if (readBE(header, 4) != kSync) throw LogError(path_, offset_, "bad sync word (corrupt log)");
-  const uint32_t channel_len = static_cast<uint32_t>(readBE(header + 20, 4));
-  const uint32_t data_len = static_cast<uint32_t>(readBE(header + 24, 4));
-  if (channel_len == 0 || channel_len > kMaxChannelLength) {
-    throw LogError(path_, offset_, "bad channel length " + std::to_string(channel_len));
-  }
-  if (data_len > kMaxDataLength) {
-    throw LogError(path_, offset_, "bad data length " + std::to_string(data_len));
-  }
-  const uint64_t event_size = sizeof header + uint64_t(channel_len) + data_len;
-  if (size_ != 0 && offset_ + event_size > size_) {
-    throw LogError(path_, offset_,
-                   "truncated event: needs " + std::to_string(event_size) + " bytes, " +
-                       std::to_string(size_ - offset_) + " left");
-  }
-  event->eventnum = static_cast<int64_t>(readBE(header + 4, 8));
-  event->utime = static_cast<int64_t>(readBE(header + 12, 8));
-  event->channel.resize(channel_len);
+  const uint8_t* h = view(offset_, 28);
+  const uint32_t channel_len = static_cast<uint32_t>(readBE(h + 20, 4));
+  const uint32_t data_len = static_cast<uint32_t>(readBE(h + 24, 4));
+  event->eventnum = static_cast<int64_t>(readBE(h + 4, 8));
+  event->utime = static_cast<int64_t>(readBE(h + 12, 8));
+  const uint8_t* channel = view(offset_ + 28, channel_len);
+  event->channel.assign(reinterpret_cast<const char*>(channel), channel_len);
   event->data.resize(data_len);
-  if (std::fread(event->channel.data(), 1, channel_len, file_) != channel_len ||
-      std::fread(event->data.data(), 1, data_len, file_) != data_len) {
-    throw LogError(path_, offset_, "truncated event body");
+  const uint64_t data_at = offset_ + 28 + channel_len;
+  if (data_len > 0) {
+    if (const uint8_t* d = data_len <= (1u << 20) ? view(data_at, data_len) : nullptr) {
+      std::memcpy(event->data.data(), d, data_len);
+    } else {
+      std::clearerr(file_);
+      if (std::fseek(file_, static_cast<long>(data_at), SEEK_SET) != 0 ||
+          std::fread(event->data.data(), 1, data_len, file_) != data_len) {
+        throw LogError(path_, offset_, "truncated event body");
+      }
+    }
   }
-  offset_ += event_size;
+  offset_ += 28 + uint64_t{channel_len} + data_len;
   return true;
 }
 

@@ -4,10 +4,17 @@
 //
 // Written here rather than with lcm::LogFile because the reader must report the byte
 // offset of a truncated or corrupt event (LCM's reader silently skips ahead to the next sync
-// word), and the writer must be byte-deterministic. A reader either stops at the first bad
-// event (throws), or, with resync, skips it as LCM's reader does — to the next event header
-// that holds up (sync word, lengths, a printable channel, the event inside the file and
-// followed by another sync word or the end) — and keeps the skipped byte ranges.
+// word), and the writer must be byte-deterministic.
+//
+// An event is good when its header has the sync word, a channel length of 1..255, a data
+// length of at most 256 MiB, it lies inside the file, its channel is printable ASCII, and the
+// next event starts where it ends: at its end the file ends, fewer than 28 bytes remain (a
+// cut header, reported on its own), or a sync word follows. So a damaged length costs only
+// its own event, never the ones it would swallow. A reader either stops at the first event
+// that is not good (throws), or, with resync, skips to the earliest good event after that
+// one's first byte and keeps the skipped byte ranges. python/sweepmap_log.py reads by the same
+// rule (tests/python/test_log_reader_cli.py holds them to the same results).
+// Only regular files are read; resync scans a window in memory, not one read per candidate.
 #pragma once
 
 #include <cstdint>
@@ -70,12 +77,16 @@ class EventLogReader {
   bool resync_ = false;
   std::vector<SkippedRange> skipped_;
 
-  // The event at offset_ (true), or false at the end; throws LogError if it is bad.
+  // The event at offset_ (true), or false at the end; throws LogError if it is not good.
   bool readAt(LogEvent* event);
-  // Whether a whole, plausible event starts at `offset`.
-  bool plausibleEventAt(uint64_t offset);
+  // Why the event at `offset` is not good ("" when it is).
+  std::string problemAt(uint64_t offset);
   // The offset of the next sync word at or after `from`, or size_.
   uint64_t nextSyncAt(uint64_t from);
+  // Bytes [at, at + n) of the file, from a window kept in memory; nullptr past the end.
+  const uint8_t* view(uint64_t at, size_t n);
+  std::vector<uint8_t> window_;
+  uint64_t window_start_ = 0;
 };
 
 // Writes an LCM event log. A write or flush that fails (a full disk) never leaves half an

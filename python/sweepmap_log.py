@@ -21,7 +21,9 @@ log does not have); 4 the log cannot be read. Each error is one line on stderr, 
 traceback; a closed pipe (`... | head -1`) ends it quietly, as it ends `cat`.
 """
 
+import errno
 import os
+import stat
 import signal
 import struct
 import sys
@@ -42,7 +44,9 @@ class Event(NamedTuple):
 
 
 def _event_at(buf: bytes, at: int) -> Optional[Event]:
-    """The event at `at` if a whole, plausible one starts there."""
+    """The event at `at` if a good one starts there: sync word, lengths, inside the file, a
+    printable channel, and at its end the file ends, fewer than 28 bytes remain, or a sync
+    word follows."""
     if at + _HEADER.size > len(buf):
         return None
     sync, eventnum, utime, channel_len, data_len = _HEADER.unpack_from(buf, at)
@@ -55,6 +59,10 @@ def _event_at(buf: bytes, at: int) -> Optional[Event]:
     channel = buf[start:start + channel_len]
     if any(c < 0x20 or c > 0x7E for c in channel):
         return None
+    # The next event starts where this one ends (core/event_log.hpp's rule): a damaged length
+    # costs its own event, not the ones it would swallow.
+    if len(buf) - end >= _HEADER.size and _HEADER.unpack_from(buf, end)[0] != SYNC:
+        return None
     return Event(eventnum, utime, channel.decode("ascii"), buf[start + channel_len:end], at)
 
 
@@ -66,7 +74,14 @@ def _report(path: str) -> Callable[[int, int, str], None]:
 
 def events(path: str, channels: Optional[Set[str]] = None,
            on_skip: Optional[Callable[[int, int, str], None]] = None) -> Iterator[Event]:
-    """Every event of the log in file order (only `channels`, if given)."""
+    """Every event of the log in file order (only `channels`, if given). Only a regular file is
+    read (a device or FIFO would never end): anything else raises IsADirectoryError or
+    OSError."""
+    mode = os.stat(path).st_mode  # before open(): opening a FIFO would wait for a writer
+    if stat.S_ISDIR(mode):
+        raise IsADirectoryError(errno.EISDIR, "is a directory")
+    if not stat.S_ISREG(mode):
+        raise OSError(errno.EINVAL, "not a regular file (a device, FIFO or folder is no log)")
     with open(path, "rb") as f:
         buf = f.read()
     on_skip = on_skip or _report(path)
@@ -127,6 +142,8 @@ def main(argv) -> int:
     except (FileNotFoundError, IsADirectoryError, NotADirectoryError) as e:
         return _fail(EXIT_USAGE, f"{path}: {e.strerror.lower()}")
     except OSError as e:
+        if e.errno == errno.EINVAL:
+            return _fail(EXIT_USAGE, f"{path}: {e.strerror}")
         return _fail(EXIT_IO, f"{path}: cannot read: {e.strerror or e}")
     if not counts:
         return _fail(EXIT_BAD_INPUT, f"{path}: holds no event"
