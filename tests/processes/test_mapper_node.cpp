@@ -159,7 +159,8 @@ TEST(MapperNode, MapSaveIsARequestNotACommand) {
     msg.utime = t;
     deliver(node, {msg});
   };
-  for (const std::string bad : {"-rf", "evil\nname.bt", "run.lcmlog", ".hidden.bt", "x.bt\n",
+  for (const std::string& bad :
+       std::vector<std::string>{"-rf", "evil\nname.bt", "run.lcmlog", ".hidden.bt", "x.bt\n",
                                 std::string(70, 'a') + ".bt", "other.bt"}) {
     request(bad);
   }
