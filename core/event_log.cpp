@@ -106,7 +106,7 @@ uint64_t EventLogReader::nextSyncAt(uint64_t from) {
   return size_;
 }
 
-std::string EventLogReader::problemAt(uint64_t at) {
+std::string EventLogReader::problemAt(uint64_t at, bool look_inside) {
   if (size_ - at < 28) {
     return "truncated event header (" + std::to_string(size_ - at) + " of 28 bytes)";
   }
@@ -128,12 +128,16 @@ std::string EventLogReader::problemAt(uint64_t at) {
   for (uint64_t i = 0; i < channel_len; ++i) {
     if (channel[i] < 0x20 || channel[i] > 0x7e) return "channel name not printable";
   }
-  if (size_ - end >= 28) {
-    const uint8_t* next = view(end, 4);
-    if (!next || readBE(next, 4) != kSync) {
-      return "event of " + std::to_string(end - at) +
-             " bytes is not followed by an event at byte " + std::to_string(end) +
-             " (a damaged length)";
+  if (size_ - end < 28) return {};
+  const uint8_t* next = view(end, 4);
+  if (next && readBE(next, 4) == kSync) return {};
+  // No event where this one ends: either its length is damaged (then a good event starts
+  // inside the span it claims, and it must not swallow it) or what follows it is.
+  if (!look_inside) return "not followed by an event at byte " + std::to_string(end);
+  for (uint64_t c = nextSyncAt(at + 1); c < end; c = nextSyncAt(c + 1)) {
+    if (problemAt(c, false).empty()) {
+      return "event claims " + std::to_string(end - at) + " bytes, but a good event starts " +
+             "inside them at byte " + std::to_string(c) + " (a damaged length)";
     }
   }
   return {};

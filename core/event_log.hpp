@@ -7,10 +7,12 @@
 // word), and the writer must be byte-deterministic.
 //
 // An event is good when its header has the sync word, a channel length of 1..255, a data
-// length of at most 256 MiB, it lies inside the file, its channel is printable ASCII, and the
-// next event starts where it ends: at its end the file ends, fewer than 28 bytes remain (a
-// cut header, reported on its own), or a sync word follows. So a damaged length costs only
-// its own event, never the ones it would swallow. A reader either stops at the first event
+// length of at most 256 MiB, it lies inside the file, its channel is printable ASCII, and it
+// swallows no event: at its end the file ends, fewer than 28 bytes remain (a cut header,
+// reported on its own), or a sync word follows, or else no good event (by the same rule,
+// with a sync word at its end) starts inside the span it claims. So a damaged length costs
+// only its own event, never the ones it would swallow, and a damaged header costs only its
+// own event, not the one before it. A reader either stops at the first event
 // that is not good (throws), or, with resync, skips to the earliest good event after that
 // one's first byte and keeps the skipped byte ranges. python/sweepmap_log.py reads by the same
 // rule (tests/python/test_log_reader_cli.py holds them to the same results).
@@ -79,8 +81,9 @@ class EventLogReader {
 
   // The event at offset_ (true), or false at the end; throws LogError if it is not good.
   bool readAt(LogEvent* event);
-  // Why the event at `offset` is not good ("" when it is).
-  std::string problemAt(uint64_t offset);
+  // Why the event at `offset` is not good ("" when it is). look_inside: when no event follows
+  // it, look for a good event (checked without look_inside) inside the span it claims.
+  std::string problemAt(uint64_t offset, bool look_inside = true);
   // The offset of the next sync word at or after `from`, or size_.
   uint64_t nextSyncAt(uint64_t from);
   // Bytes [at, at + n) of the file, from a window kept in memory; nullptr past the end.

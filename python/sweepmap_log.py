@@ -30,6 +30,7 @@ import sys
 from typing import Callable, Iterator, NamedTuple, Optional, Set
 
 SYNC = 0xEDA1DA01
+_SYNC_BYTES = struct.pack(">I", 0xEDA1DA01)
 _HEADER = struct.Struct(">IqqII")  # sync, event number, utime, channel length, data length
 _MAX_CHANNEL = 255
 _MAX_DATA = 256 << 20
@@ -43,10 +44,9 @@ class Event(NamedTuple):
     offset: int  # of the event's first byte in the file
 
 
-def _event_at(buf: bytes, at: int) -> Optional[Event]:
+def _event_at(buf: bytes, at: int, look_inside: bool = True) -> Optional[Event]:
     """The event at `at` if a good one starts there: sync word, lengths, inside the file, a
-    printable channel, and at its end the file ends, fewer than 28 bytes remain, or a sync
-    word follows."""
+    printable channel, and it swallows no event (see core/event_log.hpp)."""
     if at + _HEADER.size > len(buf):
         return None
     sync, eventnum, utime, channel_len, data_len = _HEADER.unpack_from(buf, at)
@@ -59,10 +59,16 @@ def _event_at(buf: bytes, at: int) -> Optional[Event]:
     channel = buf[start:start + channel_len]
     if any(c < 0x20 or c > 0x7E for c in channel):
         return None
-    # The next event starts where this one ends (core/event_log.hpp's rule): a damaged length
-    # costs its own event, not the ones it would swallow.
+    # It swallows no event (core/event_log.hpp's rule): where it ends, the file ends, a cut
+    # header or a sync word follows, or else no good event starts inside the span it claims.
     if len(buf) - end >= _HEADER.size and _HEADER.unpack_from(buf, end)[0] != SYNC:
-        return None
+        if not look_inside:
+            return None
+        c = buf.find(_SYNC_BYTES, at + 1, end + 3)  # a sync word starting before `end`
+        while c != -1:
+            if _event_at(buf, c, False) is not None:
+                return None
+            c = buf.find(_SYNC_BYTES, c + 1, end + 3)
     return Event(eventnum, utime, channel.decode("ascii"), buf[start + channel_len:end], at)
 
 

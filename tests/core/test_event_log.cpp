@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -199,6 +201,90 @@ TEST_F(EventLogTest, ResyncKeepsEveryEventOutsideCorruptRegions) {
     EXPECT_EQ(err.offset(), starts[30]);
   }
   EXPECT_EQ(n, 30);
+}
+
+// Issue 21: a data length grown by one bit (+65536) used to swallow the 64 KiB after it. Now
+// the event that claims them is the only one lost, strict readers stop at it, and the
+// skipped range says why.
+TEST_F(EventLogTest, ADamagedLengthCostsOnlyItsOwnEvent) {
+  const std::string p = path("len.lcmlog");
+  std::vector<uint64_t> starts;
+  {
+    EventLogWriter w(p);
+    for (int i = 0; i < 300; ++i) {
+      w.flush();
+      starts.push_back(fs::exists(p) ? fs::file_size(p) : 0);
+      w.write(1000 + i, "CHAN", std::vector<uint8_t>(400, uint8_t(i)));
+    }
+  }
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(starts[10] + 24 + 1));  // data length, bit 16
+    f.put('\x01');
+  }
+  EventLogReader r(p);
+  r.setResync(true);
+  LogEvent e;
+  std::vector<int64_t> times;
+  while (r.next(&e)) times.push_back(e.utime);
+  EXPECT_EQ(times.size(), 299u);
+  EXPECT_EQ(std::count(times.begin(), times.end(), 1010), 0);
+  ASSERT_EQ(r.skipped().size(), 1u);
+  EXPECT_EQ(r.skipped()[0].begin, starts[10]);
+  EXPECT_EQ(r.skipped()[0].end, starts[11]);
+  EXPECT_NE(r.skipped()[0].why.find("a damaged length"), std::string::npos) << r.skipped()[0].why;
+  EventLogReader strict(p);
+  int n = 0;
+  EXPECT_THROW(while (strict.next(&e))++ n, LogError);
+  EXPECT_EQ(n, 10);
+}
+
+// Megabytes of sync words (each a candidate header) are skipped as one range, without one
+// file read per candidate.
+TEST_F(EventLogTest, ResyncOverRepeatedSyncWordsIsOneRange) {
+  const std::string p = path("syncs.lcmlog");
+  {
+    EventLogWriter w(p);
+    w.write(1, "A", std::vector<uint8_t>{1});
+  }
+  const uint64_t first = fs::file_size(p);
+  {
+    std::ofstream out(p, std::ios::binary | std::ios::app);
+    for (int i = 0; i < (4 << 20) / 4; ++i) out.write("\xED\xA1\xDA\x01", 4);
+  }
+  {
+    EventLogWriter tail(path("tail.lcmlog"));
+    tail.write(2, "B", std::vector<uint8_t>{2});
+  }
+  {
+    std::ifstream in(path("tail.lcmlog"), std::ios::binary);
+    std::ofstream out(p, std::ios::binary | std::ios::app);
+    out << in.rdbuf();
+  }
+  EventLogReader r(p);
+  r.setResync(true);
+  LogEvent e;
+  std::vector<std::string> channels;
+  while (r.next(&e)) channels.push_back(e.channel);
+  EXPECT_EQ(channels, (std::vector<std::string>{"A", "B"}));
+  ASSERT_EQ(r.skipped().size(), 1u);
+  EXPECT_EQ(r.skipped()[0].begin, first);
+  EXPECT_EQ(r.skipped()[0].end, first + (4u << 20));
+}
+
+// Issue 21: `decode /dev/zero` read until bad_alloc, a FIFO hung the reader: only regular
+// files are logs.
+TEST_F(EventLogTest, OnlyRegularFilesAreRead) {
+  EXPECT_THROW(EventLogReader("/dev/zero"), LogError);
+  EXPECT_THROW(EventLogReader(dir_.string()), LogError);
+  const std::string fifo = path("fifo");
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  try {
+    EventLogReader r(fifo);
+    FAIL() << "a FIFO was opened as a log";
+  } catch (const LogError& err) {
+    EXPECT_NE(std::string(err.what()).find("not a regular file"), std::string::npos);
+  }
 }
 
 TEST_F(EventLogTest, MissingFileNamed) {
