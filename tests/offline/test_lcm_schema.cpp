@@ -33,7 +33,7 @@
 #include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 #include "tools/offline/dump.hpp"
-#include "tools/offline/lcm_schema.hpp"
+#include "core/lcm_schema.hpp"
 
 namespace sweepmap {
 namespace {

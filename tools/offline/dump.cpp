@@ -8,7 +8,7 @@
 
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
-#include "tools/offline/lcm_schema.hpp"
+#include "core/lcm_schema.hpp"
 
 namespace sweepmap {
 namespace {

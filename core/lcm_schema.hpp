@@ -1,6 +1,7 @@
 // LCM type definitions read at run time: the .lcm files this build was made from (embedded
 // at build time), parsed, their fingerprints computed as lcm-gen computes them, and any
-// message decoded field by field, by name. `sweepmap dump` prints logs with it; nothing
+// message decoded field by field, by name, or validated against its type. `sweepmap dump`
+// prints logs with it, every process checks what it receives with it; nothing
 // here depends on the generated C++ types.
 #pragma once
 
@@ -14,7 +15,7 @@
 
 namespace sweepmap {
 
-// The embedded .lcm files: {file name, text} (tools/offline/embed_lcm.cmake).
+// The embedded .lcm files: {file name, text} (core/embed_lcm.cmake).
 const std::vector<std::pair<std::string, std::string>>& lcmTypeSources();
 
 struct LcmMember {

@@ -1,4 +1,4 @@
-#include "tools/offline/lcm_schema.hpp"
+#include "core/lcm_schema.hpp"
 
 #include <algorithm>
 #include <cctype>
