@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/command_line.hpp"
 #include "processes/channels.hpp"
 #include "processes/live_runner.hpp"
 #include "rigs/rig_file.hpp"
@@ -21,18 +22,28 @@ struct CommonOptions {
   size_t queue_capacity = LiveOptions{}.queue_capacity;
 };
 
-inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
-  app.add_option("--rig", o.rig_path,
-                 "rig file (YAML; its `rig` key says the kind) or a rig's name in the "
-                 "installed config folder (rig_a, rig_b)")
-      ->required();
+// --rig's help names the kinds this process takes, with their reference rigs' names.
+inline std::string rigOptionHelp(std::initializer_list<RigKind> kinds) {
+  std::string list, names;
+  for (RigKind k : kinds) {
+    list += (list.empty() ? "" : ", ") + rigKindName(k);
+    names += (names.empty() ? "" : ", ") + defaultRigName(k);
+  }
+  return "rig file (YAML; its `rig` key says the kind) or a rig's name in the installed config "
+         "folder; this process takes " +
+         list + " rigs (" + names + ")";
+}
+
+inline void addCommonOptions(CLI::App& app, CommonOptions& o,
+                             std::initializer_list<RigKind> kinds) {
+  app.add_option("--rig", o.rig_path, rigOptionHelp(kinds))->required();
   app.add_option("--set", o.overrides, "override a rig config key: key=value (repeatable)");
   app.add_option("--lcm-url", o.lcm_url, "LCM provider URL")->capture_default_str();
   app.add_option("--queue-capacity", o.queue_capacity,
                  "receive queue bound [messages]; a message that finds it full is dropped and "
                  "counted (`dropped` in the status)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(atLeast(1));
 }
 
 // A device driver's worker thread silent this long is stuck (its reads, connection attempts and
@@ -47,7 +58,7 @@ inline LiveOptions liveOptions(const CommonOptions& o) {
 }
 
 // Loads the rig; on error prints "config error: ..." (naming file and key) and returns
-// nothing: the process's main() then exits with status 2.
+// nothing: the process's main() then exits with status 2 (kExitUsage).
 inline std::optional<Rig> loadRigOrReport(const CommonOptions& o) {
   try {
     return loadRig(o.rig_path, o.overrides);

@@ -11,6 +11,7 @@
 #include <mutex>
 #include <thread>
 
+#include "core/exit_codes.hpp"
 #include "processes/sd_notify.hpp"
 
 namespace sweepmap {
@@ -287,7 +288,7 @@ void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages) {
 int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options) {
   if (!lcm.good()) {
     std::cerr << "LCM initialisation failed\n";
-    return 2;
+    return kExitDeviceIo;
   }
   LiveRun run(lcm, nodes, options);
   run.subscribe();
@@ -295,7 +296,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
   run.loop();
   if (!run.finish()) {
     std::cerr << "LCM receive failed: stopped\n";
-    return 2;
+    return kExitDeviceIo;
   }
   return 0;
 }

@@ -732,7 +732,7 @@ TEST_F(DevicesTest, RecordPresets) {
 }
 
 // Recording onto a small file system (a 1.2 MB tmpfs in a private mount namespace): it stops
-// by itself below --min-free-mb with a clear message and exit status 3, and the log it leaves
+// by itself below --min-free-mb with a clear message and exit status 4, and the log it leaves
 // reads to its end without a broken event.
 TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
   prepare("record_full");
@@ -751,7 +751,7 @@ TEST_F(DevicesTest, RecordStopsCleanlyBeforeTheDiskIsFull) {
                           dir_ / "record.txt");
   EXPECT_EQ(procs_.stop(odo, 5.0), 0);
   const std::string said = readFile(dir_ / "record.txt");
-  EXPECT_EQ(rc, 3) << said;
+  EXPECT_EQ(rc, 4) << said;
   EXPECT_NE(said.find("below --min-free-mb 1"), std::string::npos) << said;
   EXPECT_EQ(sweepmap({"dump", (disk / "run").string()}, dir_ / "dump.txt"), 0)
       << readFile(dir_ / "dump.txt").substr(0, 2000);

@@ -310,12 +310,13 @@ TEST(Tool, SimAndReplayAnyRigByNameFromAnotherDirectory) {
 // each a config error (exit 2) that names the file and what was expected.
 TEST(Tool, RigKindErrorsAreClear) {
   const auto dir = scratchDir("rig_kind_errors");
+  std::ofstream(dir / "x.lcmlog").close();  // a log that exists: the rig is what is wrong
   EXPECT_EQ(sweepmap({"sim", "--rig", "rig_b", "--mode", "3", "--out", (dir / "x.lcmlog").string()},
                      dir / "mode.txt"),
             2);
   EXPECT_NE(readFile(dir / "mode.txt").find("rotating_lidar"), std::string::npos)
       << readFile(dir / "mode.txt");
-  EXPECT_EQ(sweepmap({"calib", "mounting", "--log", (dir / "x.lcmlog").string(), "--rig", "rig_a",
+  EXPECT_EQ(sweepmap({"calib", "mounting", "--logs", (dir / "x.lcmlog").string(), "--rig", "rig_a",
                       "--out", (dir / "m.yaml").string()},
                      dir / "calib.txt"),
             2);

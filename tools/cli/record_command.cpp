@@ -1,4 +1,8 @@
 // `sweepmap record`: lcm-logger with presets, splitting and a disk guard (tools/ops/record.hpp).
+#include <filesystem>
+#include <memory>
+
+#include "core/command_line.hpp"
 #include "processes/channels.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/ops/record.hpp"
@@ -12,27 +16,48 @@ Runner addRecordCommand(CLI::App& app) {
       "LIDAR_SCAN, MOTOR_STATE, MOTOR_SWITCH, SCAN_WINDOW, WHEEL_TICKS, IMU, WHEEL_CMD, PROFILE, "
       "STATUS_*, TRUTH_*) or all; --split-mb N starts a new file (NAME.00, NAME.01, ...) every N "
       "MB; when the free space falls below --min-free-mb the recording stops cleanly (the log "
-      "ends with its last complete event; exit status 3). Stops at SIGINT/SIGTERM or after "
+      "ends with its last complete event; exit status 4). Stops at SIGINT/SIGTERM or after "
       "--duration seconds");
+  cmd->footer(
+      "Exit status: 0 recorded; 2 bad option, or --out DIR already holds a log named --name (see "
+      "--force); 4 lcm-logger failed, or the disk is (nearly) full.");
   auto o = std::make_shared<RecordOptions>();
   o->lcm_url = kDefaultLcmUrl;
-  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--out", o->out, "output folder (may hold other recordings)")->required();
+  auto force = std::make_shared<bool>(false);
+  cmd->add_flag("--force", *force, "overwrite a log of the same --name in --out");
   cmd->add_option("--name", o->name, "log file name in it")->capture_default_str();
   cmd->add_option("--preset", o->preset, "raw or all")
       ->capture_default_str()
       ->check(CLI::IsMember({"raw", "all"}));
   cmd->add_option("--split-mb", o->split_mb, "start a new file every N MB (0: one file)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast(0));
   cmd->add_option("--min-free-mb", o->min_free_mb,
                   "stop cleanly when the output's file system has less free")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast(0));
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL to record")->capture_default_str();
   cmd->add_option("--duration", o->duration_s, "stop after [s] (0: at SIGINT/SIGTERM)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  return [o]() { return runRecord(*o); };
+      ->check(atLeast(0));
+  return [o, force]() -> int {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::exists(o->out, ec) && !fs::is_directory(o->out, ec)) {
+      throw ConfigError("--out '" + o->out + "' is a file; give a folder");
+    }
+    // The folder keeps many recordings; the one of this name is not overwritten unasked.
+    const fs::path file = fs::path(o->out) / o->name;
+    for (const fs::path& p : {file, fs::path(file.string() + ".00")}) {
+      if (!*force && fs::exists(p, ec)) {
+        throw ConfigError(p.string() +
+                          " exists: give another --name, or add --force to "
+                          "overwrite it");
+      }
+    }
+    return runRecord(*o);
+  };
 }
 
 }  // namespace sweepmap

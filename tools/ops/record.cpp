@@ -43,13 +43,13 @@ int runRecord(const RecordOptions& o) {
   fs::create_directories(o.out, ec);
   if (ec) {
     std::cerr << "record: cannot create " << o.out << ": " << ec.message() << "\n";
-    return 2;
+    return 4;  // an I/O failure (core/exit_codes.hpp)
   }
   const double free0 = freeMb(o.out);
   if (free0 >= 0 && free0 < o.min_free_mb) {
     std::cerr << "record: only " << std::lround(free0) << " MB free on " << o.out
               << ", below --min-free-mb " << o.min_free_mb << "; not starting\n";
-    return 3;
+    return 4;
   }
   const std::string file = (fs::path(o.out) / o.name).string();
   std::vector<std::string> argv = {"lcm-logger", "--lcm-url=" + o.lcm_url, "-c", channels, "-q"};
@@ -80,14 +80,14 @@ int runRecord(const RecordOptions& o) {
     notifier.alive();
     if (!procs.running(logger)) {
       std::cerr << "record: lcm-logger ended (status " << procs.wait(logger, 0) << ")\n";
-      return 1;
+      return 4;
     }
     const double free = freeMb(o.out);
     if (free >= 0 && free < o.min_free_mb) {
       std::cerr << "record: stopped: " << std::lround(free) << " MB free on " << o.out
                 << ", below --min-free-mb " << o.min_free_mb
                 << " (the log is closed after its last complete event)\n";
-      status = 3;
+      status = 4;
       break;
     }
     const double elapsed =
@@ -98,7 +98,7 @@ int runRecord(const RecordOptions& o) {
   const int rc = procs.stop(logger, 10.0);
   if (rc != 0 && status == 0) {
     std::cerr << "record: lcm-logger exited with status " << rc << "\n";
-    return 1;
+    return 4;
   }
   return status;
 }

@@ -7,7 +7,7 @@
 // that many MB. The disk is watched: when the free space on the output's file system falls
 // below `min_free_mb`, lcm-logger is stopped (SIGINT: it writes what it holds and closes the
 // file), so a log is never cut inside an event by a full disk; the reason is printed and the
-// exit status is 3. SIGINT/SIGTERM stop it cleanly too.
+// exit status is 4. SIGINT/SIGTERM stop it cleanly too.
 #pragma once
 
 #include <string>
@@ -30,8 +30,8 @@ std::string recordChannels(const std::string& preset);
 // Free space [MB] on the file system holding `path`, or -1 if it cannot be read.
 double freeMb(const std::string& path);
 
-// Returns 0 after a clean stop (signal or duration), 3 when the disk ran low, 2 for bad
-// options or when lcm-logger cannot start, 1 when lcm-logger failed.
+// Returns 0 after a clean stop (signal or duration), 2 for bad options or when lcm-logger
+// cannot start, 4 when the disk ran low or lcm-logger failed.
 int runRecord(const RecordOptions& options);
 
 }  // namespace sweepmap
