@@ -99,31 +99,31 @@ inline std::string formatLimit(double v) {
   s << v;
   return s.str();
 }
+
+// A check of a number against `limit`: `ok(value)`, else "must be WHAT LIMIT, got TEXT".
+inline CLI::Validator limitCheck(double limit, bool (*ok)(double value, double limit),
+                                 const std::string& what, const std::string& symbol) {
+  return CLI::Validator(
+      [=](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
+          return "not a number: " + text;
+        if (!ok(v, limit)) return "must be " + what + " " + formatLimit(limit) + ", got " + text;
+        return "";
+      },
+      symbol + formatLimit(limit));
+}
 }  // namespace detail_cli
 
-// A number check that says its limit: "must be at least 1, got 0" (CLI::PositiveNumber prints
+// Number checks that say their limit: "must be at least 1, got 0" (CLI::PositiveNumber prints
 // a 300-digit range).
 inline CLI::Validator atLeast(double min) {
-  return CLI::Validator(
-      [min](std::string& text) -> std::string {
-        double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
-          return "not a number: " + text;
-        if (v < min) return "must be at least " + detail_cli::formatLimit(min) + ", got " + text;
-        return "";
-      },
-      ">=" + detail_cli::formatLimit(min));
+  return detail_cli::limitCheck(
+      min, [](double v, double limit) { return v >= limit; }, "at least", ">=");
 }
 inline CLI::Validator greaterThan(double min) {
-  return CLI::Validator(
-      [min](std::string& text) -> std::string {
-        double v = 0;
-        if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v))
-          return "not a number: " + text;
-        if (v <= min) return "must be more than " + detail_cli::formatLimit(min) + ", got " + text;
-        return "";
-      },
-      ">" + detail_cli::formatLimit(min));
+  return detail_cli::limitCheck(
+      min, [](double v, double limit) { return v > limit; }, "more than", ">");
 }
 
 // --out DIR of a command that writes a folder: made if missing. A non-empty folder is refused

@@ -84,13 +84,19 @@ std::vector<std::string> cat(std::vector<std::string> a, const std::vector<std::
   return a;
 }
 
-// The `sweepmap` subcommands' rows.
-std::vector<Row> toolRows(const std::function<std::string(const std::string&)>& path,
-                          const std::string& missing,
-                          const std::function<std::string(const std::string&)>& taken) {
-  const std::string a = path("a.lcmlog"), b = path("b.lcmlog"), empty = path("empty.lcmlog");
-  const Case help{"--help", {"--help"}, 0};
-  const Case bad{"bad option", {"--no-such-option"}, 2};
+// What the rows' cases name: the logs made once, a missing file, fresh taken folders.
+struct Inputs {
+  std::function<std::string(const std::string&)> path;
+  std::string missing;
+  std::function<std::string(const std::string&)> taken;
+  std::string a, b, empty;  // a rig A log, a rig B log, an empty one
+  Case help{"--help", {"--help"}, 0};
+  Case bad{"bad option", {"--no-such-option"}, 2};
+};
+
+// sim, replay, demo, spy, bench.
+std::vector<Row> offlineRows(const Inputs& in) {
+  const auto& [path, missing, taken, a, b, empty, help, bad] = in;
   return {
       {"sweepmap",
        {"sim"},
@@ -117,6 +123,13 @@ std::vector<Row> toolRows(const std::function<std::string(const std::string&)>& 
         {"--out taken", {"--out", taken("demo")}, 2}}},
       {"sweepmap", {"spy"}, {help, bad}},
       {"sweepmap", {"bench"}, {help, bad, {"missing file", {"--rig", missing}, 2}}},
+  };
+}
+
+// calib (each kind) and eval.
+std::vector<Row> calibEvalRows(const Inputs& in) {
+  const auto& [path, missing, taken, a, b, empty, help, bad] = in;
+  return {
       {"sweepmap",
        {"calib", "plate-angle"},
        {help,
@@ -158,6 +171,13 @@ std::vector<Row> toolRows(const std::function<std::string(const std::string&)>& 
         {"--force",
          {"--logs", a, "--rig", "rig_a", "--no-plots", "--force", "--out", taken("eval_f")},
          0}}},
+  };
+}
+
+// import, emulate, capture, decode, dump, status, record, systemd, launch.
+std::vector<Row> deviceAndOpsRows(const Inputs& in) {
+  const auto& [path, missing, taken, a, b, empty, help, bad] = in;
+  return {
       {"sweepmap",
        {"import", "breezyslam"},
        {help,
@@ -253,10 +273,18 @@ std::string withTable(const std::string& doc, const std::string& t, std::string*
 }
 
 TEST_F(ExitCodes, EveryCommandAndProcessFollowsTheConvention) {
-  std::vector<Row> rows = toolRows([](const std::string& n) { return path(n); }, missing(),
-                                   [](const std::string& n) { return taken(n); });
-  const std::vector<Row> processes = processRows(missing());
-  rows.insert(rows.end(), processes.begin(), processes.end());
+  Inputs in;
+  in.path = [](const std::string& n) { return path(n); };
+  in.missing = missing();
+  in.taken = [](const std::string& n) { return taken(n); };
+  in.a = path("a.lcmlog");
+  in.b = path("b.lcmlog");
+  in.empty = path("empty.lcmlog");
+  std::vector<Row> rows;
+  for (const auto& part :
+       {offlineRows(in), calibEvalRows(in), deviceAndOpsRows(in), processRows(missing())}) {
+    rows.insert(rows.end(), part.begin(), part.end());
+  }
   std::map<std::string, int> codes;
   int n = 0;
   for (const Row& r : rows) {

@@ -9,6 +9,34 @@
 
 namespace sweepmap {
 
+namespace {
+
+// Simulates the rig into the log `out`: 0, or 1 when the run did not make what was asked.
+int simulateInto(const SimSetup& setup, const std::string& out, uint64_t seed, int sweeps) {
+  checkOutputFile(out);
+  SimRunOptions options;
+  options.seed = seed;
+  options.sweeps = sweeps;
+  options.progress = true;
+  std::unique_ptr<EventLogWriter> log;
+  try {
+    log = std::make_unique<EventLogWriter>(out);
+  } catch (const std::runtime_error& e) {
+    throw CommandError(kExitDeviceIo, e.what());
+  }
+  const SimRunResult r = simulateRig(
+      setup, options, [&](const Message& m) { log->write(m.utime, m.channel, m.data); });
+  try {
+    log->close();
+  } catch (const std::runtime_error& e) {
+    throw CommandError(kExitDeviceIo, out + ": " + e.what());
+  }
+  std::cerr << "sim: " << setup.rig.kindName() << ": " << r.summary << " -> " << out << "\n";
+  return r.ok ? kExitOk : kExitBadInput;
+}
+
+}  // namespace
+
 Runner addSimCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "sim",
@@ -66,29 +94,10 @@ Runner addSimCommand(CLI::App& app) {
     }
     if (o->print_config) {
       printSimConfig(std::cout, setup);
-      return 0;
+      return kExitOk;
     }
     if (o->out.empty()) throw ConfigError("--out LOG is required (or --print-config)");
-    checkOutputFile(o->out);
-    SimRunOptions options;
-    options.seed = o->seed;
-    options.sweeps = o->sweeps;
-    options.progress = true;
-    std::unique_ptr<EventLogWriter> log;
-    try {
-      log = std::make_unique<EventLogWriter>(o->out);
-    } catch (const std::runtime_error& e) {
-      throw CommandError(kExitDeviceIo, e.what());
-    }
-    const SimRunResult r = simulateRig(
-        setup, options, [&](const Message& m) { log->write(m.utime, m.channel, m.data); });
-    try {
-      log->close();
-    } catch (const std::runtime_error& e) {
-      throw CommandError(kExitDeviceIo, o->out + ": " + e.what());
-    }
-    std::cerr << "sim: " << setup.rig.kindName() << ": " << r.summary << " -> " << o->out << "\n";
-    return r.ok ? kExitOk : kExitBadInput;
+    return simulateInto(setup, o->out, o->seed, o->sweeps);
   };
 }
 
