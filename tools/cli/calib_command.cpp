@@ -93,11 +93,10 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       "Example: sweepmap sim --rig rig_b --set sim.duration_s=120 --out circle.lcmlog && "
       "sweepmap calib mounting --logs circle.lcmlog --rig rig_b --out "
       "config/mounting_calibration.yaml");
-  auto* logs =
-      mount->add_option("--logs", m->log, "LCM log of the drive (sweepmap sim, lcm-logger)")
-          ->check(CLI::ExistingFile);
-  // --log: the name before 0.2, kept as a hidden alias.
-  mount->add_option("--log", m->log, "")->group("")->check(CLI::ExistingFile)->excludes(logs);
+  mount->add_option("--logs", m->log, "LCM log of the drive (sweepmap sim, lcm-logger)")
+      ->check(CLI::ExistingFile);
+  // --log: its name before the other calib commands' --logs, kept as a hidden alias.
+  mount->add_option("--log", m->log, "")->group("")->check(CLI::ExistingFile);
   mount->add_option("--rig", m->rig, "rig file or name (mobile_lidar) the log was recorded with")
       ->required();
   mount->add_option("--out", m->out, "calibration file to write (YAML, atomically)")->required();
