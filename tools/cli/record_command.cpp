@@ -19,13 +19,15 @@ Runner addRecordCommand(CLI::App& app) {
       "ends with its last complete event; exit status 4). Stops at SIGINT/SIGTERM or after "
       "--duration seconds");
   cmd->footer(
-      "Exit status: 0 recorded; 2 bad option, or --out DIR already holds a log named --name (see "
-      "--force); 4 lcm-logger failed, or the disk is (nearly) full.");
+      "Exit status: 0 recorded; 2 bad option, or --out DIR already holds a log named --name "
+      "and --split-mb is 0 (see --force; split files take the next free number); 4 lcm-logger "
+      "failed, or the disk is (nearly) full.");
   auto o = std::make_shared<RecordOptions>();
   o->lcm_url = kDefaultLcmUrl;
   cmd->add_option("--out", o->out, "output folder (may hold other recordings)")->required();
   auto force = std::make_shared<bool>(false);
-  cmd->add_flag("--force", *force, "overwrite a log of the same --name in --out");
+  cmd->add_flag("--force", *force,
+                "overwrite a log of the same --name in --out (without --split-mb)");
   cmd->add_option("--name", o->name, "log file name in it")->capture_default_str();
   cmd->add_option("--preset", o->preset, "raw or all")
       ->capture_default_str()
@@ -47,14 +49,12 @@ Runner addRecordCommand(CLI::App& app) {
     if (fs::exists(o->out, ec) && !fs::is_directory(o->out, ec)) {
       throw ConfigError("--out '" + o->out + "' is a file; give a folder");
     }
-    // The folder keeps many recordings; the one of this name is not overwritten unasked.
+    // The folder keeps many recordings. Split files never overwrite one (lcm-logger -i picks the
+    // next free NAME.NN: a restarted recorder goes on); a single file would (lcm-logger -f).
     const fs::path file = fs::path(o->out) / o->name;
-    for (const fs::path& p : {file, fs::path(file.string() + ".00")}) {
-      if (!*force && fs::exists(p, ec)) {
-        throw ConfigError(p.string() +
-                          " exists: give another --name, or add --force to "
-                          "overwrite it");
-      }
+    if (o->split_mb == 0 && !*force && fs::exists(file, ec)) {
+      throw ConfigError(file.string() +
+                        " exists: give another --name, or add --force to overwrite it");
     }
     return runRecord(*o);
   };
