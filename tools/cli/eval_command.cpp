@@ -69,7 +69,8 @@ Runner addEvalCommand(CLI::App& app) {
       cmd->add_option("--experiment", q->experiment, "simulate and evaluate an experiment: paper")
           ->check(CLI::IsMember({"paper"}));
   logs->excludes(exp);
-  cmd->add_option("--rig", q->rig, "rig file or name (rig_a, rig_b, rig_c, a path): its kind decides")
+  cmd->add_option("--rig", q->rig,
+                  "rig file or name (rig_a, rig_b, rig_c, a path): its kind decides")
       ->required();
   cmd->add_option("--scene", q->scene,
                   "scene file or name (--experiment; default: the rig kind's scene)");
