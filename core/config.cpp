@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <ostream>
 #include <set>
 #include <sstream>
@@ -22,9 +23,34 @@ std::string formatDouble(double v) {
 
 double parseDouble(const std::string& text) {
   size_t used = 0;
-  const double v = std::stod(text, &used);
-  if (used != text.size() || !std::isfinite(v)) throw std::invalid_argument("not a finite number");
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    throw std::invalid_argument("expected a number");  // not std::stod's bare "stod"
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw std::invalid_argument("expected a finite number");
   return v;
+}
+
+int parseInt(const std::string& text) {
+  size_t used = 0;
+  long v = 0;
+  try {
+    v = std::stol(text, &used);
+  } catch (const std::out_of_range&) {
+    throw std::invalid_argument("expected an integer of at most 10 digits");
+  } catch (const std::exception&) {
+    throw std::invalid_argument("expected an integer");  // not std::stol's bare "stol"
+  }
+  if (used != text.size()) throw std::invalid_argument("expected an integer");
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
+    throw std::invalid_argument("expected an integer between " +
+                                std::to_string(std::numeric_limits<int>::min()) + " and " +
+                                std::to_string(std::numeric_limits<int>::max()));
+  }
+  return static_cast<int>(v);
 }
 
 void flatten(const YAML::Node& node, const std::string& prefix,
@@ -63,13 +89,7 @@ void ConfigSchema::add(const std::string& key, double* value, const std::string&
 
 void ConfigSchema::add(const std::string& key, int* value, const std::string& unit,
                        const std::string& help) {
-  addEntry({key, unit, help,
-            [value](const std::string& t) {
-              size_t used = 0;
-              const long v = std::stol(t, &used);
-              if (used != t.size()) throw std::invalid_argument("not an integer");
-              *value = static_cast<int>(v);
-            },
+  addEntry({key, unit, help, [value](const std::string& t) { *value = parseInt(t); },
             [value] { return std::to_string(*value); }});
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/command_line.hpp"
 #include "net/message_auth.hpp"
 #include "net/udpm_receiver.hpp"
 #include "processes/channels.hpp"
@@ -31,18 +32,28 @@ struct CommonOptions {
   std::shared_ptr<const net::MessageAuth> auth;
 };
 
-inline void addCommonOptions(CLI::App& app, CommonOptions& o) {
-  app.add_option("--rig", o.rig_path,
-                 "rig file (YAML; its `rig` key says the kind) or a rig's name in the "
-                 "installed config folder (rig_a, rig_b)")
-      ->required();
+// --rig's help names the kinds this process takes, with their reference rigs' names.
+inline std::string rigOptionHelp(std::initializer_list<RigKind> kinds) {
+  std::string list, names;
+  for (RigKind k : kinds) {
+    list += (list.empty() ? "" : ", ") + rigKindName(k);
+    names += (names.empty() ? "" : ", ") + defaultRigName(k);
+  }
+  return "rig file (YAML; its `rig` key says the kind) or a rig's name in the installed config "
+         "folder; this process takes " +
+         list + " rigs (" + names + ")";
+}
+
+inline void addCommonOptions(CLI::App& app, CommonOptions& o,
+                             std::initializer_list<RigKind> kinds) {
+  app.add_option("--rig", o.rig_path, rigOptionHelp(kinds))->required();
   app.add_option("--set", o.overrides, "override a rig config key: key=value (repeatable)");
   app.add_option("--lcm-url", o.lcm_url, "LCM provider URL")->capture_default_str();
   app.add_option("--queue-capacity", o.queue_capacity,
                  "receive queue bound [messages]; a message that finds it full is dropped and "
                  "counted (`dropped` in the status)")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(atLeast(1));
   app.add_option("--allow-senders", o.allow_senders,
                  "receive only from these IPv4 addresses (comma-separated; counted as "
                  "`net_not_allowed` in the status); default: any sender")
@@ -76,7 +87,7 @@ inline LiveOptions liveOptions(const CommonOptions& o) {
 
 // Loads the rig and reads the security options; on error prints "config error: ..." (naming
 // file and key, or the option) and returns nothing: the process's main() then exits with
-// status 2.
+// status 2 (kExitUsage).
 inline std::optional<Rig> loadRigOrReport(CommonOptions& o) {
   try {
     parseSecurityOptions(o);

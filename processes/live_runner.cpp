@@ -14,6 +14,7 @@
 #include <thread>
 
 #include "net/udpm_receiver.hpp"
+#include "core/exit_codes.hpp"
 #include "processes/sd_notify.hpp"
 
 namespace sweepmap {
@@ -359,7 +360,7 @@ void publishAll(lcm::LCM& lcm, const std::vector<Message>& messages, const net::
 int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& options) {
   if (!lcm.good()) {
     std::cerr << "LCM initialisation failed\n";
-    return 2;
+    return kExitDeviceIo;
   }
   const std::string process = options.process.empty() ? thisProcessName() : options.process;
   for (Node* n : nodes) n->setProcess(process);
@@ -368,7 +369,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
     live = std::make_unique<LiveRun>(lcm, nodes, options);
   } catch (const std::exception& e) {
     std::cerr << "LCM receive: " << e.what() << "\n";
-    return 2;
+    return kExitDeviceIo;
   }
   LiveRun& run = *live;
   run.subscribe();
@@ -376,7 +377,7 @@ int runLive(lcm::LCM& lcm, const std::vector<Node*>& nodes, const LiveOptions& o
   run.loop();
   if (!run.finish()) {
     std::cerr << "LCM receive failed: stopped\n";
-    return 2;
+    return kExitDeviceIo;
   }
   return 0;
 }

@@ -24,10 +24,11 @@ int main(int argc, char** argv) {
       "tilt and the encoder's zero) with the rig's geometry (geometry.*, or its calibration "
       "file), one chunk per profile"};
   CommonOptions common;
-  addCommonOptions(app, common);
-  CLI11_PARSE(app, argc, argv);
+  addCommonOptions(app, common,
+                   {RigKind::kRotatingLidar, RigKind::kMobileLidar, RigKind::kRotatingProfile});
+  if (const auto code = parseCommandLine(app, argc, argv)) return *code;
   const std::optional<Rig> rig = loadRigOrReport(common);
-  if (!rig) return 2;
+  if (!rig) return kExitUsage;
   const std::unique_ptr<Node> node = std::visit(
       [](const auto& c) -> std::unique_ptr<Node> {
         using T = std::decay_t<decltype(c)>;

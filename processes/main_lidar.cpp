@@ -4,9 +4,6 @@
 
 #include "core/device_uri.hpp"
 #include "drivers/real_lidar.hpp"
-#include "sim/scene.hpp"
-#include "sim/car_devices.hpp"
-#include "sim/lidar.hpp"
 #include "processes/channels.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/lidar_node.hpp"
@@ -14,6 +11,9 @@
 #include "processes/sim_car.hpp"
 #include "processes/sim_setup.hpp"
 #include "processes/truth_sweep_node.hpp"
+#include "sim/car_devices.hpp"
+#include "sim/lidar.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 namespace {
@@ -29,12 +29,12 @@ int runSimulatedCar(const CommonOptions& common, const Rig& loaded, const std::s
     prepareSimMobileConfig(loaded.path, &rig);
     scene = std::make_unique<Scene>(
         loadScene(
-            resolveConfigFile(scene_name.empty() ? defaultSceneName(loaded.kind()) : scene_name)),
+            resolveSceneFile(scene_name.empty() ? defaultSceneName(loaded.kind()) : scene_name)),
         PlateConfig{});
     car = makeSimCar(rig, *scene, seed, start_utime > 0 ? start_utime : wallUtime());
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
   lcm::LCM lcm(common.lcm_url);
   SimCarLidar device(car.get());
@@ -48,15 +48,15 @@ int runSimulated(const CommonOptions& common, const Rig& loaded, const std::stri
                  uint64_t seed) {
   const auto* rig_config =
       rigOfKindOrReport<RotatingLidarConfig>(loaded, "sweepmap-lidar --device sim");
-  if (!rig_config) return 2;
+  if (!rig_config) return kExitUsage;
   const RotatingLidarConfig& rig = *rig_config;
   const std::string scene_path = scene_name.empty() ? defaultSceneName(loaded.kind()) : scene_name;
   SceneConfig scene_config;
   try {
-    scene_config = loadScene(resolveConfigFile(scene_path));
+    scene_config = loadScene(resolveSceneFile(scene_path));
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
   const Scene scene(scene_config, rig.plate);
   lcm::LCM lcm(common.lcm_url);
@@ -76,7 +76,7 @@ int runDevice(const CommonOptions& common, const LidarConfig& lidar, const Devic
   lcm::LCM lcm(common.lcm_url);
   if (!lcm.good()) {
     std::cerr << "sweepmap-lidar: cannot open LCM at '" << common.lcm_url << "'\n";
-    return 1;
+    return kExitDeviceIo;
   }
   std::unique_ptr<RealLidar> device = makeRealLidar(uri, lidar, RealLidarOptions{}, wallUtime);
   LidarNode node(lidar, device.get());
@@ -88,7 +88,7 @@ int runDevice(const CommonOptions& common, const LidarConfig& lidar, const Devic
   const int rc = runLive(lcm, {&node}, options);
   // A device that is not the one the rig file describes: a configuration error, not a
   // crash to restart from.
-  return node.failed() ? 3 : rc;
+  return node.failed() ? kExitDeviceIdentity : rc;
 }
 
 }  // namespace
@@ -105,7 +105,7 @@ int main(int argc, char** argv) {
   bool sim = false;
   std::string scene_path;
   uint64_t seed = 1;
-  addCommonOptions(app, common);
+  addCommonOptions(app, common, {RigKind::kRotatingLidar, RigKind::kMobileLidar});
   app.add_option("--device", device,
                  "the lidar, overriding lidar.device: sim | scip://HOST[:PORT] (Hokuyo "
                  "UST-10LX/20LX, SCIP 2.0 over TCP) | ydlidar:///dev/PORT (YDLIDAR X4) | "
@@ -120,16 +120,16 @@ int main(int argc, char** argv) {
   app.add_option("--sim-start-utime", sim_start_utime,
                  "mobile rigs: when the simulated car starts [us, wall clock]; 0 = now (give "
                  "sweepmap-odometry --sim the same)");
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = parseCommandLine(app, argc, argv)) return *code;
   const std::optional<Rig> loaded = loadRigOrReport(common);
-  if (!loaded) return 2;
+  if (!loaded) return kExitUsage;
   if (sim) device = "sim";
   DeviceUri uri;
   try {
     uri = parseDeviceUri(device.empty() ? loaded->lidar().device : device);
-  } catch (const std::invalid_argument& e) {
+  } catch (const std::exception& e) {  // a bad URI, or a rig without a 2D lidar (rig C)
     std::cerr << "sweepmap-lidar: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
   if (uri.protocol == DeviceProtocol::kSim) {
     if (loaded->kind() == RigKind::kMobileLidar) {

@@ -52,7 +52,8 @@ int main(int argc, char** argv) {
       "NAME.<UTC time>.bt"};
   CommonOptions common;
   std::string save_path = "map.bt";
-  addCommonOptions(app, common);
+  addCommonOptions(app, common,
+                   {RigKind::kRotatingLidar, RigKind::kMobileLidar, RigKind::kRotatingProfile});
   app.add_option("--save", save_path, "map file written at shutdown and on empty MAP_SAVE")
       ->capture_default_str();
   int save_every = 0;
@@ -60,13 +61,13 @@ int main(int argc, char** argv) {
                  "also save after every N map updates (a sweep; a batch for mobile rigs), so that "
                  "a killed mapper leaves its last map; 0 = only on MAP_SAVE and at shutdown")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  CLI11_PARSE(app, argc, argv);
+      ->check(atLeast(0));
+  if (const auto code = parseCommandLine(app, argc, argv)) return *code;
   const std::optional<Rig> rig = loadRigOrReport(common);
-  if (!rig) return 2;
+  if (!rig) return kExitUsage;
   const MapperConfig config = std::visit([](const auto& c) { return c.mapper; }, rig->config);
 
-  if (save_every > 0 && !keepEarlierMap(save_path)) return 1;
+  if (save_every > 0 && !keepEarlierMap(save_path)) return kExitDeviceIo;
   lcm::LCM lcm(common.lcm_url);
   MapperNode node(config, save_path, save_every);
   installStopSignals();
@@ -74,7 +75,7 @@ int main(int argc, char** argv) {
   if (rc == 0 && node.counter("save_errors") > 0) {
     std::cerr << "sweepmap-mapper: " << node.counter("save_errors")
               << " saves failed (see above); the map file holds the last good save\n";
-    return 1;
+    return kExitDeviceIo;
   }
   return rc;
 }

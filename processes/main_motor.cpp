@@ -8,13 +8,13 @@
 
 #include "drivers/gpio/gpio_stepper.hpp"
 #include "drivers/gpio/gpiod_backend.hpp"
-#include "sim/stepper.hpp"
 #include "processes/channels.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/convert.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/motor_controller.hpp"
 #include "processes/sim_setup.hpp"
+#include "sim/stepper.hpp"
 
 namespace sweepmap {
 namespace {
@@ -32,9 +32,9 @@ int runController(
   if (rc != 0) return rc;
   if (const std::string fault = device_fault(); !fault.empty()) {
     std::cerr << "sweepmap-motor: the stepper stopped: " << fault << "\n";
-    return 1;
+    return kExitDeviceIo;
   }
-  return controller.phase() == MotorController::Phase::kFault ? 1 : 0;
+  return controller.phase() == MotorController::Phase::kFault ? kExitDeviceIo : kExitOk;
 }
 
 int runSim(const RotatingLidarConfig& rig, const CommonOptions& common, uint64_t seed, int sweeps) {
@@ -61,7 +61,7 @@ int runGpio(const RotatingLidarConfig& rig, const CommonOptions& common, int swe
     stepper = std::make_unique<GpioStepper>(options, *gpio, clock, start);
   } catch (const GpioError& e) {
     std::cerr << "sweepmap-motor: " << e.what() << "\n";
-    return 1;
+    return kExitDeviceIo;
   }
   std::cerr << "sweepmap-motor: " << rig.motor.device << ", step thread "
             << (stepper->realtime() ? "SCHED_FIFO" : "at normal priority (no SCHED_FIFO)") << "\n";
@@ -85,18 +85,18 @@ int main(int argc, char** argv) {
   bool sim = false;
   uint64_t seed = 1;
   int sweeps = 0;
-  addCommonOptions(app, common);
+  addCommonOptions(app, common, {RigKind::kRotatingLidar});
   app.add_flag("--sim", sim,
                "use the simulated stepper and switch whatever motor.device says (publishes "
                "TRUTH_SHAFT)");
   app.add_option("--seed", seed, "simulation seed")->capture_default_str();
   app.add_option("--sweeps", sweeps, "sweeps to make, then exit (0 = until stopped)")
       ->capture_default_str();
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = parseCommandLine(app, argc, argv)) return *code;
   const std::optional<Rig> loaded = loadRigOrReport(common);
-  if (!loaded) return 2;
+  if (!loaded) return kExitUsage;
   const auto* rig_config = rigOfKindOrReport<RotatingLidarConfig>(*loaded, "sweepmap-motor");
-  if (!rig_config) return 2;
+  if (!rig_config) return kExitUsage;
   const RotatingLidarConfig& rig = *rig_config;
   if (sim || parseDeviceUri(rig.motor.device).protocol == DeviceProtocol::kSim) {
     return runSim(rig, common, seed, sweeps);

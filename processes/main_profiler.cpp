@@ -5,10 +5,10 @@
 // driver exists yet (no protocol chosen): another device is a config error.
 #include <lcm/lcm-cpp.hpp>
 
-#include "sim/profile_devices.hpp"
 #include "processes/cli_common.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/profile_scan_node.hpp"
+#include "sim/profile_devices.hpp"
 
 int main(int argc, char** argv) {
   using namespace sweepmap;
@@ -24,25 +24,25 @@ int main(int argc, char** argv) {
   bool sim = false;
   uint64_t seed = 1;
   ProfileScanOptions options;
-  addCommonOptions(app, common);
+  addCommonOptions(app, common, {RigKind::kRotatingProfile});
   app.add_flag("--sim", sim, "the simulated sensor and turntable whatever the rig file says");
   app.add_option("--seed", seed, "simulation seed")->capture_default_str();
   app.add_option("--sweeps", options.sweeps, "sweeps to make, then exit (0 = until stopped)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast(0));
   app.add_option("--pause-s", options.pause_s,
                  "pause at the start angle before every sweep but the first [s]")
       ->capture_default_str()
       ->check(CLI::Range(0.0, 3600.0));
-  CLI11_PARSE(app, argc, argv);
+  if (const auto code = parseCommandLine(app, argc, argv)) return *code;
   const std::optional<Rig> loaded = loadRigOrReport(common);
-  if (!loaded) return 2;
+  if (!loaded) return kExitUsage;
   const auto* rig = rigOfKindOrReport<RotatingProfileConfig>(*loaded, "sweepmap-profiler");
-  if (!rig) return 2;
+  if (!rig) return kExitUsage;
   if (!sim && (rig->profiler.device != "sim" || rig->turntable.device != "sim")) {
     std::cerr << "sweepmap-profiler: no driver for profiler.device '" << rig->profiler.device
               << "' / turntable.device '" << rig->turntable.device << "' (only sim)\n";
-    return 2;
+    return kExitUsage;
   }
   std::unique_ptr<SimProfileWorld> world;
   try {
@@ -50,7 +50,7 @@ int main(int argc, char** argv) {
                                               wallUtime());
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
   SimTurntable table(world.get());
   SimProfilerDevice sensor(world.get());
@@ -62,5 +62,5 @@ int main(int argc, char** argv) {
   live.should_stop = [&node] { return node.done() || node.failed(); };
   const int rc = runLive(lcm, {&truth, &node}, live);
   if (rc != 0) return rc;
-  return node.failed() ? 1 : 0;
+  return node.failed() ? kExitDeviceIo : kExitOk;
 }

@@ -94,9 +94,8 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
                       ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
   }
   if (!c.mounting.calibration_file.empty()) {
-    std::filesystem::path calib(c.mounting.calibration_file);
-    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
-    const MountingCalibration m = loadMountingCalibration(calib.string());
+    const MountingCalibration m = loadFileBesideRig(
+        path, "mounting.calibration_file", c.mounting.calibration_file, loadMountingCalibration);
     c.mounting.gamma_rad = m.gamma_rad;
     c.mounting.beta_rad = m.beta_rad;
     c.mounting.alpha_rad = m.alpha_rad;

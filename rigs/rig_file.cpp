@@ -3,6 +3,7 @@
 #include <unistd.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cstdlib>
 
 #include "core/config.hpp"
@@ -61,13 +62,61 @@ void checkRigKind(const std::string& path, const std::string& found, const std::
   }
 }
 
+std::string pathBesideRig(const std::string& rig_path, const std::string& file) {
+  const fs::path p(file);
+  return p.is_relative() ? (fs::path(rig_path).parent_path() / p).string() : file;
+}
+
+void throwBesideRigError(const std::string& rig_path, const std::string& key,
+                         const std::string& file, const std::string& error) {
+  std::string where = "an absolute path";
+  if (fs::path(file).is_relative()) {
+    const fs::path dir = fs::absolute(fs::path(rig_path)).parent_path();
+    where = "relative to the rig file's folder " + dir.string() + ": " +
+            (dir / file).lexically_normal().string();
+  }
+  throw ConfigError(rig_path + ": key '" + key + "' names '" + file + "' (" + where +
+                    "): " + error);
+}
+
 fs::path configDir() {
   if (const char* env = std::getenv("SWEEPMAP_CONFIG_DIR"); env && *env) return fs::path(env);
   return executableDir() / ".." / "share" / "sweepmap" / "config";
 }
 
+std::vector<std::string> configNames(const std::string& prefix) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : fs::directory_iterator(configDir(), ec)) {
+    const fs::path p = entry.path();
+    const std::string stem = p.stem().string();
+    if (p.extension() == ".yaml" && stem.rfind(prefix, 0) == 0) names.push_back(stem);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+namespace {
+
+// ": the rigs there are: rig_a, rig_b (in DIR)", or "" when none is found.
+std::string thereAre(const std::string& what, const std::string& prefix) {
+  const std::vector<std::string> names = configNames(prefix);
+  if (names.empty()) return "";
+  std::string list;
+  for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+  return "; the " + what + " there are: " + list + " (in " +
+         configDir().lexically_normal().string() + ")";
+}
+
+}  // namespace
+
 std::string resolveConfigFile(const std::string& path_or_name) {
-  if (path_or_name.empty()) throw ConfigError("no config file given");
+  return resolveConfigFile(path_or_name, "config file", "");
+}
+
+std::string resolveConfigFile(const std::string& path_or_name, const std::string& what,
+                              const std::string& prefix) {
+  if (path_or_name.empty()) throw ConfigError("no " + what + " given");
   if (fs::is_regular_file(path_or_name)) return path_or_name;
   std::vector<fs::path> tried = {fs::path(path_or_name)};
   // A bare name (no folder part) is looked up among the installed config files.
@@ -80,7 +129,12 @@ std::string resolveConfigFile(const std::string& path_or_name) {
   }
   std::string list;
   for (const auto& t : tried) list += (list.empty() ? "" : ", ") + t.string();
-  throw ConfigError(path_or_name + ": no such config file (tried " + list + ")");
+  throw ConfigError(path_or_name + ": no such " + what + " (tried " + list + ")" +
+                    (prefix.empty() ? "" : thereAre(what + "s", prefix)));
+}
+
+std::string resolveSceneFile(const std::string& path_or_name) {
+  return resolveConfigFile(path_or_name, "scene", "scene_");
 }
 
 std::string resolveRigFile(const std::string& path_or_name) {
@@ -89,7 +143,14 @@ std::string resolveRigFile(const std::string& path_or_name) {
       return resolveConfigFile(k.default_rig);
     }
   }
-  return resolveConfigFile(path_or_name);
+  try {
+    return resolveConfigFile(path_or_name, "rig", "rig_");
+  } catch (const ConfigError& e) {
+    std::string kinds;
+    for (const auto& k : kKinds) kinds += std::string(kinds.empty() ? "" : ", ") + k.name;
+    throw ConfigError(std::string(e.what()) +
+                      " (a kind's name stands for its reference rig: " + kinds + ")");
+  }
 }
 
 RigKind readRigKind(const std::string& path) {
@@ -110,10 +171,40 @@ RigKind readRigKind(const std::string& path) {
   return rigKindFromName(root["rig"].as<std::string>(), path);
 }
 
+namespace {
+
+// A rig file's check that failed on a key an override set: the error names --set, not the file.
+[[noreturn]] void blameOverride(const std::string& path, const ConfigError& e,
+                                const std::vector<std::string>& overrides) {
+  std::string what = e.what();
+  if (what.rfind("--set", 0) == 0) throw e;  // the override's own parse error names it already
+  for (const std::string& o : overrides) {
+    const std::string key = o.substr(0, o.find('='));
+    if (key.empty() || what.find("'" + key + "'") == std::string::npos) continue;
+    if (what.rfind(path, 0) == 0) what = what.substr(path.size());
+    if (what.rfind(": ", 0) == 0) what = what.substr(2);
+    throw ConfigError("--set " + o + ": " + what + " (rig file " + path + ")");
+  }
+  throw e;
+}
+
+}  // namespace
+
 Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& overrides) {
   Rig rig;
   rig.path = resolveRigFile(path_or_name);
-  switch (readRigKind(rig.path)) {
+  const RigKind kind = readRigKind(rig.path);
+  try {
+    loadRigOfKind(kind, &rig, overrides);
+  } catch (const ConfigError& e) {
+    blameOverride(rig.path, e, overrides);
+  }
+  return rig;
+}
+
+void loadRigOfKind(RigKind kind, Rig* rig_out, const std::vector<std::string>& overrides) {
+  Rig& rig = *rig_out;
+  switch (kind) {
     case RigKind::kRotatingLidar:
       rig.config = loadRotatingLidarConfig(rig.path, overrides);
       break;
@@ -124,7 +215,6 @@ Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& ove
       rig.config = loadRotatingProfileConfig(rig.path, overrides);
       break;
   }
-  return rig;
 }
 
 const LidarConfig& Rig::lidar() const {

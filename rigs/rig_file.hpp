@@ -37,14 +37,27 @@ std::filesystem::path configDir();
 // `name` or `name.yaml` in configDir(). For rig files a kind's name stands for its
 // reference rig (rotating_lidar -> rig_a). Throws ConfigError listing what was tried.
 std::string resolveConfigFile(const std::string& path_or_name);
+// The same, naming `what` ("rig", "scene") in its error, which lists the files of configDir()
+// whose names start with `prefix` ("rig_", "scene_").
+std::string resolveConfigFile(const std::string& path_or_name, const std::string& what,
+                              const std::string& prefix);
+// A rig: its error lists the rigs there are (and the kinds' names that stand for them).
 std::string resolveRigFile(const std::string& path_or_name);
+// A scene: its error lists the scenes there are.
+std::string resolveSceneFile(const std::string& path_or_name);
+// The names (file stems) of the .yaml files in configDir() starting with `prefix`, sorted.
+std::vector<std::string> configNames(const std::string& prefix);
 
 // The kind a rig file declares (its `rig` key alone). Throws ConfigError naming the file.
 RigKind readRigKind(const std::string& path);
 
 // Resolves, reads the kind, loads that kind's schema strictly and applies `key=value`
-// overrides. Throws ConfigError naming the file and the key.
+// overrides. Throws ConfigError naming the file and the key (or `--set key=value` when the
+// value an override set fails the kind's checks).
 Rig loadRig(const std::string& path_or_name, const std::vector<std::string>& overrides = {});
+
+// Loads the rig file rig->path as `kind` into rig->config (loadRig's second half).
+void loadRigOfKind(RigKind kind, Rig* rig, const std::vector<std::string>& overrides);
 
 // The rig's config if it is of kind T; throws ConfigError "PATH is a KIND rig; WHAT needs a
 // KIND2 rig" otherwise.

@@ -33,4 +33,27 @@ std::string defaultSceneName(RigKind kind);
 // kind is loaded as another.
 void checkRigKind(const std::string& path, const std::string& found, const std::string& expected);
 
+// A file a rig file names (a calibration file): a relative `file` is relative to the rig
+// file's folder. Returns load(resolved path); a ConfigError it throws is rethrown naming the
+// rig file, the key, and what the path was relative to.
+template <class Load>
+auto loadFileBesideRig(const std::string& rig_path, const std::string& key, const std::string& file,
+                       Load&& load) -> decltype(load(file));
+// The path `file` stands for in the rig file `rig_path` (relative to its folder).
+std::string pathBesideRig(const std::string& rig_path, const std::string& file);
+// Throws ConfigError "RIG: key 'KEY' names 'FILE' (relative to the rig file's folder DIR:
+// RESOLVED): ERROR".
+[[noreturn]] void throwBesideRigError(const std::string& rig_path, const std::string& key,
+                                      const std::string& file, const std::string& error);
+
+template <class Load>
+auto loadFileBesideRig(const std::string& rig_path, const std::string& key, const std::string& file,
+                       Load&& load) -> decltype(load(file)) {
+  try {
+    return load(pathBesideRig(rig_path, file));
+  } catch (const std::exception& e) {
+    throwBesideRigError(rig_path, key, file, e.what());
+  }
+}
+
 }  // namespace sweepmap

@@ -27,17 +27,16 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   for (const auto& o : overrides) schema.set(o);
   checkRigKind(path, rig.rig, "rotating_lidar");
   // Calibration files are named relative to the rig file.
-  const auto beside = [&](const std::string& file) {
-    std::filesystem::path calib(file);
-    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
-    return calib.string();
-  };
   if (!rig.plate.calibration_file.empty()) {
-    rig.plate.alpha_deg = loadPlateCalibration(beside(rig.plate.calibration_file)).alpha_deg;
+    rig.plate.alpha_deg = loadFileBesideRig(path, "plate.calibration_file",
+                                            rig.plate.calibration_file, loadPlateCalibration)
+                              .alpha_deg;
   }
   if (!rig.geometry.calibration_file.empty()) {
     rig.geometry.lidar_offset_x_mm =
-        loadLidarOffsetCalibration(beside(rig.geometry.calibration_file)).lidar_offset_x_mm;
+        loadFileBesideRig(path, "geometry.calibration_file", rig.geometry.calibration_file,
+                          loadLidarOffsetCalibration)
+            .lidar_offset_x_mm;
   }
   const auto require = [&](bool ok, const char* key, const char* what) {
     if (!ok) throw ConfigError(path + ": key '" + key + "' " + what);

@@ -84,9 +84,9 @@ RotatingProfileConfig loadRotatingProfileConfig(const std::string& path,
   for (const auto& o : overrides) schema.set(o);
   checkRigKind(path, rig.rig, "rotating_profile");
   if (!rig.geometry.calibration_file.empty()) {
-    std::filesystem::path calib(rig.geometry.calibration_file);
-    if (calib.is_relative()) calib = std::filesystem::path(path).parent_path() / calib;
-    const AxisOffsetCalibration c = loadAxisOffsetCalibration(calib.string());
+    const AxisOffsetCalibration c =
+        loadFileBesideRig(path, "geometry.calibration_file", rig.geometry.calibration_file,
+                          loadAxisOffsetCalibration);
     rig.geometry.offset_m_mm = c.m_mm;
     rig.geometry.offset_n_mm = c.n_mm;
     rig.geometry.laser_tilt_deg = c.laser_tilt_deg;

@@ -33,6 +33,26 @@ TEST(ConfigSchema, LoadsEveryKey) {
   EXPECT_EQ(v.d, "hello");
 }
 
+// A value of the wrong type names the key, the file and line, and the type expected (not
+// std::stol's bare "stol").
+TEST(ConfigSchema, BadValueSaysWhatWasExpected) {
+  Small v;
+  ConfigSchema s;
+  v.declare(s);
+  try {
+    s.loadString("grp: {a: 2.5, b: many}\nc: false\nd: hello\n", "mem.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("mem.yaml:1: key 'grp.b': bad value 'many' (expected an integer)"),
+              std::string::npos)
+        << what;
+    EXPECT_EQ(what.find("stol"), std::string::npos) << what;
+  }
+  EXPECT_THROW(s.set("grp.a=wide"), ConfigError);
+  EXPECT_THROW(s.set("grp.b=99999999999999"), ConfigError);
+}
+
 TEST(ConfigSchema, RejectsUnknownKeyNamingFileAndKey) {
   Small v;
   ConfigSchema s;

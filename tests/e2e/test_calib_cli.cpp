@@ -170,9 +170,9 @@ TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
   const std::string log = circleLog();
   const fs::path dir = scratchDir("calib_cli_mounting");
   const fs::path out = dir / "mounting_calibration.yaml";
-  const int rc =
-      runSplit({"calib", "mounting", "--log", log, "--rig", kRigB, "--out", out.string(), "--json"},
-               dir / "stdout.json", dir / "stderr.txt");
+  const int rc = runSplit(
+      {"calib", "mounting", "--logs", log, "--rig", kRigB, "--out", out.string(), "--json"},
+      dir / "stdout.json", dir / "stderr.txt");
   ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
   const nlohmann::json j = readJson(dir / "stdout.json");
   std::cerr << readFile(dir / "stderr.txt");
@@ -213,26 +213,27 @@ TEST(CalibCli, MountingBadInputsFailClearly) {
     a.insert(a.end(), args.begin(), args.end());
     return runSplit(a, dir / (label + ".out"), dir / (label + ".err"));
   };
-  // Missing log.
+  // Missing log (given by --log, the hidden alias of --logs).
   EXPECT_EQ(run({"--log", (dir / "nope.lcmlog").string(), "--rig", kRigB, "--out", out.string()},
                 "missing"),
             2);
   EXPECT_NE(readFile(dir / "missing.err").find("nope.lcmlog"), std::string::npos);
   // Corrupt log: bytes that are no LCM log.
   std::ofstream(dir / "corrupt.lcmlog") << std::string(4096, 'x');
-  EXPECT_NE(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string()},
-                "corrupt"),
-            0);
+  EXPECT_NE(
+      run({"--logs", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string()},
+          "corrupt"),
+      0);
   EXPECT_FALSE(readFile(dir / "corrupt.err").empty());
   // A bad rig key names the key.
-  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(),
+  EXPECT_EQ(run({"--logs", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(),
                  "--set", "mounting.gama_rad=1"},
                 "badkey"),
             2);
   EXPECT_NE(readFile(dir / "badkey.err").find("mounting.gama_rad"), std::string::npos)
       << readFile(dir / "badkey.err");
   // A missing calibration file named by the rig.
-  EXPECT_EQ(run({"--log", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(),
+  EXPECT_EQ(run({"--logs", (dir / "corrupt.lcmlog").string(), "--rig", kRigB, "--out", out.string(),
                  "--set", "mounting.calibration_file=absent.yaml"},
                 "badcalib"),
             2);

@@ -59,13 +59,13 @@ TEST(ToolRigC, CalibAxisOffsetFromASimulatedLog) {
   EXPECT_NEAR(c.m_mm, 123.0, 0.1);
   EXPECT_NEAR(c.n_mm, 409.0, 0.1);
   EXPECT_EQ(c.logs, std::vector<std::string>{log});
-  // A log without profiles: exit 2, naming it.
+  // A log without profiles: bad input (exit 1), naming it.
   const std::string rig_a_log = (dir / "rig_a.lcmlog").string();
   { std::ofstream(rig_a_log) << ""; }
   EXPECT_EQ(sweepmap({"calib", "axis-offset", "--logs", rig_a_log, "--rig", "rig_c", "--out",
                       (dir / "x.yaml").string()},
                      dir / "empty.txt"),
-            2);
+            1);
   EXPECT_NE(readFile(dir / "empty.txt").find(rig_a_log + ": no PROFILE messages"),
             std::string::npos)
       << readFile(dir / "empty.txt");

@@ -39,7 +39,12 @@ int sweepmap(const std::vector<std::string>& args, const fs::path& out_file) {
 
 int sweepmapIn(const fs::path& cwd, const std::vector<std::string>& args,
                const fs::path& out_file) {
-  std::vector<std::string> argv = {binPath("sweepmap")};
+  return runIn(cwd, "sweepmap", args, out_file);
+}
+
+int runIn(const fs::path& cwd, const std::string& exe, const std::vector<std::string>& args,
+          const fs::path& out_file) {
+  std::vector<std::string> argv = {binPath(exe)};
   argv.insert(argv.end(), args.begin(), args.end());
   posix_spawn_file_actions_t fa;
   posix_spawn_file_actions_init(&fa);

@@ -25,6 +25,9 @@ int sweepmap(const std::vector<std::string>& args, const fs::path& out_file = {}
 // The same, run from the working directory `cwd`.
 int sweepmapIn(const fs::path& cwd, const std::vector<std::string>& args,
                const fs::path& out_file = {});
+// Any executable of build/bin (sweepmap, sweepmap-motor, ...), run from `cwd` ("" = here).
+int runIn(const fs::path& cwd, const std::string& exe, const std::vector<std::string>& args,
+          const fs::path& out_file = {});
 
 std::string readFile(const fs::path& p);
 nlohmann::json readJson(const fs::path& p);

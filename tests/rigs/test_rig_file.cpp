@@ -146,6 +146,13 @@ TEST(RigFile, NamesResolveInTheInstallTreeFromAnyDirectory) {
                        fs::path(SWEEPMAP_SOURCE_DIR) / "config" / "scene_lab.yaml"));
   const std::string missing = configError([] { resolveRigFile("rig_z"); });
   EXPECT_NE(missing.find("rig_z.yaml"), std::string::npos) << missing;
+  // The fix: the rigs there are, and the kinds' names.
+  EXPECT_NE(missing.find("the rigs there are: rig_a, "), std::string::npos) << missing;
+  EXPECT_NE(missing.find("rig_c"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("rotating_profile"), std::string::npos) << missing;
+  const std::string scene = configError([] { resolveSceneFile("scene_z"); });
+  EXPECT_NE(scene.find("the scenes there are: scene_conference_room, scene_lab"), std::string::npos)
+      << scene;
   fs::current_path(here);
 }
 
@@ -223,12 +230,31 @@ TEST(RigFile, RealDeviceExamplesDifferOnlyInTheDevice) {
   EXPECT_EQ(yamlWithDevice("rig_b_x4", "x"), yamlWithDevice("rig_b", "x"));
 }
 
-// A device URI that cannot be opened is a config error naming the file and the key.
+// A device URI that cannot be opened is a config error naming the key, and --set when the
+// value came from an override (not the rig file, which holds a good one).
 TEST(RigFile, BadDeviceUriIsAConfigError) {
   const std::string e = configError([] { loadRig(kRigA, {"lidar.device=usb0"}); });
-  EXPECT_NE(e.find("rig_a.yaml: key 'lidar.device': device 'usb0': expected sim"),
+  EXPECT_NE(e.find("--set lidar.device=usb0: key 'lidar.device': device 'usb0': expected sim"),
             std::string::npos)
       << e;
+  EXPECT_NE(e.find("(rig file "), std::string::npos) << e;
+}
+
+// A value an override sets that the kind's checks reject names --set and the key.
+TEST(RigFile, ABadOverrideNamesSetNotTheFile) {
+  const std::string e = configError([] { loadRig(kRigA, {"motor.mode=9"}); });
+  EXPECT_EQ(e.rfind("--set motor.mode=9: ", 0), 0u) << e;
+  EXPECT_NE(e.find("motor.mode"), std::string::npos) << e;
+}
+
+// A calibration file named relative to the rig file: the error says relative to what.
+TEST(RigFile, RelativePathsSayWhatTheyAreRelativeTo) {
+  const fs::path dir = scratch("relative");
+  fs::copy_file(kRigA, dir / "rig.yaml");
+  const std::string e =
+      configError([&] { loadRig((dir / "rig.yaml").string(), {"plate.calibration_file=c.yaml"}); });
+  EXPECT_NE(e.find("relative to the rig file's folder " + dir.string()), std::string::npos) << e;
+  EXPECT_NE(e.find("plate.calibration_file"), std::string::npos) << e;
 }
 
 // Each device key takes its own kind of device.

@@ -176,8 +176,9 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
     const SimulatedLog log = simulate(o, c.overrides, log_path, false);
     // The `sweepmap replay` command itself, so that its time includes start-up and its
     // peak RSS is its own.
-    std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path, "--rig",
-                                     o.rig,          "--out",  out_dir,  "--no-plots"};
+    // --force: the scratch folder of an earlier bench is emptied, not refused.
+    std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path,     "--rig",  o.rig,
+                                     "--out",        out_dir,  "--no-plots", "--force"};
     for (const std::string& kv : c.overrides) args.insert(args.end(), {"--set", kv});
     std::vector<char*> argv;
     for (std::string& a : args) argv.push_back(a.data());

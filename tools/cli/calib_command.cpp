@@ -5,6 +5,7 @@
 #include <iostream>
 #include <memory>
 
+#include "core/command_line.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/offline/calibrate_axis_offset.hpp"
@@ -33,12 +34,14 @@ CLI::App* addPlateAngle(CLI::App* calib, std::shared_ptr<PlateAngleCalibRequest>
       "walls are rejected and listed. Human report (per sweep, result, timing) on stderr; --json "
       "prints alpha_deg, iterations, final_cost, converged, sweeps_used, sweeps_rejected, history "
       "and, for simulated logs, alpha_true_deg on stdout.\n\n"
-      "Exit status: 0 calibrated; 1 no usable sweep; 2 bad rig, log or output path.\n"
+      "Exit status: 0 calibrated; 1 a log is corrupt or holds no usable sweep; 2 bad option or "
+      "rig, a missing log, or an output folder that does not exist; 4 OUT cannot be written.\n"
       "Example: sweepmap calib plate-angle --logs room.lcmlog --rig rig_a "
       "--out config/plate_calibration.yaml");
   plate->add_option("--logs", o->logs, "LCM logs of the room (sweepmap sim, lcm-logger)")
       ->required()
-      ->expected(1, -1);
+      ->expected(1, -1)
+      ->check(CLI::ExistingFile);
   plate
       ->add_option("--rig", o->rig, "rig file or name (rotating_lidar) the logs were recorded with")
       ->required();
@@ -47,7 +50,7 @@ CLI::App* addPlateAngle(CLI::App* calib, std::shared_ptr<PlateAngleCalibRequest>
   plate->add_option("--set", o->sets, "override a rig config key: key=value (repeatable)");
   plate->add_option("--voxel", o->voxel_m, "voxel size [m] of the wall extraction's downsampling")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(greaterThan(0));
   return plate;
 }
 
@@ -84,12 +87,16 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       "mounting. Human report on stderr; --json prints gamma_rad, beta_rad, alpha_rad, "
       "time_offset_s, residual_before_m, residual_after_m (RMS), correspondences, method, the "
       "paper's result under \"paper\" and, for simulated logs, the truth and error_mrad.\n\n"
-      "Exit status: 0 calibrated; 1 not calibrated (too little data, no overlap); 2 bad rig, log "
-      "or output path.\n"
+      "Exit status: 0 calibrated; 1 not calibrated (a corrupt log, too little data, no overlap); "
+      "2 bad option or rig, a missing log, or an output folder that does not exist; 4 OUT cannot "
+      "be written.\n"
       "Example: sweepmap sim --rig rig_b --set sim.duration_s=120 --out circle.lcmlog && "
-      "sweepmap calib mounting --log circle.lcmlog --rig rig_b --out "
+      "sweepmap calib mounting --logs circle.lcmlog --rig rig_b --out "
       "config/mounting_calibration.yaml");
-  mount->add_option("--log", m->log, "LCM log of the drive (sweepmap sim, lcm-logger)")->required();
+  mount->add_option("--logs", m->log, "LCM log of the drive (sweepmap sim, lcm-logger)")
+      ->check(CLI::ExistingFile);
+  // --log: its name before the other calib commands' --logs, kept as a hidden alias.
+  mount->add_option("--log", m->log, "")->group("")->check(CLI::ExistingFile);
   mount->add_option("--rig", m->rig, "rig file or name (mobile_lidar) the log was recorded with")
       ->required();
   mount->add_option("--out", m->out, "calibration file to write (YAML, atomically)")->required();
@@ -110,9 +117,65 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       ->add_option("--min-pass-gap", m->min_pass_gap_s,
                    "seconds between two observations of a place for them to be two passes")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(greaterThan(0));
   return mount;
 }
+
+// What `calib axis-offset` does for each kind, for its --help.
+const char* const kAxisOffsetFooter =
+    "rotating_lidar (rig A): every sweep of the logs is assembled with the rig's offset "
+    "(geometry.lidar_offset_x_mm, nominal 13.9 mm), its planes (walls, floor, ceiling, "
+    "furniture) found by PCL RANSAC, each ray assigned to the plane whose crossing along "
+    "the ray its range is within 50 mm of (none where another plane crosses the ray within 150 "
+    "mm of it: edges; at most --plane-points per plane, evenly strided); then Ceres over the "
+    "offset and every plane (unit normal + distance, each sweep "
+    "its own), Cauchy-weighted point-to-plane residuals, reweighted three times. What planes "
+    "can see: x (across the scan plane, the paper's 13.9 mm) and y (within it, perpendicular "
+    "to the axis) bend the vertical walls and are observable from them; floor and ceiling "
+    "constrain neither; z (along the axis) moves the whole cloud and is never observable (held "
+    "at 0). x is estimated and written (geometry.lidar_offset_x_mm); --offset-y also estimates "
+    "y, reported only (the rig's model has t = (x, 0, 0)). Warns, and writes nothing, when x "
+    "is not determined (no vertical wall; sigma > 0.5 mm). Prints the wall-plane RMS before "
+    "(the rig's offset) and after (each plane refit by least squares); --json prints "
+    "lidar_offset_x_mm, sigma_x_mm, observability {x, y, z}, wall_rms_before_mm, "
+    "wall_rms_after_mm, planes, warnings and, for simulated logs, truth_x_mm and "
+    "offset_error_mm. Record several sweeps of a room in a high-resolution mode (20 mode-7 "
+    "sweeps: within 0.11 mm of a true 16 mm on five simulated seeds).\n\n"
+    "rotating_profile (rig C): every turntable sweep of the logs is one pose of the plate "
+    "(sweepmap sim --rig rig_c "
+    "makes sim.plate_count of them; a real recording: one sweep per pose, the plate alone in "
+    "view). Both methods see the same points (at most --max-points per sweep, evenly "
+    "strided).\n\n"
+    "The paper's (reported, and drawn as S(M, N) like its Fig. 6): points to frame O_r by "
+    "Eq. 7, a least-squares plane z = Ax + By + C per pose (Eq. 8-13), the RMS of the "
+    "point-to-plane distances (Eq. 14), their mean S (Eq. 15), minimised by a grid search of "
+    "--m-min..--m-max x --n-min..--n-max in --step (Algorithm 1; default the paper's (110, 130) "
+    "x (395, "
+    "425) mm in 1 mm).\n\n"
+    "Ours (the result written): Ceres over M, N and every plane (unit normal on the sphere + "
+    "distance) with point-to-plane residuals through the generalised Eq. 7, also the laser "
+    "plane's tilt from the axis (unless --no-tilt) and, with --encoder-zero, the encoder's "
+    "zero; each parameter's standard deviation from ceres::Covariance. A parameter the planes "
+    "do not determine is reported: the encoder zero never is (it turns the whole cloud about "
+    "the axis) and is then held at the rig's value; M and N are not with parallel or level "
+    "plates, and then nothing is written.\n\n"
+    "Writes OUT atomically (axis_offset.m_mm, n_mm, laser_tilt_deg, encoder_zero_deg + "
+    "provenance with the standard deviations and the paper's result); set "
+    "geometry.calibration_file in the rig file to use it. Human report on stderr; --json "
+    "prints ours, paper, warnings, planes and, for simulated logs, truth and offset_error_mm "
+    "on stdout.\n\n"
+    "Exit status: 0 calibrated; 1 not calibrated (no plate sweep or room plane, M, N or the "
+    "lidar's offset not observable) or a bad log (no profiles, a non-finite point, a corrupt "
+    "event: named with its byte offset); 2 bad option (or one of the other kind) or rig, a "
+    "missing log, or an output folder that does not exist; 4 OUT cannot be written.\n"
+    "Examples: sweepmap sim --rig rig_c --out plates.lcmlog && sweepmap calib axis-offset "
+    "--logs plates.lcmlog --rig rig_c --out axis_offset.yaml\n"
+    "sweepmap sim --rig rig_a --mode 7 --sweeps 20 --set sim.lidar_offset_x_mm=16 --out "
+    "room.lcmlog && sweepmap calib axis-offset --logs room.lcmlog --rig rig_a --out "
+    "lidar_offset.yaml";
+
+void addAxisOffsetProfileOptions(CLI::App* axis, std::shared_ptr<AxisOffsetCalibRequest> a);
+void addAxisOffsetLidarOptions(CLI::App* axis, std::shared_ptr<LidarAxisOffsetCalibRequest> l);
 
 // `calib axis-offset`: its flags into an AxisOffsetCalibRequest (rig C) and a
 // LidarAxisOffsetCalibRequest (rig A); the rig file's kind decides which runs.
@@ -124,62 +187,14 @@ CLI::App* addAxisOffset(CLI::App* calib, std::shared_ptr<AxisOffsetCalibRequest>
       "turntable's axis (Zhao 2021) from sweeps of a flat plate in m non-parallel poses; "
       "rotating_lidar rigs (rig A): the lidar's offset t_L^O' from its rotation axis from room "
       "sweeps, by the same plane constraint");
-  axis->footer(
-      "rotating_lidar (rig A): every sweep of the logs is assembled with the rig's offset "
-      "(geometry.lidar_offset_x_mm, nominal 13.9 mm), its planes (walls, floor, ceiling, "
-      "furniture) found by PCL RANSAC, each ray assigned to the plane whose crossing along "
-      "the ray its range is within 50 mm of (none where another plane crosses the ray within 150 "
-      "mm of it: edges; at most --plane-points per plane, evenly strided); then Ceres over the "
-      "offset and every plane (unit normal + distance, each sweep "
-      "its own), Cauchy-weighted point-to-plane residuals, reweighted three times. What planes "
-      "can see: x (across the scan plane, the paper's 13.9 mm) and y (within it, perpendicular "
-      "to the axis) bend the vertical walls and are observable from them; floor and ceiling "
-      "constrain neither; z (along the axis) moves the whole cloud and is never observable (held "
-      "at 0). x is estimated and written (geometry.lidar_offset_x_mm); --offset-y also estimates "
-      "y, reported only (the rig's model has t = (x, 0, 0)). Warns, and writes nothing, when x "
-      "is not determined (no vertical wall; sigma > 0.5 mm). Prints the wall-plane RMS before "
-      "(the rig's offset) and after (each plane refit by least squares); --json prints "
-      "lidar_offset_x_mm, sigma_x_mm, observability {x, y, z}, wall_rms_before_mm, "
-      "wall_rms_after_mm, planes, warnings and, for simulated logs, truth_x_mm and "
-      "offset_error_mm. Record several sweeps of a room in a high-resolution mode (20 mode-7 "
-      "sweeps: within 0.11 mm of a true 16 mm on five simulated seeds).\n\n"
-      "rotating_profile (rig C): every turntable sweep of the logs is one pose of the plate "
-      "(sweepmap sim --rig rig_c "
-      "makes sim.plate_count of them; a real recording: one sweep per pose, the plate alone in "
-      "view). Both methods see the same points (at most --max-points per sweep, evenly "
-      "strided).\n\n"
-      "The paper's (reported, and drawn as S(M, N) like its Fig. 6): points to frame O_r by "
-      "Eq. 7, a least-squares plane z = Ax + By + C per pose (Eq. 8-13), the RMS of the "
-      "point-to-plane distances (Eq. 14), their mean S (Eq. 15), minimised by a grid search of "
-      "--m-min..--m-max x --n-min..--n-max in --step (Algorithm 1; default the paper's (110, 130) "
-      "x (395, "
-      "425) mm in 1 mm).\n\n"
-      "Ours (the result written): Ceres over M, N and every plane (unit normal on the sphere + "
-      "distance) with point-to-plane residuals through the generalised Eq. 7, also the laser "
-      "plane's tilt from the axis (unless --no-tilt) and, with --encoder-zero, the encoder's "
-      "zero; each parameter's standard deviation from ceres::Covariance. A parameter the planes "
-      "do not determine is reported: the encoder zero never is (it turns the whole cloud about "
-      "the axis) and is then held at the rig's value; M and N are not with parallel or level "
-      "plates, and then nothing is written.\n\n"
-      "Writes OUT atomically (axis_offset.m_mm, n_mm, laser_tilt_deg, encoder_zero_deg + "
-      "provenance with the standard deviations and the paper's result); set "
-      "geometry.calibration_file in the rig file to use it. Human report on stderr; --json "
-      "prints ours, paper, warnings, planes and, for simulated logs, truth and offset_error_mm "
-      "on stdout.\n\n"
-      "Exit status: 0 calibrated; 1 not calibrated (no plate sweep or room plane, M, N or the "
-      "lidar's offset not observable); 2 bad rig, log (no profiles, a non-finite point, a "
-      "corrupt event: named with its byte offset), an option of the other kind, or output "
-      "path.\n"
-      "Examples: sweepmap sim --rig rig_c --out plates.lcmlog && sweepmap calib axis-offset "
-      "--logs plates.lcmlog --rig rig_c --out axis_offset.yaml\n"
-      "sweepmap sim --rig rig_a --mode 7 --sweeps 20 --set sim.lidar_offset_x_mm=16 --out "
-      "room.lcmlog && sweepmap calib axis-offset --logs room.lcmlog --rig rig_a --out "
-      "lidar_offset.yaml");
+  axis->footer(kAxisOffsetFooter);
+
   axis->add_option("--logs", a->logs,
                    "LCM logs of the plate sweeps (rig C) or of a room (rig A) (sweepmap sim, "
                    "lcm-logger)")
       ->required()
-      ->expected(1, -1);
+      ->expected(1, -1)
+      ->check(CLI::ExistingFile);
   axis->add_option("--rig", a->rig,
                    "rig file or name (rotating_profile or rotating_lidar) the logs were recorded "
                    "with")
@@ -187,6 +202,13 @@ CLI::App* addAxisOffset(CLI::App* calib, std::shared_ptr<AxisOffsetCalibRequest>
   axis->add_option("--out", a->out, "calibration file to write (YAML, atomically)")->required();
   axis->add_flag("--json", a->json, "print the result as JSON on stdout");
   axis->add_option("--set", a->sets, "override a rig config key: key=value (repeatable)");
+  addAxisOffsetProfileOptions(axis, a);
+  addAxisOffsetLidarOptions(axis, l);
+  return axis;
+}
+
+// `calib axis-offset`'s options for rotating_profile rigs (kProfileOnly below).
+void addAxisOffsetProfileOptions(CLI::App* axis, std::shared_ptr<AxisOffsetCalibRequest> a) {
   axis->add_option("--m-min", a->grid.m_min_mm, "the paper's grid: M from [mm]")
       ->capture_default_str();
   axis->add_option("--m-max", a->grid.m_max_mm, "the paper's grid: M to [mm]")
@@ -197,7 +219,7 @@ CLI::App* addAxisOffset(CLI::App* calib, std::shared_ptr<AxisOffsetCalibRequest>
       ->capture_default_str();
   axis->add_option("--step", a->grid.step_mm, "the paper's grid step [mm]")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(greaterThan(0));
   axis->add_flag("--no-grid", a->no_grid, "skip the paper's method");
   axis->add_option("--figure", a->figure, "S(M, N) picture (PNG; default OUT's name + _S.png)");
   axis->add_flag(
@@ -209,13 +231,16 @@ CLI::App* addAxisOffset(CLI::App* calib, std::shared_ptr<AxisOffsetCalibRequest>
   axis->add_option("--max-points", a->max_points_per_sweep,
                    "points per sweep both methods use (evenly strided; 0 = all)")
       ->capture_default_str();
+}
+
+// `calib axis-offset`'s options for rotating_lidar rigs (kLidarOnly below).
+void addAxisOffsetLidarOptions(CLI::App* axis, std::shared_ptr<LidarAxisOffsetCalibRequest> l) {
   axis->add_flag("--offset-y", l->estimate_y,
                  "rotating_lidar: also estimate the offset within the scan plane (reported)");
   axis->add_option("--plane-points", l->segmentation.max_rays_per_plane,
                    "rotating_lidar: points per plane and sweep (evenly strided; 0 = all)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
-  return axis;
+      ->check(atLeast(0));
 }
 
 // The options of `calib axis-offset` that only one kind takes.
@@ -232,7 +257,7 @@ int runAxisOffset(CLI::App* axis, const AxisOffsetCalibRequest& a,
     kind = readRigKind(resolveRigFile(a.rig));
   } catch (const std::exception& e) {
     std::cerr << "calib axis-offset: config error: " << e.what() << "\n";
-    return 2;
+    return kExitUsage;
   }
   const bool lidar = kind == RigKind::kRotatingLidar;
   for (const auto& name : lidar ? kProfileOnly : kLidarOnly) {
@@ -240,7 +265,7 @@ int runAxisOffset(CLI::App* axis, const AxisOffsetCalibRequest& a,
       std::cerr << "calib axis-offset: " << name << " is for "
                 << (lidar ? "rotating_profile" : "rotating_lidar") << " rigs; " << a.rig << " is a "
                 << rigKindName(kind) << " rig\n";
-      return 2;
+      return kExitUsage;
     }
   }
   if (!lidar) return calibrateAxisOffsetFromLogs(a);
@@ -269,11 +294,17 @@ Runner addCalibCommand(CLI::App& app) {
   auto a = std::make_shared<AxisOffsetCalibRequest>();
   auto l = std::make_shared<LidarAxisOffsetCalibRequest>();
   CLI::App* axis = addAxisOffset(calib, a, l);
-  return [plate, o, mount, m, axis, a, l]() {
+  return [plate, o, mount, m, axis, a, l]() -> int {
+    if (plate->parsed()) checkOutputFile(o->out);
+    if (mount->parsed()) checkOutputFile(m->out);
+    if (axis->parsed()) checkOutputFile(a->out);
     if (plate->parsed()) return calibratePlateAngleFromLogs(*o);
-    if (mount->parsed()) return calibrateMountingFromLog(*m);
+    if (mount->parsed()) {
+      if (m->log.empty()) throw ConfigError("calib mounting: --logs LOG is required");
+      return calibrateMountingFromLog(*m);
+    }
     if (axis->parsed()) return runAxisOffset(axis, *a, l);
-    return 2;
+    return kExitUsage;
   };
 }
 

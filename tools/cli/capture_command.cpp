@@ -2,7 +2,9 @@
 // (tools/devices/capture.hpp).
 #include <iostream>
 
+#include "core/command_line.hpp"
 #include "core/config.hpp"
+#include "core/device_uri.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/devices/capture.hpp"
@@ -32,21 +34,28 @@ Runner addCaptureCommand(CLI::App& app) {
       ->required();
   cmd->add_option("--seconds", o->seconds, "how long to record after the first byte")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(greaterThan(0));
   cmd->add_option("--out", o->out, "capture file")->required();
   cmd->add_option("--rig", *rig,
                   "rig file or name whose lidar section the device must match (default: rig_a "
                   "for scip, rig_b otherwise)");
   cmd->add_option("--set", *sets, "override a rig key: key=value (repeatable)");
-  return [o, rig, sets]() {
+  cmd->footer(
+      "Exit status: 0 captured; 2 bad option, URI or rig; 4 the device sent nothing or the "
+      "capture file cannot be written.");
+  return [o, rig, sets]() -> int {
     try {
-      const std::string r =
-          !rig->empty() ? *rig : (o->uri.rfind("scip:", 0) == 0 ? "rig_a" : "rig_b");
-      return runCapture(*o, expectedLidar(r, *sets), std::cout);
-    } catch (const ConfigError& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
+      if (parseDeviceUri(o->uri).protocol == DeviceProtocol::kSim) {
+        throw ConfigError("capture needs a real device's URI, not sim");
+      }
+    } catch (const std::invalid_argument& e) {
+      throw ConfigError(e.what());
     }
+    checkOutputFile(o->out);
+    const std::string r =
+        !rig->empty() ? *rig : (o->uri.rfind("scip:", 0) == 0 ? "rig_a" : "rig_b");
+    // runCapture's 1: nothing received, or the file could not be written.
+    return runCapture(*o, expectedLidar(r, *sets), std::cout) == 0 ? kExitOk : kExitDeviceIo;
   };
 }
 
@@ -73,15 +82,20 @@ Runner addDecodeCommand(CLI::App& app) {
                   "scip, rig_b otherwise)");
   cmd->add_option("--set", *sets, "override a rig key: key=value (repeatable)");
   cmd->add_option("--baud", o->baud, "raw serial bytes: the line rate (default: the device's)");
-  return [o, rig, sets]() {
-    try {
-      const std::string r = !rig->empty() ? *rig : (o->protocol == "scip" ? "rig_a" : "rig_b");
-      const DecodeResult res = runDecode(*o, expectedLidar(r, *sets), std::cout);
-      return res.file_error.empty() ? 0 : 1;
-    } catch (const ConfigError& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
+  cmd->footer(
+      "Exit status: 0 decoded; 1 the file is corrupt (a capture's bad record: what came before "
+      "is kept) or holds nothing of the protocol; 2 bad option or rig, or a missing input file; 4 "
+      "the log cannot be written.");
+  return [o, rig, sets]() -> int {
+    checkOutputFile(o->out);
+    const std::string r = !rig->empty() ? *rig : (o->protocol == "scip" ? "rig_a" : "rig_b");
+    const DecodeResult res = runDecode(*o, expectedLidar(r, *sets), std::cout);
+    if (res.scans == 0) {
+      std::cerr << "decode: nothing decoded: " << o->in << " holds no " << o->protocol
+                << " message (" << res.bytes << " bytes)\n";
+      return kExitBadInput;
     }
+    return res.file_error.empty() ? kExitOk : kExitBadInput;
   };
 }
 

@@ -1,6 +1,8 @@
 // `sweepmap demo`: the main job (tools/ops/demo.hpp).
 #include <iostream>
+#include <memory>
 
+#include "core/command_line.hpp"
 #include "core/config.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/ops/demo.hpp"
@@ -29,7 +31,10 @@ Runner addDemoCommand(CLI::App& app) {
   cmd->add_option("--scene", o->scene,
                   "scene file or name (default: the rig kind's scene); rotating_profile: plate or "
                   "test_piece (default sim.scene)");
-  cmd->add_option("--out", o->out, "output directory")->capture_default_str();
+  cmd->add_option("--out", o->out, "output folder (new or empty; see --force)")
+      ->capture_default_str();
+  auto force = std::make_shared<bool>(false);
+  cmd->add_flag("--force", *force, "empty a non-empty --out folder first");
   cmd->add_option("--set", o->overrides,
                   "override a rig key for every process: key=value (repeatable)");
   cmd->add_option("--mode", o->mode, "rotating_lidar: scan mode 1..7")
@@ -37,7 +42,7 @@ Runner addDemoCommand(CLI::App& app) {
       ->check(CLI::Range(1, 7));
   cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: number of sweeps")
       ->capture_default_str()
-      ->check(CLI::PositiveNumber);
+      ->check(atLeast(1));
   cmd->add_option("--seed", o->seed, "simulation seed")->capture_default_str();
   cmd->add_option("--devices", o->devices,
                   "sim (the device processes simulate their devices) or emulated (`sweepmap "
@@ -46,13 +51,12 @@ Runner addDemoCommand(CLI::App& app) {
                   "pseudo-terminals, and the processes drive them with the real drivers)")
       ->capture_default_str()
       ->check(CLI::IsMember({"sim", "emulated"}));
-  return [o]() {
-    try {
-      return runDemo(*o);
-    } catch (const ConfigError& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
-    }
+  cmd->footer(
+      "Exit status: 0 done; 1 a process did not end cleanly or the replay failed; 2 bad option "
+      "or rig, or a non-empty --out (see --force).");
+  return [o, force]() -> int {
+    prepareOutputDir(o->out, *force);
+    return runDemo(*o);  // a ConfigError: exit status 2
   };
 }
 

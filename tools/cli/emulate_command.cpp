@@ -9,6 +9,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/command_line.hpp"
 #include "core/config.hpp"
 #include "core/event_log.hpp"
 #include "processes/convert.hpp"
@@ -61,8 +62,9 @@ std::vector<std::string> splitModels(const std::string& list) {
   return out;
 }
 
-int runEmulate(const EmulateOptions& o) {
-  const std::vector<std::string> models = splitModels(o.models);
+// The options' combination checked against the devices served; true when it is the one TCP
+// device (ust10lx). Throws ConfigError naming the option to change.
+bool checkServing(const EmulateOptions& o, const std::vector<std::string>& models) {
   const bool tcp = models.size() == 1 && models[0] == "ust10lx";
   for (const std::string& m : models) {
     if (m == "ust10lx" && models.size() > 1) {
@@ -80,71 +82,107 @@ int runEmulate(const EmulateOptions& o) {
   if (std::find(models.begin(), models.end(), faulty) == models.end()) {
     throw ConfigError("--fault-device '" + faulty + "' is not served here");
   }
-  EmulatorWorldOptions wo = o.world;
-  if (wo.rig.empty()) wo.rig = tcp ? "rig_a" : "rig_b";
-  wo.clock_drift_ppm = o.clock.drift_ppm;
-  const int64_t start = o.start_utime > 0 ? o.start_utime : wallUtime();
-  std::unique_ptr<EmulatorWorld> world = makeEmulatorWorld(wo, start);
+  return tcp;
+}
 
-  // Truth: each scan as the world made it (true first-ray time, exact ranges), its
-  // device_stamp the sensor's counter at the first ray.
+// What the served devices read from the simulated world, and the truth log beside it.
+struct WorldFeeds {
   std::unique_ptr<EventLogWriter> truth;
-  if (!o.truth.empty()) truth = std::make_unique<EventLogWriter>(o.truth);
-  std::atomic<int64_t> lidar_power_on{start};
-  ScanSource source;
+  std::atomic<int64_t> lidar_power_on{0};
+  ScanSource scans;
+  ImuSource imu;
+  TicksSource ticks;
+  DeviceClockModel device_clock;  // the odometry devices' clocks
+};
+
+// The world's sources for `models`. Truth: each scan as the world made it (true first-ray
+// time, exact ranges), its device_stamp the sensor's counter at the first ray.
+void connectFeeds(const EmulateOptions& o, const std::vector<std::string>& models,
+                  EmulatorWorld& world, int64_t start, WorldFeeds& f) {
+  if (!o.truth.empty()) f.truth = std::make_unique<EventLogWriter>(o.truth);
+  f.lidar_power_on = start;
   for (const std::string& m : models) {
     if (!isLidarModel(m)) continue;
-    ScanSource inner = world->source();
-    source = [&, inner](int64_t now_us) {
+    ScanSource inner = world.source();
+    f.scans = [&o, &f, inner](int64_t now_us) {
       std::vector<Scan2D> scans = inner(now_us);
-      if (truth) {
-        for (const Scan2D& s : scans) {
-          Scan2D t = s;
-          t.device_stamp = o.clock.counterAt(lidar_power_on, s.utime);
-          Outbox out;
-          out.publish(kTruthLidarScanChannel, s.utime, toLcm(t));
-          for (const Message& msg : out.take()) truth->write(msg.utime, msg.channel, msg.data);
-        }
-        truth->flush();
+      if (!f.truth) return scans;
+      for (const Scan2D& s : scans) {
+        Scan2D t = s;
+        t.device_stamp = o.clock.counterAt(f.lidar_power_on, s.utime);
+        Outbox out;
+        out.publish(kTruthLidarScanChannel, s.utime, toLcm(t));
+        for (const Message& msg : out.take()) f.truth->write(msg.utime, msg.channel, msg.data);
       }
+      f.truth->flush();
       return scans;
     };
   }
-  // The odometry devices' clocks: the sensor clock's offset and drift.
-  DeviceClockModel device_clock;
-  device_clock.offset_us = (static_cast<double>(o.clock.start_ms) + o.clock.offset_ms) * 1e3;
-  device_clock.drift_ppm = o.clock.drift_ppm;
-  ImuSource imu;
-  TicksSource ticks;
-  if (std::find(models.begin(), models.end(), "hi219") != models.end()) imu = world->imuSource();
-  if (std::find(models.begin(), models.end(), "wheel-board") != models.end()) {
-    ticks = world->ticksSource();
-  }
+  f.device_clock.offset_us = (static_cast<double>(o.clock.start_ms) + o.clock.offset_ms) * 1e3;
+  f.device_clock.drift_ppm = o.clock.drift_ppm;
+  const auto serves = [&](const char* m) {
+    return std::find(models.begin(), models.end(), m) != models.end();
+  };
+  if (serves("hi219")) f.imu = world.imuSource();
+  if (serves("wheel-board")) f.ticks = world.ticksSource();
+}
 
+// The world's LCM side (--follow-lcm, --publish-truth): its nodes run live on a thread until
+// `stop`. Nothing when the world has no node.
+struct LcmSide {
   std::unique_ptr<lcm::LCM> lcm;
-  std::thread lcm_thread;
+  std::thread thread;
   std::atomic<bool> stop{false};
-  installStopSignals();
-  const std::vector<Node*> nodes = world->nodes();
-  if (!nodes.empty()) {
+
+  void start(const EmulateOptions& o, EmulatorWorld& world) {
+    const std::vector<Node*> nodes = world.nodes();
+    if (nodes.empty()) return;
     lcm = std::make_unique<lcm::LCM>(o.lcm_url);
-    if (!lcm->good()) throw ConfigError("cannot open LCM at '" + o.lcm_url + "'");
-    publishAll(*lcm, world->startMessages(wallUtime()));
+    if (!lcm->good()) {
+      throw CommandError(kExitDeviceIo, "cannot open LCM at '" + o.lcm_url + "'");
+    }
+    publishAll(*lcm, world.startMessages(wallUtime()));
     LiveOptions lo;
     lo.lcm_url = o.lcm_url;
-    lo.should_stop = [&stop] { return stop.load(); };
-    lcm_thread = std::thread([&lcm, nodes, lo] { runLive(*lcm, nodes, lo); });
+    lo.should_stop = [this] { return stop.load(); };
+    thread = std::thread([this, nodes, lo] { runLive(*lcm, nodes, lo); });
   }
+  ~LcmSide() {
+    stop = true;
+    if (thread.joinable()) thread.join();
+  }
+};
+
+// Lines written to it go to stdout whole, prefixed with the device's name (several device
+// threads print).
+struct LineOut : std::streambuf {
+  std::mutex* m;
+  std::string prefix, line;
+  int overflow(int c) override {
+    if (c == '\n') {
+      std::lock_guard<std::mutex> lock(*m);
+      std::cout << prefix << line << std::endl;
+      line.clear();
+    } else if (c != EOF) {
+      line.push_back(static_cast<char>(c));
+    }
+    return c;
+  }
+};
+
+// One server thread per device until a stop signal, --duration or a failure (which stops
+// them all and is rethrown).
+void serveAll(const EmulateOptions& o, const std::vector<std::string>& models, bool tcp,
+              WorldFeeds& f) {
+  const std::string faulty = o.fault_device.empty() ? models[0] : o.fault_device;
   std::atomic<bool> server_stop{false};
   std::thread watcher([&] {
     while (!server_stop && !stopRequested())
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     server_stop = true;
   });
-  // One server thread per device; the first failure stops them all.
-  std::mutex error_mutex;
+  std::mutex error_mutex, info_mutex;
   std::exception_ptr error;
-  std::mutex info_mutex;
   std::vector<std::thread> servers;
   for (size_t i = 0; i < models.size(); ++i) {
     const std::string model = models[i];
@@ -152,33 +190,19 @@ int runEmulate(const EmulateOptions& o) {
     if (!tcp) server.pty = true;
     if (tcp && server.listen.empty()) server.listen = "127.0.0.1:10940";
     if (!o.links.empty()) server.pty_link = o.links[i];
-    LinkFaults faults = o.faults;
-    if (model != faulty) faults = LinkFaults{};
+    const LinkFaults faults = model == faulty ? o.faults : LinkFaults{};
     const std::function<std::unique_ptr<EmulatedLidar>(int64_t)> make =
         [&, model](int64_t now_us) -> std::unique_ptr<EmulatedLidar> {
-      if (model == "hi219") return std::make_unique<Hi219Device>(imu, device_clock, now_us);
+      if (model == "hi219") return std::make_unique<Hi219Device>(f.imu, f.device_clock, now_us);
       if (model == "wheel-board") {
-        return std::make_unique<WheelBoardDevice>(ticks, device_clock, now_us);
+        return std::make_unique<WheelBoardDevice>(f.ticks, f.device_clock, now_us);
       }
-      lidar_power_on = now_us;
-      return makeEmulatedLidar(emulatedModel(model), source, o.clock, now_us);
+      f.lidar_power_on = now_us;
+      return makeEmulatedLidar(emulatedModel(model), f.scans, o.clock, now_us);
     };
     servers.emplace_back([&, server, faults, make, model] {
       try {
-        struct LineOut : std::streambuf {
-          std::mutex* m;
-          std::string prefix, line;
-          int overflow(int c) override {
-            if (c == '\n') {
-              std::lock_guard<std::mutex> lock(*m);
-              std::cout << prefix << line << std::endl;
-              line.clear();
-            } else if (c != EOF) {
-              line.push_back(static_cast<char>(c));
-            }
-            return c;
-          }
-        } buf;
+        LineOut buf;
         buf.m = &info_mutex;
         buf.prefix = models.size() > 1 ? model + ": " : "";
         std::ostream out(&buf);
@@ -192,11 +216,25 @@ int runEmulate(const EmulateOptions& o) {
   }
   for (std::thread& t : servers) t.join();
   server_stop = true;
-  stop = true;
   watcher.join();
-  if (lcm_thread.joinable()) lcm_thread.join();
   if (error) std::rethrow_exception(error);
-  return 0;
+}
+
+int runEmulate(const EmulateOptions& o) {
+  const std::vector<std::string> models = splitModels(o.models);
+  const bool tcp = checkServing(o, models);
+  EmulatorWorldOptions wo = o.world;
+  if (wo.rig.empty()) wo.rig = tcp ? "rig_a" : "rig_b";
+  wo.clock_drift_ppm = o.clock.drift_ppm;
+  const int64_t start = o.start_utime > 0 ? o.start_utime : wallUtime();
+  std::unique_ptr<EmulatorWorld> world = makeEmulatorWorld(wo, start);
+  WorldFeeds feeds;
+  connectFeeds(o, models, *world, start, feeds);
+  installStopSignals();
+  LcmSide lcm_side;
+  lcm_side.start(o, *world);
+  serveAll(o, models, tcp, feeds);
+  return kExitOk;
 }
 
 }  // namespace
@@ -270,14 +308,7 @@ Runner addEmulateCommand(CLI::App& app) {
   cmd->add_option("--truth", o->truth,
                   "LCM log of the world's scans as simulated (TRUTH_LIDAR_SCAN: true first-ray "
                   "time, exact ranges, device_stamp = the sensor counter at the first ray)");
-  return [o]() {
-    try {
-      return runEmulate(*o);
-    } catch (const ConfigError& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
-    }
-  };
+  return [o]() -> int { return runEmulate(*o); };  // a ConfigError: exit status 2
 }
 
 }  // namespace sweepmap

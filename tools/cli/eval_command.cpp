@@ -1,7 +1,9 @@
 // `sweepmap eval`: evaluate a rig with its paper's measures (tools/eval/eval.hpp).
 #include <iostream>
 
+#include "core/command_line.hpp"
 #include "core/config.hpp"
+#include "core/progress.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/eval/eval.hpp"
 
@@ -40,7 +42,8 @@ const char* const kEvalFooter =
     "paper_table2, checks, timings_s (the only part that differs between runs), ~15 s.\n\n"
     "Exit status: 0 evaluated; 1 a log is corrupt (after evaluating what came before) or holds "
     "nothing to evaluate (the report says why), or (rotating_profile) a feature was not "
-    "measured under some setting or ours did not calibrate; 2 bad rig, scene or option.\n"
+    "measured under some setting or ours did not calibrate; 2 bad rig, scene or option, a "
+    "missing log, or a non-empty --out (see --force); 4 an output cannot be written.\n"
     "Examples: sweepmap eval --experiment paper --rig rig_a --out eval_a\n"
     "          sweepmap eval --experiment paper --rig rig_b --out eval_b\n"
     "          sweepmap eval --experiment paper --rig rig_c --out eval_c";
@@ -66,11 +69,14 @@ Runner addEvalCommand(CLI::App& app) {
       cmd->add_option("--experiment", q->experiment, "simulate and evaluate an experiment: paper")
           ->check(CLI::IsMember({"paper"}));
   logs->excludes(exp);
-  cmd->add_option("--rig", q->rig, "rig file or name (rig_a, rig_b, a path): its kind decides")
+  cmd->add_option("--rig", q->rig,
+                  "rig file or name (rig_a, rig_b, rig_c, a path): its kind decides")
       ->required();
   cmd->add_option("--scene", q->scene,
                   "scene file or name (--experiment; default: the rig kind's scene)");
-  cmd->add_option("--out", q->out_dir, "output directory")->required();
+  cmd->add_option("--out", q->out_dir, "output folder (new or empty; see --force)")->required();
+  auto force = std::make_shared<bool>(false);
+  cmd->add_flag("--force", *force, "empty a non-empty --out folder first");
   cmd->add_option("--set", q->overrides,
                   "override a config key: key=value; scene keys as scene.<key> with --experiment "
                   "(repeatable)");
@@ -82,11 +88,11 @@ Runner addEvalCommand(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--sweeps-per-mode", q->sweeps_per_mode,
                   "rotating_lidar --experiment: sweeps per mode (default 5)")
-      ->check(CLI::PositiveNumber);
+      ->check(atLeast(1));
   cmd->add_option(
          "--calib-sweeps", q->calib_sweeps,
          "rotating_lidar --experiment: mode-7 sweeps for the alpha calibration (default 50)")
-      ->check(CLI::PositiveNumber);
+      ->check(atLeast(1));
   cmd->add_flag("--no-naive", q->no_naive,
                 "rotating_lidar --experiment: skip the naive-action-sequence sweeps of mode 1");
   cmd->add_option("--repeats", q->repeats,
@@ -96,23 +102,21 @@ Runner addEvalCommand(CLI::App& app) {
                 "mobile_lidar --logs: also assemble with no mounting error and compare "
                 "(--experiment always does)");
   cmd->add_flag("--no-plots", *no_plots, "skip the PNG figures");
-  cmd->add_flag("--quiet", *quiet, "no progress lines on stderr");
-  return [q, no_plots, quiet]() {
+  cmd->add_flag("--quiet", *quiet,
+                "no progress lines on stderr (they show only when it is a terminal)");
+  return [q, no_plots, quiet, force]() -> int {
     q->plots = !*no_plots;
-    q->progress = !*quiet;
-    EvalRunResult r;
-    try {
-      r = runEval(*q);
-    } catch (const ConfigError& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
-    }
+    ProgressOptions po;
+    po.enabled = !*quiet;
+    q->progress = Progress("eval", po).active();
+    prepareOutputDir(q->out_dir, *force);
+    const EvalRunResult r = runEval(*q);  // a ConfigError: exit status 2
     std::cerr << "eval: " << r.summary << "\n";
     if (r.failed) {
       std::cerr << "eval: " << r.message << "\n";
-      return 1;
+      return kExitBadInput;
     }
-    return 0;
+    return kExitOk;
   };
 }
 

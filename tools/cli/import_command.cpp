@@ -1,5 +1,6 @@
 #include <iostream>
 
+#include "core/command_line.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/import/import_mines.hpp"
 
@@ -17,11 +18,19 @@ Runner addImportCommand(CLI::App& app) {
   auto out = std::make_shared<std::string>();
   bs->add_option("FILE", *in, "input .dat file")->required()->check(CLI::ExistingFile);
   bs->add_option("--out", *out, "output LCM log")->required();
-  return [=]() {
-    const BreezySlamImport r = importBreezySlam(*in, *out);
+  bs->footer(
+      "Exit status: 0 imported; 1 the file is corrupt or holds no scan; 2 bad option or a "
+      "missing input file; 4 the log cannot be written.");
+  return [=]() -> int {
+    checkOutputFile(*out);
+    const BreezySlamImport r = importBreezySlam(*in, *out);  // bad data throws: exit status 1
     std::cerr << "import: " << r.scans << " scans of " << r.beams << " ranges, "
               << (r.last_utime - r.first_utime) / 1e6 << " s -> " << *out << "\n";
-    return 0;
+    if (r.scans == 0) {
+      std::cerr << "import: " << *in << " holds no scan\n";
+      return kExitBadInput;
+    }
+    return kExitOk;
   };
 }
 

@@ -17,7 +17,7 @@ Runner addLaunchCommand(CLI::App& app) {
       "SIGINT/SIGTERM stop them in reverse file order: SIGINT, then SIGKILL after the stop "
       "timeout");
   auto o = std::make_shared<LaunchOptions>();
-  cmd->add_option("DEPLOY", o->deploy, "deployment file")->required();
+  cmd->add_option("DEPLOY", o->deploy, "deployment file")->required()->check(CLI::ExistingFile);
   cmd->add_option("--host", o->host, "run this host's processes (default: every host's)");
   cmd->add_option("--log-dir", o->log_dir, "one log file per process, and launch.txt")
       ->capture_default_str();
@@ -26,7 +26,7 @@ Runner addLaunchCommand(CLI::App& app) {
   auto no_watchdog = std::make_shared<bool>(false);
   cmd->add_flag("--no-watchdog", *no_watchdog,
                 "do not watch the processes' WATCHDOG=1 (a debugger's breakpoint is no hang)");
-  return [o, no_watchdog]() {
+  return [o, no_watchdog]() -> int {
     o->watchdog = !*no_watchdog;
     return runLaunch(*o);
   };

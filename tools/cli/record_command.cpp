@@ -1,5 +1,9 @@
 // `sweepmap record`: our own LCM logger with presets, splitting and a disk guard
 // (tools/ops/record.hpp).
+#include <filesystem>
+#include <memory>
+
+#include "core/command_line.hpp"
 #include "processes/channels.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/ops/record.hpp"
@@ -17,31 +21,52 @@ Runner addRecordCommand(CLI::App& app) {
       "recording stops (the log ends with its last complete event; exit status 4). Stops at "
       "SIGINT/SIGTERM or after "
       "--duration seconds");
+  cmd->footer(
+      "Exit status: 0 recorded; 2 bad option, or --out DIR already holds a log named --name "
+      "and --split-mb is 0 (see --force; split files take the next free number); 4 the socket "
+      "or the file cannot be opened, or the disk is (nearly) full or refused a write.");
   auto o = std::make_shared<RecordOptions>();
   o->lcm_url = kDefaultLcmUrl;
-  cmd->add_option("--out", o->out, "output directory")->required();
+  cmd->add_option("--out", o->out, "output folder (may hold other recordings)")->required();
+  auto force = std::make_shared<bool>(false);
+  cmd->add_flag("--force", *force,
+                "overwrite a log of the same --name in --out (without --split-mb)");
   cmd->add_option("--name", o->name, "log file name in it")->capture_default_str();
   cmd->add_option("--preset", o->preset, "raw or all")
       ->capture_default_str()
       ->check(CLI::IsMember({"raw", "all"}));
   cmd->add_option("--split-mb", o->split_mb, "start a new file every N MB (0: one file)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast(0));
   cmd->add_option("--min-free-mb", o->min_free_mb,
                   "stop cleanly when the output's file system has less free")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast(0));
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL to record")->capture_default_str();
   cmd->add_option("--duration", o->duration_s, "stop after [s] (0: at SIGINT/SIGTERM)")
       ->capture_default_str()
-      ->check(CLI::NonNegativeNumber);
+      ->check(atLeast(0));
   cmd->add_option("--allow-senders", o->allow_senders,
                   "record only what these IPv4 addresses send (comma-separated); default: any")
       ->delimiter(',');
   cmd->add_option("--key-file", o->key_file,
                   "shared key (chmod 600): record only messages signed with it (the log holds "
                   "them without their signature); default: no check");
-  return [o]() { return runRecord(*o); };
+  return [o, force]() -> int {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::exists(o->out, ec) && !fs::is_directory(o->out, ec)) {
+      throw ConfigError("--out '" + o->out + "' is a file; give a folder");
+    }
+    // The folder keeps many recordings. Split files never overwrite one (lcm-logger -i picks the
+    // next free NAME.NN: a restarted recorder goes on); a single file would (lcm-logger -f).
+    const fs::path file = fs::path(o->out) / o->name;
+    if (o->split_mb == 0 && !*force && fs::exists(file, ec)) {
+      throw ConfigError(file.string() +
+                        " exists: give another --name, or add --force to overwrite it");
+    }
+    return runRecord(*o);
+  };
 }
 
 }  // namespace sweepmap

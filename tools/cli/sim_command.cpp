@@ -1,11 +1,41 @@
 // `sweepmap sim`: simulate any rig into an LCM log of its raw and ground-truth channels.
 #include <iostream>
+#include <memory>
 
+#include "core/command_line.hpp"
 #include "core/event_log.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/offline/runs.hpp"
 
 namespace sweepmap {
+
+namespace {
+
+// Simulates the rig into the log `out`: 0, or 1 when the run did not make what was asked.
+int simulateInto(const SimSetup& setup, const std::string& out, uint64_t seed, int sweeps) {
+  checkOutputFile(out);
+  SimRunOptions options;
+  options.seed = seed;
+  options.sweeps = sweeps;
+  options.progress = true;
+  std::unique_ptr<EventLogWriter> log;
+  try {
+    log = std::make_unique<EventLogWriter>(out);
+  } catch (const std::runtime_error& e) {
+    throw CommandError(kExitDeviceIo, e.what());
+  }
+  const SimRunResult r = simulateRig(
+      setup, options, [&](const Message& m) { log->write(m.utime, m.channel, m.data); });
+  try {
+    log->close();
+  } catch (const std::runtime_error& e) {
+    throw CommandError(kExitDeviceIo, out + ": " + e.what());
+  }
+  std::cerr << "sim: " << setup.rig.kindName() << ": " << r.summary << " -> " << out << "\n";
+  return r.ok ? kExitOk : kExitBadInput;
+}
+
+}  // namespace
 
 Runner addSimCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
@@ -18,6 +48,9 @@ Runner addSimCommand(CLI::App& app) {
       "rotating_profile (rig C): the profile sensor on its turntable sweeping the calibration "
       "plate once per pose (sim.plate_count) or the paper's test piece (PROFILE, "
       "TRUTH_PROFILE_RIG)");
+  cmd->footer(
+      "Exit status: 0 simulated; 1 the run did not make what was asked (a motor fault, fewer "
+      "sweeps); 2 bad option, rig, scene or --out; 4 the log cannot be written.");
   struct Opts {
     std::string rig, scene, out;
     int mode = 0;
@@ -37,7 +70,7 @@ Runner addSimCommand(CLI::App& app) {
                    ->check(CLI::Range(1, 7));
   auto* sweeps = cmd->add_option("--sweeps", o->sweeps, "rotating_lidar: number of 3D sweeps")
                      ->capture_default_str()
-                     ->check(CLI::PositiveNumber);
+                     ->check(atLeast(1));
   cmd->add_option("--seed", o->seed, "random seed of the simulated devices")->capture_default_str();
   cmd->add_option("--set", o->sets,
                   "override a config key: key=value (e.g. sim.path=loop); scene keys as "
@@ -45,7 +78,7 @@ Runner addSimCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "output LCM log");
   cmd->add_flag("--print-config", o->print_config,
                 "print every rig and scene key with its value, unit and meaning, then exit");
-  return [o, mode, sweeps]() {
+  return [o, mode, sweeps]() -> int {
     SimSetup setup;
     try {
       setup = loadSimSetup(o->rig, o->scene, o->sets);
@@ -56,32 +89,15 @@ Runner addSimCommand(CLI::App& app) {
       }
       if (rotating && o->mode > 0) rotating->motor.mode = o->mode;  // 1..7, checked above
     } catch (const std::exception& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
+      std::cerr << "sim: config error: " << e.what() << "\n";
+      return kExitUsage;
     }
     if (o->print_config) {
       printSimConfig(std::cout, setup);
-      return 0;
+      return kExitOk;
     }
-    if (o->out.empty()) {
-      std::cerr << "sim: --out LOG is required\n";
-      return 2;
-    }
-    SimRunOptions options;
-    options.seed = o->seed;
-    options.sweeps = o->sweeps;
-    SimRunResult r;
-    try {
-      EventLogWriter log(o->out);
-      r = simulateRig(setup, options,
-                      [&](const Message& m) { log.write(m.utime, m.channel, m.data); });
-      log.close();
-    } catch (const ConfigError& e) {
-      std::cerr << "config error: " << e.what() << "\n";
-      return 2;
-    }
-    std::cerr << "sim: " << setup.rig.kindName() << ": " << r.summary << " -> " << o->out << "\n";
-    return r.ok ? 0 : 1;
+    if (o->out.empty()) throw ConfigError("--out LOG is required (or --print-config)");
+    return simulateInto(setup, o->out, o->seed, o->sweeps);
   };
 }
 

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 
+#include "core/exit_codes.hpp"
 #include "tools/cli/commands.hpp"
 
 namespace sweepmap {
@@ -27,11 +28,11 @@ Runner addSpyCommand(CLI::App& app, const std::string& argv0) {
   auto print_only = std::make_shared<bool>(false);
   cmd->add_option("--lcm-url", *url, "LCM URL to watch (default: LCM's default)");
   cmd->add_flag("--print-command", *print_only, "print the java command line and exit");
-  return [=]() {
+  return [=]() -> int {
     const std::string jar = lcmtypesJar(argv0);
     if (!std::filesystem::exists(jar)) {
       std::cerr << "spy: " << jar << " not found: build the lcmtypes_jar target (needs javac)\n";
-      return 2;
+      return kExitDeviceIo;
     }
     const std::string cp = "/usr/share/java/lcm.jar:/usr/share/java/jchart2d.jar:" + jar;
     setenv("CLASSPATH", cp.c_str(), 1);
@@ -48,7 +49,7 @@ Runner addSpyCommand(CLI::App& app, const std::string& argv0) {
     cargs.push_back(nullptr);
     execvp("java", cargs.data());
     std::cerr << "spy: cannot start java\n";
-    return 2;
+    return kExitDeviceIo;
   };
 }
 

@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "core/config.hpp"
+#include "core/exit_codes.hpp"
 #include "tools/cli/commands.hpp"
 #include "tools/ops/systemd_units.hpp"
 
@@ -23,13 +24,13 @@ Runner addSystemdCommand(CLI::App& app) {
     std::string deploy, host, out, bin_dir = "/usr/bin";
   };
   auto o = std::make_shared<Options>();
-  cmd->add_option("DEPLOY", o->deploy, "deployment file")->required();
+  cmd->add_option("DEPLOY", o->deploy, "deployment file")->required()->check(CLI::ExistingFile);
   cmd->add_option("--host", o->host, "the host whose processes the units run")->required();
   cmd->add_option("--out", o->out, "output directory")->required();
   cmd->add_option("--bin-dir", o->bin_dir,
                   "where the sweepmap executables are installed on that host")
       ->capture_default_str();
-  return [o]() {
+  return [o]() -> int {
     try {
       const Deployment d = loadDeployment(o->deploy);
       for (const auto& path : writeSystemdUnits(d, o->host, o->bin_dir, o->out)) {
@@ -37,9 +38,9 @@ Runner addSystemdCommand(CLI::App& app) {
       }
     } catch (const ConfigError& e) {
       std::cerr << "sweepmap systemd: " << e.what() << "\n";
-      return 2;
+      return kExitUsage;
     }
-    return 0;
+    return kExitOk;
   };
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/calibration_file.hpp"
+#include "core/exit_codes.hpp"
 #include "mapping/plot.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/profile_log.hpp"
@@ -233,9 +234,9 @@ std::string drawAxisOffsetSurface(const std::string& png, const GridSearchResult
 
 int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   RotatingProfileConfig rig;
-  if (!checkInputs(o, &rig)) return 2;
+  if (!checkInputs(o, &rig)) return kExitUsage;
   Inputs in;
-  if (!readLogs(o, &in)) return 2;
+  if (!readLogs(o, &in)) return kExitBadInput;
   if (in.planes.empty()) {
     std::cerr << kWhat << ": no sweep with " << o.min_points_per_sweep
               << " or more points in the logs: nothing calibrated\n";
@@ -248,7 +249,7 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
       grid = gridSearchAxisOffset(in.planes, o.grid);
     } catch (const std::invalid_argument& e) {
       std::cerr << kWhat << ": " << e.what() << "\n";
-      return 2;
+      return kExitUsage;
     }
     figure = figurePath(o);
     figure_error = drawAxisOffsetSurface(figure, *grid);
@@ -265,7 +266,7 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
       written = true;
     } catch (const std::exception& e) {
       std::cerr << kWhat << ": " << e.what() << "\n";
-      return 2;
+      return kExitDeviceIo;
     }
   }
   reportHuman(o, in, r, grid, figure, figure_error, written);

@@ -11,6 +11,7 @@
 
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
+#include "core/exit_codes.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/log_sweeps.hpp"
 
@@ -207,9 +208,9 @@ nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLi
 
 int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   RotatingLidarConfig rig;
-  if (!checkInputs(o, &rig)) return 2;
+  if (!checkInputs(o, &rig)) return kExitUsage;
   Inputs in;
-  if (!readLogs(o, rig, &in)) return 2;
+  if (!readLogs(o, rig, &in)) return kExitBadInput;
   if (in.planes.empty()) {
     std::cerr << kWhat << ": no sweep with planes in the logs (" << in.rejected.size()
               << " rejected): nothing calibrated\n";
@@ -229,7 +230,7 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
       written = true;
     } catch (const std::exception& e) {
       std::cerr << kWhat << ": " << e.what() << "\n";
-      return 2;
+      return kExitDeviceIo;
     }
   }
   reportHuman(o, rig, in, r, written);

@@ -10,6 +10,8 @@
 #include <sstream>
 
 #include "core/calibration_file.hpp"
+#include "core/exit_codes.hpp"
+#include "core/progress.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/mobile_log.hpp"
 
@@ -64,7 +66,7 @@ bool readLog(const MountingCalibRequest& o, const MobileLidarConfig& rig, Mobile
 
 // Run the methods from the rig's mounting: ours, then the paper's (without a time offset).
 MethodRuns runMethods(const MountingCalibRequest& o, const MobileLidarConfig& rig,
-                      const MobileLog& log, const PoseTrack& track) {
+                      const MobileLog& log, const PoseTrack& track, Progress& progress) {
   MethodRuns runs;
   const LidarMounting initial = rig.mounting.toMounting();
   MountingCalibrationOptions options;
@@ -74,12 +76,14 @@ MethodRuns runMethods(const MountingCalibRequest& o, const MobileLidarConfig& ri
   options.method = MountingMethod::kPointToPlane;
   runs.max_time_offset_s = options.max_time_offset_s;
   const auto t_ours = Clock::now();
+  progress.stage("ours (point to plane)");
   runs.ours = calibrateMounting(log.scans, track, initial, options);
   runs.ours_s = seconds(Clock::now() - t_ours);
   if (!o.no_paper) {
     options.method = MountingMethod::kPaperPoints;
     options.estimate_time_offset = false;
     const auto t_paper = Clock::now();
+    progress.stage("the paper's (edge points)");
     runs.paper = calibrateMounting(log.scans, track, initial, options);
     runs.paper_s = seconds(Clock::now() - t_paper);
   }
@@ -184,15 +188,25 @@ bool writeCalibration(const MountingCalibRequest& o, const MountingCalibrationRe
 int calibrateMountingFromLog(const MountingCalibRequest& o) {
   const auto t_start = Clock::now();
   MobileLidarConfig rig;
-  if (!checkInputs(o, &rig)) return 2;
+  if (!checkInputs(o, &rig)) return kExitUsage;
+  ProgressOptions po;
+  po.enabled = !o.json;
+  Progress progress(kWhat, po);
+  MethodRuns runs;
   MobileLog log;
-  if (!readLog(o, rig, &log)) return 2;
+  {
+    ProgressTicker ticker(progress);  // the stages are single long calls
+    progress.stage("reading the log");
+    if (!readLog(o, rig, &log)) return kExitBadInput;
+    progress.stage("");
+    runs = runMethods(o, rig, log, chosenTrack(log, o.track), progress);
+  }
+  progress.finish();
   const PoseTrack& track = chosenTrack(log, o.track);
-  const double load_s = seconds(Clock::now() - t_start);
+  const double load_s = seconds(Clock::now() - t_start) - runs.ours_s - runs.paper_s;
   std::cerr << kWhat << ": " << log.scans.size() << " scans, " << track.size() << " " << o.track
             << " poses from " << o.log << "\n";
 
-  const MethodRuns runs = runMethods(o, rig, log, track);
   std::optional<LidarMounting> truth;
   if (log.truth_mounting) truth = trueMounting(*log.truth_mounting);
   reportMethod(o, runs.ours, runs.ours_s, truth);
@@ -204,7 +218,7 @@ int calibrateMountingFromLog(const MountingCalibRequest& o) {
     if (o.json) std::cout << std::setprecision(12) << j.dump(2) << "\n";
     return 1;
   }
-  if (!writeCalibration(o, runs.ours)) return 2;
+  if (!writeCalibration(o, runs.ours)) return kExitDeviceIo;
   const double total_s = seconds(Clock::now() - t_start);
   std::cerr << std::fixed << std::setprecision(2) << "  time: log " << load_s << " s, ours "
             << runs.ours_s << " s, paper " << runs.paper_s << " s, total " << total_s

@@ -12,6 +12,7 @@
 #include "core/angles.hpp"
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
+#include "core/exit_codes.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/log_sweeps.hpp"
 
@@ -237,12 +238,12 @@ void reportJson(const PlateAngleCalibRequest& o, const LogSweeps& in, const Alph
 int calibratePlateAngleFromLogs(const PlateAngleCalibRequest& o) {
   const auto t_start = Clock::now();
   RotatingLidarConfig rig;
-  if (!checkInputs(o, &rig)) return 2;
+  if (!checkInputs(o, &rig)) return kExitUsage;
   WallExtractionOptions wall_options;
   wall_options.voxel_m = o.voxel_m;
   LogSweeps in;
   for (const auto& log : o.logs) {
-    if (!readLog(log, rig, wall_options, &in)) return 2;
+    if (!readLog(log, rig, wall_options, &in)) return kExitBadInput;
   }
   if (in.sweeps.empty()) return reportNothingCalibrated(o, in);
   const AlphaFit f = fitAlpha(in.sweeps);
@@ -250,7 +251,7 @@ int calibratePlateAngleFromLogs(const PlateAngleCalibRequest& o) {
     writeCalibration(o, in, f);
   } catch (const std::exception& e) {
     std::cerr << "calib plate-angle: " << e.what() << "\n";
-    return 2;  // as the mounting calibration: a bad output path
+    return kExitDeviceIo;  // the file could not be written
   }
   const double total_s = seconds(Clock::now() - t_start);
   reportHuman(o, in, f, total_s);

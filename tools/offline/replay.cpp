@@ -1,7 +1,5 @@
 #include "tools/offline/replay.hpp"
 
-#include <unistd.h>
-
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -17,6 +15,7 @@
 #include "core/angles.hpp"
 #include "core/atomic_file.hpp"
 #include "core/event_log.hpp"
+#include "core/progress.hpp"
 #include "mapping/cloud_io.hpp"
 #include "mapping/occupancy_map.hpp"
 #include "mapping/plot.hpp"
@@ -27,30 +26,6 @@ namespace sweepmap {
 namespace {
 
 namespace fs = std::filesystem;
-
-class ProgressBar {
- public:
-  ProgressBar(bool enabled, uint64_t total) : enabled_(enabled && isatty(2)), total_(total) {}
-  void update(uint64_t done) {
-    if (!enabled_ || total_ == 0) return;
-    const int pct = static_cast<int>(100 * done / total_);
-    if (pct == last_) return;
-    last_ = pct;
-    const int width = 40;
-    const int fill = pct * width / 100;
-    std::fprintf(stderr, "\rreplay [%s%s] %3d%%", std::string(fill, '#').c_str(),
-                 std::string(width - fill, ' ').c_str(), pct);
-    std::fflush(stderr);
-  }
-  ~ProgressBar() {
-    if (enabled_ && last_ >= 0) std::fprintf(stderr, "\n");
-  }
-
- private:
-  bool enabled_;
-  uint64_t total_;
-  int last_ = -1;
-};
 
 // The JSON line of one sweep in summary.json.
 nlohmann::json sweepJson(const AssembledSweep& s, const SweepTruth& truth,
@@ -138,12 +113,16 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   MapperNode mapper(rig.mapper, (out / "map.bt").string());
   nlohmann::json sweeps = nlohmann::json::array();
   std::vector<Eigen::Vector3f> first_Op, first_O;
-  ProgressBar bar(options.progress, fs::file_size(options.log_path));
+  ProgressOptions po;
+  po.enabled = options.progress;
+  Progress bar("replay", po);
 
   LogSweepOptions lo;
   lo.extra_nodes = {&mapper};
   lo.sink = [&](const Message& m) { derived.write(m.utime, m.channel, m.data); };
-  lo.progress = [&](uint64_t offset, uint64_t) { bar.update(offset); };
+  lo.progress = [&](uint64_t offset, uint64_t size) {
+    bar.update(size > 0 ? static_cast<double>(offset) / static_cast<double>(size) : -1.0);
+  };
   const auto onSweep = [&](const AssembledSweep& s, const SweepTruth& truth) {
     std::ostringstream name;
     // Numbered in log order: sweep ids start again when the motor process restarts.

@@ -8,6 +8,7 @@
 #include "core/angles.hpp"
 #include "core/atomic_file.hpp"
 #include "core/event_log.hpp"
+#include "core/progress.hpp"
 #include "mapping/cloud_io.hpp"
 #include "mapping/occupancy_map.hpp"
 #include "mapping/plot.hpp"
@@ -89,8 +90,14 @@ void plotTopViewOf(const fs::path& out, const Collected& c) {
 }  // namespace
 
 MobileReplayResult replayMobileLog(const std::string& log_path, const MobileLidarConfig& rig,
-                                   const std::string& out_dir, bool plots) {
+                                   const std::string& out_dir, bool plots, bool progress) {
   LogPlayer player(log_path);
+  ProgressOptions po;
+  po.enabled = progress;
+  Progress bar("replay", po);
+  player.setProgress([&bar](uint64_t offset, uint64_t size) {
+    bar.update(size > 0 ? static_cast<double>(offset) / static_cast<double>(size) : -1.0);
+  });
   const fs::path out(out_dir);
   fs::create_directories(out);
   EventLogWriter derived((out / "derived.lcmlog").string());

@@ -19,6 +19,7 @@ struct MobileReplayResult {
 // Writes DIR/map.bt, DIR/cloud.pcd (all world points), DIR/derived.lcmlog,
 // DIR/summary.json and DIR/top_view.png (cloud with the EKF and wheel-odometry paths).
 MobileReplayResult replayMobileLog(const std::string& log_path, const MobileLidarConfig& rig,
-                                   const std::string& out_dir, bool plots = true);
+                                   const std::string& out_dir, bool plots = true,
+                                   bool progress = false);
 
 }  // namespace sweepmap

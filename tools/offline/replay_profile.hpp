@@ -25,6 +25,7 @@ struct ProfileReplayResult {
 // DIR/summary.json and, with `plots`, DIR/top_view.png. Throws LogError if the log cannot be
 // opened.
 ProfileReplayResult replayProfileLog(const std::string& log_path, const RotatingProfileConfig& rig,
-                                     const std::string& out_dir, bool plots = true);
+                                     const std::string& out_dir, bool plots = true,
+                                     bool progress = false);
 
 }  // namespace sweepmap

@@ -6,14 +6,15 @@
 
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <vector>
 
-#include "sim/scene.hpp"
 #include "processes/node.hpp"
 #include "rigs/rig_file.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 
@@ -36,6 +37,7 @@ void printSimConfig(std::ostream& out, const SimSetup& setup);
 struct SimRunOptions {
   uint64_t seed = 1;
   int sweeps = 1;  // rotating_lidar: 3D sweeps to make (mobile_lidar: sim.duration_s decides)
+  bool progress = false;  // progress on stderr when it is a terminal (core/progress.hpp)
 };
 
 struct SimRunResult {
@@ -52,7 +54,7 @@ struct ReplayRunOptions {
   std::string log_path;
   std::string out_dir;
   bool plots = true;
-  bool progress = false;  // progress bar on stderr (rotating_lidar)
+  bool progress = false;  // progress on stderr when it is a terminal (core/progress.hpp)
 };
 
 struct ReplayRunResult {
@@ -62,9 +64,19 @@ struct ReplayRunResult {
   int64_t points = 0;
   bool log_error = false;  // truncated or corrupt log: outputs up to it were kept
   std::string error;
+  bool nothing = false;  // no sweep (scan, for mobile_lidar) made: `error` says why
 };
 
-// Replays a log through the rig kind's processes (offline, virtual clock) into out_dir.
+// Replays a log through the rig kind's processes (offline, virtual clock) into out_dir. A
+// replay that made nothing (an empty log, a log of another rig kind) sets `nothing` and says in
+// `error` what the rig's kind needs and what the log holds (explainEmptyReplay).
 ReplayRunResult replayRig(const Rig& rig, const ReplayRunOptions& options);
+
+// The events of each channel of a log (a corrupt region skipped).
+std::map<std::string, int64_t> logChannelCounts(const std::string& log_path);
+
+// Why a replay with `rig` made nothing of the log: what the rig's kind needs (channels, and
+// ranges per LIDAR_SCAN), what the log holds, and the rig kind its channels look like.
+std::string explainEmptyReplay(const Rig& rig, const std::string& log_path);
 
 }  // namespace sweepmap
