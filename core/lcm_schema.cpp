@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <functional>
 #include <set>
@@ -449,6 +451,198 @@ const LcmStruct* LcmSchema::decode(const uint8_t* data, size_t size, LcmValue* o
                          " bytes left over after byte " + std::to_string(r.at()));
   }
   return s;
+}
+
+namespace {
+
+bool validUtf8(const uint8_t* p, size_t n) {
+  for (size_t i = 0; i < n;) {
+    const uint8_t c = p[i];
+    size_t len = 0;
+    uint32_t cp = 0;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if ((c & 0xE0) == 0xC0) {
+      len = 2, cp = c & 0x1F;
+    } else if ((c & 0xF0) == 0xE0) {
+      len = 3, cp = c & 0x0F;
+    } else if ((c & 0xF8) == 0xF0) {
+      len = 4, cp = c & 0x07;
+    } else {
+      return false;
+    }
+    if (i + len > n) return false;
+    for (size_t k = 1; k < len; ++k) {
+      if ((p[i + k] & 0xC0) != 0x80) return false;
+      cp = (cp << 6) | (p[i + k] & 0x3F);
+    }
+    // Overlong forms, surrogates and code points past U+10FFFF are not UTF-8.
+    if ((len == 2 && cp < 0x80) || (len == 3 && cp < 0x800) || (len == 4 && cp < 0x10000) ||
+        (cp >= 0xD800 && cp <= 0xDFFF) || cp > 0x10FFFF) {
+      return false;
+    }
+    i += len;
+  }
+  return true;
+}
+
+// The walk behind LcmSchema::validate: the bytes against one struct after another, with no
+// allocation unless a message fails (then the reason).
+class Validator {
+ public:
+  Validator(const LcmSchema& schema, const uint8_t* data, size_t size)
+      : schema_(schema), data_(data), size_(size) {}
+  size_t at() const { return at_; }
+  const std::string& error() const { return error_; }
+
+  bool structAt(const LcmStruct& s, int depth) {
+    if (depth > 16) return fail(s, nullptr, "structs nested too deeply");
+    int64_t ints[64];  // the struct's integer members so far (array sizes), by member index
+    if (s.members.size() > 64) return fail(s, nullptr, "more than 64 members");
+    for (size_t k = 0; k < s.members.size(); ++k) {
+      const LcmMember& m = s.members[k];
+      uint64_t count = 1;
+      for (const std::string& d : m.dims) {
+        const int64_t n = isNumber(d) ? std::stoll(d) : dimValue(s, ints, k, d);
+        if (n < 0) return fail(s, &m, "negative count " + std::to_string(n));
+        const uint64_t unit = std::max<size_t>(minSize(schema_, m.type), 1) * count;
+        if (count > 0 && static_cast<uint64_t>(n) > (size_ - at_) / unit) {
+          return fail(s, &m,
+                      std::to_string(n) + " elements do not fit in the " +
+                          std::to_string(size_ - at_) + " bytes left");
+        }
+        count *= static_cast<uint64_t>(n);
+      }
+      ints[k] = 0;
+      for (uint64_t e = 0; e < count; ++e) {
+        if (!element(s, m, depth, m.dims.empty() ? &ints[k] : nullptr)) return false;
+      }
+    }
+    return true;
+  }
+
+ private:
+  static int64_t dimValue(const LcmStruct& s, const int64_t* ints, size_t k,
+                          const std::string& name) {
+    for (size_t j = 0; j < k; ++j) {
+      if (s.members[j].name == name) return ints[j];
+    }
+    return 0;
+  }
+
+  bool fail(const LcmStruct& s, const LcmMember* m, const std::string& why) {
+    if (error_.empty()) {
+      error_ = s.name + (m ? "." + m->name : std::string()) + " at byte " + std::to_string(at_) +
+               ": " + why;
+    }
+    return false;
+  }
+
+  const uint8_t* take(size_t n) {
+    if (n > size_ - at_) return nullptr;
+    const uint8_t* p = data_ + at_;
+    at_ += n;
+    return p;
+  }
+
+  static uint64_t be(const uint8_t* p, size_t n) {
+    uint64_t v = 0;
+    for (size_t k = 0; k < n; ++k) v = (v << 8) | p[k];
+    return v;
+  }
+
+  bool number(const LcmStruct& s, const LcmMember& m, size_t n, int64_t* value) {
+    const uint8_t* p = take(n);
+    if (!p) return fail(s, &m, "needs " + std::to_string(n) + " bytes");
+    const uint64_t u = be(p, n);
+    const bool nan_allowed = m.comment.find("NaN") != std::string::npos;
+    if (m.type == "float" || m.type == "double") {
+      double d;
+      if (n == 4) {
+        float f;
+        const auto u32 = static_cast<uint32_t>(u);
+        std::memcpy(&f, &u32, 4);
+        d = f;
+      } else {
+        std::memcpy(&d, &u, 8);
+      }
+      if (!std::isfinite(d) && !(nan_allowed && std::isnan(d))) {
+        return fail(s, &m, "not a finite number");
+      }
+      return true;
+    }
+    int64_t v = static_cast<int64_t>(u);
+    if (n == 1 && m.type == "int8_t") v = static_cast<int8_t>(u);
+    if (n == 2) v = static_cast<int16_t>(u);
+    if (n == 4) v = static_cast<int32_t>(u);
+    if (m.type == "boolean" && u > 1) return fail(s, &m, "boolean " + std::to_string(u));
+    if (!m.enum_names.empty() && !m.enum_names.count(v)) {
+      return fail(s, &m, "value " + std::to_string(v) + " is none of its constants");
+    }
+    if (value) *value = v;
+    return true;
+  }
+
+  bool string(const LcmStruct& s, const LcmMember& m) {
+    const uint8_t* p = take(4);
+    if (!p) return fail(s, &m, "needs a string length");
+    const auto n = static_cast<int32_t>(be(p, 4));
+    if (n < 1 || static_cast<size_t>(n) > size_ - at_) {
+      return fail(s, &m,
+                  "string length " + std::to_string(n) + " with " + std::to_string(size_ - at_) +
+                      " bytes left");
+    }
+    if (static_cast<size_t>(n) > LcmSchema::kMaxStringBytes) {
+      return fail(s, &m,
+                  "string of " + std::to_string(n) + " bytes (at most " +
+                      std::to_string(LcmSchema::kMaxStringBytes) + ")");
+    }
+    const uint8_t* text = take(static_cast<size_t>(n));
+    if (text[n - 1] != 0) return fail(s, &m, "string not NUL-terminated");
+    if (std::memchr(text, 0, static_cast<size_t>(n - 1))) return fail(s, &m, "NUL inside a string");
+    if (!validUtf8(text, static_cast<size_t>(n - 1))) return fail(s, &m, "string not UTF-8");
+    return true;
+  }
+
+  bool element(const LcmStruct& s, const LcmMember& m, int depth, int64_t* value) {
+    const std::string& t = m.type;
+    if (t == "int8_t" || t == "byte" || t == "boolean") return number(s, m, 1, value);
+    if (t == "int16_t") return number(s, m, 2, value);
+    if (t == "int32_t" || t == "float") return number(s, m, 4, value);
+    if (t == "int64_t" || t == "double") return number(s, m, 8, value);
+    if (t == "string") return string(s, m);
+    const LcmStruct* inner = schema_.find(t);
+    if (!inner) return fail(s, &m, "unknown type " + t);
+    return structAt(*inner, depth + 1) || fail(s, &m, "in " + t);
+  }
+
+  const LcmSchema& schema_;
+  const uint8_t* data_;
+  size_t size_;
+  size_t at_ = 0;
+  std::string error_;
+};
+
+}  // namespace
+
+std::string LcmSchema::validate(const uint8_t* data, size_t size) const {
+  if (size < 8) return "shorter than a type fingerprint (" + std::to_string(size) + " bytes)";
+  int64_t fingerprint = 0;
+  for (int k = 0; k < 8; ++k) fingerprint = (fingerprint << 8) | data[k];
+  const LcmStruct* s = byFingerprint(fingerprint);
+  if (!s) {
+    char hex[32];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fingerprint));
+    return std::string("unknown type (fingerprint ") + hex + ")";
+  }
+  Validator v(*this, data + 8, size - 8);
+  if (!v.structAt(*s, 0)) return v.error();
+  if (v.at() != size - 8) {
+    return s->name + ": " + std::to_string(size - 8 - v.at()) + " bytes left over after byte " +
+           std::to_string(v.at() + 8);
+  }
+  return {};
 }
 
 }  // namespace sweepmap

@@ -77,6 +77,16 @@ class LcmSchema {
   // the bytes cannot hold). Returns nullptr for an unknown fingerprint.
   const LcmStruct* decode(const uint8_t* data, size_t size, LcmValue* out) const;
 
+  // Why a whole message (fingerprint first) is not a valid message of a known type, or "" when
+  // it is; allocates nothing on the way. Beyond what decode() checks (every length and count
+  // against the bytes present, no bytes left over): strings NUL-terminated, at most
+  // kMaxStringBytes and valid UTF-8; floats and doubles finite unless their member's comment
+  // says NaN is allowed; enum members one of their constants; booleans 0 or 1; an unknown
+  // fingerprint is invalid. Every type is covered by its .lcm file: a new type cannot be
+  // forgotten. The reason names the type, the member and the byte offset.
+  static constexpr size_t kMaxStringBytes = 64 * 1024;
+  std::string validate(const uint8_t* data, size_t size) const;
+
  private:
   void computeFingerprints();
 

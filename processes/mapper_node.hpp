@@ -36,7 +36,7 @@ class MapperNode : public Node {
   // kMaxRequestedFiles names per run; everything refused is counted (`refused_saves`).
   // Sweeps being assembled are bounded too (kMaxPendingSweeps, kMaxPendingPoints): the oldest
   // goes into the map as it is (counted as incomplete) when a bound is reached.
-  static constexpr double kMapSaveIntervalS = 5.0;
+  static constexpr double kMapSaveIntervalS = 1.0;
   static constexpr size_t kMaxRequestedFiles = 16;
   static constexpr size_t kMaxPendingSweeps = 4;
   static constexpr size_t kMaxPendingPoints = 4'000'000;  // 48 MB of xyz floats

@@ -484,6 +484,7 @@ TEST_F(DeployTest, DiskFullWhileSavingAMapKeepsThePreviousMap) {
   ASSERT_GT(free_bytes, saved.size() / 2);
   std::ofstream(disk / "filler", std::ios::binary)
       << std::string(free_bytes - saved.size() / 2, 'x');
+  sleepS(1.1);  // MAP_SAVE is a request from the network: at most one a second is honoured
   lcm.publish(channels::kMapSave, &save);
   const std::string error = "cannot save " + map + ": write failed: No space left on device";
   EXPECT_TRUE(waitFor([&] { return procs_.said(mapper).find(error) != std::string::npos; }, 20))

@@ -7,10 +7,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
 #include "core/event_log.hpp"
+#include "core/lcm_schema.hpp"
 #include "processes/node.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/imu_t.hpp"
@@ -33,7 +35,6 @@
 #include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 #include "tools/offline/dump.hpp"
-#include "core/lcm_schema.hpp"
 
 namespace sweepmap {
 namespace {
@@ -67,6 +68,94 @@ TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
   expectFingerprint<truth_test_piece_t>("truth_test_piece_t");
   expectFingerprint<wheel_cmd_t>("wheel_cmd_t");
   expectFingerprint<wheel_ticks_t>("wheel_ticks_t");
+}
+
+std::vector<uint8_t> bytesOf(const auto& m) {
+  std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
+  m.encode(b.data(), 0, static_cast<int>(b.size()));
+  return b;
+}
+
+std::string validate(const std::vector<uint8_t>& b) {
+  return LcmSchema::builtIn().validate(b.data(), b.size());
+}
+
+process_status_t aStatus() {
+  process_status_t m{};
+  m.utime = 5;
+  m.process = "mapper";
+  m.health = process_status_t::DEGRADED;
+  m.detail = "fine: déjà vu";
+  m.ncounters = 2;
+  m.counter_names = {"a", "b"};
+  m.counter_values = {1, 2};
+  return m;
+}
+
+// Issue 21: the messages that killed or stalled the processes, and what must hold of any
+// message before a node sees it.
+TEST(LcmSchemaValidate, RealMessagesPassAndEveryKindOfDamageIsNamed) {
+  EXPECT_EQ(validate(bytesOf(aStatus())), "");
+  lidar_scan_t scan{};
+  scan.nranges = 3;
+  scan.ranges_m = {1.0f, 0.0f, 2.5f};
+  EXPECT_EQ(validate(bytesOf(scan)), "");
+
+  // A string length of INT32_MIN (a 22-byte MAP_SAVE).
+  map_save_t save{};
+  save.utime = 1;
+  save.path = "x";
+  std::vector<uint8_t> b = bytesOf(save);
+  b[16] = 0x80, b[17] = b[18] = b[19] = 0;
+  EXPECT_NE(validate(b).find("map_save_t.path at byte 16: string length -2147483648"),
+            std::string::npos)
+      << validate(b);
+  // ncounters = 2^26 in 100 bytes.
+  b = bytesOf(aStatus());
+  const size_t n_at = 8 + 8 + 4 + 7 + 1 + 4 + 16;  // fingerprint, utime, process, health, detail
+  b[n_at] = 0x04, b[n_at + 1] = b[n_at + 2] = b[n_at + 3] = 0;
+  EXPECT_NE(validate(b).find("counter_names"), std::string::npos) << validate(b);
+  EXPECT_NE(validate(b).find("do not fit"), std::string::npos) << validate(b);
+  // Text that is not UTF-8, a health that is none of its constants.
+  process_status_t bad_text = aStatus();
+  bad_text.detail = "\xff\xfe";
+  EXPECT_NE(validate(bytesOf(bad_text)).find("not UTF-8"), std::string::npos);
+  process_status_t bad_enum = aStatus();
+  bad_enum.health = 7;
+  EXPECT_NE(validate(bytesOf(bad_enum)).find("health"), std::string::npos);
+  // NaN only where the type says it may be.
+  imu_t imu{};
+  imu.rpy_rad[0] = std::nan("");
+  EXPECT_EQ(validate(bytesOf(imu)), "");
+  imu.gyro_rad_s[1] = std::numeric_limits<double>::infinity();
+  EXPECT_NE(validate(bytesOf(imu)).find("imu_t.gyro_rad_s"), std::string::npos)
+      << validate(bytesOf(imu));
+  // Bytes left over, a cut message, an unknown type.
+  b = bytesOf(aStatus());
+  b.push_back(0);
+  EXPECT_NE(validate(b).find("left over"), std::string::npos);
+  b.resize(b.size() - 10);
+  EXPECT_NE(validate(b), "");
+  b = bytesOf(aStatus());
+  b[0] ^= 1;
+  EXPECT_NE(validate(b).find("unknown type"), std::string::npos);
+}
+
+// Every prefix and every single-byte change of real messages: validate never crashes and
+// refuses every prefix.
+TEST(LcmSchemaValidate, DamagedMessagesNeverCrashIt) {
+  for (const std::vector<uint8_t>& good : {bytesOf(aStatus()), bytesOf(map_save_t{})}) {
+    for (size_t n = 0; n < good.size(); ++n) {
+      EXPECT_NE(LcmSchema::builtIn().validate(good.data(), n), "") << n;
+    }
+    for (size_t i = 0; i < good.size(); ++i) {
+      for (int v : {0x00, 0x7f, 0x80, 0xff}) {
+        std::vector<uint8_t> b = good;
+        b[i] = static_cast<uint8_t>(v);
+        LcmSchema::builtIn().validate(b.data(), b.size());
+      }
+    }
+  }
 }
 
 // Hand-written definitions: nested structs, fixed and variable multi-dimensional arrays,
