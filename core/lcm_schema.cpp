@@ -491,8 +491,9 @@ bool validUtf8(const uint8_t* p, size_t n) {
 // allocation unless a message fails (then the reason).
 class Validator {
  public:
-  Validator(const LcmSchema& schema, const uint8_t* data, size_t size)
-      : schema_(schema), data_(data), size_(size) {}
+  // Walks data from `start` (past the fingerprint); offsets are the message's own.
+  Validator(const LcmSchema& schema, const uint8_t* data, size_t size, size_t start)
+      : schema_(schema), data_(data), size_(size), at_(start) {}
   size_t at() const { return at_; }
   const std::string& error() const { return error_; }
 
@@ -620,7 +621,7 @@ class Validator {
   const LcmSchema& schema_;
   const uint8_t* data_;
   size_t size_;
-  size_t at_ = 0;
+  size_t at_;
   std::string error_;
 };
 
@@ -636,11 +637,11 @@ std::string LcmSchema::validate(const uint8_t* data, size_t size) const {
     std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(fingerprint));
     return std::string("unknown type (fingerprint ") + hex + ")";
   }
-  Validator v(*this, data + 8, size - 8);
+  Validator v(*this, data, size, 8);
   if (!v.structAt(*s, 0)) return v.error();
-  if (v.at() != size - 8) {
-    return s->name + ": " + std::to_string(size - 8 - v.at()) + " bytes left over after byte " +
-           std::to_string(v.at() + 8);
+  if (v.at() != size) {
+    return s->name + ": " + std::to_string(size - v.at()) + " bytes left over after byte " +
+           std::to_string(v.at());
   }
   return {};
 }

@@ -7,6 +7,7 @@
 #include <thread>
 
 #include "processes/live_runner.hpp"
+#include "sweepmap/map_save_t.hpp"
 #include "sweepmap/process_status_t.hpp"
 
 namespace sweepmap {
@@ -20,9 +21,17 @@ class RecordingNode : public Node {
 
  protected:
   void handle(const Message& m, Outbox&) override {
-    if (m.data.size() == 1) seen.push_back(m.data[0]);
+    map_save_t r;
+    if (decodeMessage(m, &r)) seen.push_back(static_cast<int>(r.utime));
   }
 };
+
+// Message i: a valid LCM message (a node sees nothing else), numbered by its utime.
+void publishNumbered(lcm::LCM& lcm, int i) {
+  map_save_t m{};
+  m.utime = i;
+  lcm.publish("IN", &m);
+}
 
 void runWith(bool wake_on_message) {
   lcm::LCM lcm("memq://");
@@ -38,8 +47,7 @@ void runWith(bool wake_on_message) {
   std::thread publisher([&] {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));  // after runLive subscribed
     for (int i = 0; i < 100; ++i) {
-      const uint8_t byte = static_cast<uint8_t>(i);
-      lcm.publish("IN", &byte, 1);
+      publishNumbered(lcm, i);
       if (i % 10 == 0) std::this_thread::sleep_for(std::chrono::milliseconds(3));
     }
   });
@@ -64,10 +72,7 @@ class FloodingNode : public RecordingNode {
  protected:
   void advance(int64_t, Outbox&) override {
     if (++ticks != 1) return;
-    for (int i = 0; i < 100; ++i) {
-      const uint8_t byte = static_cast<uint8_t>(i);
-      lcm_->publish("IN", &byte, 1);
-    }
+    for (int i = 0; i < 100; ++i) publishNumbered(*lcm_, i);
   }
 
  private:

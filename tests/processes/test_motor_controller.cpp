@@ -2,11 +2,11 @@
 
 #include <cmath>
 
-#include "sim/stepper.hpp"
 #include "processes/channels.hpp"
 #include "processes/motor_controller.hpp"
 #include "processes/offline_bus.hpp"
 #include "processes/sim_setup.hpp"
+#include "sim/stepper.hpp"
 #include "sweepmap/motor_state_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 

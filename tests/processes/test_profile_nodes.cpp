@@ -7,11 +7,11 @@
 #include <cstdio>
 #include <map>
 
-#include "sim/profile_devices.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/profile_assembler_node.hpp"
 #include "processes/profile_scan_node.hpp"
+#include "sim/profile_devices.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
 
