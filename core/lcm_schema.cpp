@@ -586,13 +586,15 @@ class Validator {
   }
 
   bool string(const LcmStruct& s, const LcmMember& m) {
+    const size_t start = at_;  // a bad length is reported where the length is
     const uint8_t* p = take(4);
     if (!p) return fail(s, &m, "needs a string length");
     const auto n = static_cast<int32_t>(be(p, 4));
     if (n < 1 || static_cast<size_t>(n) > size_ - at_) {
-      return fail(s, &m,
-                  "string length " + std::to_string(n) + " with " + std::to_string(size_ - at_) +
-                      " bytes left");
+      const std::string why = "string length " + std::to_string(n) + " with " +
+                              std::to_string(size_ - at_) + " bytes left";
+      at_ = start;
+      return fail(s, &m, why);
     }
     if (static_cast<size_t>(n) > LcmSchema::kMaxStringBytes) {
       return fail(s, &m,
