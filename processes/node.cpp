@@ -75,6 +75,15 @@ void Node::receive(const Message& msg, Outbox& out) {
     reportError("invalid", msg.channel + ": " + why);
     return;
   }
+  // Its own stamp against this node's clock and the channel's stream (stamp_guard.hpp).
+  int64_t stamp = 0;
+  for (size_t k = 8; k < 16; ++k)
+    stamp = static_cast<int64_t>((static_cast<uint64_t>(stamp) << 8) | msg.data[k]);
+  if (std::string why; !stamps_.admit(msg.channel, stamp, msg.utime, &why)) {
+    count("stamp_refused_" + msg.channel);
+    reportError("stamp_refused", why);
+    return;
+  }
   try {
     handle(msg, out);
   } catch (const std::exception& e) {

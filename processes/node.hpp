@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "processes/stamp_guard.hpp"
+
 namespace sweepmap {
 
 // One message on a channel. `utime` is when it was published/received [us]: the log
@@ -119,6 +121,7 @@ class Node {
   std::string name_;
   std::string process_;
   std::map<std::string, int64_t> counters_;
+  StampGuard stamps_;
   std::string detail_;
   bool failed_ = false;
   std::string degraded_;

@@ -83,6 +83,43 @@ TEST(OdometryNode, StraightDriveFromTicks) {
   EXPECT_NEAR(node.ekf().pose().x_m, 1.0, 0.02);
 }
 
+// Issue 21: one IMU message stamped a day ahead moved the EKF to x = -8.5e6 m, and one such
+// WHEEL_TICKS froze that channel until restart. Now neither reaches the node, the drive goes
+// on as without them, and both are counted with their offset.
+TEST(OdometryNode, AMessageStampedADayAheadNeitherMovesTheEstimateNorFreezesItsChannel) {
+  constexpr int64_t kDay = 86'400'000'000;
+  auto arriving = [](Message m, int64_t arrival_us) {
+    m.utime = arrival_us;
+    return m;
+  };
+  auto drive = [&](bool poisoned) {
+    OdometryNode node(config());
+    std::vector<Message> msgs;
+    for (int k = 0; k <= 100; ++k) {
+      const int64_t t = 1000000 + 20000 * k;
+      const int64_t n = std::llround(318.30988618 * 0.02 * k);
+      msgs.push_back(arriving(ticks(t, n, n), t + 1000));
+      msgs.push_back(arriving(gyro(t + 5000, 0.01), t + 6000));
+      if (poisoned && k == 50) {  // both arrive now
+        msgs.push_back(arriving(gyro(t + 6000 + kDay, 5.0), t + 6500));
+        msgs.push_back(arriving(ticks(t + 7000 + kDay, n + 100000, n), t + 7500));
+      }
+    }
+    run(node, msgs, channels::kOdometryPose);
+    return std::make_pair(node.ekf().pose(),
+                          std::make_pair(node.counter("stamp_refused_IMU"),
+                                         node.counter("stamp_refused_WHEEL_TICKS")));
+  };
+  const auto [clean, clean_refused] = drive(false);
+  const auto [poisoned, refused] = drive(true);
+  EXPECT_EQ(clean_refused, std::make_pair(int64_t{0}, int64_t{0}));
+  EXPECT_EQ(refused, std::make_pair(int64_t{1}, int64_t{1}));
+  EXPECT_DOUBLE_EQ(poisoned.x_m, clean.x_m);
+  EXPECT_DOUBLE_EQ(poisoned.y_m, clean.y_m);
+  EXPECT_DOUBLE_EQ(poisoned.theta_rad, clean.theta_rad);
+  EXPECT_NEAR(clean.x_m, 0.4, 0.01);  // 2 s at 0.2 m/s: later ticks were not frozen out
+}
+
 TEST(OdometryNode, BadInputRejectedAndCounted) {
   OdometryNode node(config());
   std::vector<Message> msgs = {ticks(1000000, 0, 0),
