@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,6 +69,17 @@ struct ParseStep {
   static ParseStep skip() { return {kSkip, 1}; }
 };
 
+// A packet's start: the sync bytes `s0 s1`, then at least `header` bytes in all. Nothing when
+// they are there, else the step to take (skip a byte that is no sync, or wait for the rest).
+inline std::optional<ParseStep> expectHeader(const uint8_t* p, size_t left, uint8_t s0, uint8_t s1,
+                                             size_t header) {
+  if (p[0] != s0) return ParseStep::skip();
+  if (left < 2) return ParseStep::wait();
+  if (p[1] != s1) return ParseStep::skip();
+  if (left < header) return ParseStep::wait();
+  return std::nullopt;
+}
+
 // The bytes a binary decoder (RPLIDAR, YDLIDAR, HI219, wheel board) has been fed and not yet
 // decoded, with the run of bytes it skipped to resynchronise. feed() appends, then a step
 // function decodes from the front until it waits for more; what it took or skipped is dropped,
@@ -94,6 +106,13 @@ class PacketBuffer {
     buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
     offset_ += static_cast<int64_t>(at);
     return buffer_.empty();
+  }
+
+  // The same, reporting the skipped run at the end when nothing is left.
+  template <class Event, class Step>
+  void feed(const uint8_t* data, size_t size, DecoderCounters* counters, std::vector<Event>* out,
+            Step step) {
+    if (feed(data, size, counters, step)) skipped_.flush(counters, out);
   }
 
   // Reports the run of skipped bytes before the packet about to be emitted.

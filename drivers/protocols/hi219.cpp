@@ -114,20 +114,15 @@ void Decoder::parsePayload(const uint8_t* p, size_t n, int64_t offset, std::vect
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  const bool all_taken =
-      buffer_.feed(data, size, &counters_, [&](const uint8_t* p, size_t left, int64_t offset) {
-        return parseFrame(p, left, offset, out);
-      });
-  if (all_taken) buffer_.flushSkipped(&counters_, out);
+  buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
 }
 
 // 5A A5, the payload's length, its CRC, the payload.
 ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
                               std::vector<Event>* out) {
-  if (p[0] != 0x5A) return ParseStep::skip();
-  if (left < 2) return ParseStep::wait();
-  if (p[1] != 0xA5) return ParseStep::skip();
-  if (left < kHeader) return ParseStep::wait();
+  if (const auto not_yet = expectHeader(p, left, 0x5A, 0xA5, kHeader)) return *not_yet;
   const size_t len = u16(p + 2);
   if (len == 0 || len > kMaxPayload) return ParseStep::skip();  // a false sync
   if (left < kHeader + len) return ParseStep::wait();

@@ -45,20 +45,15 @@ uint16_t crc16(const uint8_t* data, size_t size) {
 void Decoder::reset() { *this = Decoder(); }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  const bool all_taken =
-      buffer_.feed(data, size, &counters_, [&](const uint8_t* p, size_t left, int64_t offset) {
-        return parseFrame(p, left, offset, out);
-      });
-  if (all_taken) buffer_.flushSkipped(&counters_, out);
+  buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
 }
 
 // A5 5B, type, length, sequence number, payload, CRC.
 ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
                               std::vector<Event>* out) {
-  if (p[0] != 0xA5) return ParseStep::skip();
-  if (left < 2) return ParseStep::wait();
-  if (p[1] != 0x5B) return ParseStep::skip();
-  if (left < kHeader) return ParseStep::wait();
+  if (const auto not_yet = expectHeader(p, left, 0xA5, 0x5B, kHeader)) return *not_yet;
   const uint8_t type = p[2];
   const size_t n = p[3];
   const bool known = (type == kTypeTicks && n == 14) || (type == kTypeSpeed && n == 4);

@@ -101,21 +101,17 @@ void Decoder::reset() {
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
   // Buffered: at most one packet header's worth is waited for, a packet is at most
   // 10 + 2 * 255 bytes.
-  const bool all_taken =
-      buffer_.feed(data, size, &counters_, [&](const uint8_t* p, size_t left, int64_t offset) {
-        if (p[0] == 0xA5) return parseReply(p, left, offset, out);
-        if (p[0] == 0xAA) return parsePacket(p, left, offset, out);
-        return ParseStep::skip();
-      });
-  if (all_taken) buffer_.flushSkipped(&counters_, out);
+  buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    if (p[0] == 0xA5) return parseReply(p, left, offset, out);
+    if (p[0] == 0xAA) return parsePacket(p, left, offset, out);
+    return ParseStep::skip();
+  });
 }
 
 // A5 5A: a reply descriptor (the scan stream's start, device info or health).
 ParseStep Decoder::parseReply(const uint8_t* p, size_t left, int64_t offset,
                               std::vector<Event>* out) {
-  if (left < 2) return ParseStep::wait();
-  if (p[1] != 0x5A) return ParseStep::skip();
-  if (left < kDescriptor) return ParseStep::wait();
+  if (const auto not_yet = expectHeader(p, left, 0xA5, 0x5A, kDescriptor)) return *not_yet;
   Descriptor d;
   parseDescriptor(p, &d);
   if (d.type == kTypeScan && d.mode == 1) {
@@ -144,9 +140,7 @@ ParseStep Decoder::parseReply(const uint8_t* p, size_t left, int64_t offset,
 // AA 55: a sample packet, checked against its check code.
 ParseStep Decoder::parsePacket(const uint8_t* p, size_t left, int64_t offset,
                                std::vector<Event>* out) {
-  if (left < 2) return ParseStep::wait();
-  if (p[1] != 0x55) return ParseStep::skip();
-  if (left < kHeader) return ParseStep::wait();
+  if (const auto not_yet = expectHeader(p, left, 0xAA, 0x55, kHeader)) return *not_yet;
   const PacketHeader h = readHeader(p);
   if (h.lsn == 0 || (h.fsa & 1) == 0 || (h.lsa & 1) == 0 || ((h.ct & 1) && h.lsn != 1)) {
     return ParseStep::skip();  // not a packet header: resynchronise at the next byte
