@@ -100,83 +100,86 @@ void writeCalibrationFile(const std::string& path, const std::string& header,
   writeFileAtomic(path, "# " + header + "\n" + em.c_str() + "\n");
 }
 
+// What one kind of calibration file adds to the common part: the comment line at its top, its
+// section and the section's keys, each bound to a member of the kind's struct (every kind has
+// `source` and `logs` too, the common provenance).
+template <class Calibration>
+struct CalibrationKind {
+  const char* header;
+  const char* section;
+  std::vector<std::pair<const char*, double Calibration::*>> keys;
+
+  Calibration load(const std::string& path) const {
+    std::vector<std::string> names;
+    for (const auto& [name, member] : keys) names.emplace_back(name);
+    const CalibrationFileContent f = loadCalibrationFile(path, section, names);
+    Calibration c;
+    for (const auto& [name, member] : keys) c.*member = f.values.at(name);
+    c.source = f.source;
+    c.logs = f.logs;
+    return c;
+  }
+
+  void write(const std::string& path, const Calibration& c) const {
+    std::vector<std::pair<std::string, double>> values;
+    for (const auto& [name, member] : keys) values.emplace_back(name, c.*member);
+    writeCalibrationFile(path, header, section, values, c.source, c.logs);
+  }
+};
+
+const CalibrationKind<PlateCalibration> kPlate{
+    "Plate-angle calibration (Yuan 2021 Algorithm A1); read via plate.calibration_file",
+    "plate",
+    {{"alpha_deg", &PlateCalibration::alpha_deg}}};
+
+const CalibrationKind<MountingCalibration> kMounting{
+    "Lidar mounting calibration (Miao 2022 section 4.2); read via mounting.calibration_file",
+    "mounting",
+    {{"gamma_rad", &MountingCalibration::gamma_rad},
+     {"beta_rad", &MountingCalibration::beta_rad},
+     {"alpha_rad", &MountingCalibration::alpha_rad}}};
+
+const CalibrationKind<AxisOffsetCalibration> kAxisOffset{
+    "Axis-offset calibration of a rotating profile sensor (Zhao 2021, plane constraints); read "
+    "via geometry.calibration_file",
+    "axis_offset",
+    {{"m_mm", &AxisOffsetCalibration::m_mm},
+     {"n_mm", &AxisOffsetCalibration::n_mm},
+     {"laser_tilt_deg", &AxisOffsetCalibration::laser_tilt_deg},
+     {"encoder_zero_deg", &AxisOffsetCalibration::encoder_zero_deg}}};
+
+const CalibrationKind<LidarOffsetCalibration> kLidarOffset{
+    "Lidar-to-axis offset of a rotating 2D lidar (t_L^O', plane constraints); read via "
+    "geometry.calibration_file",
+    "geometry",
+    {{"lidar_offset_x_mm", &LidarOffsetCalibration::lidar_offset_x_mm}}};
+
 }  // namespace
 
-PlateCalibration loadPlateCalibration(const std::string& path) {
-  const CalibrationFileContent f = loadCalibrationFile(path, "plate", {"alpha_deg"});
-  PlateCalibration c;
-  c.alpha_deg = f.values.at("alpha_deg");
-  c.source = f.source;
-  c.logs = f.logs;
-  return c;
-}
-
+PlateCalibration loadPlateCalibration(const std::string& path) { return kPlate.load(path); }
 void writePlateCalibration(const std::string& path, const PlateCalibration& c) {
-  writeCalibrationFile(
-      path, "Plate-angle calibration (Yuan 2021 Algorithm A1); read via plate.calibration_file",
-      "plate", {{"alpha_deg", c.alpha_deg}}, c.source, c.logs);
+  kPlate.write(path, c);
 }
 
 MountingCalibration loadMountingCalibration(const std::string& path) {
-  const CalibrationFileContent f =
-      loadCalibrationFile(path, "mounting", {"gamma_rad", "beta_rad", "alpha_rad"});
-  MountingCalibration c;
-  c.gamma_rad = f.values.at("gamma_rad");
-  c.beta_rad = f.values.at("beta_rad");
-  c.alpha_rad = f.values.at("alpha_rad");
-  c.source = f.source;
-  c.logs = f.logs;
-  return c;
+  return kMounting.load(path);
 }
-
 void writeMountingCalibration(const std::string& path, const MountingCalibration& c) {
-  writeCalibrationFile(
-      path,
-      "Lidar mounting calibration (Miao 2022 section 4.2); read via mounting.calibration_file",
-      "mounting",
-      {{"gamma_rad", c.gamma_rad}, {"beta_rad", c.beta_rad}, {"alpha_rad", c.alpha_rad}}, c.source,
-      c.logs);
+  kMounting.write(path, c);
 }
 
 AxisOffsetCalibration loadAxisOffsetCalibration(const std::string& path) {
-  const CalibrationFileContent f = loadCalibrationFile(
-      path, "axis_offset", {"m_mm", "n_mm", "laser_tilt_deg", "encoder_zero_deg"});
-  AxisOffsetCalibration c;
-  c.m_mm = f.values.at("m_mm");
-  c.n_mm = f.values.at("n_mm");
-  c.laser_tilt_deg = f.values.at("laser_tilt_deg");
-  c.encoder_zero_deg = f.values.at("encoder_zero_deg");
-  c.source = f.source;
-  c.logs = f.logs;
-  return c;
+  return kAxisOffset.load(path);
 }
-
 void writeAxisOffsetCalibration(const std::string& path, const AxisOffsetCalibration& c) {
-  writeCalibrationFile(path,
-                       "Axis-offset calibration of a rotating profile sensor (Zhao 2021, plane "
-                       "constraints); read via geometry.calibration_file",
-                       "axis_offset",
-                       {{"m_mm", c.m_mm},
-                        {"n_mm", c.n_mm},
-                        {"laser_tilt_deg", c.laser_tilt_deg},
-                        {"encoder_zero_deg", c.encoder_zero_deg}},
-                       c.source, c.logs);
+  kAxisOffset.write(path, c);
 }
 
 LidarOffsetCalibration loadLidarOffsetCalibration(const std::string& path) {
-  const CalibrationFileContent f = loadCalibrationFile(path, "geometry", {"lidar_offset_x_mm"});
-  LidarOffsetCalibration c;
-  c.lidar_offset_x_mm = f.values.at("lidar_offset_x_mm");
-  c.source = f.source;
-  c.logs = f.logs;
-  return c;
+  return kLidarOffset.load(path);
 }
-
 void writeLidarOffsetCalibration(const std::string& path, const LidarOffsetCalibration& c) {
-  writeCalibrationFile(path,
-                       "Lidar-to-axis offset of a rotating 2D lidar (t_L^O', plane constraints); "
-                       "read via geometry.calibration_file",
-                       "geometry", {{"lidar_offset_x_mm", c.lidar_offset_x_mm}}, c.source, c.logs);
+  kLidarOffset.write(path, c);
 }
 
 }  // namespace sweepmap

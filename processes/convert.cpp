@@ -5,38 +5,102 @@
 
 namespace sweepmap {
 
+namespace {
+
+int64_t readInt32BE(const uint8_t* d, size_t size, size_t at) {
+  if (at + 4 > size) return -1;
+  const uint32_t u = (uint32_t{d[at]} << 24) | (uint32_t{d[at + 1]} << 16) |
+                     (uint32_t{d[at + 2]} << 8) | d[at + 3];
+  return static_cast<int32_t>(u);
+}
+
+}  // namespace
+
+// lidar_scan_t: hash 8, utime 8, seq 8, five 4-byte fields, nranges and its floats,
+// device_stamp 8, nintensities and its floats, nangles and its floats.
+template <>
+bool plausibleCounts<lidar_scan_t>(const uint8_t* data, size_t size) {
+  const int64_t n = readInt32BE(data, size, 44);
+  if (n < 0 || 48 + 4 * static_cast<uint64_t>(n) > size) return false;
+  const size_t at_intensities = 48 + 4 * static_cast<size_t>(n) + 8;
+  const int64_t ni = readInt32BE(data, size, at_intensities);
+  if (ni < 0 || at_intensities + 4 + 4 * static_cast<uint64_t>(ni) > size) return false;
+  const size_t at_angles = at_intensities + 4 + 4 * static_cast<size_t>(ni);
+  const int64_t na = readInt32BE(data, size, at_angles);
+  return na >= 0 && at_angles + 4 + 4 * static_cast<uint64_t>(na) <= size;
+}
+
+// cloud_chunk_t: hash 8, utime 8, sweep_id 8, four int32, frame string (length incl. NUL),
+// corrected 1, phi_offset 8, sensor_origin 24, then npoints of 3 floats.
+template <>
+bool plausibleCounts<cloud_chunk_t>(const uint8_t* data, size_t size) {
+  const int64_t len = readInt32BE(data, size, 40);
+  if (len < 0 || 44 + static_cast<uint64_t>(len) > size) return false;
+  const size_t at = 44 + static_cast<size_t>(len) + 1 + 8 + 24;
+  const int64_t n = readInt32BE(data, size, at);
+  return n >= 0 && at + 4 + 12 * static_cast<uint64_t>(n) <= size;
+}
+
+// profile_t: hash 8, utime 8, sequence 8, sweep_id 4, encoder_counts 8, three int32 (the last
+// point_count), then 2 + 4 + 4 bytes per point.
+template <>
+bool plausibleCounts<profile_t>(const uint8_t* data, size_t size) {
+  const int64_t n = readInt32BE(data, size, 44);
+  return n >= 0 && 48 + 10 * static_cast<uint64_t>(n) <= size;
+}
+
+namespace {
+
+template <class To, class From>
+void assign(To* to, const From& from) {
+  *to = static_cast<To>(from);
+}
+
+// The fields Scan2D and lidar_scan_t share by name, either way (the message is float where the
+// struct is double).
+template <class From, class To>
+void copyScanFields(const From& f, To* t) {
+  assign(&t->utime, f.utime);
+  assign(&t->seq, f.seq);
+  assign(&t->angle_min_rad, f.angle_min_rad);
+  assign(&t->angle_increment_rad, f.angle_increment_rad);
+  assign(&t->time_increment_ns, f.time_increment_ns);
+  assign(&t->range_min_m, f.range_min_m);
+  assign(&t->range_max_m, f.range_max_m);
+  t->ranges_m = f.ranges_m;
+  t->device_stamp = f.device_stamp;
+  t->intensities = f.intensities;
+  t->angles_rad = f.angles_rad;
+}
+
+// The fields Profile and profile_t share by name (all of the struct's), either way.
+template <class From, class To>
+void copyProfileFields(const From& f, To* t) {
+  t->utime = f.utime;
+  t->sequence = f.sequence;
+  t->sweep_id = f.sweep_id;
+  t->encoder_counts = f.encoder_counts;
+  t->counts_per_revolution = f.counts_per_revolution;
+  t->column_count = f.column_count;
+  t->column = f.column;
+  t->y_mm = f.y_mm;
+  t->z_mm = f.z_mm;
+}
+
+}  // namespace
+
 lidar_scan_t toLcm(const Scan2D& scan) {
   lidar_scan_t m;
-  m.utime = scan.utime;
-  m.seq = scan.seq;
-  m.angle_min_rad = static_cast<float>(scan.angle_min_rad);
-  m.angle_increment_rad = static_cast<float>(scan.angle_increment_rad);
-  m.time_increment_ns = static_cast<int32_t>(scan.time_increment_ns);
-  m.range_min_m = static_cast<float>(scan.range_min_m);
-  m.range_max_m = static_cast<float>(scan.range_max_m);
+  copyScanFields(scan, &m);
   m.nranges = static_cast<int32_t>(scan.ranges_m.size());
-  m.ranges_m = scan.ranges_m;
-  m.device_stamp = scan.device_stamp;
   m.nintensities = static_cast<int32_t>(scan.intensities.size());
-  m.intensities = scan.intensities;
   m.nangles = static_cast<int32_t>(scan.angles_rad.size());
-  m.angles_rad = scan.angles_rad;
   return m;
 }
 
 Scan2D fromLcm(const lidar_scan_t& m) {
   Scan2D s;
-  s.utime = m.utime;
-  s.seq = m.seq;
-  s.angle_min_rad = m.angle_min_rad;
-  s.angle_increment_rad = m.angle_increment_rad;
-  s.time_increment_ns = m.time_increment_ns;
-  s.range_min_m = m.range_min_m;
-  s.range_max_m = m.range_max_m;
-  s.ranges_m = m.ranges_m;
-  s.device_stamp = m.device_stamp;
-  s.intensities = m.intensities;
-  s.angles_rad = m.angles_rad;
+  copyScanFields(m, &s);
   return s;
 }
 
@@ -161,30 +225,14 @@ wheel_ticks_t toLcm(const WheelTicks& t) {
 
 profile_t toLcm(const Profile& p) {
   profile_t m;
-  m.utime = p.utime;
-  m.sequence = p.sequence;
-  m.sweep_id = p.sweep_id;
-  m.encoder_counts = p.encoder_counts;
-  m.counts_per_revolution = p.counts_per_revolution;
-  m.column_count = p.column_count;
+  copyProfileFields(p, &m);
   m.point_count = static_cast<int32_t>(p.column.size());
-  m.column = p.column;
-  m.y_mm = p.y_mm;
-  m.z_mm = p.z_mm;
   return m;
 }
 
 Profile fromLcm(const profile_t& m) {
   Profile p;
-  p.utime = m.utime;
-  p.sequence = m.sequence;
-  p.sweep_id = m.sweep_id;
-  p.encoder_counts = m.encoder_counts;
-  p.counts_per_revolution = m.counts_per_revolution;
-  p.column_count = m.column_count;
-  p.column = m.column;
-  p.y_mm = m.y_mm;
-  p.z_mm = m.z_mm;
+  copyProfileFields(m, &p);
   return p;
 }
 

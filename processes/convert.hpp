@@ -1,4 +1,5 @@
-// The one place where LCM messages and the library structs meet.
+// The one place where LCM messages and the library structs meet: the generic codec of the
+// message types (message_codec.hpp) and the conversions to and from the library structs.
 #pragma once
 
 #include <string>
@@ -9,6 +10,7 @@
 #include "core/scan.hpp"
 #include "devices/odometry_devices.hpp"
 #include "devices/shaft_trajectory.hpp"
+#include "processes/message_codec.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"

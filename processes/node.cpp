@@ -5,56 +5,9 @@
 #include <iostream>
 
 #include "core/lcm_schema.hpp"
-#include "sweepmap/cloud_chunk_t.hpp"
-#include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/process_status_t.hpp"
-#include "sweepmap/profile_t.hpp"
 
 namespace sweepmap {
-namespace {
-
-int64_t readInt32BE(const std::vector<uint8_t>& d, size_t at) {
-  if (at + 4 > d.size()) return -1;
-  const uint32_t u = (uint32_t{d[at]} << 24) | (uint32_t{d[at + 1]} << 16) |
-                     (uint32_t{d[at + 2]} << 8) | d[at + 3];
-  return static_cast<int32_t>(u);
-}
-
-}  // namespace
-
-// lidar_scan_t: hash 8, utime 8, seq 8, five 4-byte fields, nranges and its floats,
-// device_stamp 8, nintensities and its floats, nangles and its floats.
-template <>
-bool plausibleCounts<lidar_scan_t>(const Message& m) {
-  const int64_t n = readInt32BE(m.data, 44);
-  if (n < 0 || 48 + 4 * static_cast<uint64_t>(n) > m.data.size()) return false;
-  const size_t at_intensities = 48 + 4 * static_cast<size_t>(n) + 8;
-  const int64_t ni = readInt32BE(m.data, at_intensities);
-  if (ni < 0 || at_intensities + 4 + 4 * static_cast<uint64_t>(ni) > m.data.size()) return false;
-  const size_t at_angles = at_intensities + 4 + 4 * static_cast<size_t>(ni);
-  const int64_t na = readInt32BE(m.data, at_angles);
-  return na >= 0 && at_angles + 4 + 4 * static_cast<uint64_t>(na) <= m.data.size();
-}
-
-// cloud_chunk_t: hash 8, utime 8, sweep_id 8, four int32, frame string (length incl. NUL),
-// corrected 1, phi_offset 8, sensor_origin 24, then npoints of 3 floats.
-template <>
-bool plausibleCounts<cloud_chunk_t>(const Message& m) {
-  const int64_t len = readInt32BE(m.data, 40);
-  if (len < 0 || 44 + static_cast<uint64_t>(len) > m.data.size()) return false;
-  const size_t at = 44 + static_cast<size_t>(len) + 1 + 8 + 24;
-  const int64_t n = readInt32BE(m.data, at);
-  return n >= 0 && at + 4 + 12 * static_cast<uint64_t>(n) <= m.data.size();
-}
-
-// profile_t: hash 8, utime 8, sequence 8, sweep_id 4, encoder_counts 8, three int32 (the last
-// point_count), then 2 + 4 + 4 bytes per point.
-template <>
-bool plausibleCounts<profile_t>(const Message& m) {
-  const int64_t n = readInt32BE(m.data, 44);
-  return n >= 0 && 48 + 10 * static_cast<uint64_t>(n) <= m.data.size();
-}
-
 Node::Node(std::string name) : name_(std::move(name)) {}
 
 std::string Node::statusChannel() const {

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "processes/message_codec.hpp"
 #include "processes/stamp_guard.hpp"
 
 namespace sweepmap {
@@ -29,8 +30,7 @@ class Outbox {
     Message m;
     m.utime = utime;
     m.channel = channel;
-    m.data.resize(static_cast<size_t>(msg.getEncodedSize()));
-    msg.encode(m.data.data(), 0, static_cast<int>(m.data.size()));
+    m.data = encodeMessage(msg);
     messages_.push_back(std::move(m));
   }
   void push(Message m) { messages_.push_back(std::move(m)); }
@@ -45,29 +45,11 @@ class Outbox {
   std::vector<Message> messages_;
 };
 
-// lcm-gen's decoders size arrays from the count in the message before checking that the
-// bytes are there: a few malformed bytes could ask for gigabytes. Types with variable
-// arrays get their counts checked against the message size first (node.cpp).
-template <class T>
-bool plausibleCounts(const Message&) {
-  return true;
-}
-class lidar_scan_t;
-class cloud_chunk_t;
-class profile_t;
-template <>
-bool plausibleCounts<lidar_scan_t>(const Message& m);
-template <>
-bool plausibleCounts<cloud_chunk_t>(const Message& m);
-template <>
-bool plausibleCounts<profile_t>(const Message& m);
-
-// Decodes an lcm-gen type; false when the bytes are not exactly one valid message.
+// Decodes an lcm-gen type (message_codec.hpp); false when the bytes are not exactly one
+// valid message.
 template <class T>
 bool decodeMessage(const Message& m, T* out) {
-  if (m.data.size() > (1u << 26) || !plausibleCounts<T>(m)) return false;
-  const int n = out->decode(m.data.data(), 0, static_cast<int>(m.data.size()));
-  return n == static_cast<int>(m.data.size());
+  return decodeMessage(m.data.data(), m.data.size(), out);
 }
 
 class Node {

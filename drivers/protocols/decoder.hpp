@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,96 @@ class SkippedRun {
  private:
   std::string name_, why_;
   int64_t start_ = 0, bytes_ = 0;
+};
+
+// What a binary decoder found at its cursor: a packet (or a reply) of `bytes` bytes, taken; a
+// start whose rest has not arrived yet (wait for more bytes); or no packet start (the byte is
+// skipped, and counted in the decoder's SkippedRun).
+struct ParseStep {
+  enum Kind { kTake, kWait, kSkip };
+  Kind kind = kSkip;
+  size_t bytes = 1;
+  static ParseStep take(size_t n) { return {kTake, n}; }
+  static ParseStep wait() { return {kWait, 0}; }
+  static ParseStep skip() { return {kSkip, 1}; }
+};
+
+// A packet's start: the sync bytes `s0 s1`, then at least `header` bytes in all. Nothing when
+// they are there, else the step to take (skip a byte that is no sync, or wait for the rest).
+inline std::optional<ParseStep> expectHeader(const uint8_t* p, size_t left, uint8_t s0, uint8_t s1,
+                                             size_t header) {
+  if (p[0] != s0) return ParseStep::skip();
+  if (left < 2) return ParseStep::wait();
+  if (p[1] != s1) return ParseStep::skip();
+  if (left < header) return ParseStep::wait();
+  return std::nullopt;
+}
+
+// The bytes a binary decoder (RPLIDAR, YDLIDAR, HI219, wheel board) has been fed and not yet
+// decoded, with the run of bytes it skipped to resynchronise. feed() appends, then a step
+// function decodes from the front until it waits for more; what it took or skipped is dropped,
+// so at most one unfinished packet is held.
+class PacketBuffer {
+ public:
+  PacketBuffer(std::string name, std::string why) : skipped_(std::move(name), std::move(why)) {}
+
+  // `step(p, left, offset)`: the ParseStep at `p` (`left` bytes from it, at stream `offset`).
+  // True when every byte was taken or skipped (then the skipped run can be reported: no
+  // packet can start in it any more).
+  template <class Step>
+  bool feed(const uint8_t* data, size_t size, DecoderCounters* counters, Step step) {
+    counters->bytes += static_cast<int64_t>(size);
+    buffer_.insert(buffer_.end(), data, data + size);
+    size_t at = 0;
+    while (at < buffer_.size()) {
+      const int64_t offset = offset_ + static_cast<int64_t>(at);
+      const ParseStep s = step(buffer_.data() + at, buffer_.size() - at, offset);
+      if (s.kind == ParseStep::kWait) break;
+      if (s.kind == ParseStep::kSkip) skipped_.skip(offset, s.bytes);
+      at += s.bytes;
+    }
+    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
+    offset_ += static_cast<int64_t>(at);
+    return buffer_.empty();
+  }
+
+  // The same, reporting the skipped run at the end when nothing is left.
+  template <class Event, class Step>
+  void feed(const uint8_t* data, size_t size, DecoderCounters* counters, std::vector<Event>* out,
+            Step step) {
+    if (feed(data, size, counters, step)) skipped_.flush(counters, out);
+  }
+
+  // Reports the run of skipped bytes before the packet about to be emitted.
+  template <class Event>
+  void flushSkipped(DecoderCounters* counters, std::vector<Event>* out) {
+    skipped_.flush(counters, out);
+  }
+  bool skippedNone() const { return skipped_.empty(); }
+
+  // A packet whose check fails: dropped and counted, and its bytes searched again from the
+  // next one (its sync bytes may have been a false start inside other data).
+  template <class Event>
+  ParseStep dropBadPacket(int64_t offset, std::string what, DecoderCounters* counters,
+                          std::vector<Event>* out) {
+    skipped_.flush(counters, out);
+    ++counters->checksum_errors;
+    ++counters->resyncs;
+    ++counters->discarded_bytes;
+    out->push_back(DecodeError{offset, std::move(what)});
+    return ParseStep::take(1);
+  }
+
+  void clear() {
+    buffer_.clear();
+    offset_ = 0;
+    skipped_.clear();
+  }
+
+ private:
+  std::vector<uint8_t> buffer_;
+  int64_t offset_ = 0;  // stream offset of buffer_[0]
+  SkippedRun skipped_;
 };
 
 }  // namespace sweepmap

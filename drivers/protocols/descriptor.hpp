@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <string>
 
 namespace sweepmap {
@@ -38,6 +39,30 @@ inline std::string encodeHealthReply(uint8_t type, int status, int error_code) {
   s.push_back(static_cast<char>(status));
   s.push_back(static_cast<char>(error_code & 0xff));
   s.push_back(static_cast<char>((error_code >> 8) & 0xff));
+  return s;
+}
+
+// Both devices' device info reply: the model, two firmware bytes (RPLIDAR: minor, major;
+// YDLIDAR: major, minor), the hardware version and a 16-byte serial (zero-padded).
+inline std::string encodeInfoReply(uint8_t type, int model, int firmware_byte1, int firmware_byte2,
+                                   int hardware, const std::string& serial16) {
+  std::string s = encodeDescriptor(20, 0, type);
+  s.push_back(static_cast<char>(model));
+  s.push_back(static_cast<char>(firmware_byte1));
+  s.push_back(static_cast<char>(firmware_byte2));
+  s.push_back(static_cast<char>(hardware));
+  for (int i = 0; i < 16; ++i) s.push_back(i < static_cast<int>(serial16.size()) ? serial16[i] : 0);
+  return s;
+}
+
+// The info reply's serial: `n` bytes as upper-case hex digits.
+inline std::string hexBytes(const uint8_t* p, int n) {
+  std::string s;
+  for (int i = 0; i < n; ++i) {
+    char h[3];
+    std::snprintf(h, sizeof h, "%02X", p[i]);
+    s += h;
+  }
   return s;
 }
 

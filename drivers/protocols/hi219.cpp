@@ -47,8 +47,6 @@ uint16_t crc16(const uint8_t* data, size_t size, uint16_t crc) {
 void Decoder::reset() {
   counters_ = {};
   buffer_.clear();
-  buffer_offset_ = 0;
-  skipped_.clear();
 }
 
 void Decoder::parsePayload(const uint8_t* p, size_t n, int64_t offset, std::vector<Event>* out) {
@@ -116,54 +114,28 @@ void Decoder::parsePayload(const uint8_t* p, size_t n, int64_t offset, std::vect
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  counters_.bytes += static_cast<int64_t>(size);
-  buffer_.insert(buffer_.end(), data, data + size);
-  size_t at = 0;
-  const auto flushGarbage = [&] { skipped_.flush(&counters_, out); };
-  const auto skip = [&] {
-    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at));
-    ++at;
-  };
-  while (at < buffer_.size()) {
-    const uint8_t* p = buffer_.data() + at;
-    const size_t left = buffer_.size() - at;
-    if (p[0] != 0x5A) {
-      skip();
-      continue;
-    }
-    if (left < 2) break;
-    if (p[1] != 0xA5) {
-      skip();
-      continue;
-    }
-    if (left < kHeader) break;
-    const size_t len = u16(p + 2);
-    if (len == 0 || len > kMaxPayload) {
-      skip();  // a false sync
-      continue;
-    }
-    if (left < kHeader + len) break;
-    uint16_t crc = crc16(p, 4);
-    crc = crc16(p + kHeader, len, crc);
-    const int64_t offset = buffer_offset_ + static_cast<int64_t>(at);
-    if (crc != u16(p + 4)) {
-      // Dropped, and its bytes searched again: the 5A A5 may have been inside other data.
-      flushGarbage();
-      ++counters_.checksum_errors;
-      ++counters_.resyncs;
-      ++counters_.discarded_bytes;
-      out->push_back(DecodeError{
-          offset, "HI219 frame (" + std::to_string(len) + " bytes): CRC mismatch; frame dropped"});
-      ++at;
-      continue;
-    }
-    flushGarbage();
-    parsePayload(p + kHeader, len, offset, out);
-    at += kHeader + len;
+  buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
+}
+
+// 5A A5, the payload's length, its CRC, the payload.
+ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
+                              std::vector<Event>* out) {
+  if (const auto not_yet = expectHeader(p, left, 0x5A, 0xA5, kHeader)) return *not_yet;
+  const size_t len = u16(p + 2);
+  if (len == 0 || len > kMaxPayload) return ParseStep::skip();  // a false sync
+  if (left < kHeader + len) return ParseStep::wait();
+  uint16_t crc = crc16(p, 4);
+  crc = crc16(p + kHeader, len, crc);
+  if (crc != u16(p + 4)) {
+    return buffer_.dropBadPacket(
+        offset, "HI219 frame (" + std::to_string(len) + " bytes): CRC mismatch; frame dropped",
+        &counters_, out);
   }
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
-  buffer_offset_ += static_cast<int64_t>(at);
-  if (buffer_.empty()) flushGarbage();
+  buffer_.flushSkipped(&counters_, out);
+  parsePayload(p + kHeader, len, offset, out);
+  return ParseStep::take(kHeader + len);
 }
 
 std::string encodeFrame(const std::string& payload) {

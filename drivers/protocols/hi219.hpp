@@ -57,10 +57,9 @@ class Decoder {
 
  private:
   void parsePayload(const uint8_t* p, size_t n, int64_t offset, std::vector<Event>* out);
+  ParseStep parseFrame(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
   DecoderCounters counters_;
-  std::vector<uint8_t> buffer_;
-  int64_t buffer_offset_ = 0;
-  SkippedRun skipped_{"HI219", "to the next frame"};
+  PacketBuffer buffer_{"HI219", "to the next frame"};
 };
 
 // Device side (the emulator): a frame of the given payload, with its CRC.

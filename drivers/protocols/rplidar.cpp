@@ -30,14 +30,30 @@ bool knownDescriptor(const uint8_t* p, uint32_t* length, int* mode, uint8_t* typ
          (*type == kTypeSampleRate && *length == 4 && *mode == 0);
 }
 
-std::string hex(const uint8_t* p, int n) {
-  std::string s;
-  for (int i = 0; i < n; ++i) {
-    char h[3];
-    std::snprintf(h, sizeof h, "%02X", p[i]);
-    s += h;
+// The content `c` of a single reply (device info, health or sample rate).
+Event decodeReply(uint8_t type, const uint8_t* c, int64_t offset) {
+  if (type == kTypeInfo) {
+    DeviceInfo i;
+    i.model = c[0];
+    i.firmware_minor = c[1];
+    i.firmware_major = c[2];
+    i.hardware = c[3];
+    i.serial = hexBytes(c + 4, 16);
+    i.offset = offset;
+    return i;
   }
-  return s;
+  if (type == kTypeHealth) {
+    Health h;
+    h.status = c[0];
+    h.error_code = c[1] | (c[2] << 8);
+    h.offset = offset;
+    return h;
+  }
+  SampleRate r;
+  r.standard_us = c[0] | (c[1] << 8);
+  r.express_us = c[2] | (c[3] << 8);
+  r.offset = offset;
+  return r;
 }
 
 }  // namespace
@@ -45,109 +61,76 @@ std::string hex(const uint8_t* p, int n) {
 void Decoder::reset() {
   counters_ = {};
   buffer_.clear();
-  buffer_offset_ = 0;
   scanning_ = false;
-  skipped_.clear();
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  counters_.bytes += static_cast<int64_t>(size);
-  buffer_.insert(buffer_.end(), data, data + size);
-  size_t at = 0;
-  Samples batch;
-  const auto flushBatch = [&] {
-    if (!batch.samples.empty()) out->push_back(std::move(batch));
-    batch = Samples{};
-  };
-  const auto flushGarbage = [&] {
-    if (skipped_.empty()) return;
-    flushBatch();
-    skipped_.flush(&counters_, out);
-  };
-  const auto skip = [&] {
-    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at));
-    ++at;
-  };
-  while (at < buffer_.size()) {
-    const size_t left = buffer_.size() - at;
-    const uint8_t* p = buffer_.data() + at;
-    const int64_t offset = buffer_offset_ + static_cast<int64_t>(at);
-    if (p[0] == 0xA5) {
-      if (left < kDescriptor) {
-        if (!scanning_ || left < 2 || p[1] == 0x5A) break;
-      } else {
-        uint32_t length = 0;
-        int mode = 0;
-        uint8_t type = 0;
-        if (knownDescriptor(p, &length, &mode, &type)) {
-          if (type != kTypeScan && left < kDescriptor + length) break;
-          flushGarbage();
-          flushBatch();
-          ++counters_.packets;
-          const uint8_t* c = p + kDescriptor;
-          if (type == kTypeScan) {
-            scanning_ = true;
-            out->push_back(ScanStart{offset});
-            at += kDescriptor;
-            continue;
-          }
-          scanning_ = false;
-          if (type == kTypeInfo) {
-            DeviceInfo i;
-            i.model = c[0];
-            i.firmware_minor = c[1];
-            i.firmware_major = c[2];
-            i.hardware = c[3];
-            i.serial = hex(c + 4, 16);
-            i.offset = offset;
-            out->push_back(i);
-          } else if (type == kTypeHealth) {
-            Health h;
-            h.status = c[0];
-            h.error_code = c[1] | (c[2] << 8);
-            h.offset = offset;
-            if (h.status != 0) ++counters_.device_errors;
-            out->push_back(h);
-          } else {
-            SampleRate r;
-            r.standard_us = c[0] | (c[1] << 8);
-            r.express_us = c[2] | (c[3] << 8);
-            r.offset = offset;
-            out->push_back(r);
-          }
-          at += kDescriptor + length;
-          continue;
+  const bool all_taken =
+      buffer_.feed(data, size, &counters_, [&](const uint8_t* p, size_t left, int64_t offset) {
+        if (p[0] == 0xA5) {
+          if (const auto step = parseReply(p, left, offset, out)) return *step;
         }
-      }
-    }
-    if (!scanning_) {
-      skip();
-      continue;
-    }
-    if (left < kSample) break;
-    if (!validSample(p)) {
-      skip();
-      continue;
-    }
-    flushGarbage();
-    Sample s;
-    s.start = p[0] & 1;
-    s.quality = p[0] >> 2;
-    s.angle_deg = ((p[1] >> 1) | (p[2] << 7)) / 64.0;
-    s.distance_mm = (p[3] | (p[4] << 8)) / 4.0;
-    s.end_offset = offset + static_cast<int64_t>(kSample);
-    if (s.angle_deg >= 360.0) {
-      skip();  // angle_q6 beyond a turn: not a sample
-      continue;
-    }
-    ++counters_.packets;
-    batch.samples.push_back(s);
-    at += kSample;
+        return parseSample(p, left, offset, out);
+      });
+  flushBatch(out);
+  if (all_taken) flushSkipped(out);
+}
+
+void Decoder::flushBatch(std::vector<Event>* out) {
+  if (!batch_.samples.empty()) out->push_back(std::move(batch_));
+  batch_ = Samples{};
+}
+
+// The samples decoded so far go out before the error that follows them.
+void Decoder::flushSkipped(std::vector<Event>* out) {
+  if (buffer_.skippedNone()) return;
+  flushBatch(out);
+  buffer_.flushSkipped(&counters_, out);
+}
+
+// A5 5A and a descriptor this host knows, with its reply; nothing when the bytes are not one
+// (while scanning, an A5 may start a sample).
+std::optional<ParseStep> Decoder::parseReply(const uint8_t* p, size_t left, int64_t offset,
+                                             std::vector<Event>* out) {
+  if (left < kDescriptor) {
+    if (!scanning_ || left < 2 || p[1] == 0x5A) return ParseStep::wait();
+    return std::nullopt;
   }
-  flushBatch();
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
-  buffer_offset_ += static_cast<int64_t>(at);
-  if (buffer_.empty()) flushGarbage();
+  uint32_t length = 0;
+  int mode = 0;
+  uint8_t type = 0;
+  if (!knownDescriptor(p, &length, &mode, &type)) return std::nullopt;
+  if (type != kTypeScan && left < kDescriptor + length) return ParseStep::wait();
+  flushSkipped(out);
+  flushBatch(out);
+  ++counters_.packets;
+  scanning_ = type == kTypeScan;
+  if (scanning_) {
+    out->push_back(ScanStart{offset});
+    return ParseStep::take(kDescriptor);
+  }
+  out->push_back(decodeReply(type, p + kDescriptor, offset));
+  if (type == kTypeHealth && std::get<Health>(out->back()).status != 0) ++counters_.device_errors;
+  return ParseStep::take(kDescriptor + length);
+}
+
+// A 5-byte sample of the scan stream, added to the batch.
+ParseStep Decoder::parseSample(const uint8_t* p, size_t left, int64_t offset,
+                               std::vector<Event>* out) {
+  if (!scanning_) return ParseStep::skip();
+  if (left < kSample) return ParseStep::wait();
+  if (!validSample(p)) return ParseStep::skip();
+  flushSkipped(out);
+  Sample s;
+  s.start = p[0] & 1;
+  s.quality = p[0] >> 2;
+  s.angle_deg = ((p[1] >> 1) | (p[2] << 7)) / 64.0;
+  s.distance_mm = (p[3] | (p[4] << 8)) / 4.0;
+  s.end_offset = offset + static_cast<int64_t>(kSample);
+  if (s.angle_deg >= 360.0) return ParseStep::skip();  // angle_q6 beyond a turn: not a sample
+  ++counters_.packets;
+  batch_.samples.push_back(s);
+  return ParseStep::take(kSample);
 }
 
 std::string request(uint8_t cmd, const std::string& payload) {
@@ -168,13 +151,7 @@ std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {
 
 std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
                        const std::string& serial16) {
-  std::string s = encodeDescriptor(20, 0, kTypeInfo);
-  s.push_back(static_cast<char>(model));
-  s.push_back(static_cast<char>(fw_minor));
-  s.push_back(static_cast<char>(fw_major));
-  s.push_back(static_cast<char>(hardware));
-  for (int i = 0; i < 16; ++i) s.push_back(i < static_cast<int>(serial16.size()) ? serial16[i] : 0);
-  return s;
+  return encodeInfoReply(kTypeInfo, model, fw_minor, fw_major, hardware, serial16);
 }
 
 std::string encodeHealth(int status, int error_code) {

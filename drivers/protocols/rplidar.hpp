@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -68,11 +69,15 @@ class Decoder {
   void reset();
 
  private:
+  std::optional<ParseStep> parseReply(const uint8_t* p, size_t left, int64_t offset,
+                                      std::vector<Event>* out);
+  ParseStep parseSample(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
+  void flushBatch(std::vector<Event>* out);
+  void flushSkipped(std::vector<Event>* out);
   DecoderCounters counters_;
-  std::vector<uint8_t> buffer_;
-  int64_t buffer_offset_ = 0;
+  PacketBuffer buffer_{"RPLIDAR", "(bad start or check bits)"};
   bool scanning_ = false;  // after a scan descriptor: 5-byte samples
-  SkippedRun skipped_{"RPLIDAR", "(bad start or check bits)"};
+  Samples batch_;          // the samples of this feed() so far
 };
 
 // Host side.

@@ -336,12 +336,21 @@ void Decoder::line(std::string_view text, int64_t offset, std::vector<Event>* ou
 void Decoder::finishReply(std::vector<Event>* out) {
   const std::string command = echo_.substr(0, 2);
   const std::string where = "SCIP " + command + " reply";
-  // Every body line ends with its checksum.
+  if (!bodyChecksumsOk(command, where, out)) return;
+  const bool data_status = (isStream(command) && status_ == "99") ||
+                           (!isStream(command) && isScanCommand(command) && status_ == "00");
+  if (isScanCommand(command) && data_status) return emitScan(command, where, out);
+  emitReply(command, where, out);
+}
+
+// Every body line ends with its checksum; the first that fails drops the reply.
+bool Decoder::bodyChecksumsOk(const std::string& command, const std::string& where,
+                              std::vector<Event>* out) {
   for (const auto& [text, at] : body_) {
     if (text.size() < 2) {
       ++counters_.checksum_errors;
       out->push_back(DecodeError{at, where + ": line too short for its checksum"});
-      return;
+      return false;
     }
     const std::string_view data(text.data(), text.size() - 1);
     const bool info = command == "VV" || command == "PP" || command == "II";
@@ -353,62 +362,77 @@ void Decoder::finishReply(std::vector<Event>* out) {
       out->push_back(DecodeError{at, where + ": checksum '" + std::string(1, text.back()) +
                                          "' of a data line should be '" + checksum(summed) +
                                          "'; reply dropped"});
-      return;
+      return false;
     }
   }
-  const bool data_status = (isStream(command) && status_ == "99") ||
-                           (!isStream(command) && isScanCommand(command) && status_ == "00");
-  if (isScanCommand(command) && data_status) {
-    ScanData s;
-    s.command = command;
-    s.offset = reply_offset_;
-    s.start_step = digits(echo_, 2, 4);
-    s.end_step = digits(echo_, 6, 4);
-    s.cluster = std::max(1, digits(echo_, 10, 2));
-    if (isStream(command)) s.remaining = std::max(0, digits(echo_, 13, 2));
-    if (s.start_step < 0 || s.end_step < s.start_step || body_.empty() ||
-        body_.front().first.size() != kStampChars + 1) {
-      ++counters_.device_errors;
-      out->push_back(DecodeError{reply_offset_, where + ": malformed scan header '" + echo_ + "'"});
-      return;
-    }
-    s.time_ms = *decodeValue(std::string_view(body_.front().first).substr(0, kStampChars));
-    std::string joined;
-    for (size_t i = 1; i < body_.size(); ++i) {
-      joined.append(body_[i].first, 0, body_[i].first.size() - 1);
-    }
-    const int per = charsPerValue(command) * (hasIntensity(command) ? 2 : 1);
-    const size_t n = static_cast<size_t>((s.end_step - s.start_step) / s.cluster + 1);
-    if (joined.size() != n * static_cast<size_t>(per)) {
-      ++counters_.device_errors;
-      out->push_back(DecodeError{reply_offset_, where + ": " + std::to_string(joined.size()) +
-                                                    " data characters, expected " +
-                                                    std::to_string(n * per)});
-      return;
-    }
-    const int w = charsPerValue(command);
-    s.ranges_mm.resize(n);
-    if (hasIntensity(command)) s.intensities.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      const std::string_view v(joined.data() + i * per, static_cast<size_t>(per));
-      const auto r = decodeValue(v.substr(0, static_cast<size_t>(w)));
-      const auto in = hasIntensity(command) ? decodeValue(v.substr(static_cast<size_t>(w)))
-                                            : std::optional<uint32_t>(0);
-      if (!r || !in) {
-        // A flipped bit 6 passes SCIP's 6-bit checksum; a character out of range shows it.
-        ++counters_.checksum_errors;
-        out->push_back(DecodeError{reply_offset_,
-                                   where + ": invalid character in value " + std::to_string(i)});
-        return;
-      }
-      s.ranges_mm[i] = *r;
-      if (hasIntensity(command)) s.intensities[i] = *in;
-    }
-    ++counters_.packets;
-    ++counters_.scans;
-    out->push_back(std::move(s));
+  return true;
+}
+
+// A scan reply (GD/GS/GE, or a streamed MD/MS/ME scan): the echo's range, the time stamp
+// line, then the values over the data lines.
+void Decoder::emitScan(const std::string& command, const std::string& where,
+                       std::vector<Event>* out) {
+  ScanData s;
+  s.command = command;
+  s.offset = reply_offset_;
+  s.start_step = digits(echo_, 2, 4);
+  s.end_step = digits(echo_, 6, 4);
+  s.cluster = std::max(1, digits(echo_, 10, 2));
+  if (isStream(command)) s.remaining = std::max(0, digits(echo_, 13, 2));
+  if (s.start_step < 0 || s.end_step < s.start_step || body_.empty() ||
+      body_.front().first.size() != kStampChars + 1) {
+    ++counters_.device_errors;
+    out->push_back(DecodeError{reply_offset_, where + ": malformed scan header '" + echo_ + "'"});
     return;
   }
+  s.time_ms = *decodeValue(std::string_view(body_.front().first).substr(0, kStampChars));
+  if (!decodeScanValues(where, &s, out)) return;
+  ++counters_.packets;
+  ++counters_.scans;
+  out->push_back(std::move(s));
+}
+
+// The data lines (their checksums off) joined and cut into one range (and intensity) per
+// cluster of `s`'s steps.
+bool Decoder::decodeScanValues(const std::string& where, ScanData* s, std::vector<Event>* out) {
+  const std::string& command = s->command;
+  std::string joined;
+  for (size_t i = 1; i < body_.size(); ++i) {
+    joined.append(body_[i].first, 0, body_[i].first.size() - 1);
+  }
+  const int per = charsPerValue(command) * (hasIntensity(command) ? 2 : 1);
+  const size_t n = static_cast<size_t>((s->end_step - s->start_step) / s->cluster + 1);
+  if (joined.size() != n * static_cast<size_t>(per)) {
+    ++counters_.device_errors;
+    out->push_back(DecodeError{reply_offset_, where + ": " + std::to_string(joined.size()) +
+                                                  " data characters, expected " +
+                                                  std::to_string(n * per)});
+    return false;
+  }
+  const int w = charsPerValue(command);
+  s->ranges_mm.resize(n);
+  if (hasIntensity(command)) s->intensities.resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const std::string_view v(joined.data() + i * per, static_cast<size_t>(per));
+    const auto r = decodeValue(v.substr(0, static_cast<size_t>(w)));
+    const auto in = hasIntensity(command) ? decodeValue(v.substr(static_cast<size_t>(w)))
+                                          : std::optional<uint32_t>(0);
+    if (!r || !in) {
+      // A flipped bit 6 passes SCIP's 6-bit checksum; a character out of range shows it.
+      ++counters_.checksum_errors;
+      out->push_back(
+          DecodeError{reply_offset_, where + ": invalid character in value " + std::to_string(i)});
+      return false;
+    }
+    s->ranges_mm[i] = *r;
+    if (hasIntensity(command)) s->intensities[i] = *in;
+  }
+  return true;
+}
+
+// Any other reply: its status, the KEY:value; lines of VV/PP/II, the time of TM1.
+void Decoder::emitReply(const std::string& command, const std::string& where,
+                        std::vector<Event>* out) {
   Reply r;
   r.command = command;
   r.echo = echo_;

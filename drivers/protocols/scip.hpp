@@ -80,6 +80,11 @@ class Decoder {
   void line(std::string_view text, int64_t offset, std::vector<Event>* out);
   bool startReply(std::string_view echo, int64_t offset, std::vector<Event>* out);
   void finishReply(std::vector<Event>* out);
+  bool bodyChecksumsOk(const std::string& command, const std::string& where,
+                       std::vector<Event>* out);
+  void emitScan(const std::string& command, const std::string& where, std::vector<Event>* out);
+  bool decodeScanValues(const std::string& where, ScanData* s, std::vector<Event>* out);
+  void emitReply(const std::string& command, const std::string& where, std::vector<Event>* out);
   void discard(int64_t offset, size_t bytes, const std::string& why, std::vector<Event>* out);
   void flushGarbage(std::vector<Event>* out);
 

@@ -45,82 +45,67 @@ uint16_t crc16(const uint8_t* data, size_t size) {
 void Decoder::reset() { *this = Decoder(); }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  counters_.bytes += static_cast<int64_t>(size);
-  buffer_.insert(buffer_.end(), data, data + size);
-  size_t at = 0;
-  const auto flushGarbage = [&] { skipped_.flush(&counters_, out); };
-  const auto skip = [&] {
-    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at));
-    ++at;
-  };
-  while (at < buffer_.size()) {
-    const uint8_t* p = buffer_.data() + at;
-    const size_t left = buffer_.size() - at;
-    if (p[0] != 0xA5) {
-      skip();
-      continue;
-    }
-    if (left < 2) break;
-    if (p[1] != 0x5B) {
-      skip();
-      continue;
-    }
-    if (left < kHeader) break;
-    const uint8_t type = p[2];
-    const size_t n = p[3];
-    const bool known = (type == kTypeTicks && n == 14) || (type == kTypeSpeed && n == 4);
-    if (!known && (type == 0 || type > 0x0F || n > kMaxPayload)) {
-      skip();  // not a header
-      continue;
-    }
-    if (left < kHeader + n + kCrc) break;
-    const int64_t offset = buffer_offset_ + static_cast<int64_t>(at);
-    if (crc16(p + 2, kHeader - 2 + n) != u16(p + kHeader + n)) {
-      flushGarbage();
-      ++counters_.checksum_errors;
-      ++counters_.resyncs;
-      ++counters_.discarded_bytes;
-      out->push_back(DecodeError{offset, "wheel board frame (type " + std::to_string(type) +
-                                             "): CRC mismatch; frame dropped"});
-      ++at;
-      continue;
-    }
-    flushGarbage();
-    const uint16_t seq = u16(p + 4);
-    const uint8_t* d = p + kHeader;
-    const size_t slot = std::min<size_t>(type, 2);
-    if (have_seq_[slot]) gaps_ += static_cast<uint16_t>(seq - last_seq_[slot] - 1);
-    have_seq_[slot] = true;
-    last_seq_[slot] = seq;
-    ++counters_.packets;
-    if (type == kTypeTicks && n == 14) {
-      Ticks t;
-      t.seq = seq;
-      t.time_us = u32(d);
-      t.left = static_cast<int32_t>(u32(d + 4));
-      t.right = static_cast<int32_t>(u32(d + 8));
-      t.flags = u16(d + 12);
-      t.offset = offset;
-      if (t.flags & (kFlagLeftEncoder | kFlagRightEncoder | kFlagDriver)) ++counters_.device_errors;
-      out->push_back(t);
-    } else if (type == kTypeSpeed && n == 4) {
-      Speed s;
-      s.seq = seq;
-      s.v_m_s = static_cast<int16_t>(u16(d)) * 1e-3;
-      s.w_rad_s = static_cast<int16_t>(u16(d + 2)) * 1e-3;
-      s.offset = offset;
-      out->push_back(s);
-    } else {
-      ++counters_.device_errors;
-      out->push_back(DecodeError{offset, "wheel board: frame type " + std::to_string(type) +
-                                             " with " + std::to_string(n) +
-                                             " bytes is not one this host knows; skipped"});
-    }
-    at += kHeader + n + kCrc;
+  buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
+}
+
+// A5 5B, type, length, sequence number, payload, CRC.
+ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
+                              std::vector<Event>* out) {
+  if (const auto not_yet = expectHeader(p, left, 0xA5, 0x5B, kHeader)) return *not_yet;
+  const uint8_t type = p[2];
+  const size_t n = p[3];
+  const bool known = (type == kTypeTicks && n == 14) || (type == kTypeSpeed && n == 4);
+  if (!known && (type == 0 || type > 0x0F || n > kMaxPayload)) {
+    return ParseStep::skip();  // not a header
   }
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
-  buffer_offset_ += static_cast<int64_t>(at);
-  if (buffer_.empty()) flushGarbage();
+  if (left < kHeader + n + kCrc) return ParseStep::wait();
+  if (crc16(p + 2, kHeader - 2 + n) != u16(p + kHeader + n)) {
+    return buffer_.dropBadPacket(
+        offset,
+        "wheel board frame (type " + std::to_string(type) + "): CRC mismatch; frame dropped",
+        &counters_, out);
+  }
+  buffer_.flushSkipped(&counters_, out);
+  decodeFrame(p, offset, out);
+  return ParseStep::take(kHeader + n + kCrc);
+}
+
+// A frame whose CRC holds: its sequence number checked for gaps, its payload decoded.
+void Decoder::decodeFrame(const uint8_t* p, int64_t offset, std::vector<Event>* out) {
+  const uint8_t type = p[2];
+  const size_t n = p[3];
+  const uint16_t seq = u16(p + 4);
+  const uint8_t* d = p + kHeader;
+  const size_t slot = std::min<size_t>(type, 2);
+  if (have_seq_[slot]) gaps_ += static_cast<uint16_t>(seq - last_seq_[slot] - 1);
+  have_seq_[slot] = true;
+  last_seq_[slot] = seq;
+  ++counters_.packets;
+  if (type == kTypeTicks && n == 14) {
+    Ticks t;
+    t.seq = seq;
+    t.time_us = u32(d);
+    t.left = static_cast<int32_t>(u32(d + 4));
+    t.right = static_cast<int32_t>(u32(d + 8));
+    t.flags = u16(d + 12);
+    t.offset = offset;
+    if (t.flags & (kFlagLeftEncoder | kFlagRightEncoder | kFlagDriver)) ++counters_.device_errors;
+    out->push_back(t);
+  } else if (type == kTypeSpeed && n == 4) {
+    Speed s;
+    s.seq = seq;
+    s.v_m_s = static_cast<int16_t>(u16(d)) * 1e-3;
+    s.w_rad_s = static_cast<int16_t>(u16(d + 2)) * 1e-3;
+    s.offset = offset;
+    out->push_back(s);
+  } else {
+    ++counters_.device_errors;
+    out->push_back(DecodeError{offset, "wheel board: frame type " + std::to_string(type) +
+                                           " with " + std::to_string(n) +
+                                           " bytes is not one this host knows; skipped"});
+  }
 }
 
 std::string encodeTicks(const Ticks& t) {

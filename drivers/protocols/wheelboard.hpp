@@ -71,10 +71,10 @@ class Decoder {
   void reset();
 
  private:
+  ParseStep parseFrame(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
+  void decodeFrame(const uint8_t* p, int64_t offset, std::vector<Event>* out);
   DecoderCounters counters_;
-  std::vector<uint8_t> buffer_;
-  int64_t buffer_offset_ = 0;
-  SkippedRun skipped_{"wheel board", "to the next frame"};
+  PacketBuffer buffer_{"wheel board", "to the next frame"};
   bool have_seq_[3] = {false, false, false};
   uint16_t last_seq_[3] = {0, 0, 0};
   int64_t gaps_ = 0;

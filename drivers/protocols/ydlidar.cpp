@@ -27,6 +27,65 @@ uint16_t encodeAngle(double deg) {
   return static_cast<uint16_t>((q << 1) | 1);
 }
 
+struct PacketHeader {
+  uint8_t ct = 0;
+  size_t lsn = 0;
+  uint16_t fsa = 0, lsa = 0, cs = 0;
+};
+
+PacketHeader readHeader(const uint8_t* p) {
+  return PacketHeader{p[2], p[3], le16(p + 4), le16(p + 6), le16(p + 8)};
+}
+
+// The XOR of the packet's 16-bit words but its check code.
+uint16_t checkCode(const uint8_t* p, const PacketHeader& h) {
+  uint16_t x = le16(p) ^ h.fsa ^ static_cast<uint16_t>(h.ct | (h.lsn << 8)) ^ h.lsa;
+  for (size_t i = 0; i < h.lsn; ++i) x ^= le16(p + kHeader + 2 * i);
+  return x;
+}
+
+DeviceInfo decodeInfo(const uint8_t* c, int64_t offset) {
+  DeviceInfo info;
+  info.model = c[0];
+  info.firmware_major = c[1];  // the manual: low byte major, high byte minor
+  info.firmware_minor = c[2];
+  info.hardware = c[3];
+  info.serial = hexBytes(c + 4, 16);
+  info.offset = offset;
+  return info;
+}
+
+Health decodeHealth(const uint8_t* c, int64_t offset) {
+  Health h;
+  h.status = c[0];
+  h.error_code = le16(c + 1);
+  h.offset = offset;
+  return h;
+}
+
+// The samples' distances and angles: first-level by interpolation FSA..LSA, then corrected.
+Packet decodePacket(const uint8_t* p, const PacketHeader& h, int64_t offset) {
+  Packet packet;
+  packet.ring_start = h.ct & 1;
+  packet.offset = offset;
+  packet.end_offset = offset + static_cast<int64_t>(kHeader + 2 * h.lsn);
+  const double first = (h.fsa >> 1) / 64.0, last = (h.lsa >> 1) / 64.0;
+  double span = last - first;
+  if (span < 0) span += 360.0;
+  for (size_t i = 0; i < h.lsn; ++i) {
+    Sample s;
+    s.distance_mm = le16(p + kHeader + 2 * i) / 4.0;
+    s.raw_angle_deg = h.lsn > 1 ? first + span * static_cast<double>(i) / double(h.lsn - 1) : first;
+    double a = s.raw_angle_deg + angleCorrectionDeg(s.distance_mm);
+    a = std::fmod(a, 360.0);
+    if (a < 0) a += 360.0;
+    s.raw_angle_deg = std::fmod(s.raw_angle_deg, 360.0);
+    s.angle_deg = a;
+    packet.samples.push_back(s);
+  }
+  return packet;
+}
+
 }  // namespace
 
 double angleCorrectionDeg(double d) {
@@ -37,140 +96,67 @@ double angleCorrectionDeg(double d) {
 void Decoder::reset() {
   counters_ = {};
   buffer_.clear();
-  buffer_offset_ = 0;
-  skipped_.clear();
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  counters_.bytes += static_cast<int64_t>(size);
-  buffer_.insert(buffer_.end(), data, data + size);
-  parse(out, false);
+  // Buffered: at most one packet header's worth is waited for, a packet is at most
+  // 10 + 2 * 255 bytes.
+  buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    if (p[0] == 0xA5) return parseReply(p, left, offset, out);
+    if (p[0] == 0xAA) return parsePacket(p, left, offset, out);
+    return ParseStep::skip();
+  });
 }
 
-void Decoder::parse(std::vector<Event>* out, bool) {
-  size_t at = 0;
-  const auto flushGarbage = [&] { skipped_.flush(&counters_, out); };
-  const auto skip = [&](size_t n) {
-    skipped_.skip(buffer_offset_ + static_cast<int64_t>(at), n);
-    at += n;
-  };
-  while (at < buffer_.size()) {
-    const size_t left = buffer_.size() - at;
-    const uint8_t* p = buffer_.data() + at;
-    const int64_t offset = buffer_offset_ + static_cast<int64_t>(at);
-    if (p[0] == 0xA5) {
-      if (left < 2) break;
-      if (p[1] != 0x5A) {
-        skip(1);
-        continue;
-      }
-      if (left < kDescriptor) break;
-      Descriptor descriptor;
-      parseDescriptor(p, &descriptor);
-      const uint32_t length = descriptor.length;
-      const int mode = descriptor.mode;
-      const uint8_t type = descriptor.type;
-      if (type == kTypeScan && mode == 1) {
-        flushGarbage();
-        ++counters_.packets;
-        out->push_back(ScanStart{offset});
-        at += kDescriptor;
-        continue;
-      }
-      if ((type == kTypeInfo && length == 20 && mode == 0) ||
-          (type == kTypeHealth && length == 3 && mode == 0)) {
-        if (left < kDescriptor + length) break;
-        flushGarbage();
-        const uint8_t* c = p + kDescriptor;
-        ++counters_.packets;
-        if (type == kTypeInfo) {
-          DeviceInfo info;
-          info.model = c[0];
-          info.firmware_major = c[1];  // the manual: low byte major, high byte minor
-          info.firmware_minor = c[2];
-          info.hardware = c[3];
-          for (int i = 0; i < 16; ++i) {
-            char hex[3];
-            std::snprintf(hex, sizeof hex, "%02X", c[4 + i]);
-            info.serial += hex;
-          }
-          info.offset = offset;
-          out->push_back(info);
-        } else {
-          Health h;
-          h.status = c[0];
-          h.error_code = le16(c + 1);
-          h.offset = offset;
-          if (h.status != 0) ++counters_.device_errors;
-          out->push_back(h);
-        }
-        at += kDescriptor + length;
-        continue;
-      }
-      skip(1);  // A5 5A with a descriptor we do not know: a false start
-      continue;
-    }
-    if (p[0] == 0xAA) {
-      if (left < 2) break;
-      if (p[1] != 0x55) {
-        skip(1);
-        continue;
-      }
-      if (left < kHeader) break;
-      const uint8_t ct = p[2];
-      const size_t lsn = p[3];
-      const uint16_t fsa = le16(p + 4), lsa = le16(p + 6), cs = le16(p + 8);
-      if (lsn == 0 || (fsa & 1) == 0 || (lsa & 1) == 0 || ((ct & 1) && lsn != 1)) {
-        skip(1);  // not a packet header: resynchronise at the next byte
-        continue;
-      }
-      const size_t total = kHeader + 2 * lsn;
-      if (left < total) break;
-      uint16_t x = le16(p) ^ fsa ^ static_cast<uint16_t>(ct | (lsn << 8)) ^ lsa;
-      for (size_t i = 0; i < lsn; ++i) x ^= le16(p + kHeader + 2 * i);
-      if (x != cs) {
-        // A bad check: the packet is dropped, and its bytes searched again for a real
-        // header (the AA 55 may have been a false one inside good data).
-        flushGarbage();
-        ++counters_.checksum_errors;
-        out->push_back(DecodeError{offset, "YDLIDAR packet (LSN " + std::to_string(lsn) +
-                                               "): check code mismatch; packet dropped"});
-        at += 1;
-        ++counters_.resyncs;
-        counters_.discarded_bytes += 1;
-        continue;
-      }
-      flushGarbage();
-      Packet packet;
-      packet.ring_start = ct & 1;
-      packet.offset = offset;
-      packet.end_offset = offset + static_cast<int64_t>(total);
-      const double first = (fsa >> 1) / 64.0, last = (lsa >> 1) / 64.0;
-      double span = last - first;
-      if (span < 0) span += 360.0;
-      for (size_t i = 0; i < lsn; ++i) {
-        Sample s;
-        s.distance_mm = le16(p + kHeader + 2 * i) / 4.0;
-        s.raw_angle_deg = lsn > 1 ? first + span * static_cast<double>(i) / double(lsn - 1) : first;
-        double a = s.raw_angle_deg + angleCorrectionDeg(s.distance_mm);
-        a = std::fmod(a, 360.0);
-        if (a < 0) a += 360.0;
-        s.raw_angle_deg = std::fmod(s.raw_angle_deg, 360.0);
-        s.angle_deg = a;
-        packet.samples.push_back(s);
-      }
-      ++counters_.packets;
-      out->push_back(std::move(packet));
-      at += total;
-      continue;
-    }
-    skip(1);
+// A5 5A: a reply descriptor (the scan stream's start, device info or health).
+ParseStep Decoder::parseReply(const uint8_t* p, size_t left, int64_t offset,
+                              std::vector<Event>* out) {
+  if (const auto not_yet = expectHeader(p, left, 0xA5, 0x5A, kDescriptor)) return *not_yet;
+  Descriptor d;
+  parseDescriptor(p, &d);
+  if (d.type == kTypeScan && d.mode == 1) {
+    buffer_.flushSkipped(&counters_, out);
+    ++counters_.packets;
+    out->push_back(ScanStart{offset});
+    return ParseStep::take(kDescriptor);
   }
-  // Keep only the unparsed tail (bounded: at most one packet header's worth is waited for,
-  // a packet is at most 10 + 2 * 255 bytes).
-  buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
-  buffer_offset_ += static_cast<int64_t>(at);
-  if (buffer_.empty()) flushGarbage();
+  const bool info = d.type == kTypeInfo && d.length == 20 && d.mode == 0;
+  const bool health = d.type == kTypeHealth && d.length == 3 && d.mode == 0;
+  if (!info && !health) return ParseStep::skip();  // a descriptor we do not know: a false start
+  if (left < kDescriptor + d.length) return ParseStep::wait();
+  buffer_.flushSkipped(&counters_, out);
+  ++counters_.packets;
+  const uint8_t* c = p + kDescriptor;
+  if (info) {
+    out->push_back(decodeInfo(c, offset));
+  } else {
+    const Health h = decodeHealth(c, offset);
+    if (h.status != 0) ++counters_.device_errors;
+    out->push_back(h);
+  }
+  return ParseStep::take(kDescriptor + d.length);
+}
+
+// AA 55: a sample packet, checked against its check code.
+ParseStep Decoder::parsePacket(const uint8_t* p, size_t left, int64_t offset,
+                               std::vector<Event>* out) {
+  if (const auto not_yet = expectHeader(p, left, 0xAA, 0x55, kHeader)) return *not_yet;
+  const PacketHeader h = readHeader(p);
+  if (h.lsn == 0 || (h.fsa & 1) == 0 || (h.lsa & 1) == 0 || ((h.ct & 1) && h.lsn != 1)) {
+    return ParseStep::skip();  // not a packet header: resynchronise at the next byte
+  }
+  const size_t total = kHeader + 2 * h.lsn;
+  if (left < total) return ParseStep::wait();
+  if (checkCode(p, h) != h.cs) {
+    return buffer_.dropBadPacket(
+        offset,
+        "YDLIDAR packet (LSN " + std::to_string(h.lsn) + "): check code mismatch; packet dropped",
+        &counters_, out);
+  }
+  buffer_.flushSkipped(&counters_, out);
+  ++counters_.packets;
+  out->push_back(decodePacket(p, h, offset));
+  return ParseStep::take(total);
 }
 
 std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {
@@ -179,13 +165,7 @@ std::string encodeDescriptor(uint32_t length, int mode, uint8_t type) {
 
 std::string encodeInfo(int model, int fw_major, int fw_minor, int hardware,
                        const std::string& serial16) {
-  std::string s = encodeDescriptor(20, 0, kTypeInfo);
-  s.push_back(static_cast<char>(model));
-  s.push_back(static_cast<char>(fw_major));
-  s.push_back(static_cast<char>(fw_minor));
-  s.push_back(static_cast<char>(hardware));
-  for (int i = 0; i < 16; ++i) s.push_back(i < static_cast<int>(serial16.size()) ? serial16[i] : 0);
-  return s;
+  return encodeInfoReply(kTypeInfo, model, fw_major, fw_minor, hardware, serial16);
 }
 
 std::string encodeHealth(int status, int error_code) {

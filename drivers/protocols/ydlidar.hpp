@@ -70,11 +70,10 @@ class Decoder {
   void reset();
 
  private:
-  void parse(std::vector<Event>* out, bool final_pass);
+  ParseStep parseReply(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
+  ParseStep parsePacket(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
   DecoderCounters counters_;
-  std::vector<uint8_t> buffer_;
-  int64_t buffer_offset_ = 0;  // stream offset of buffer_[0]
-  SkippedRun skipped_{"YDLIDAR", "to the next packet"};
+  PacketBuffer buffer_{"YDLIDAR", "to the next packet"};
 };
 
 // Device side (the emulator): encoders. Angles in degrees [0, 360), raw (uncorrected).

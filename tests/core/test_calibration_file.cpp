@@ -2,6 +2,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "core/calibration_file.hpp"
@@ -118,6 +119,72 @@ TEST_F(CalibrationFileTest, MountingRejectsBadFilesNamingTheKey) {
   EXPECT_NE(error("plate: {alpha_deg: 30}\n").find("'plate'"), std::string::npos);
   EXPECT_NE(error("mounting: [1\n").find("m.yaml"), std::string::npos);
   EXPECT_EQ(error("mounting: {gamma_rad: 0.01, beta_rad: 0, alpha_rad: -0.02}\n"), "");
+}
+
+std::string readBytes(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+// The bytes every kind writes, as the tools wrote them before the kinds shared one writer: a
+// calibration file is a config file under version control, so its text must not drift.
+TEST_F(CalibrationFileTest, EveryKindWritesTheSameBytesAsBefore) {
+  const std::map<std::string, std::string> source{
+      {"tool", "sweepmap calib"}, {"date", "2026-11-22T04:00:00Z"}, {"seed", "7"}};
+  const std::vector<std::string> logs{"a.lcmlog", "b.lcmlog"};
+  const std::string provenance =
+      "source:\n  date: 2026-11-22T04:00:00Z\n  seed: 7\n  tool: sweepmap calib\n"
+      "  logs:\n    - a.lcmlog\n    - b.lcmlog\n";
+
+  PlateCalibration plate;
+  plate.alpha_deg = 29.359812345;
+  plate.source = source;
+  plate.logs = logs;
+  const std::string p = (dir_ / "plate.yaml").string();
+  writePlateCalibration(p, plate);
+  EXPECT_EQ(readBytes(p),
+            "# Plate-angle calibration (Yuan 2021 Algorithm A1); read via "
+            "plate.calibration_file\nplate:\n  alpha_deg: 29.359812345\n" +
+                provenance);
+
+  MountingCalibration mounting;
+  mounting.gamma_rad = 0.0355;
+  mounting.beta_rad = -0.0126;
+  mounting.alpha_rad = 1e-7;
+  mounting.source = source;
+  mounting.logs = logs;
+  const std::string m = (dir_ / "mounting.yaml").string();
+  writeMountingCalibration(m, mounting);
+  EXPECT_EQ(readBytes(m),
+            "# Lidar mounting calibration (Miao 2022 section 4.2); read via "
+            "mounting.calibration_file\nmounting:\n  gamma_rad: 0.0355\n  beta_rad: -0.0126\n"
+            "  alpha_rad: 1e-07\n" +
+                provenance);
+
+  AxisOffsetCalibration axis;
+  axis.m_mm = 123.0;
+  axis.n_mm = 409.123456789012;
+  axis.laser_tilt_deg = 0.2;
+  axis.source = source;
+  const std::string a = (dir_ / "axis.yaml").string();
+  writeAxisOffsetCalibration(a, axis);
+  EXPECT_EQ(readBytes(a),
+            "# Axis-offset calibration of a rotating profile sensor (Zhao 2021, plane "
+            "constraints); read via geometry.calibration_file\naxis_offset:\n  m_mm: 123\n"
+            "  n_mm: 409.123456789\n  laser_tilt_deg: 0.2\n  encoder_zero_deg: 0\nsource:\n"
+            "  date: 2026-11-22T04:00:00Z\n  seed: 7\n  tool: sweepmap calib\n  logs:\n    []\n");
+
+  LidarOffsetCalibration lidar;
+  lidar.lidar_offset_x_mm = 16.0;
+  lidar.logs = {"only.lcmlog"};
+  const std::string l = (dir_ / "lidar.yaml").string();
+  writeLidarOffsetCalibration(l, lidar);
+  EXPECT_EQ(readBytes(l),
+            "# Lidar-to-axis offset of a rotating 2D lidar (t_L^O', plane constraints); read via "
+            "geometry.calibration_file\ngeometry:\n  lidar_offset_x_mm: 16\nsource:\n  logs:\n"
+            "    - only.lcmlog\n");
 }
 
 }  // namespace

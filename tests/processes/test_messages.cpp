@@ -8,6 +8,7 @@
 #include "processes/node.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/profile_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/truth_sweep_t.hpp"
 
@@ -87,6 +88,26 @@ TEST(Messages, ScanWithHugeTrailingCountIsRefused) {
   bad = m;
   bad.data[at_nintensities + 4] = 0x40;  // nangles
   EXPECT_FALSE(decodeMessage(bad, &out));
+}
+
+// The codec takes exactly one whole message: a byte short or a byte over is refused.
+TEST(Messages, CodecRefusesShortAndTrailingBytes) {
+  profile_t p{};
+  p.counts_per_revolution = 262144;
+  p.column_count = 1280;
+  p.point_count = 1;
+  p.column = {7};
+  p.y_mm = {1.5f};
+  p.z_mm = {-2.5f};
+  std::vector<uint8_t> bytes = encodeMessage(p);
+  ASSERT_EQ(bytes.size(), 48u + 10u);  // as lcmtypes/profile_t.lcm lays it out
+  profile_t out{};
+  ASSERT_TRUE(decodeMessage(bytes.data(), bytes.size(), &out));
+  EXPECT_EQ(out.column, p.column);
+  EXPECT_EQ(out.z_mm, p.z_mm);
+  EXPECT_FALSE(decodeMessage(bytes.data(), bytes.size() - 1, &out));
+  bytes.push_back(0);
+  EXPECT_FALSE(decodeMessage(bytes.data(), bytes.size(), &out));
 }
 
 }  // namespace

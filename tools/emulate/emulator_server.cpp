@@ -13,6 +13,7 @@
 #include <cstdio>
 #include <cstring>
 #include <stdexcept>
+#include <vector>
 
 namespace sweepmap {
 namespace {
@@ -93,134 +94,200 @@ std::string openPty(Fd* master, Fd* slave) {
   return path;
 }
 
-}  // namespace
+using DeviceFactory = std::function<std::unique_ptr<EmulatedLidar>(int64_t now_us)>;
 
-void serveEmulator(const std::function<std::unique_ptr<EmulatedLidar>(int64_t now_us)>& make_device,
-                   const ServerOptions& options, const LinkFaults& faults,
-                   const std::function<int64_t()>& now_us, const std::atomic<bool>& stop,
-                   std::ostream& info) {
-  if (options.pty == !options.listen.empty()) {
-    throw std::runtime_error("serve either --listen HOST:PORT or --pty");
+// One served device and its link (a TCP listener and client, or a pty), with the faults that
+// are injected on it.
+class EmulatorLink {
+ public:
+  EmulatorLink(const DeviceFactory& make_device, const ServerOptions& options,
+               const LinkFaults& faults, const std::function<int64_t()>& now_us, std::ostream& info)
+      : make_device_(make_device),
+        options_(options),
+        faults_(faults),
+        now_us_(now_us),
+        info_(info),
+        rng_(faults.seed) {
+    if (!options.pty) address_ = loopbackAddress(options.listen);
   }
-  std::mt19937_64 rng(faults.seed);
-  std::uniform_real_distribution<double> uniform(0.0, 1.0);
-  std::uniform_int_distribution<int> bit(0, 7);
-  sockaddr_in address{};
-  if (!options.pty) address = loopbackAddress(options.listen);
 
-  Fd listener, client, master, slave;
-  std::unique_ptr<EmulatedLidar> device;
-  std::string pending;  // TCP: bytes the client has not taken yet (bounded)
-  const auto powerUp = [&](int64_t now) {
-    device = make_device(now);
-    if (options.pty) {
-      const std::string path = openPty(&master, &slave);
-      if (!options.pty_link.empty()) {
-        ::unlink(options.pty_link.c_str());
-        if (::symlink(path.c_str(), options.pty_link.c_str()) < 0) {
-          throw std::runtime_error("cannot link " + options.pty_link + " -> " + path + ": " +
-                                   std::strerror(errno));
-        }
-        info << "emulator: serial device at " << options.pty_link << " (-> " << path << ")"
-             << std::endl;
-      } else {
-        info << "emulator: serial device at " << path << std::endl;
-      }
-    } else {
-      listener.reset(listenOn(address, options.listen));
-      info << "emulator: listening on " << options.listen << std::endl;
-    }
-  };
-  const auto powerDown = [&](int64_t now) {
-    client.reset();
-    listener.reset();
-    master.reset();
-    slave.reset();
-    pending.clear();
-    if (options.pty && !options.pty_link.empty()) ::unlink(options.pty_link.c_str());
-    if (device) device->reset(now);
-    device.reset();
-  };
+  void run(const std::atomic<bool>& stop);
 
-  const int64_t start = now_us();
-  powerUp(start);
+ private:
+  void powerUp(int64_t now);
+  void announcePty(const std::string& path);
+  void powerDown(int64_t now);
+  void waitForHost();
+  void exchange();
+  bool receive(std::string* out);
+  void injectByteFaults(std::string* out);
+  void transmit(const std::string& out);
+
+  const DeviceFactory& make_device_;
+  const ServerOptions& options_;
+  const LinkFaults& faults_;
+  const std::function<int64_t()>& now_us_;
+  std::ostream& info_;
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+  std::uniform_int_distribution<int> bit_{0, 7};
+  sockaddr_in address_{};
+  Fd listener_, client_, master_, slave_;
+  std::unique_ptr<EmulatedLidar> device_;
+  std::string pending_;  // TCP: bytes the client has not taken yet (bounded)
+  int64_t start_us_ = 0;
+  std::string out_;
+  std::vector<uint8_t> in_ = std::vector<uint8_t>(4096);
+};
+
+void EmulatorLink::run(const std::atomic<bool>& stop) {
+  start_us_ = now_us_();
+  powerUp(start_us_);
   bool hung_up = false;
   int64_t down_until = -1;
-  std::string out;
-  std::vector<uint8_t> in(4096);
   while (!stop) {
-    const int64_t now = now_us();
-    const double elapsed_s = static_cast<double>(now - start) * 1e-6;
-    if (options.duration_s > 0 && elapsed_s >= options.duration_s) break;
-    if (!hung_up && faults.hangup_at_s >= 0 && elapsed_s >= faults.hangup_at_s) {
+    const int64_t now = now_us_();
+    const double elapsed_s = static_cast<double>(now - start_us_) * 1e-6;
+    if (options_.duration_s > 0 && elapsed_s >= options_.duration_s) break;
+    if (!hung_up && faults_.hangup_at_s >= 0 && elapsed_s >= faults_.hangup_at_s) {
       hung_up = true;
       powerDown(now);
-      down_until = now + static_cast<int64_t>(faults.down_s * 1e6);
-      info << "emulator: hang-up injected; back in " << faults.down_s << " s" << std::endl;
+      down_until = now + static_cast<int64_t>(faults_.down_s * 1e6);
+      info_ << "emulator: hang-up injected; back in " << faults_.down_s << " s" << std::endl;
     }
-    if (!device) {
+    if (!device_) {
       if (now >= down_until) {
         powerUp(now);
       } else {
-        ::usleep(static_cast<useconds_t>(options.tick_us));
+        ::usleep(static_cast<useconds_t>(options_.tick_us));
       }
       continue;
     }
-    if (!options.pty && !client) {
-      pollfd p{listener.fd, POLLIN, 0};
-      if (::poll(&p, 1, options.tick_us / 1000 + 1) > 0) {
-        const int c = ::accept4(listener.fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
-        if (c >= 0) {
-          const int one = 1;
-          ::setsockopt(c, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-          client.reset(c);
-          device->reset(now_us());  // a new TCP session starts from the power-on state
-          info << "emulator: host connected" << std::endl;
-        }
-      }
-      out.clear();
-      device->advance(now_us(), &out);  // time passes for the device either way
+    if (!options_.pty && !client_) {
+      waitForHost();
       continue;
     }
-    const int io_fd = options.pty ? master.fd : client.fd;
-    pollfd p{io_fd, POLLIN, 0};
-    const int ready = ::poll(&p, 1, options.tick_us / 1000 + 1);
-    out.clear();
-    if (ready > 0 && (p.revents & (POLLIN | POLLHUP | POLLERR))) {
-      const ssize_t n = ::read(io_fd, in.data(), in.size());
-      if (n > 0) {
-        device->receive(in.data(), static_cast<size_t>(n), now_us(), &out);
-      } else if (!options.pty && (n == 0 || (errno != EAGAIN && errno != EINTR))) {
-        client.reset();  // the host went away
-        pending.clear();
-        device->reset(now_us());
-        info << "emulator: host disconnected" << std::endl;
-        continue;
-      }
-    }
-    device->advance(now_us(), &out);
-    const double t_s = static_cast<double>(now_us() - start) * 1e-6;
-    if (faults.stall_at_s >= 0 && t_s >= faults.stall_at_s &&
-        t_s < faults.stall_at_s + faults.stall_s) {
-      out.clear();  // stalled: what the device sends now is lost
-    }
-    if (faults.corrupt_rate > 0) {
-      for (char& c : out) {
-        if (uniform(rng) < faults.corrupt_rate) c = static_cast<char>(c ^ (1 << bit(rng)));
-      }
-    }
-    if (out.empty() && pending.empty()) continue;
-    if (options.pty) {
-      // A UART sends whether or not anybody reads: what does not fit is lost.
-      (void)!::write(master.fd, out.data(), out.size());
-    } else {
-      pending += out;
-      if (pending.size() > (4u << 20)) pending.erase(0, pending.size() - (4u << 20));
-      const ssize_t n = ::send(client.fd, pending.data(), pending.size(), MSG_NOSIGNAL);
-      if (n > 0) pending.erase(0, static_cast<size_t>(n));
+    exchange();
+  }
+  powerDown(now_us_());
+}
+
+void EmulatorLink::powerUp(int64_t now) {
+  device_ = make_device_(now);
+  if (options_.pty) {
+    announcePty(openPty(&master_, &slave_));
+  } else {
+    listener_.reset(listenOn(address_, options_.listen));
+    info_ << "emulator: listening on " << options_.listen << std::endl;
+  }
+}
+
+// Prints the new pty's path, through the link the options ask for.
+void EmulatorLink::announcePty(const std::string& path) {
+  if (options_.pty_link.empty()) {
+    info_ << "emulator: serial device at " << path << std::endl;
+    return;
+  }
+  ::unlink(options_.pty_link.c_str());
+  if (::symlink(path.c_str(), options_.pty_link.c_str()) < 0) {
+    throw std::runtime_error("cannot link " + options_.pty_link + " -> " + path + ": " +
+                             std::strerror(errno));
+  }
+  info_ << "emulator: serial device at " << options_.pty_link << " (-> " << path << ")"
+        << std::endl;
+}
+
+void EmulatorLink::powerDown(int64_t now) {
+  client_.reset();
+  listener_.reset();
+  master_.reset();
+  slave_.reset();
+  pending_.clear();
+  if (options_.pty && !options_.pty_link.empty()) ::unlink(options_.pty_link.c_str());
+  if (device_) device_->reset(now);
+  device_.reset();
+}
+
+// TCP with no host: accepts one if it comes within a tick; the device's time passes anyway.
+void EmulatorLink::waitForHost() {
+  pollfd p{listener_.fd, POLLIN, 0};
+  if (::poll(&p, 1, options_.tick_us / 1000 + 1) > 0) {
+    const int c = ::accept4(listener_.fd, nullptr, nullptr, SOCK_NONBLOCK | SOCK_CLOEXEC);
+    if (c >= 0) {
+      const int one = 1;
+      ::setsockopt(c, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+      client_.reset(c);
+      device_->reset(now_us_());  // a new TCP session starts from the power-on state
+      info_ << "emulator: host connected" << std::endl;
     }
   }
-  powerDown(now_us());
+  out_.clear();
+  device_->advance(now_us_(), &out_);  // time passes for the device either way
+}
+
+// One tick with a host: what it sent goes to the device, what the device says goes back.
+void EmulatorLink::exchange() {
+  out_.clear();
+  if (!receive(&out_)) return;
+  device_->advance(now_us_(), &out_);
+  const double t_s = static_cast<double>(now_us_() - start_us_) * 1e-6;
+  if (faults_.stall_at_s >= 0 && t_s >= faults_.stall_at_s &&
+      t_s < faults_.stall_at_s + faults_.stall_s) {
+    out_.clear();  // stalled: what the device sends now is lost
+  }
+  injectByteFaults(&out_);
+  if (out_.empty() && pending_.empty()) return;
+  transmit(out_);
+}
+
+// Waits up to a tick for the host's bytes and hands them to the device; false when the TCP
+// host went away (the device is then back in its power-on state).
+bool EmulatorLink::receive(std::string* out) {
+  const int io_fd = options_.pty ? master_.fd : client_.fd;
+  pollfd p{io_fd, POLLIN, 0};
+  const int ready = ::poll(&p, 1, options_.tick_us / 1000 + 1);
+  if (ready <= 0 || !(p.revents & (POLLIN | POLLHUP | POLLERR))) return true;
+  const ssize_t n = ::read(io_fd, in_.data(), in_.size());
+  if (n > 0) {
+    device_->receive(in_.data(), static_cast<size_t>(n), now_us_(), out);
+  } else if (!options_.pty && (n == 0 || (errno != EAGAIN && errno != EINTR))) {
+    client_.reset();  // the host went away
+    pending_.clear();
+    device_->reset(now_us_());
+    info_ << "emulator: host disconnected" << std::endl;
+    return false;
+  }
+  return true;
+}
+
+void EmulatorLink::injectByteFaults(std::string* out) {
+  if (faults_.corrupt_rate <= 0) return;
+  for (char& c : *out) {
+    if (uniform_(rng_) < faults_.corrupt_rate) c = static_cast<char>(c ^ (1 << bit_(rng_)));
+  }
+}
+
+void EmulatorLink::transmit(const std::string& out) {
+  if (options_.pty) {
+    // A UART sends whether or not anybody reads: what does not fit is lost.
+    (void)!::write(master_.fd, out.data(), out.size());
+    return;
+  }
+  pending_ += out;
+  if (pending_.size() > (4u << 20)) pending_.erase(0, pending_.size() - (4u << 20));
+  const ssize_t n = ::send(client_.fd, pending_.data(), pending_.size(), MSG_NOSIGNAL);
+  if (n > 0) pending_.erase(0, static_cast<size_t>(n));
+}
+
+}  // namespace
+
+void serveEmulator(const DeviceFactory& make_device, const ServerOptions& options,
+                   const LinkFaults& faults, const std::function<int64_t()>& now_us,
+                   const std::atomic<bool>& stop, std::ostream& info) {
+  if (options.pty == !options.listen.empty()) {
+    throw std::runtime_error("serve either --listen HOST:PORT or --pty");
+  }
+  EmulatorLink(make_device, options, faults, now_us, info).run(stop);
 }
 
 }  // namespace sweepmap

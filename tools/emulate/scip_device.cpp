@@ -65,150 +65,135 @@ void ScipDevice::receive(const uint8_t* data, size_t size, int64_t now_us, std::
   }
 }
 
+namespace {
+
+// The tag after a ';' (at most 16 printable characters) taken off `params`; the error status
+// of a bad tag, or "" when there is none or it is good.
+std::string splitTag(std::string* params, std::string* tag) {
+  const size_t semi = params->find(';');
+  if (semi == std::string::npos) return "";
+  *tag = params->substr(semi + 1);
+  params->resize(semi);
+  if (tag->size() > 16) return "0G";
+  for (char c : *tag) {
+    if (c < 0x20 || c > 0x7e) return "0H";
+  }
+  return "";
+}
+
+}  // namespace
+
 void ScipDevice::command(const std::string& line, int64_t now_us, std::string* out) {
   const auto reply = [&](const std::string& status, const std::string& body = "") {
     *out += line + "\n" + scip::withChecksum(status) + "\n" + body + "\n";
   };
-  if (line.size() < 2) {
-    reply("0C");
-    return;
-  }
+  if (line.size() < 2) return reply("0C");
   const std::string cmd = line.substr(0, 2);
   std::string params = line.substr(2), tag;
-  if (const size_t semi = params.find(';'); semi != std::string::npos) {
-    tag = params.substr(semi + 1);
-    params = params.substr(0, semi);
-    if (tag.size() > 16) {
-      reply("0G");
-      return;
-    }
-    for (char c : tag) {
-      if (c < 0x20 || c > 0x7e) {
-        reply("0H");
-        return;
-      }
-    }
-  }
+  if (const std::string bad_tag = splitTag(&params, &tag); !bad_tag.empty()) return reply(bad_tag);
   if (cmd == "VV" || cmd == "PP" || cmd == "II") {
-    if (!params.empty()) {
-      reply("0C");
-      return;
-    }
-    std::string body;
-    if (cmd == "VV") {
-      body = infoLine("VEND:Hokuyo Automatic Co.,Ltd.") + infoLine("PROD:UST-10LX") +
-             infoLine("FIRM:1.1.3(2016-03-02)") + infoLine("PROT:SCIP 2.0") +
-             infoLine("SERI:H1612345");
-    } else if (cmd == "PP") {
-      body = infoLine("MODL:UST-10LX") + infoLine("DMIN:" + std::to_string(kDmin)) +
-             infoLine("DMAX:" + std::to_string(kDmax)) + infoLine("ARES:" + std::to_string(kAres)) +
-             infoLine("AMIN:" + std::to_string(kAmin)) + infoLine("AMAX:" + std::to_string(kAmax)) +
-             infoLine("AFRT:" + std::to_string(kAfrt)) +
-             infoLine("SCAN:" + std::to_string(kScanRpm));
-    } else {
-      char time[16];
-      std::snprintf(time, sizeof time, "%06X", counterAt(now_us));
-      body = infoLine("MODL:UST-10LX") +
-             infoLine(std::string("LASR:") + (laser_on_ ? "ON" : "OFF")) +
-             infoLine("SCSP:Initial(2400[rpm])") + infoLine("MESM:Measuring by Normal Mode") +
-             infoLine("SBPS:Ethernet 100 [Mbps]") + infoLine(std::string("TIME:") + time) +
-             infoLine("STAT:Stable 000 no error.");
-    }
-    reply("00", body);
-    return;
+    if (!params.empty()) return reply("0C");
+    return reply("00", identityBody(cmd, now_us));
   }
-  if (cmd == "BM") {
-    reply(laser_on_ ? "02" : "00");
-    laser_on_ = true;
-    return;
-  }
-  if (cmd == "QT") {
-    streaming_ = false;
-    laser_on_ = false;
-    reply("00");
-    return;
-  }
-  if (cmd == "RS" || cmd == "RT") {
-    streaming_ = false;
-    laser_on_ = false;
-    adjust_mode_ = false;
-    reply("00");
-    return;
-  }
+  if (cmd == "BM" || cmd == "QT" || cmd == "RS" || cmd == "RT") return reply(laserCommand(cmd));
   if (cmd == "TM") {
-    if (params.size() != 1 || params[0] < '0' || params[0] > '2') {
-      reply("01");
-      return;
-    }
-    if (params[0] == '0') {
-      if (adjust_mode_) {
-        reply("02");
-        return;
-      }
-      streaming_ = false;  // no measurement while the time is being adjusted
-      adjust_mode_ = true;
-      reply("00");
-    } else if (params[0] == '1') {
-      if (!adjust_mode_) {
-        reply("03");
-        return;
-      }
-      reply("00", scip::withChecksum(scip::encodeValue(counterAt(now_us), 4)) + "\n");
-    } else {
-      if (!adjust_mode_) {
-        reply("03");
-        return;
-      }
-      adjust_mode_ = false;
-      reply("00");
-    }
-    return;
+    const Reply r = timeAdjustCommand(params, now_us);
+    return reply(r.status, r.body);
   }
   const bool stream = cmd == "MD" || cmd == "MS" || cmd == "ME";
   const bool single = cmd == "GD" || cmd == "GS" || cmd == "GE";
-  if (!stream && !single) {
-    reply("0E");
-    return;
-  }
-  const size_t need = stream ? 13 : 10;
-  if (params.size() < need) {
-    reply("0C");
-    return;
-  }
-  if (params.size() > need) {
-    reply("0F");
-    return;
-  }
-  const std::string s_start = params.substr(0, 4), s_end = params.substr(4, 4),
-                    s_cluster = params.substr(8, 2);
-  if (!allDigits(s_start)) return reply("01");
-  if (!allDigits(s_end)) return reply("02");
-  if (!allDigits(s_cluster)) return reply("03");
-  const int start = std::stoi(s_start), end = std::stoi(s_end);
-  const int cluster = std::max(1, std::stoi(s_cluster));
-  if (start < kAmin || start > kAmax || end > kAmax) return reply("04");
-  if (end < start) return reply("05");
-  if (adjust_mode_) return reply("0B");
+  if (!stream && !single) return reply("0E");
+  Request request{cmd, 0, 0, 1};
+  if (const std::string bad = parseRange(params, stream, &request); !bad.empty()) return reply(bad);
   if (single) {
     if (!laser_on_) return reply("10");
     if (!latest_) return reply("0B");  // nothing measured yet: busy
     *out += line + "\n" + scip::withChecksum("00") + "\n";
-    scanReply(*latest_, Request{cmd, start, end, cluster}, "", out);
-    return;
+    return scanReply(*latest_, request, "", out);
   }
   const std::string s_skip = params.substr(10, 1), s_count = params.substr(11, 2);
   if (!allDigits(s_skip)) return reply("06");
   if (!allDigits(s_count)) return reply("07");
   reply("00");
+  startStream(request, std::stoi(s_skip), std::stoi(s_count), tag);
+}
+
+std::string ScipDevice::identityBody(const std::string& cmd, int64_t now_us) const {
+  if (cmd == "VV") {
+    return infoLine("VEND:Hokuyo Automatic Co.,Ltd.") + infoLine("PROD:UST-10LX") +
+           infoLine("FIRM:1.1.3(2016-03-02)") + infoLine("PROT:SCIP 2.0") +
+           infoLine("SERI:H1612345");
+  }
+  if (cmd == "PP") {
+    return infoLine("MODL:UST-10LX") + infoLine("DMIN:" + std::to_string(kDmin)) +
+           infoLine("DMAX:" + std::to_string(kDmax)) + infoLine("ARES:" + std::to_string(kAres)) +
+           infoLine("AMIN:" + std::to_string(kAmin)) + infoLine("AMAX:" + std::to_string(kAmax)) +
+           infoLine("AFRT:" + std::to_string(kAfrt)) + infoLine("SCAN:" + std::to_string(kScanRpm));
+  }
+  char time[16];
+  std::snprintf(time, sizeof time, "%06X", counterAt(now_us));
+  return infoLine("MODL:UST-10LX") + infoLine(std::string("LASR:") + (laser_on_ ? "ON" : "OFF")) +
+         infoLine("SCSP:Initial(2400[rpm])") + infoLine("MESM:Measuring by Normal Mode") +
+         infoLine("SBPS:Ethernet 100 [Mbps]") + infoLine(std::string("TIME:") + time) +
+         infoLine("STAT:Stable 000 no error.");
+}
+
+std::string ScipDevice::laserCommand(const std::string& cmd) {
+  if (cmd == "BM") {
+    const bool was_on = laser_on_;
+    laser_on_ = true;
+    return was_on ? "02" : "00";
+  }
+  streaming_ = false;
+  laser_on_ = false;
+  if (cmd == "RS" || cmd == "RT") adjust_mode_ = false;  // QT keeps the time adjust mode
+  return "00";
+}
+
+ScipDevice::Reply ScipDevice::timeAdjustCommand(const std::string& params, int64_t now_us) {
+  if (params.size() != 1 || params[0] < '0' || params[0] > '2') return {"01", ""};
+  if (params[0] == '0') {
+    if (adjust_mode_) return {"02", ""};
+    streaming_ = false;  // no measurement while the time is being adjusted
+    adjust_mode_ = true;
+    return {"00", ""};
+  }
+  if (!adjust_mode_) return {"03", ""};
+  if (params[0] == '1') {
+    return {"00", scip::withChecksum(scip::encodeValue(counterAt(now_us), 4)) + "\n"};
+  }
+  adjust_mode_ = false;
+  return {"00", ""};
+}
+
+std::string ScipDevice::parseRange(const std::string& params, bool stream, Request* r) const {
+  const size_t need = stream ? 13 : 10;
+  if (params.size() < need) return "0C";
+  if (params.size() > need) return "0F";
+  const std::string s_start = params.substr(0, 4), s_end = params.substr(4, 4),
+                    s_cluster = params.substr(8, 2);
+  if (!allDigits(s_start)) return "01";
+  if (!allDigits(s_end)) return "02";
+  if (!allDigits(s_cluster)) return "03";
+  r->start = std::stoi(s_start);
+  r->end = std::stoi(s_end);
+  r->cluster = std::max(1, std::stoi(s_cluster));
+  if (r->start < kAmin || r->start > kAmax || r->end > kAmax) return "04";
+  if (r->end < r->start) return "05";
+  if (adjust_mode_) return "0B";
+  return "";
+}
+
+void ScipDevice::startStream(const Request& r, int skip, int count, const std::string& tag) {
   streaming_ = true;
   laser_on_ = true;  // MD/MS/ME switch the laser on
-  stream_command_ = cmd;
+  stream_command_ = r.command;
   stream_tag_ = tag;
-  start_ = start;
-  end_ = end;
-  cluster_ = cluster;
-  skip_ = std::stoi(s_skip);
-  remaining_ = std::stoi(s_count);
+  start_ = r.start;
+  end_ = r.end;
+  cluster_ = r.cluster;
+  skip_ = skip;
+  remaining_ = count;
   unlimited_ = remaining_ == 0;
   skipped_ = 0;
 }

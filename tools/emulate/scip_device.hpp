@@ -36,6 +36,16 @@ class ScipDevice : public EmulatedLidar {
     std::string command;
     int start, end, cluster;
   };
+  struct Reply {
+    std::string status, body;
+  };
+  // The steps of command(); each returns the status it answers ("" for none yet).
+  std::string identityBody(const std::string& cmd, int64_t now_us) const;  // VV, PP, II
+  std::string laserCommand(const std::string& cmd);                        // BM, QT, RS, RT
+  Reply timeAdjustCommand(const std::string& params, int64_t now_us);      // TM0/1/2
+  // Start, end and cluster of MD/MS/ME (`stream`) or GD/GS/GE.
+  std::string parseRange(const std::string& params, bool stream, Request* r) const;
+  void startStream(const Request& r, int skip, int count, const std::string& tag);
   // `head`: the echo and "99" status of a streamed scan (empty for GD/GS/GE).
   void scanReply(const Scan2D& scan, const Request& r, const std::string& head, std::string* out);
   uint32_t counterAt(int64_t t_us) const;
