@@ -8,6 +8,7 @@
 #include "sweepmap/process_status_t.hpp"
 
 namespace sweepmap {
+
 Node::Node(std::string name) : name_(std::move(name)) {}
 
 std::string Node::statusChannel() const {
