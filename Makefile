@@ -22,7 +22,7 @@ SANITIZE_BUILD ?= build-sanitize
 FUZZ_BUILD ?= build-fuzz
 PI_BUILD ?= build-pi
 FUZZ_RUNS ?= 10000000
-FUZZ_PROTOCOLS = scip x4 rplidar hi219 wheelboard lcm_datagram
+FUZZ_PROTOCOLS = scip x4 rplidar hi219 wheelboard lcm_datagram lcm_message
 JOBS ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 # -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable.
