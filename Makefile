@@ -129,6 +129,7 @@ docs: setup $(BUILD)/Makefile
 
 bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench
+	$(BUILD)/tools/bench/bench_net
 
 clean:
 	rm -rf $(BUILD) $(SANITIZE_BUILD) $(PI_BUILD) out
