@@ -140,8 +140,8 @@ TEST(EvalRotating, SmallPaperExperiment) {
   const int rc = sweepmap(
       {"eval", "--experiment", "paper", "--rig", kRig, "--scene", kScene, "--sweeps-per-mode", "2",
        "--calib-sweeps", "10", "--seed", "1", "--out", dir.string()},
-      dir / "stderr.txt");
-  ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
+      fs::path(dir.string() + ".stderr.txt"));
+  ASSERT_EQ(rc, 0) << readFile(fs::path(dir.string() + ".stderr.txt"));
   const auto report = readJson(dir / "report.json");
   EXPECT_EQ(report["sweeps"].get<int>(), 14);
 
@@ -229,8 +229,8 @@ TEST(EvalRotating, LogsWithTruth) {
   const fs::path dir = scratchDir("eval_logs_truth");
   const int rc =
       sweepmap({"eval", "--logs", mode1, mode7, "--rig", kRig, "--out", dir.string(), "--no-plots"},
-               dir / "stderr.txt");
-  ASSERT_EQ(rc, 0) << readFile(dir / "stderr.txt");
+               fs::path(dir.string() + ".stderr.txt"));
+  ASSERT_EQ(rc, 0) << readFile(fs::path(dir.string() + ".stderr.txt"));
   const auto report = readJson(dir / "report.json");
   EXPECT_EQ(report["sweeps"].get<int>(), 3);
   EXPECT_EQ(report["modes"]["1"]["sweeps"].size(), 2u);
@@ -255,11 +255,11 @@ TEST(EvalRotating, LogWithoutSweepsReportsAndFails) {
   if (!fs::exists(log))
     GTEST_SKIP() << log << " not present (../shared is not beside this checkout)";
   const fs::path dir = scratchDir("eval_no_sweeps");
-  const int rc =
-      sweepmap({"eval", "--logs", log, "--rig", kRig, "--out", dir.string()}, dir / "stderr.txt");
+  const int rc = sweepmap({"eval", "--logs", log, "--rig", kRig, "--out", dir.string()},
+                          fs::path(dir.string() + ".stderr.txt"));
   EXPECT_EQ(rc, 1);
-  EXPECT_NE(readFile(dir / "stderr.txt").find("no sweeps"), std::string::npos)
-      << readFile(dir / "stderr.txt");
+  EXPECT_NE(readFile(fs::path(dir.string() + ".stderr.txt")).find("no sweeps"), std::string::npos)
+      << readFile(fs::path(dir.string() + ".stderr.txt"));
   const auto report = readJson(dir / "report.json");
   EXPECT_EQ(report["sweeps"].get<int>(), 0);
   EXPECT_NE(report["error"].get<std::string>().find("no sweeps"), std::string::npos);

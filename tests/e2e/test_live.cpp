@@ -132,9 +132,9 @@ TEST_F(LiveTest, RigBDemoLiveMapEqualsReplayedMap) {
   const auto dir = scratchDir("demo_rig_b");
   ASSERT_EQ(sweepmap({"demo", "--rig", "rig_b", "--set", "sim.duration_s=8", "--seed", "3", "--out",
                       dir.string()},
-                     dir / "demo.txt"),
+                     fs::path(dir.string() + ".demo.txt")),
             0)
-      << readFile(dir / "demo.txt");
+      << readFile(fs::path(dir.string() + ".demo.txt"));
   expectDemoOutputs(dir);
   EXPECT_GT(readJson(dir / "summary.json")["scans"].get<int>(), 40);
   EXPECT_TRUE(sameBytes(dir / "live_map.bt", dir / "map.bt"))
@@ -185,9 +185,10 @@ TEST(RigCProcesses, ProfilerRefusesOtherKindsAndDevicesItHasNoDriverFor) {
   // The demo has no emulated devices for rig C.
   EXPECT_EQ(sweepmap({"demo", "--rig", "rig_c", "--devices", "emulated", "--out",
                       (dir / "demo").string()},
-                     dir / "demo.txt"),
+                     fs::path(dir.string() + ".demo.txt")),
             2);
-  EXPECT_NE(readFile(dir / "demo.txt").find("only simulated devices"), std::string::npos);
+  EXPECT_NE(readFile(fs::path(dir.string() + ".demo.txt")).find("only simulated devices"),
+            std::string::npos);
 }
 
 // Rig C live: `sweepmap demo --rig rig_c` runs sweepmap-profiler (the simulated turntable and
@@ -199,9 +200,9 @@ TEST_F(LiveTest, RigCDemoLiveEqualsReplayAndThePlatesAreFlat) {
   ASSERT_EQ(sweepmap({"demo", "--rig", "rig_c", "--seed", "2", "--set", "geometry.offset_m_mm=123",
                       "--set", "geometry.offset_n_mm=409", "--set", "geometry.laser_tilt_deg=0.2",
                       "--set", "geometry.encoder_zero_deg=0.5", "--out", dir.string()},
-                     dir / "demo.txt"),
+                     fs::path(dir.string() + ".demo.txt")),
             0)
-      << readFile(dir / "demo.txt");
+      << readFile(fs::path(dir.string() + ".demo.txt"));
   expectDemoOutputs(dir);
   const std::string log = (dir / "demo.lcmlog").string();
   // Every profile the profiler published reached the log (its own count, in its last status).
