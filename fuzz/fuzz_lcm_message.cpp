@@ -18,7 +18,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   for (int k = 0; k < 8; ++k) message[k] = static_cast<uint8_t>(fingerprint >> (56 - 8 * k));
   message.insert(message.end(), data + 1, data + size);
   const std::vector<uint8_t> raw(data, data + size);
-  for (const std::vector<uint8_t>* m : {&message, &raw}) {
+  for (const std::vector<uint8_t>* m : {static_cast<const std::vector<uint8_t>*>(&message), &raw}) {
     if (!schema.validate(m->data(), m->size()).empty()) continue;
     sweepmap::LcmValue value;
     try {

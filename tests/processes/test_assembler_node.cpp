@@ -134,8 +134,10 @@ TEST_F(AssemblerNodeTest, BadInputIsCountedNotFatal) {
   EXPECT_EQ(node.counter("errors"), 0);
 }
 
-// One far-future stamp is dropped and does not block later scans; a real clock step
-// (several scans agreeing) restarts assembly.
+// One far-future stamp is dropped (by every node's stamp guard, processes/stamp_guard.hpp)
+// and does not block later scans; a real clock step (several scans agreeing) restarts
+// assembly: the guard lets the third scan of the new clock through, the assembler's own
+// check then wants three more before it discards what it holds and starts again.
 TEST_F(AssemblerNodeTest, FarFutureStampDoesNotBlockTheStream) {
   AssemblerNode node(rig_);
   std::vector<Message> msgs = {scanMsg(0), scanMsg(1)};
@@ -150,11 +152,12 @@ TEST_F(AssemblerNodeTest, FarFutureStampDoesNotBlockTheStream) {
   for (int j = 3; j < 8; ++j) msgs.push_back(scanMsg(j));
   feed(msgs, &node);
   EXPECT_EQ(node.counter("scans"), 7);
-  EXPECT_EQ(node.counter("invalid"), 1);
+  EXPECT_EQ(node.counter("stamp_refused_LIDAR_SCAN"), 1);
+  EXPECT_EQ(node.counter("invalid"), 0);
   EXPECT_EQ(node.counter("clock_resets"), 0);
   // The source restarts with a clock a day behind: after 3 scans it is believed.
   std::vector<Message> later;
-  for (int j = 0; j < 5; ++j) {
+  for (int j = 0; j < 6; ++j) {
     Message m = scanMsg(100 + j);
     lidar_scan_t s;
     ASSERT_TRUE(decodeMessage(m, &s));
@@ -162,8 +165,9 @@ TEST_F(AssemblerNodeTest, FarFutureStampDoesNotBlockTheStream) {
     later.push_back(encode(channels::kLidarScan, m.utime, s));
   }
   feed(later, &node);
+  EXPECT_EQ(node.counter("stamp_refused_LIDAR_SCAN"), 1 + 2);
   EXPECT_EQ(node.counter("clock_resets"), 1);
-  EXPECT_EQ(node.counter("scans"), 7 + 3);
+  EXPECT_EQ(node.counter("scans"), 7 + 2);
 }
 
 TEST_F(AssemblerNodeTest, FinishFlushesIncompleteWindow) {
