@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include "core/config.hpp"
 #include "core/exit_codes.hpp"
@@ -154,11 +155,18 @@ inline void prepareOutputDir(const std::string& dir, bool force) {
   fs::create_directories(p);
 }
 
-// --out FILE of a command that writes one file: refused when it names a folder, or when its
-// folder does not exist. Throws ConfigError naming the path and the fix.
-inline void checkOutputFile(const std::string& file) {
+// --out FILE of a command that writes one file: refused when it names a folder, when its
+// folder does not exist, or when it is one of the command's `inputs` (it would overwrite the
+// capture it reads). Throws ConfigError naming the path and the fix.
+inline void checkOutputFile(const std::string& file, const std::vector<std::string>& inputs = {}) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  for (const std::string& in : inputs) {
+    if (fs::exists(file, ec) && fs::equivalent(file, in, ec)) {
+      throw ConfigError("--out '" + file + "' is the input '" + in +
+                        "': it would be overwritten; give another file name");
+    }
+  }
   if (fs::is_directory(file, ec)) {
     throw ConfigError("--out '" + file + "' is a folder; give a file name (e.g. " +
                       (fs::path(file) / "run.lcmlog").string() + ")");

@@ -79,6 +79,11 @@ TEST(CommandLine, OutputFolderRefusedUnlessForced) {
   EXPECT_THROW(checkOutputFile((dir / "new").string()), ConfigError);  // a folder
   EXPECT_THROW(checkOutputFile((dir / "no" / "x.log").string()), ConfigError);
   EXPECT_NO_THROW(checkOutputFile((dir / "x.log").string()));
+  // Issue 21: `--out` equal to the input overwrote the capture. Also through another spelling.
+  EXPECT_THROW(checkOutputFile((dir / "file").string(), {(dir / "file").string()}), ConfigError);
+  EXPECT_THROW(checkOutputFile((dir / "new" / ".." / "file").string(), {(dir / "file").string()}),
+               ConfigError);
+  EXPECT_NO_THROW(checkOutputFile((dir / "x.log").string(), {(dir / "file").string()}));
   fs::remove_all(dir);
 }
 

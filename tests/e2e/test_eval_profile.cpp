@@ -95,7 +95,8 @@ TEST_F(EvalProfilePaper, SameSeedGivesTheSameReportButItsTimings) {
   const fs::path again = scratchDir("eval_profile_again");
   std::vector<std::string> args = experiment(4);
   args.insert(args.end(), {"--out", again.string()});
-  ASSERT_EQ(sweepmap(args, again / "output.txt"), 0) << readFile(again / "output.txt");
+  ASSERT_EQ(sweepmap(args, fs::path(again.string() + ".output.txt")), 0)
+      << readFile(fs::path(again.string() + ".output.txt"));
   nlohmann::json a = report_, b = readJson(again / "report.json");
   a.erase("timings_s");
   b.erase("timings_s");

@@ -295,9 +295,9 @@ Runner addCalibCommand(CLI::App& app) {
   auto l = std::make_shared<LidarAxisOffsetCalibRequest>();
   CLI::App* axis = addAxisOffset(calib, a, l);
   return [plate, o, mount, m, axis, a, l]() -> int {
-    if (plate->parsed()) checkOutputFile(o->out);
-    if (mount->parsed()) checkOutputFile(m->out);
-    if (axis->parsed()) checkOutputFile(a->out);
+    if (plate->parsed()) checkOutputFile(o->out, o->logs);
+    if (mount->parsed()) checkOutputFile(m->out, {m->log});
+    if (axis->parsed()) checkOutputFile(a->out, a->logs);
     if (plate->parsed()) return calibratePlateAngleFromLogs(*o);
     if (mount->parsed()) {
       if (m->log.empty()) throw ConfigError("calib mounting: --logs LOG is required");

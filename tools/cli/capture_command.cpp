@@ -87,7 +87,7 @@ Runner addDecodeCommand(CLI::App& app) {
       "is kept) or holds nothing of the protocol; 2 bad option or rig, or a missing input file; 4 "
       "the log cannot be written.");
   return [o, rig, sets]() -> int {
-    checkOutputFile(o->out);
+    checkOutputFile(o->out, {o->in});
     const std::string r = !rig->empty() ? *rig : (o->protocol == "scip" ? "rig_a" : "rig_b");
     const DecodeResult res = runDecode(*o, expectedLidar(r, *sets), std::cout);
     if (res.scans == 0) {

@@ -22,7 +22,7 @@ Runner addImportCommand(CLI::App& app) {
       "Exit status: 0 imported; 1 the file is corrupt or holds no scan; 2 bad option or a "
       "missing input file; 4 the log cannot be written.");
   return [=]() -> int {
-    checkOutputFile(*out);
+    checkOutputFile(*out, {*in});
     const BreezySlamImport r = importBreezySlam(*in, *out);  // bad data throws: exit status 1
     std::cerr << "import: " << r.scans << " scans of " << r.beams << " ranges, "
               << (r.last_utime - r.first_utime) / 1e6 << " s -> " << *out << "\n";
