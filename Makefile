@@ -129,7 +129,7 @@ docs: setup $(BUILD)/Makefile
 
 bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench
-	$(BUILD)/tools/bench/bench_net
+	$(BUILD)/bin/bench_net
 
 clean:
 	rm -rf $(BUILD) $(SANITIZE_BUILD) $(PI_BUILD) out
