@@ -147,13 +147,15 @@ TEST(CalibAxisOffsetRigA, FindsTheTrueOffsetAndReplayUsesIt) {
 
 TEST(CalibAxisOffsetRigA, OptionsOfTheOtherKindAreRefused) {
   const fs::path dir = scratchDir("calib_axis_offset_rig_a_options");
-  EXPECT_EQ(runSplit({"calib", "axis-offset", "--logs", "x.lcmlog", "--rig", "rig_a", "--out",
+  const std::string log = (dir / "x.lcmlog").string();  // exists: the options are checked first
+  std::ofstream(log).flush();
+  EXPECT_EQ(runSplit({"calib", "axis-offset", "--logs", log, "--rig", "rig_a", "--out",
                       (dir / "o.yaml").string(), "--step", "0.5"},
                      dir / "a.out", dir / "a.err"),
             2);
   EXPECT_NE(readFile(dir / "a.err").find("--step is for rotating_profile rigs"), std::string::npos)
       << readFile(dir / "a.err");
-  EXPECT_EQ(runSplit({"calib", "axis-offset", "--logs", "x.lcmlog", "--rig", "rig_c", "--out",
+  EXPECT_EQ(runSplit({"calib", "axis-offset", "--logs", log, "--rig", "rig_c", "--out",
                       (dir / "o.yaml").string(), "--offset-y"},
                      dir / "c.out", dir / "c.err"),
             2);
