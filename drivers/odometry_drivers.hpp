@@ -21,8 +21,8 @@
 #include <string>
 #include <vector>
 
-#include "drivers/clock_sync.hpp"
 #include "devices/odometry_devices.hpp"
+#include "drivers/clock_sync.hpp"
 #include "drivers/protocols/hi219.hpp"
 #include "drivers/protocols/wheelboard.hpp"
 #include "drivers/stream_device.hpp"

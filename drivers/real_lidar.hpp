@@ -11,8 +11,8 @@
 
 #include "core/device_uri.hpp"
 #include "core/rig_components.hpp"
-#include "drivers/io/byte_stream.hpp"
 #include "devices/lidar_device.hpp"
+#include "drivers/io/byte_stream.hpp"
 #include "drivers/protocols/decoder.hpp"
 #include "drivers/stream_device.hpp"
 

@@ -22,8 +22,8 @@
 #include <vector>
 
 #include "core/device_uri.hpp"
-#include "drivers/io/byte_stream.hpp"
 #include "devices/lidar_device.hpp"
+#include "drivers/io/byte_stream.hpp"
 #include "drivers/protocols/decoder.hpp"
 
 namespace sweepmap {

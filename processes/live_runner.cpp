@@ -13,8 +13,8 @@
 #include <string>
 #include <thread>
 
-#include "net/udpm_receiver.hpp"
 #include "core/exit_codes.hpp"
+#include "net/udpm_receiver.hpp"
 #include "processes/sd_notify.hpp"
 
 namespace sweepmap {

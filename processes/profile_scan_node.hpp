@@ -15,9 +15,9 @@
 #include <cstdint>
 
 #include "devices/profiler_device.hpp"
-#include "sim/profile_devices.hpp"
 #include "devices/turntable_device.hpp"
 #include "processes/node.hpp"
+#include "sim/profile_devices.hpp"
 
 namespace sweepmap {
 

@@ -7,11 +7,11 @@
 #include <memory>
 #include <string>
 
-#include "sim/scene.hpp"
-#include "sim/car_devices.hpp"
-#include "sim/mobile.hpp"
 #include "processes/node.hpp"
 #include "rigs/mobile_lidar.hpp"
+#include "sim/car_devices.hpp"
+#include "sim/mobile.hpp"
+#include "sim/scene.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 

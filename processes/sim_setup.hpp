@@ -3,9 +3,9 @@
 
 #include <cstdint>
 
-#include "sim/scene.hpp"
-#include "sim/profiler.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "sim/profiler.hpp"
+#include "sim/scene.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 #include "sweepmap/truth_test_piece_t.hpp"

@@ -9,8 +9,8 @@
 #include "core/config.hpp"
 #include "core/mounting.hpp"
 #include "core/rig_components.hpp"
-#include "sim/mobile.hpp"
 #include "odometry/odometry_config.hpp"
+#include "sim/mobile.hpp"
 
 namespace sweepmap {
 

@@ -23,8 +23,8 @@
 
 #include "core/rig_components.hpp"
 #include "devices/lidar_device.hpp"
-#include "sim/scene.hpp"
 #include "devices/shaft_trajectory.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 

@@ -31,8 +31,8 @@
 #include "core/config.hpp"
 #include "core/scan.hpp"
 #include "devices/odometry_devices.hpp"
-#include "sim/scene.hpp"
 #include "odometry/wheel_odometry.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 

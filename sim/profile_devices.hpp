@@ -20,8 +20,8 @@
 #include <vector>
 
 #include "devices/profiler_device.hpp"
-#include "sim/profiler.hpp"
 #include "devices/turntable_device.hpp"
+#include "sim/profiler.hpp"
 
 namespace sweepmap {
 

@@ -20,11 +20,11 @@
 
 #include "core/device_uri.hpp"
 #include "core/rig_components.hpp"
+#include "devices/stepper_device.hpp"
 #include "drivers/gpio/gpio_backend.hpp"
 #include "drivers/gpio/step_clock.hpp"
 #include "drivers/gpio/step_generator.hpp"
 #include "drivers/gpio/switch_debouncer.hpp"
-#include "devices/stepper_device.hpp"
 
 namespace sweepmap {
 

@@ -28,11 +28,11 @@
 #include <string>
 #include <thread>
 
+#include "devices/shaft_trajectory.hpp"
+#include "devices/stepper_device.hpp"
 #include "drivers/gpio/gpio_backend.hpp"
 #include "drivers/gpio/priority_inheritance_mutex.hpp"
 #include "drivers/gpio/step_clock.hpp"
-#include "devices/shaft_trajectory.hpp"
-#include "devices/stepper_device.hpp"
 
 namespace sweepmap {
 

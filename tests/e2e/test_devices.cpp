@@ -709,8 +709,7 @@ TEST_F(DevicesTest, RecordEndsItsLogAtAnEventWhenTheDiskRefusesAWrite) {
   const fs::path disk = dir_ / "disk";
   fs::create_directories(disk);
   std::string why;
-  if (!mountPrivateTmpfs(disk, "300k", &why))
-    GTEST_SKIP() << "no private mount namespace: " << why;
+  if (!mountPrivateTmpfs(disk, "300k", &why)) GTEST_SKIP() << "no private mount namespace: " << why;
   const pid_t odo = simOdometry("odometry");
   const int rc = sweepmap({"record", "--preset", "all", "--out", disk.string(), "--min-free-mb",
                            "0", "--duration", "60", "--lcm-url", kUrl},

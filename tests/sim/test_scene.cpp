@@ -7,8 +7,8 @@
 #include <random>
 #include <sstream>
 
-#include "sim/scene.hpp"
 #include "hand_scene.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 namespace {

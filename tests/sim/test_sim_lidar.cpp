@@ -5,8 +5,8 @@
 #include <iostream>
 #include <memory>
 
-#include "sim/lidar.hpp"
 #include "hand_scene.hpp"
+#include "sim/lidar.hpp"
 
 namespace sweepmap {
 namespace {

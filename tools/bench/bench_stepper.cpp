@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "core/angles.hpp"
+#include "devices/motion_profile.hpp"
 #include "drivers/gpio/fake_gpio_backend.hpp"
 #include "drivers/gpio/gpio_stepper.hpp"
-#include "devices/motion_profile.hpp"
 #include "tools/bench/proc_stats.hpp"
 
 namespace sweepmap {

@@ -5,11 +5,7 @@
 #include <random>
 
 #include "core/config.hpp"
-#include "sim/scene.hpp"
 #include "devices/shaft_trajectory.hpp"
-#include "sim/car_devices.hpp"
-#include "sim/lidar.hpp"
-#include "sim/mobile.hpp"
 #include "processes/channels.hpp"
 #include "processes/lidar_node.hpp"
 #include "processes/sim_car.hpp"
@@ -17,6 +13,10 @@
 #include "processes/truth_sweep_node.hpp"
 #include "rigs/mobile_lidar.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "sim/car_devices.hpp"
+#include "sim/lidar.hpp"
+#include "sim/mobile.hpp"
+#include "sim/scene.hpp"
 #include "tools/offline/runs.hpp"
 
 namespace sweepmap {

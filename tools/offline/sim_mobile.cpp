@@ -4,11 +4,11 @@
 #include <cmath>
 
 #include "core/rig_components.hpp"
-#include "sim/mobile.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/sim_car.hpp"
 #include "processes/sim_setup.hpp"
+#include "sim/mobile.hpp"
 #include "tools/offline/simulation.hpp"
 
 namespace sweepmap {

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "sim/scene.hpp"
 #include "processes/node.hpp"
 #include "rigs/mobile_lidar.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 

@@ -2,10 +2,10 @@
 
 #include <cmath>
 
-#include "sim/profile_devices.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/sim_setup.hpp"
+#include "sim/profile_devices.hpp"
 
 namespace sweepmap {
 

@@ -1,7 +1,5 @@
 #include "tools/offline/simulation.hpp"
 
-#include "sim/lidar.hpp"
-#include "sim/stepper.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/lidar_node.hpp"
@@ -9,6 +7,8 @@
 #include "processes/offline_bus.hpp"
 #include "processes/sim_setup.hpp"
 #include "processes/truth_sweep_node.hpp"
+#include "sim/lidar.hpp"
+#include "sim/stepper.hpp"
 
 namespace sweepmap {
 

@@ -6,9 +6,9 @@
 #include <functional>
 #include <string>
 
-#include "sim/scene.hpp"
 #include "processes/node.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "sim/scene.hpp"
 
 namespace sweepmap {
 
