@@ -34,6 +34,9 @@ packages=(
   libsodium-dev  # signed LCM messages (net/message_auth.hpp)
   iptables libnetfilter-queue-dev  # the two-host test: loss and reordering without netem
   systemd
+  libwebsocketpp-dev libasio-dev  # sweepmap view: HTTP and WebSocket server (header-only)
+  libjs-three                     # sweepmap view: three.js, served from /usr/share/javascript
+  chromium                        # browser tests of the view and off-screen 3D renderings
 )
 # The on-board tree for arm64: only packages that are Multi-Arch: same (co-installable with
 # their amd64 twins) or host tools. liblcm1, liblcm-dev and libyaml-cpp-dev are not
@@ -97,5 +100,26 @@ if [ "$pi" -eq 1 ]; then
     pc="$ARM64_ROOT/usr/lib/aarch64-linux-gnu/pkgconfig/lcm.pc"
     $SUDO sed -i -e "s|^prefix=.*|prefix=$ARM64_ROOT/usr|" -e '/^Requires:/d' "$pc"
     echo "$want" | $SUDO tee "$ARM64_ROOT/.unpacked" >/dev/null
+  fi
+fi
+
+# Test-only Node packages (tests/js/package-lock.json, pinned): independent readers of our
+# MCAP, LAS and Foxglove WebSocket output, and the browser driver. The product needs no Node.
+# Installed again only when the lock file changed (a stamp beside node_modules).
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+js="$root/tests/js"
+if [ -f "$js/package-lock.json" ]; then
+  if ! command -v npm >/dev/null; then
+    echo "setup: installing npm"
+    $SUDO apt-get install -y -qq --no-install-recommends nodejs npm
+  fi
+  stamp="$js/node_modules/.lock-sha256"
+  want_lock=$(sha256sum "$js/package-lock.json" | cut -d' ' -f1)
+  if [ -f "$stamp" ] && [ "$(cat "$stamp")" = "$want_lock" ]; then
+    echo "setup: test-only npm packages present in tests/js/node_modules"
+  else
+    echo "setup: npm ci in tests/js (test-only packages)"
+    (cd "$js" && npm ci --no-audit --no-fund --loglevel=error)
+    echo "$want_lock" >"$stamp"
   fi
 fi
