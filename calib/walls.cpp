@@ -144,6 +144,9 @@ std::vector<WallPlaneFit> ransacPlanes(pcl::PointCloud<pcl::PointXYZ>::Ptr remai
   seg.setOptimizeCoefficients(true);
   seg.setModelType(model);
   seg.setMethodType(pcl::SAC_RANSAC);
+  // One thread: PCL's default (-1) runs RANSAC's samples in OpenMP threads, and which
+  // sample wins then depends on the scheduler: results changed under load.
+  seg.setNumberOfThreads(1);
   seg.setAxis(Eigen::Vector3f::UnitZ());
   seg.setEpsAngle(eps_angle_rad);
   seg.setDistanceThreshold(distance_m);

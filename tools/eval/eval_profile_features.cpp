@@ -61,6 +61,9 @@ std::optional<Plane> fitPlane(const std::vector<Eigen::Vector3d>& pts, const Eig
     seg.setEpsAngle(10.0 * M_PI / 180.0);
   }
   seg.setMethodType(pcl::SAC_RANSAC);
+  // One thread: PCL's default (-1) runs RANSAC's samples in OpenMP threads, and which
+  // sample wins then depends on the scheduler: results changed under load.
+  seg.setNumberOfThreads(1);
   seg.setDistanceThreshold(kPlaneRansac_mm);
   seg.setMaxIterations(500);
   seg.setInputCloud(toPcl(pts));
@@ -128,6 +131,9 @@ std::optional<Cylinder> fitCylinder(const std::vector<Eigen::Vector3d>& wall, do
   pcl::SACSegmentation<pcl::PointXYZ> seg;
   seg.setModelType(pcl::SACMODEL_CIRCLE2D);
   seg.setMethodType(pcl::SAC_RANSAC);
+  // One thread: PCL's default (-1) runs RANSAC's samples in OpenMP threads, and which
+  // sample wins then depends on the scheduler: results changed under load.
+  seg.setNumberOfThreads(1);
   seg.setDistanceThreshold(kCircleRansac_mm);
   seg.setRadiusLimits(0.7 * radius_mm, 1.3 * radius_mm);
   seg.setMaxIterations(500);
