@@ -90,7 +90,6 @@ void writeCalibration(const AxisOffsetCalibRequest& o, const Inputs& in, const A
   c.source["tool"] = "sweepmap calib axis-offset";
   c.source["method"] = "ceres: M, N, planes" + std::string(r.tilt_estimated ? ", laser tilt" : "") +
                        (r.zero_estimated ? ", encoder zero" : "");
-  c.source["date"] = calib_workflow::utcNow();
   c.source["planes"] = std::to_string(in.planes.size());
   c.source["sigma_m_mm"] = num(r.sigma_m_mm);
   c.source["sigma_n_mm"] = num(r.sigma_n_mm);

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <chrono>
-#include <ctime>
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -18,16 +17,6 @@ namespace sweepmap::calib_workflow {
 using Clock = std::chrono::steady_clock;
 
 inline double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
-// UTC date and time for a calibration file's provenance (never used in a result).
-inline std::string utcNow() {
-  const std::time_t t = std::time(nullptr);
-  std::tm tm{};
-  gmtime_r(&t, &tm);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", &tm);
-  return buf;
-}
 
 // The rig as its kind T into *rig; false after "WHAT: config error: ..." if it cannot be
 // loaded or is of another kind.

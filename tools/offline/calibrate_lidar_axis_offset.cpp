@@ -109,7 +109,6 @@ void writeCalibration(const LidarAxisOffsetCalibRequest& o, const RotatingLidarC
   c.source["tool"] = "sweepmap calib axis-offset";
   c.source["method"] = "ceres: t_L^O' x" + std::string(r.y_estimated ? ", y" : "") +
                        " and every plane (PCL RANSAC planes of each sweep), Cauchy weights";
-  c.source["date"] = calib_workflow::utcNow();
   c.source["nominal_mm"] = num(rig.geometry.lidar_offset_x_mm);
   c.source["sigma_mm"] = num(r.sigma_x_mm);
   c.source["sweeps"] = std::to_string(in.sweeps_used);

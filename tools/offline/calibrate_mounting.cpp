@@ -161,7 +161,6 @@ bool writeCalibration(const MountingCalibRequest& o, const MountingCalibrationRe
   c.beta_rad = ours.beta_rad;
   c.alpha_rad = ours.alpha_rad;
   c.source["tool"] = "sweepmap calib mounting";
-  c.source["date"] = calib_workflow::utcNow();
   c.source["method"] = mountingMethodName(ours.method);
   c.source["track"] = o.track;
   std::ostringstream text;

@@ -166,7 +166,6 @@ void writeCalibration(const PlateAngleCalibRequest& o, const LogSweeps& in, cons
   PlateCalibration c;
   c.alpha_deg = f.alpha_deg;
   c.source["tool"] = "sweepmap calib plate-angle";
-  c.source["date"] = calib_workflow::utcNow();
   c.source["sweeps_used"] = std::to_string(in.sweeps.size());
   std::ostringstream cost;
   cost << std::setprecision(6) << f.lm.final_cost;
