@@ -21,8 +21,8 @@ void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "range_min_m", &range_min_m, "m", "shortest valid range");
   s.add(p + "range_max_m", &range_max_m, "m", "longest valid range");
   s.add(p + "device", &device, "",
-        "the lidar to open: sim | scip://HOST[:PORT] | ydlidar:///dev/PORT | "
-        "rplidar:///dev/PORT[?baud=N]");
+        "the lidar to open: sim | scip://HOST[:PORT] | scip:///dev/PORT[?baud=N] (a Hokuyo "
+        "on a serial or USB port) | ydlidar:///dev/PORT | rplidar:///dev/PORT[?baud=N]");
 }
 
 void LidarConfig::validate(const std::string& source, const std::string& p) const {

@@ -240,5 +240,17 @@ TEST(ScipModels, ADeviceThatIsNotTheRigsModelIsRefused) {
   EXPECT_THROW(drive(utm, "UST-20LX", 0.1), IdentityMismatch);
 }
 
+// A Hokuyo on a serial or USB port (the URG-04LX's): scip:///dev/PORT, 19200 baud unless given.
+TEST(ScipModels, SerialScipUri) {
+  const DeviceUri u = parseDeviceUri("scip:///dev/ttyACM0");
+  EXPECT_EQ(u.protocol, DeviceProtocol::kScip);
+  EXPECT_EQ(u.path, "/dev/ttyACM0");
+  EXPECT_EQ(u.baud, 19200);
+  EXPECT_TRUE(u.host.empty());
+  EXPECT_EQ(parseDeviceUri("scip:///dev/ttyUSB0?baud=115200").baud, 115200);
+  EXPECT_THROW(parseDeviceUri("scip:///dev/ttyACM0?speed=1"), std::invalid_argument);
+  EXPECT_EQ(parseDeviceUri("scip://192.168.0.10").path, "");
+}
+
 }  // namespace
 }  // namespace sweepmap

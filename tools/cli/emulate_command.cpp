@@ -65,16 +65,16 @@ std::vector<std::string> splitModels(const std::string& list) {
 // The options' combination checked against the devices served; true when it is the one TCP
 // device (ust10lx). Throws ConfigError naming the option to change.
 bool checkServing(const EmulateOptions& o, const std::vector<std::string>& models) {
-  const bool tcp = models.size() == 1 && models[0] == "ust10lx";
+  // ust10lx: TCP (--listen), or a pty (--pty) as a URG-04LX's USB port.
+  const bool tcp = models.size() == 1 && models[0] == "ust10lx" && !o.server.pty;
   for (const std::string& m : models) {
     if (m == "ust10lx" && models.size() > 1) {
-      throw ConfigError("ust10lx speaks TCP: serve it alone, with --listen");
+      throw ConfigError("ust10lx is served alone (--listen, or --pty)");
     }
   }
   if (!tcp && !o.server.listen.empty()) {
     throw ConfigError(o.models + ": serial devices: use --pty, not --listen");
   }
-  if (tcp && o.server.pty) throw ConfigError("ust10lx speaks TCP: use --listen, not --pty");
   if (!o.links.empty() && o.links.size() != models.size()) {
     throw ConfigError("--link: give one path per device (" + std::to_string(models.size()) + ")");
   }
@@ -262,7 +262,8 @@ Runner addEmulateCommand(CLI::App& app) {
   cmd->add_option("--listen", o->server.listen,
                   "ust10lx: loopback HOST:PORT to serve on (default 127.0.0.1:10940)");
   cmd->add_flag("--pty", o->server.pty,
-                "serial devices: serve each on a new pseudo-terminal (default)");
+                "serial devices: serve each on a new pseudo-terminal (default); ust10lx: serve "
+                "SCIP on a pty, as a URG-04LX's USB port (open it as scip:///dev/pts/N)");
   cmd->add_option("--link", o->links,
                   "serial devices: keep a symlink to each device's pty at this path (stable "
                   "across hang-ups); one per device, in order")
