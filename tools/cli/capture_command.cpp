@@ -18,22 +18,24 @@ LidarConfig expectedLidar(const std::string& rig, const std::vector<std::string>
   return loadRig(rig, sets).lidar();
 }
 
-// `--lidar-model`: the model's whole field of view; it must speak `protocol`.
-LidarConfig modelLidar(const std::string& name, const std::string& protocol) {
+// The lidar `decode PROTOCOL` decodes as: the rig's, or with `--lidar-model` the model's whole
+// field of view. Its model must speak `protocol` (else a ConfigError naming both).
+LidarConfig decodeLidar(const std::string& protocol, const std::string& model,
+                        const std::string& rig, const std::vector<std::string>& sets) {
+  const LidarConfig l = model.empty() ? expectedLidar(rig, sets) : LidarConfig{};
+  const std::string name = model.empty() ? l.model : model;
   const LidarModel* m = findLidarModel(name);
   if (m == nullptr) {
     throw ConfigError("--lidar-model: '" + name + "' is not one of " + lidarModelNames());
   }
-  const bool hokuyo = m->protocol == DeviceProtocol::kScip;
-  const bool fits = protocol == "scip"      ? hokuyo
-                    : protocol == "x4"      ? m->protocol == DeviceProtocol::kYdlidarX4
-                    : protocol == "rplidar" ? m->protocol == DeviceProtocol::kRplidar
-                                            : false;
-  if (!fits) {
-    throw ConfigError("--lidar-model: the " + name + " speaks " + protocolName(m->protocol) +
-                      ", not " + protocol);
+  const DeviceProtocol want = protocol == "scip" ? DeviceProtocol::kScip
+                              : protocol == "x4" ? DeviceProtocol::kYdlidarX4
+                                                 : DeviceProtocol::kRplidar;
+  if (m->protocol != want) {
+    throw ConfigError((model.empty() ? "the rig's lidar.model: " : "--lidar-model: ") + name +
+                      " speaks " + protocolName(m->protocol) + ", not " + protocol);
   }
-  return fullFieldOf(*m);
+  return model.empty() ? l : fullFieldOf(*m);
 }
 
 }  // namespace
@@ -98,7 +100,8 @@ Runner addDecodeCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "LCM log to write")->required();
   auto* rig_opt = cmd->add_option("--rig", *rig,
                                   "rig file or name of the lidar (model, field of view, range "
-                                  "limits; default: rig_a for scip, rig_b otherwise)");
+                                  "limits; default: rig_a for scip, rig_b for x4, "
+                                  "--lidar-model RPLIDAR-A1 for rplidar, rig_b otherwise)");
   auto* set_opt = cmd->add_option("--set", *sets, "override a rig key: key=value (repeatable)");
   auto model = std::make_shared<std::string>();
   cmd->add_option("--lidar-model", *model,
@@ -115,8 +118,12 @@ Runner addDecodeCommand(CLI::App& app) {
   return [o, rig, sets, model]() -> int {
     checkOutputFile(o->out, {o->in});
     const std::string r = !rig->empty() ? *rig : (o->protocol == "scip" ? "rig_a" : "rig_b");
+    const bool lidar = o->protocol == "scip" || o->protocol == "x4" || o->protocol == "rplidar";
+    // rig_b's lidar is an X4: RPLIDAR bytes without a rig are an A1's.
+    const bool a1 = o->protocol == "rplidar" && rig->empty() && sets->empty();
+    const std::string m = model->empty() && a1 ? "RPLIDAR-A1" : *model;
     const LidarConfig expected =
-        model->empty() ? expectedLidar(r, *sets) : modelLidar(*model, o->protocol);
+        lidar ? decodeLidar(o->protocol, m, r, *sets) : expectedLidar(r, *sets);
     const DecodeResult res = runDecode(*o, expected, std::cout);
     if (res.scans == 0) {
       std::cerr << "decode: nothing decoded: " << o->in << " holds no " << o->protocol
