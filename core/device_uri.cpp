@@ -134,6 +134,18 @@ const char* protocolName(DeviceProtocol protocol) {
   return "?";
 }
 
+// A serial device's options: baud=N.
+static void parseBaudOption(const std::string& text, const std::string& query, DeviceUri* uri) {
+  forEachOption(query, [&](const std::string& key, const std::string& value, bool has_value,
+                           const std::string& kv) {
+    if (key != "baud" || !has_value) {
+      throw std::invalid_argument("device '" + text + "': unknown option '" + kv +
+                                  "' (known: baud=N)");
+    }
+    uri->baud = parsePositive(text, "baud rate", value, 4000000);
+  });
+}
+
 DeviceUri parseDeviceUri(const std::string& text) {
   DeviceUri uri;
   uri.text = text;
@@ -152,6 +164,14 @@ DeviceUri parseDeviceUri(const std::string& text) {
   if (const size_t q = rest.find('?'); q != std::string::npos) {
     query = rest.substr(q + 1);
     rest = rest.substr(0, q);
+  }
+  if (scheme == "scip" && !rest.empty() && rest.front() == '/') {
+    // A Hokuyo on a serial line or its USB port (URG-04LX: /dev/ttyACM0): the same SCIP lines.
+    uri.protocol = DeviceProtocol::kScip;
+    uri.path = rest;
+    uri.baud = 19200;  // the URG-04LX's factory rate (its USB port ignores it)
+    parseBaudOption(text, query, &uri);
+    return uri;
   }
   if (scheme == "scip") {
     uri.protocol = DeviceProtocol::kScip;
@@ -195,14 +215,7 @@ DeviceUri parseDeviceUri(const std::string& text) {
                                   ":///dev/PORT (an absolute path)");
     }
     uri.path = rest;
-    forEachOption(query, [&](const std::string& key, const std::string& value, bool has_value,
-                             const std::string& kv) {
-      if (key != "baud" || !has_value) {
-        throw std::invalid_argument("device '" + text + "': unknown option '" + kv +
-                                    "' (known: baud=N)");
-      }
-      uri.baud = parsePositive(text, "baud rate", value, 4000000);
-    });
+    parseBaudOption(text, query, &uri);
     return uri;
   }
   if (scheme == "gpiod") {

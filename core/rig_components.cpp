@@ -4,10 +4,14 @@
 #include <stdexcept>
 
 #include "core/device_uri.hpp"
+#include "core/lidar_models.hpp"
 
 namespace sweepmap {
 
 void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "model", &model, "",
+        "the lidar model (core/lidar_models.hpp): " + lidarModelNames() +
+            "; the keys below must fit it, and a SCIP driver requests just their steps");
   s.add(p + "beam_count", &beam_count, "", "rays per scan");
   s.add(p + "angle_min_deg", &angle_min_deg, "deg", "angle of ray 0, from Z_L toward Y_L");
   s.add(p + "angle_increment_deg", &angle_increment_deg, "deg", "angle between rays");
@@ -17,8 +21,8 @@ void LidarConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "range_min_m", &range_min_m, "m", "shortest valid range");
   s.add(p + "range_max_m", &range_max_m, "m", "longest valid range");
   s.add(p + "device", &device, "",
-        "the lidar to open: sim | scip://HOST[:PORT] | ydlidar:///dev/PORT | "
-        "rplidar:///dev/PORT[?baud=N]");
+        "the lidar to open: sim | scip://HOST[:PORT] | scip:///dev/PORT[?baud=N] (a Hokuyo "
+        "on a serial or USB port) | ydlidar:///dev/PORT | rplidar:///dev/PORT[?baud=N]");
 }
 
 void LidarConfig::validate(const std::string& source, const std::string& p) const {
@@ -30,11 +34,22 @@ void LidarConfig::validate(const std::string& source, const std::string& p) cons
   require(steps_per_revolution >= beam_count, "steps_per_revolution", "must be >= beam_count");
   require(range_min_m >= 0 && range_max_m > range_min_m, "range_max_m",
           "must exceed range_min_m >= 0");
+  DeviceUri uri;
   try {
-    parseDeviceUriFor(
+    uri = parseDeviceUriFor(
         device, {DeviceProtocol::kScip, DeviceProtocol::kYdlidarX4, DeviceProtocol::kRplidar});
   } catch (const std::invalid_argument& e) {
     throw ConfigError(source + ": key '" + p + "device': " + e.what());
+  }
+  const LidarModel* m = findLidarModel(model);
+  require(m != nullptr, "model", "'" + model + "' is not one of " + lidarModelNames());
+  require(uri.protocol == DeviceProtocol::kSim || uri.protocol == m->protocol, "device",
+          "speaks " + std::string(protocolName(uri.protocol)) + ", the " + model + " " +
+              protocolName(m->protocol));
+  try {
+    checkLidarFitsModel(*this, *m);
+  } catch (const LidarFitError& e) {
+    throw ConfigError(source + ": key '" + p + e.key + "' " + e.what());
   }
 }
 

@@ -12,6 +12,10 @@
 namespace sweepmap {
 
 struct LidarConfig {
+  // The device, from the catalogue of core/lidar_models.hpp (UST-10LX, URG-04LX-UG01,
+  // YDLIDAR-X4, ...). The keys below must fit it: for a SCIP model they pick the run of its
+  // steps the driver requests (the field of view), and the driver checks the device's PP.
+  std::string model = "UST-10LX";
   int beam_count = 1081;          // rays per scan
   double angle_min_deg = -135.0;  // angle of ray 0, from Z_L toward Y_L
   double angle_increment_deg = 0.25;

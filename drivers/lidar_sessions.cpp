@@ -4,6 +4,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/lidar_models.hpp"
 #include "drivers/clock_sync.hpp"
 #include "drivers/protocols/rplidar.hpp"
 #include "drivers/protocols/scip.hpp"
@@ -26,17 +27,16 @@ std::string at(int64_t offset) { return "byte " + std::to_string(offset) + ": ";
 class ScipSession : public LidarSession {
  public:
   ScipSession(const LidarConfig& expected, const SessionOptions& options)
-      : expected_(expected), options_(options) {
-    // Until the device's PP is seen (a raw file from the middle of a stream): the rig's.
-    params_.model = "(rig file)";
-    params_.ares = expected.steps_per_revolution;
-    const double step = 2.0 * M_PI / params_.ares;
-    params_.afrt = static_cast<int>(std::lround(-expected.angle_min_deg * M_PI / 180.0 / step));
-    params_.amin = 0;
-    params_.amax = expected.beam_count - 1;
-    params_.dmin_mm = static_cast<int>(std::lround(expected.range_min_m * 1000.0));
-    params_.dmax_mm = static_cast<int>(std::lround(expected.range_max_m * 1000.0));
-    params_.scan_rpm = static_cast<int>(std::lround(expected.scan_rate_hz * 60.0));
+      : expected_(expected), options_(options), model_(scipModel(expected.model)) {
+    // Until the device's PP is seen (a raw file from the middle of a stream): the model's.
+    params_.model = model_.name + " (lidar.model)";
+    params_.dmin_mm = model_.pp.dmin_mm;
+    params_.dmax_mm = model_.pp.dmax_mm;
+    params_.ares = model_.pp.ares;
+    params_.amin = model_.pp.amin;
+    params_.amax = model_.pp.amax;
+    params_.afrt = model_.pp.afrt;
+    params_.scan_rpm = model_.pp.scan_rpm;
   }
 
   void start(ByteStream& stream, const std::function<int64_t()>& now) override {
@@ -50,10 +50,11 @@ class ScipSession : public LidarSession {
     const scip::Reply vv = exchange(stream, now, "VV");
     const scip::Reply pp = exchange(stream, now, "PP");
     params_ = scip::parseParams(pp.params);
-    identity_ = pp.params.count("MODL") ? pp.params.at("MODL") : "SCIP sensor";
+    const std::string modl = pp.params.count("MODL") ? pp.params.at("MODL") : "";
+    identity_ = modl.empty() ? "SCIP sensor" : modl;
     if (vv.params.count("SERI")) identity_ += " serial " + vv.params.at("SERI");
     if (vv.params.count("FIRM")) identity_ += " firmware " + vv.params.at("FIRM");
-    check();
+    check(modl, vv.params.count("PROD") ? vv.params.at("PROD") : "");
     // The sensor's clock against ours: TM1 exchanges narrow the offset down to about a
     // round trip (DeviceClockSync::anchor).
     // (A client that left the sensor in adjust mode: TM0 answers 02 "already on".)
@@ -70,13 +71,14 @@ class ScipSession : public LidarSession {
       clock_.anchor(*tm.time_ms, sent, received);
     }
     exchange(stream, now, "TM2");
-    // Ranges and intensities (ME) where the sensor has them, else ranges (MD).
-    const int start =
-        params_.afrt +
-        static_cast<int>(std::lround(expected_.angle_min_deg * M_PI / 180.0 / params_.stepRad()));
-    const int end = start + expected_.beam_count - 1;
-    scip::Reply r = exchange(stream, now, scip::scanCommand("ME", start, end, 0, 0, 0), false);
-    if (!r.ok) r = exchange(stream, now, scip::scanCommand("MD", start, end, 0, 0, 0), false);
+    // The rig's steps (its field of view; the device's PP is the model's, checked above):
+    // ranges and intensities (ME) where the sensor has them, else ranges (MD).
+    const ScipRequest q = scipRequestFor(expected_, model_);
+    const auto command = [&](const char* c) {
+      return scip::scanCommand(c, q.start_step, q.end_step, q.cluster, 0, 0);
+    };
+    scip::Reply r = exchange(stream, now, command("ME"), false);
+    if (!r.ok) r = exchange(stream, now, command("MD"), false);
     if (!r.ok) {
       throw StreamError("SCIP " + r.command + " status " + r.status + ": " +
                         scip::statusText(r.command, r.status));
@@ -141,40 +143,46 @@ class ScipSession : public LidarSession {
     throw StreamError("no reply to SCIP " + line.substr(0, line.size() - 1) + " within 1 s");
   }
 
-  // The device must be the lidar the rig file describes.
-  void check() const {
+  static LidarModel scipModel(const std::string& name) {
+    const LidarModel* m = findLidarModel(name);
+    if (m == nullptr || m->protocol != DeviceProtocol::kScip) {
+      throw std::invalid_argument("lidar.model '" + name + "' is not a SCIP lidar (" +
+                                  lidarModelNames() + ")");
+    }
+    return *m;
+  }
+
+  // The device must be the lidar.model of the rig file: its name in PP's MODL (or VV's PROD),
+  // PP's steps and rate the catalogue's, its range limits covering the rig's.
+  void check(const std::string& modl, const std::string& prod) const {
     const auto mismatch = [&](const std::string& what, const std::string& rig,
                               const std::string& device) {
-      throw IdentityMismatch(what + ": the rig file says " + rig + ", the " + identity_ + " has " +
-                             device);
+      throw IdentityMismatch(what + ": the rig file's lidar.model " + model_.name + " has " + rig +
+                             ", the device (" + identity_ + ") reports " + device);
     };
-    const int beams = params_.amax - params_.amin + 1;
-    if (beams != expected_.beam_count) {
-      mismatch("beams", std::to_string(expected_.beam_count),
-               std::to_string(beams) + " (steps " + std::to_string(params_.amin) + ".." +
-                   std::to_string(params_.amax) + ")");
+    if (modl.find(model_.name) == std::string::npos &&
+        prod.find(model_.name) == std::string::npos) {
+      mismatch("model", "MODL " + model_.name, "MODL '" + modl + "'");
     }
-    if (params_.ares != expected_.steps_per_revolution ||
-        std::fabs(360.0 / params_.ares - expected_.angle_increment_deg) > 1e-6) {
-      mismatch("angular resolution",
-               fmt(expected_.angle_increment_deg, 6) + " deg (" +
-                   std::to_string(expected_.steps_per_revolution) + " steps per turn)",
-               fmt(360.0 / params_.ares, 6) + " deg (ARES " + std::to_string(params_.ares) + ")");
+    const ScipGeometry& want = model_.pp;
+    const std::pair<const char*, std::pair<int, int>> keys[] = {
+        {"ARES", {want.ares, params_.ares}},
+        {"AMIN", {want.amin, params_.amin}},
+        {"AMAX", {want.amax, params_.amax}},
+        {"AFRT", {want.afrt, params_.afrt}},
+        {"SCAN", {want.scan_rpm, params_.scan_rpm}}};
+    for (const auto& [key, v] : keys) {
+      if (v.first != v.second) {
+        mismatch(key, std::string(key) + " " + std::to_string(v.first),
+                 std::string(key) + " " + std::to_string(v.second));
+      }
     }
-    const double angle_min_deg = params_.angleRad(params_.amin) * 180.0 / M_PI;
-    if (std::fabs(angle_min_deg - expected_.angle_min_deg) > 0.5 * 360.0 / params_.ares) {
-      mismatch("first ray angle", fmt(expected_.angle_min_deg, 6) + " deg",
-               fmt(angle_min_deg, 6) + " deg");
-    }
-    if (expected_.range_min_m < params_.dmin_mm * 1e-3 ||
-        expected_.range_max_m > params_.dmax_mm * 1e-3) {
-      mismatch("range limits",
-               fmt(expected_.range_min_m) + ".." + fmt(expected_.range_max_m) + " m",
-               fmt(params_.dmin_mm * 1e-3) + ".." + fmt(params_.dmax_mm * 1e-3) + " m");
-    }
-    const double rate = params_.scan_rpm / 60.0;
-    if (std::fabs(rate - expected_.scan_rate_hz) > 0.01 * expected_.scan_rate_hz) {
-      mismatch("scan rate", fmt(expected_.scan_rate_hz) + " Hz", fmt(rate) + " Hz");
+    if (expected_.range_min_m < params_.dmin_mm * 1e-3 - 1e-9 ||
+        expected_.range_max_m > params_.dmax_mm * 1e-3 + 1e-9) {
+      mismatch(
+          "range limits",
+          "the rig's " + fmt(expected_.range_min_m) + ".." + fmt(expected_.range_max_m) + " m",
+          "DMIN..DMAX " + fmt(params_.dmin_mm * 1e-3) + ".." + fmt(params_.dmax_mm * 1e-3) + " m");
     }
   }
 
@@ -207,14 +215,19 @@ class ScipSession : public LidarSession {
     // echoes to 30 m but is specified to 10 m), as the simulated lidar publishes them.
     s.range_min_m = std::max(s.range_min_m, expected_.range_min_m);
     s.range_max_m = std::min(s.range_max_m, expected_.range_max_m);
+    // (In float, as the ranges are: 20 mm is not below a 0.02 m limit.)
+    const auto lo = static_cast<float>(s.range_min_m), hi = static_cast<float>(s.range_max_m);
     for (float& r : s.ranges_m) {
-      if (r < s.range_min_m || r > s.range_max_m) r = 0.0f;
+      if (r < lo || r > hi) r = 0.0f;
     }
     s.seq = seq_++;
-    const double ray_s = 60.0 / params_.scan_rpm / params_.ares;
-    s.time_increment_ns = static_cast<int64_t>(std::llround(ray_s * d.cluster * 1e9));
+    s.time_increment_ns =
+        static_cast<int64_t>(std::llround(params_.stepPeriodS() * d.cluster * 1e9));
+    // The stamp is the scan's step 0; ray 0 came firstRayDelayS later.
+    const auto delay_us =
+        static_cast<int64_t>(std::llround(scip::firstRayDelayS(d, params_) * 1e6));
     if (options_.time == ScanTime::kArrival && arrival >= 0) {
-      s.utime = clock_.observe(d.time_ms, arrival);
+      s.utime = clock_.observe(d.time_ms, arrival) + delay_us;
     } else {
       // No receive times: the device's own clock, unwrapped (ms -> us).
       const int64_t modulus = int64_t{1} << 24;
@@ -224,13 +237,14 @@ class ScipSession : public LidarSession {
         unwrapped_ = d.time_ms;
       have_raw_ = true;
       last_raw_ = d.time_ms;
-      s.utime = unwrapped_ * 1000;
+      s.utime = unwrapped_ * 1000 + delay_us;
     }
     scans->push_back(std::move(s));
   }
 
   LidarConfig expected_;
   SessionOptions options_;
+  LidarModel model_;
   scip::Decoder decoder_;
   scip::Params params_;
   DeviceClockSync clock_;

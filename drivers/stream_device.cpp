@@ -127,7 +127,8 @@ void StreamDevice::run() {
     beat();
     std::unique_ptr<ByteStream> stream;
     try {
-      stream = uri_.protocol == DeviceProtocol::kScip
+      // SCIP over TCP (UST, UTM-30LX-EW), or on a serial / USB port (URG-04LX: a path).
+      stream = uri_.protocol == DeviceProtocol::kScip && uri_.path.empty()
                    ? openTcp(uri_.host, uri_.port, options_.connect_timeout_ms)
                    : openSerial(uri_.path, uri_.baud);
     } catch (const StreamError& e) {

@@ -16,7 +16,9 @@ void LidarNode::advance(int64_t now_utime, Outbox& out) {
   for (const std::string& e : health.events) reportEvent(e);
   if (!health.fatal.empty() && !failed()) setFailed(health.fatal);
   for (const Scan2D& scan : device_->poll(now_utime)) {
-    const std::string why = validateScan(scan, config_.beam_count);
+    // The driver's scans carry their own angles: their length is the device's (a SCIP
+    // reply covers the steps asked for), not checked against the rig's ray count.
+    const std::string why = validateScan(scan, 0);
     if (!why.empty()) {
       reportError("invalid", "device scan " + std::to_string(scan.seq) + " dropped: " + why);
       continue;

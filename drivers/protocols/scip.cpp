@@ -465,7 +465,7 @@ void Decoder::emitReply(const std::string& command, const std::string& where,
 }
 
 double Params::stepRad() const { return 2.0 * M_PI / ares; }
-double Params::angleRad(int step) const { return (step - afrt) * stepRad(); }
+double Params::angleRad(double step) const { return (step - afrt) * stepRad(); }
 
 Params parseParams(const std::map<std::string, std::string>& pp) {
   Params p;
@@ -505,8 +505,20 @@ Params parseParams(const std::map<std::string, std::string>& pp) {
 
 Scan2D toScan2D(const ScanData& scan, const Params& pp) {
   Scan2D s;
-  s.angle_min_rad = pp.angleRad(scan.start_step);
-  s.angle_increment_rad = pp.stepRad() * scan.cluster;
+  const int c = std::max(1, scan.cluster);
+  s.angle_min_rad = pp.angleRad(scan.start_step + 0.5 * (c - 1));
+  s.angle_increment_rad = pp.stepRad() * c;
+  const size_t n = scan.ranges_mm.size();
+  const int last_steps = n == 0 ? c : scan.end_step - (scan.start_step + int(n - 1) * c) + 1;
+  if (last_steps < c) {
+    // The end step cuts the last cluster short: its middle is not on the grid.
+    s.angles_rad.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const int first = scan.start_step + int(i) * c;
+      const int steps = std::min(c, scan.end_step - first + 1);
+      s.angles_rad[i] = static_cast<float>(pp.angleRad(first + 0.5 * (steps - 1)));
+    }
+  }
   s.range_min_m = pp.dmin_mm * 1e-3;
   s.range_max_m = pp.dmax_mm * 1e-3;
   s.device_stamp = scan.time_ms;
@@ -520,6 +532,10 @@ Scan2D toScan2D(const ScanData& scan, const Params& pp) {
   }
   s.intensities.assign(scan.intensities.begin(), scan.intensities.end());
   return s;
+}
+
+double firstRayDelayS(const ScanData& scan, const Params& pp) {
+  return (scan.start_step + 0.5 * (std::max(1, scan.cluster) - 1)) * pp.stepPeriodS();
 }
 
 std::string scanCommand(const std::string& command, int start, int end, int cluster, int skip,

@@ -14,8 +14,13 @@
 // the characters before the ';' ("PROT:SCIP 2.0;N").
 //
 // Time stamps: the sensor's millisecond counter, 24 bits (wraps every 4.66 h), sent in 4
-// characters with each scan and by TM1. sweepmap takes a scan's stamp as the counter when
-// the scan's first step (the requested start step) was measured; the emulator stamps so.
+// characters with each scan and by TM1. A scan's stamp is the counter at the scan's step 0
+// ("Time stamp is a timer value at 0th step of every scan", SCIP2.0 specification
+// C-42-03320B, §7), whatever steps were requested: ray 0 of a reply from step s was measured
+// s steps later (firstRayDelayS); the emulator stamps so.
+//
+// Angles (core/lidar_models.hpp): step s at (s - AFRT) * 2 pi / ARES; a cluster of c steps,
+// which sends the smallest of its values, at its middle step s + (c - 1) / 2.
 #pragma once
 
 #include <cstdint>
@@ -105,16 +110,20 @@ struct Params {
   std::string model;
   int dmin_mm = 0, dmax_mm = 0, ares = 0, amin = 0, amax = 0, afrt = 0, scan_rpm = 0;
   double stepRad() const;
-  double angleRad(int step) const;  // from the front step, counter-clockwise positive
+  double angleRad(double step) const;  // from the front step, counter-clockwise positive
+  double stepPeriodS() const { return 60.0 / scan_rpm / ares; }
 };
 // Throws std::runtime_error naming a missing or insane key.
 Params parseParams(const std::map<std::string, std::string>& pp);
 
-// A scan as sweepmap's Scan2D, angles and ranges only: ray i at step start + i*cluster
-// (the cluster's first step), ranges mm -> m with the sensor's error codes (< DMIN) and
-// anything beyond DMAX as 0 (no return), intensities as sent, device_stamp = the 24-bit
-// stamp. utime and time_increment_ns are the driver's (host clock).
+// A scan as sweepmap's Scan2D, angles and ranges only: ray i at the middle of its cluster,
+// step start + i*cluster + (cluster - 1) / 2 (a last cluster cut short by the end step at its
+// own middle: then angles_rad holds every ray's angle), ranges mm -> m with the sensor's
+// error codes (< DMIN) and anything beyond DMAX as 0 (no return), intensities as sent,
+// device_stamp = the 24-bit stamp. utime and time_increment_ns are the driver's (host clock).
 Scan2D toScan2D(const ScanData& scan, const Params& pp);
+// From the scan's stamp (its step 0) to its ray 0's middle step [s].
+double firstRayDelayS(const ScanData& scan, const Params& pp);
 
 // Command lines (host -> sensor): "MD0000108000000\n" and so on.
 std::string scanCommand(const std::string& command, int start, int end, int cluster, int skip,

@@ -48,6 +48,26 @@ TEST_F(SweepAssemblyTest, PointsUseEachRaysOwnTime) {
   EXPECT_LT((s.points_Op[7].cast<double>() - want).norm(), 1e-6);
 }
 
+// A scan of part of the field of view (a SCIP sub-range: rays 1..3 of the 5, its first ray
+// 1 ms later, each ray at its own angle) gives the same points as those rays of the full scan:
+// the assembler takes each ray's angle and time from the scan, not from the rig's grid.
+TEST_F(SweepAssemblyTest, ASubRangeScanGivesTheSameRaysPoints) {
+  Scan2D full = scan(4, 0.0f);
+  for (size_t i = 0; i < 5; ++i) full.ranges_m[i] = 1.0f + 0.25f * float(i);
+  Scan2D part = full;
+  part.ranges_m.assign(full.ranges_m.begin() + 1, full.ranges_m.begin() + 4);
+  part.angle_min_rad = full.rayAngle(1);
+  part.utime = full.rayUtime(1);
+  // The sweep's first scan (its first ray: phi = 0) is the same full scan in both.
+  const AssembledSweep a = assembleSweep({scan(0, 2.0f), full}, window_, rig_);
+  const AssembledSweep b = assembleSweep({scan(0, 2.0f), part}, window_, rig_);
+  ASSERT_EQ(a.points_Op.size(), 10u);
+  ASSERT_EQ(b.points_Op.size(), 8u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_LT((b.points_Op[5 + i] - a.points_Op[5 + 1 + i]).norm(), 1e-6) << i;
+  }
+}
+
 TEST_F(SweepAssemblyTest, SkipsNoReturnAndOutOfLimitRays) {
   Scan2D a = scan(0, 2.0f);
   a.ranges_m[0] = 0.0f;   // no return

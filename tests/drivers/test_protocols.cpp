@@ -194,6 +194,8 @@ TEST(ScipDevice, Conversation) {
       Scan2D s;
       s.utime = next * 25000;
       s.time_increment_ns = 17361;
+      s.angle_min_rad = -0.75 * M_PI;  // the UST-10LX's steps 0..1080
+      s.angle_increment_rad = 2.0 * M_PI / 1440.0;
       s.ranges_m.assign(1081, 1.5f);
       s.ranges_m[0] = 0.0f;  // no return
       ++next;

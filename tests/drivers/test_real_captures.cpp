@@ -16,6 +16,8 @@
 #include <string>
 #include <vector>
 
+#include "core/lidar_models.hpp"
+#include "drivers/lidar_sessions.hpp"
 #include "drivers/protocols/hi219.hpp"
 #include "drivers/protocols/scip.hpp"
 #include "drivers/protocols/ydlidar.hpp"
@@ -148,6 +150,130 @@ TEST(RealCapturesScip, Urg04lxGdReplyAtTheModelsAngles) {
       std::count_if(scan.ranges_m.begin(), scan.ranges_m.end(), [](float r) { return r > 0.0f; }),
       597);
   EXPECT_EQ(scan.device_stamp, 11149560);
+}
+
+// Raw bytes through the driver's own session, as `sweepmap decode scip FILE --lidar-model M`
+// decodes them (tools/devices/capture.cpp: the model's whole field of view, device times).
+std::vector<Scan2D> decodeAsModel(const std::string& bytes, const std::string& model,
+                                  std::vector<std::string>* errors) {
+  const LidarModel* m = findLidarModel(model);
+  if (m == nullptr) throw std::runtime_error("no model " + model);
+  SessionOptions options;
+  options.time = ScanTime::kStream;
+  auto session = makeLidarSession(DeviceProtocol::kScip, fullFieldOf(*m), options);
+  std::vector<Scan2D> scans;
+  session->onBytes(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), -1, &scans,
+                   errors);
+  return scans;
+}
+
+// Issue 22: "A URG-04LX GD/MD reply of steps 44-725, decoded with --lidar-model URG-04LX-UG01,
+// gives one scan of 682 rays at the model's angles, with the error codes invalid."
+TEST(RealCapturesScip, Urg04lxGdReplyDecodedAsItsModel) {
+  std::vector<std::string> errors;
+  const auto scans = decodeAsModel(readBinary(kUrgGd), "URG-04LX-UG01", &errors);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  ASSERT_EQ(scans.size(), 1u);
+  const Scan2D& scan = scans[0];
+  ASSERT_EQ(scan.ranges_m.size(), 682u);
+  // The model's angles by the SCIP2.0 specification: step s at (s - AFRT) * 360 / ARES deg,
+  // AFRT 384, ARES 1024 (the device's PP); ray i is step 44 + i.
+  for (size_t i : {size_t(0), size_t(1), size_t(340), size_t(681)}) {
+    EXPECT_NEAR(scan.rayAngle(i), (44.0 + double(i) - 384.0) * 2.0 * M_PI / 1024.0, 1e-9) << i;
+  }
+  EXPECT_NEAR(scan.rayAngle(0) / kDeg, -119.53125, 1e-4);  // 0.01 deg and better
+  // Values below DMIN 20 are the URG-04LX's error codes (Table 3), never ranges: 85 of them.
+  EXPECT_EQ(scan.ranges_m[0], 0.0f);  // code 6
+  EXPECT_FLOAT_EQ(scan.ranges_m[3], 4.190f);
+  EXPECT_FLOAT_EQ(scan.ranges_m[340], 0.293f);
+  EXPECT_EQ(
+      std::count_if(scan.ranges_m.begin(), scan.ranges_m.end(), [](float r) { return r > 0.0f; }),
+      682 - 85);
+  // The stamp is the scan's step 0; ray 0 (step 44) was measured 44 steps of
+  // 100 ms / 1024 later: 11149560 ms + 4296.875 us.
+  EXPECT_EQ(scan.utime, 11149560LL * 1000 + 4297);
+}
+
+// A UST-10LX GD reply for steps 0-10, hand-encoded by the SCIP2.0 specification (3-character
+// values, 64-character blocks, each line with its checksum: the low 6 bits of the sum + 0x30).
+// Values: 1234 ("CB"'s worked value, here in 3 characters "0CB"), 5432 ("1Dh", the
+// specification's example), 1 (error code "no object in the range"), 65533 (beyond DMAX: what
+// real USTs send with no echo), 20 (DMIN), 30000 (DMAX), 1000..1004; stamp 0x123456 ("4SAF").
+const std::string kUstGd0To10 = "GD0000001000\n00P\n4SAF>\n0CB1Dh001?om00D7D`0?X0?Y0?Z0?[0?\\Z\n\n";
+
+// Issue 22: "A UST-10LX GD reply for steps 0-10 gives one scan of 11 rays starting at the
+// model's first angle."
+TEST(SpecBytesScip, Ust10lxGdOfSteps0To10) {
+  std::vector<std::string> errors;
+  const auto scans = decodeAsModel(kUstGd0To10, "UST-10LX", &errors);
+  EXPECT_TRUE(errors.empty()) << errors.front();
+  ASSERT_EQ(scans.size(), 1u);
+  const Scan2D& scan = scans[0];
+  ASSERT_EQ(scan.ranges_m.size(), 11u);
+  // Step 0 of a UST-10LX (PP: AMIN 0, AFRT 540, ARES 1440): (0 - 540) * 360 / 1440 = -135 deg.
+  EXPECT_NEAR(scan.rayAngle(0), -0.75 * M_PI, 1e-12);
+  EXPECT_NEAR(scan.rayAngle(10), (10.0 - 540.0) * 2.0 * M_PI / 1440.0, 1e-12);
+  const std::vector<float> want = {1.234f, 5.432f, 0.0f,   0.0f,   0.020f, 30.0f,
+                                   1.000f, 1.001f, 1.002f, 1.003f, 1.004f};
+  for (size_t i = 0; i < want.size(); ++i) EXPECT_FLOAT_EQ(scan.ranges_m[i], want[i]) << i;
+  EXPECT_EQ(scan.device_stamp, 0x123456);
+  EXPECT_EQ(scan.utime, 0x123456LL * 1000);  // step 0 is ray 0
+}
+
+// The same steps decoded at a cluster of 2 (GD0000001002: 6 values, the last cluster one
+// step): each ray at its cluster's middle step.
+TEST(SpecBytesScip, ClusterRaysAtTheirMiddleStep) {
+  scip::ScanData d;
+  d.command = "GD";
+  d.start_step = 0;
+  d.end_step = 10;
+  d.cluster = 2;
+  d.ranges_mm = {1000, 1000, 1000, 1000, 1000, 1000};
+  const scip::Params pp = scip::parseParams({{"DMIN", "20"},
+                                             {"DMAX", "30000"},
+                                             {"ARES", "1440"},
+                                             {"AMIN", "0"},
+                                             {"AMAX", "1080"},
+                                             {"AFRT", "540"},
+                                             {"SCAN", "2400"}});
+  const Scan2D scan = scip::toScan2D(d, pp);
+  const double step = 2.0 * M_PI / 1440.0;
+  ASSERT_EQ(scan.ranges_m.size(), 6u);
+  for (size_t i = 0; i < 5; ++i) {
+    EXPECT_NEAR(scan.rayAngle(i), (2.0 * double(i) + 0.5 - 540.0) * step, 1e-6) << i;
+  }
+  EXPECT_NEAR(scan.rayAngle(5), (10.0 - 540.0) * step, 1e-6);  // step 10 alone
+}
+
+// scip/urg04lx_pp_urgnetwork.txt and urg04lx_vv_urgnetwork.txt: a classic URG-04LX's PP and VV
+// replies as Hokuyo's urgnetwork wiki prints them (every checksum holds).
+TEST(RealCapturesScip, Urg04lxPpAndVvReplies) {
+  const auto replies = only<scip::Reply>(decodeAll<scip::Decoder, scip::Event>(
+      readBinary("scip/urg04lx_pp_urgnetwork.txt") + readBinary("scip/urg04lx_vv_urgnetwork.txt")));
+  ASSERT_EQ(replies.size(), 2u);
+  const auto& pp = replies[0].params;
+  EXPECT_EQ(pp.at("MODL"), "URG-04LX(Hokuyo Automatic Co.,Ltd.)");
+  const scip::Params p = scip::parseParams(pp);
+  const LidarModel& m = *findLidarModel("URG-04LX");
+  EXPECT_EQ(p.dmin_mm, 20);
+  EXPECT_EQ(p.dmax_mm, 5600);
+  EXPECT_EQ(p.ares, 1024);
+  EXPECT_EQ(p.amin, 44);
+  EXPECT_EQ(p.amax, 725);
+  EXPECT_EQ(p.afrt, 384);
+  EXPECT_EQ(p.scan_rpm, 600);
+  // The catalogue holds what the device says.
+  EXPECT_EQ(m.pp.dmin_mm, p.dmin_mm);
+  EXPECT_EQ(m.pp.dmax_mm, p.dmax_mm);
+  EXPECT_EQ(m.pp.ares, p.ares);
+  EXPECT_EQ(m.pp.amin, p.amin);
+  EXPECT_EQ(m.pp.amax, p.amax);
+  EXPECT_EQ(m.pp.afrt, p.afrt);
+  EXPECT_EQ(m.pp.scan_rpm, p.scan_rpm);
+  const auto& vv = replies[1].params;
+  EXPECT_EQ(vv.at("PROD"), "SOKUIKI Sensor URG-04LX");
+  EXPECT_EQ(vv.at("FIRM"), "3.1.00(18/Jan./2007)");
+  EXPECT_EQ(vv.at("SERI"), "H0614967");
 }
 
 // --- HiPNUC HI219 / HI2xx -------------------------------------------------------------------

@@ -210,18 +210,18 @@ TEST_F(DevicesTest, ScipDriverReconnectsWithinTwoSeconds) {
   EXPECT_GE(c.at("reconnects"), 1);
 }
 
-// A device that is not the rig file's lidar: one clear error naming both values, exit 3.
+// A device that is not the rig file's lidar.model: one clear error naming both, exit 3 (the
+// emulator answers as rig_a's UST-10LX; the rig file says UTM-30LX, whose steps are the same).
 TEST_F(DevicesTest, IdentityMismatchIsOneClearError) {
   prepare("mismatch");
   const pid_t emu = emulator("ust10lx", {"--listen", "127.0.0.1:10940", "--rig", "rig_a"});
   sleepS(0.5);
-  const pid_t drv =
-      lidar("rig_a", "scip://127.0.0.1:10940", {"lidar.beam_count=721", "lidar.angle_min_deg=-90"});
+  const pid_t drv = lidar("rig_a", "scip://127.0.0.1:10940", {"lidar.model=UTM-30LX"});
   EXPECT_EQ(procs_.wait(drv, 10.0), 3);
   procs_.stop(emu, 5.0);
   const std::string out = procs_.said("lidar");
-  EXPECT_NE(out.find("721"), std::string::npos) << out;
-  EXPECT_NE(out.find("1081"), std::string::npos) << out;
+  EXPECT_NE(out.find("UTM-30LX"), std::string::npos) << out;
+  EXPECT_NE(out.find("UST-10LX"), std::string::npos) << out;
 }
 
 // A refused connection: one line, then quiet retries; streaming once the device appears.
@@ -365,10 +365,11 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(SerialCase{"x4", "ydlidar", {}, 1.0 / 7.0, 0.0003, 0.1 * M_PI / 180},
                       SerialCase{"rplidar",
                                  "rplidar",
-                                 {"lidar.beam_count=360", "lidar.angle_min_deg=-180",
-                                  "lidar.range_min_m=0.15", "lidar.angle_increment_deg=1",
-                                  "lidar.steps_per_revolution=360", "lidar.scan_rate_hz=5.5",
-                                  "sim.scan_rate_hz=5.5", "sim.sample_rate_hz=1980"},
+                                 {"lidar.model=RPLIDAR-A1", "lidar.beam_count=360",
+                                  "lidar.angle_min_deg=-180", "lidar.range_min_m=0.15",
+                                  "lidar.angle_increment_deg=1", "lidar.steps_per_revolution=360",
+                                  "lidar.scan_rate_hz=5.5", "sim.scan_rate_hz=5.5",
+                                  "sim.sample_rate_hz=1980"},
                                  1.0 / 5.5,
                                  0.0003,
                                  0.1 * M_PI / 180}),

@@ -119,7 +119,8 @@ TEST_F(AssemblerNodeTest, BadInputIsCountedNotFatal) {
     Scan2D s;
     s.utime = 1000000 + 25000 * 5;
     s.range_max_m = 10;
-    s.ranges_m.assign(3, 1.0f);  // wrong length
+    s.ranges_m.assign(3, 1.0f);     // any ray count is a scan (a sub-range of the field) ...
+    s.intensities.assign(2, 1.0f);  // ... but not 2 intensities for 3 rays: wrong length
     msgs.push_back(encode(channels::kLidarScan, s.utime, toLcm(s)));
   }
   msgs.push_back(scanMsg(0));                      // repeated: out of order

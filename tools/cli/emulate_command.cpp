@@ -65,16 +65,16 @@ std::vector<std::string> splitModels(const std::string& list) {
 // The options' combination checked against the devices served; true when it is the one TCP
 // device (ust10lx). Throws ConfigError naming the option to change.
 bool checkServing(const EmulateOptions& o, const std::vector<std::string>& models) {
-  const bool tcp = models.size() == 1 && models[0] == "ust10lx";
+  // ust10lx: TCP (--listen), or a pty (--pty) as a URG-04LX's USB port.
+  const bool tcp = models.size() == 1 && models[0] == "ust10lx" && !o.server.pty;
   for (const std::string& m : models) {
     if (m == "ust10lx" && models.size() > 1) {
-      throw ConfigError("ust10lx speaks TCP: serve it alone, with --listen");
+      throw ConfigError("ust10lx is served alone (--listen, or --pty)");
     }
   }
   if (!tcp && !o.server.listen.empty()) {
     throw ConfigError(o.models + ": serial devices: use --pty, not --listen");
   }
-  if (tcp && o.server.pty) throw ConfigError("ust10lx speaks TCP: use --listen, not --pty");
   if (!o.links.empty() && o.links.size() != models.size()) {
     throw ConfigError("--link: give one path per device (" + std::to_string(models.size()) + ")");
   }
@@ -93,6 +93,7 @@ struct WorldFeeds {
   ImuSource imu;
   TicksSource ticks;
   DeviceClockModel device_clock;  // the odometry devices' clocks
+  std::string scip_model;         // the world rig's lidar.model (ust10lx serves it)
 };
 
 // The world's sources for `models`. Truth: each scan as the world made it (true first-ray
@@ -101,6 +102,7 @@ void connectFeeds(const EmulateOptions& o, const std::vector<std::string>& model
                   EmulatorWorld& world, int64_t start, WorldFeeds& f) {
   if (!o.truth.empty()) f.truth = std::make_unique<EventLogWriter>(o.truth);
   f.lidar_power_on = start;
+  f.scip_model = world.lidarModel();
   for (const std::string& m : models) {
     if (!isLidarModel(m)) continue;
     ScanSource inner = world.source();
@@ -198,7 +200,7 @@ void serveAll(const EmulateOptions& o, const std::vector<std::string>& models, b
         return std::make_unique<WheelBoardDevice>(f.ticks, f.device_clock, now_us);
       }
       f.lidar_power_on = now_us;
-      return makeEmulatedLidar(emulatedModel(model), f.scans, o.clock, now_us);
+      return makeEmulatedLidar(emulatedModel(model), f.scans, o.clock, now_us, f.scip_model);
     };
     servers.emplace_back([&, server, faults, make, model] {
       try {
@@ -243,7 +245,9 @@ Runner addEmulateCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "emulate",
       "Serve simulated devices behind their real protocols, for the real drivers: ust10lx "
-      "(Hokuyo UST-10LX, SCIP 2.0 over TCP, fed by a rotating_lidar world: the simulated lidar "
+      "(a Hokuyo SCIP 2.0 sensor over TCP, as the world rig's lidar.model: the UST-10LX of "
+      "rig_a, or e.g. --set lidar.model=UTM-30LX; fed by a rotating_lidar world: the simulated "
+      "lidar "
       "on a shaft that stands still, or follows TRUTH_SHAFT with --follow-lcm); on "
       "pseudo-terminals, fed by a mobile_lidar world (the simulated car): x4 (YDLIDAR X4), "
       "rplidar (RPLIDAR A1), hi219 (HiPNUC HI219 IMU) and wheel-board (our wheel board "
@@ -258,7 +262,8 @@ Runner addEmulateCommand(CLI::App& app) {
   cmd->add_option("--listen", o->server.listen,
                   "ust10lx: loopback HOST:PORT to serve on (default 127.0.0.1:10940)");
   cmd->add_flag("--pty", o->server.pty,
-                "serial devices: serve each on a new pseudo-terminal (default)");
+                "serial devices: serve each on a new pseudo-terminal (default); ust10lx: serve "
+                "SCIP on a pty, as a URG-04LX's USB port (open it as scip:///dev/pts/N)");
   cmd->add_option("--link", o->links,
                   "serial devices: keep a symlink to each device's pty at this path (stable "
                   "across hang-ups); one per device, in order")

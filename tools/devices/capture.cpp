@@ -177,7 +177,7 @@ DecodeResult runDecode(const DecodeOptions& o, const LidarConfig& expected, std:
       ++r.errors;
     }
     for (const Scan2D& s : scans) {
-      const std::string why = validateScan(s, expected.beam_count);
+      const std::string why = validateScan(s, 0);  // any length: each ray has its angle
       if (!why.empty()) {
         report << o.in << ": scan " << s.seq << " dropped: " << why << "\n";
         ++r.errors;

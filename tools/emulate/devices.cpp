@@ -23,10 +23,11 @@ int64_t EmulatedClock::counterAt(int64_t power_on_us, int64_t t_us) const {
 }
 
 std::unique_ptr<EmulatedLidar> makeEmulatedLidar(EmulatedModel model, ScanSource source,
-                                                 const EmulatedClock& clock, int64_t power_on_us) {
+                                                 const EmulatedClock& clock, int64_t power_on_us,
+                                                 const std::string& scip_model) {
   switch (model) {
     case EmulatedModel::kUst10lx:
-      return std::make_unique<ScipDevice>(std::move(source), clock, power_on_us);
+      return std::make_unique<ScipDevice>(std::move(source), clock, power_on_us, scip_model);
     case EmulatedModel::kX4:
       return std::make_unique<X4Device>(std::move(source));
     case EmulatedModel::kRplidarA1:

@@ -28,7 +28,10 @@ struct EmulatedClock {
   int64_t counterAt(int64_t power_on_us, int64_t t_us) const;
 };
 
+// kUst10lx serves SCIP as `scip_model` (a SCIP model of core/lidar_models.hpp: the world rig's
+// lidar.model, so `--set lidar.model=URG-04LX-UG01` emulates a URG-04LX-UG01).
 std::unique_ptr<EmulatedLidar> makeEmulatedLidar(EmulatedModel model, ScanSource source,
-                                                 const EmulatedClock& clock, int64_t power_on_us);
+                                                 const EmulatedClock& clock, int64_t power_on_us,
+                                                 const std::string& scip_model = "UST-10LX");
 
 }  // namespace sweepmap

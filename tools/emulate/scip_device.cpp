@@ -7,10 +7,6 @@
 namespace sweepmap {
 namespace {
 
-constexpr int kAres = 1440, kAmin = 0, kAmax = 1080, kAfrt = 540;
-constexpr int kDmin = 20, kDmax = 30000, kScanRpm = 2400;
-constexpr uint32_t kNoEcho = 1;  // an error code below DMIN
-
 bool allDigits(const std::string& s) {
   if (s.empty()) return false;
   for (char c : s) {
@@ -38,8 +34,22 @@ std::string blocks(const std::string& data) {
 
 }  // namespace
 
-ScipDevice::ScipDevice(ScanSource source, const EmulatedClock& clock, int64_t power_on_us)
-    : source_(std::move(source)), clock_(clock), power_on_us_(power_on_us) {}
+namespace {
+LidarModel scipModel(const std::string& name) {
+  const LidarModel* m = findLidarModel(name);
+  if (m == nullptr || m->protocol != DeviceProtocol::kScip) {
+    throw std::invalid_argument("no SCIP lidar model '" + name + "'");
+  }
+  return *m;
+}
+}  // namespace
+
+ScipDevice::ScipDevice(ScanSource source, const EmulatedClock& clock, int64_t power_on_us,
+                       const std::string& model)
+    : source_(std::move(source)),
+      model_(scipModel(model)),
+      clock_(clock),
+      power_on_us_(power_on_us) {}
 
 uint32_t ScipDevice::counterAt(int64_t t_us) const {
   return static_cast<uint32_t>(clock_.counterAt(power_on_us_, t_us));
@@ -103,6 +113,7 @@ void ScipDevice::command(const std::string& line, int64_t now_us, std::string* o
   const bool stream = cmd == "MD" || cmd == "MS" || cmd == "ME";
   const bool single = cmd == "GD" || cmd == "GS" || cmd == "GE";
   if (!stream && !single) return reply("0E");
+  if ((cmd == "ME" || cmd == "GE") && !model_.scip_intensity) return reply("0E");  // URG-04LX
   Request request{cmd, 0, 0, 1};
   if (const std::string bad = parseRange(params, stream, &request); !bad.empty()) return reply(bad);
   if (single) {
@@ -119,23 +130,25 @@ void ScipDevice::command(const std::string& line, int64_t now_us, std::string* o
 }
 
 std::string ScipDevice::identityBody(const std::string& cmd, int64_t now_us) const {
+  const ScipGeometry& pp = model_.pp;
+  const std::string& name = model_.name;
   if (cmd == "VV") {
-    return infoLine("VEND:Hokuyo Automatic Co.,Ltd.") + infoLine("PROD:UST-10LX") +
+    return infoLine("VEND:Hokuyo Automatic Co.,Ltd.") + infoLine("PROD:SOKUIKI Sensor " + name) +
            infoLine("FIRM:1.1.3(2016-03-02)") + infoLine("PROT:SCIP 2.0") +
            infoLine("SERI:H1612345");
   }
   if (cmd == "PP") {
-    return infoLine("MODL:UST-10LX") + infoLine("DMIN:" + std::to_string(kDmin)) +
-           infoLine("DMAX:" + std::to_string(kDmax)) + infoLine("ARES:" + std::to_string(kAres)) +
-           infoLine("AMIN:" + std::to_string(kAmin)) + infoLine("AMAX:" + std::to_string(kAmax)) +
-           infoLine("AFRT:" + std::to_string(kAfrt)) + infoLine("SCAN:" + std::to_string(kScanRpm));
+    const auto key = [](const char* k, int v) { return infoLine(k + std::to_string(v)); };
+    return infoLine("MODL:" + name + "(Hokuyo Automatic Co.,Ltd.)") + key("DMIN:", pp.dmin_mm) +
+           key("DMAX:", pp.dmax_mm) + key("ARES:", pp.ares) + key("AMIN:", pp.amin) +
+           key("AMAX:", pp.amax) + key("AFRT:", pp.afrt) + key("SCAN:", pp.scan_rpm);
   }
   char time[16];
   std::snprintf(time, sizeof time, "%06X", counterAt(now_us));
-  return infoLine("MODL:UST-10LX") + infoLine(std::string("LASR:") + (laser_on_ ? "ON" : "OFF")) +
-         infoLine("SCSP:Initial(2400[rpm])") + infoLine("MESM:Measuring by Normal Mode") +
-         infoLine("SBPS:Ethernet 100 [Mbps]") + infoLine(std::string("TIME:") + time) +
-         infoLine("STAT:Stable 000 no error.");
+  return infoLine("MODL:" + name) + infoLine(std::string("LASR:") + (laser_on_ ? "ON" : "OFF")) +
+         infoLine("SCSP:Initial(" + std::to_string(pp.scan_rpm) + "[rpm])") +
+         infoLine("MESM:Measuring by Normal Mode") + infoLine("SBPS:Ethernet 100 [Mbps]") +
+         infoLine(std::string("TIME:") + time) + infoLine("STAT:Stable 000 no error.");
 }
 
 std::string ScipDevice::laserCommand(const std::string& cmd) {
@@ -178,7 +191,9 @@ std::string ScipDevice::parseRange(const std::string& params, bool stream, Reque
   r->start = std::stoi(s_start);
   r->end = std::stoi(s_end);
   r->cluster = std::max(1, std::stoi(s_cluster));
-  if (r->start < kAmin || r->start > kAmax || r->end > kAmax) return "04";
+  if (r->start < model_.pp.amin || r->start > model_.pp.amax || r->end > model_.pp.amax) {
+    return "04";
+  }
   if (r->end < r->start) return "05";
   if (adjust_mode_) return "0B";
   return "";
@@ -218,34 +233,53 @@ void ScipDevice::advance(int64_t now_us, std::string* out) {
   }
 }
 
-void ScipDevice::scanReply(const Scan2D& scan, const Request& r, const std::string& head,
-                           std::string* out) {
+int64_t ScipDevice::stepUtime(const Scan2D& scan, double step) const {
+  if (!(scan.angle_increment_rad > 0)) return scan.utime;
+  const double rays = (model_.pp.angleRad(step) - scan.angle_min_rad) / scan.angle_increment_rad;
+  return scan.utime + static_cast<int64_t>(std::llround(rays * scan.time_increment_ns * 1e-3));
+}
+
+int ScipDevice::rayAt(const Scan2D& scan, int step) const {
+  if (!(scan.angle_increment_rad > 0)) return -1;
+  const double rays = (model_.pp.angleRad(step) - scan.angle_min_rad) / scan.angle_increment_rad;
+  const long i = std::lround(rays);
+  if (std::fabs(rays - double(i)) > 0.01 || i < 0 || i >= long(scan.ranges_m.size())) return -1;
+  return static_cast<int>(i);
+}
+
+// The values of `r`'s clusters, encoded.
+std::string ScipDevice::dataOf(const Scan2D& scan, const Request& r) const {
   const bool intensity = r.command == "ME" || r.command == "GE";
   const int chars = (r.command == "MS" || r.command == "GS") ? 2 : 3;
-  *out += head;
-  // The stamp: the counter when the first requested step was measured.
-  const int64_t t_first = scan.rayUtime(static_cast<size_t>(r.start - kAmin));
-  *out += scip::withChecksum(scip::encodeValue(counterAt(t_first), 4)) + "\n";
+  const auto dmin = static_cast<uint32_t>(model_.pp.dmin_mm);
+  const auto dmax = static_cast<uint32_t>(model_.pp.dmax_mm);
   std::string data;
   for (int step = r.start; step <= r.end; step += r.cluster) {
     // A cluster reports its nearest valid range (the sensor's documented grouping rule).
-    uint32_t mm = 0;
     float r_best = 0.0f;
     for (int k = step; k < std::min(step + r.cluster, r.end + 1); ++k) {
-      const auto i = static_cast<size_t>(k - kAmin);
-      const float r = i < scan.ranges_m.size() ? scan.ranges_m[i] : 0.0f;
-      if (r > 0.0f && (r_best == 0.0f || r < r_best)) r_best = r;
+      const int i = rayAt(scan, k);
+      const float range = i >= 0 ? scan.ranges_m[static_cast<size_t>(i)] : 0.0f;
+      if (range > 0.0f && (r_best == 0.0f || range < r_best)) r_best = range;
     }
-    mm = r_best > 0.0f ? static_cast<uint32_t>(std::lround(r_best * 1000.0)) : kNoEcho;
-    if (mm < static_cast<uint32_t>(kDmin) || mm > static_cast<uint32_t>(kDmax)) mm = kNoEcho;
+    uint32_t mm = r_best > 0.0f ? static_cast<uint32_t>(std::lround(r_best * 1000.0)) : 0;
+    const bool valid = mm >= dmin && mm <= dmax;
+    if (!valid) mm = model_.no_return_code;
     data += scip::encodeValue(mm, chars);
     if (intensity) {
-      const uint32_t in =
-          mm == kNoEcho ? 0 : static_cast<uint32_t>(std::lround(20000.0 / (1.0 + r_best)));
+      const uint32_t in = valid ? static_cast<uint32_t>(std::lround(20000.0 / (1.0 + r_best))) : 0;
       data += scip::encodeValue(in, chars);
     }
   }
-  *out += blocks(data) + "\n";
+  return data;
+}
+
+void ScipDevice::scanReply(const Scan2D& scan, const Request& r, const std::string& head,
+                           std::string* out) {
+  *out += head;
+  // The stamp: the counter at the scan's step 0 (SCIP2.0 specification, section 7).
+  *out += scip::withChecksum(scip::encodeValue(counterAt(stepUtime(scan, 0)), 4)) + "\n";
+  *out += blocks(dataOf(scan, r)) + "\n";
 }
 
 }  // namespace sweepmap

@@ -1,22 +1,27 @@
-// An emulated Hokuyo UST-10LX speaking SCIP 2.0 (drivers/protocols/scip.hpp) as the
-// specification describes, fed by a simulated world's scans.
+// An emulated Hokuyo SCIP 2.0 sensor (drivers/protocols/scip.hpp) of any SCIP model of the
+// catalogue (core/lidar_models.hpp: UST-10LX, UST-20LX, UTM-30LX, URG-04LX, URG-04LX-UG01), as
+// the specification describes it, fed by a simulated world's scans.
 //
-// Commands: VV, PP, II (identity; values of a UST-10LX: PP as Hokuyo's UST-10LX manual gives
-// them, DMAX 30000 mm, ARES 1440, AMIN 0, AMAX 1080, AFRT 540, SCAN 2400 rpm), BM, QT, RS,
-// RT, TM0/TM1/TM2, MD/MS/ME (streams: start/end step, cluster, skip, count; 0 = unlimited),
-// GD/GS/GE (the latest scan) and every malformed or out-of-range form with the status the
-// specification gives it; an unknown command answers "0E".
-// Data: a source scan's ray i is step i (the source must have the sensor's 1081 rays at
-// AMIN..AMAX); ranges rounded to mm; no return is error code 1 (below DMIN); ME's intensity
-// is a model of a matt wall's echo: 20000 / (1 + r[m]) (the real unit is not published).
-// The time stamp of a scan is the sensor's counter (EmulatedClock) at its first requested
-// step's measurement (the source's first-ray time + (start - AMIN) ray periods).
+// Commands: VV, PP, II (identity: PP the model's catalogue values, MODL its name), BM, QT,
+// RS, RT, TM0/TM1/TM2, MD/MS/ME (streams: any start/end step within AMIN..AMAX, cluster
+// 0..99, skip 0..9, count; 0 = unlimited), GD/GS/GE (the latest scan) and every malformed or
+// out-of-range form with the status the specification gives it; an unknown command answers
+// "0E". The framing is the same on every model (the URG-04LX's USB port carries the same
+// lines; a serial line's baud rate does not change them).
+// Data: step s reports the source scan's ray nearest its direction ((s - AFRT) * 2 pi / ARES),
+// so a source on any grid serves any sub-range; a cluster reports its nearest valid range
+// (the specification's grouping rule); ranges rounded to mm; no return, or a range outside
+// DMIN..DMAX, is the model's error code (UST/UTM 1, URG-04LX 0: core/lidar_models.cpp);
+// ME's intensity is a model of a matt wall's echo: 20000 / (1 + r[m]) (the real unit is not
+// published). The time stamp of a scan is the sensor's counter (EmulatedClock) at the scan's
+// step 0, as the specification defines it, whatever steps were requested.
 #pragma once
 
 #include <cstdint>
 #include <optional>
 #include <string>
 
+#include "core/lidar_models.hpp"
 #include "core/scan.hpp"
 #include "tools/emulate/devices.hpp"
 #include "tools/emulate/emulated_lidar.hpp"
@@ -25,7 +30,9 @@ namespace sweepmap {
 
 class ScipDevice : public EmulatedLidar {
  public:
-  ScipDevice(ScanSource source, const EmulatedClock& clock, int64_t power_on_us);
+  // `model`: a SCIP model of the catalogue (std::invalid_argument otherwise).
+  ScipDevice(ScanSource source, const EmulatedClock& clock, int64_t power_on_us,
+             const std::string& model = "UST-10LX");
   void receive(const uint8_t* data, size_t size, int64_t now_us, std::string* out) override;
   void advance(int64_t now_us, std::string* out) override;
   void reset(int64_t now_us) override;
@@ -49,8 +56,13 @@ class ScipDevice : public EmulatedLidar {
   // `head`: the echo and "99" status of a streamed scan (empty for GD/GS/GE).
   void scanReply(const Scan2D& scan, const Request& r, const std::string& head, std::string* out);
   uint32_t counterAt(int64_t t_us) const;
+  // When `scan` (on its own grid) looked at `step`, and which of its rays did (-1: none).
+  int64_t stepUtime(const Scan2D& scan, double step) const;
+  int rayAt(const Scan2D& scan, int step) const;
+  std::string dataOf(const Scan2D& scan, const Request& r) const;
 
   ScanSource source_;
+  LidarModel model_;
   EmulatedClock clock_;
   int64_t power_on_us_;
   std::string line_;

@@ -109,6 +109,7 @@ class RotatingWorld : public EmulatorWorld {
   }
 
  private:
+  std::string lidarModel() const override { return rig_.lidar.model; }
   RotatingLidarConfig rig_;
   SceneConfig scene_config_;
   Scene scene_;
@@ -184,6 +185,7 @@ class MobileWorld : public EmulatorWorld {
   }
 
  private:
+  std::string lidarModel() const override { return rig_.lidar.model; }
   MobileLidarConfig rig_;
   Scene scene_;
   std::mutex mutex_;

@@ -48,6 +48,8 @@ class EmulatorWorld {
   // publish once at start (TRUTH_RIG).
   virtual std::vector<Node*> nodes() { return {}; }
   virtual std::vector<Message> startMessages(int64_t now_us) { return {}; }
+  // The rig's lidar.model (core/lidar_models.hpp): what a SCIP emulator answers as.
+  virtual std::string lidarModel() const = 0;
 };
 
 // Throws ConfigError / std::runtime_error naming the file and key.
