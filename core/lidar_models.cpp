@@ -57,7 +57,8 @@ std::vector<LidarModel> makeCatalogue() {
            "Hokuyo UST-20LX specification: 0.06-20 m, 270 deg, 0.25 deg, 25 ms/scan; steps as "
            "the UST-10LX; DMAX 60000 not seen in a real PP reply"),
       scip("UTM-30LX", utm30, 1, true, 0.1, 30.0,
-           "PP of a real UTM-30LX-EW (its lines with their checksums, in Hokuyo sample code); "
+           "PP of a real UTM-30LX-EW (its lines with their checksums, in Hokuyo sample code; "
+           "the same DMIN/DMAX/steps/period in Hokuyo-aut/urg_node2's tests on the device); "
            "SCIP2.0 specification Table 2: steps 0/540/1080 of 1440; Hokuyo UTM-30LX "
            "specification: 0.1-30 m, 25 ms/scan"),
       scip("URG-04LX", urg04, 0, false, 0.06, 4.095,

@@ -245,6 +245,88 @@ TEST(SpecBytesScip, ClusterRaysAtTheirMiddleStep) {
   EXPECT_NEAR(scan.rayAngle(5), (10.0 - 540.0) * step, 1e-6);  // step 10 alone
 }
 
+// --- Figures a real UTM-30LX-EW gave (no bytes published) -----------------------------------
+//
+// Hokuyo's ROS 2 driver Hokuyo-aut/urg_node2 (Apache-2.0), test/urg_node2_test.cpp at commit
+// 815a1107c6e06cff3974998af9a471c30f701909: tests named UTM_30_LX_EW that run the driver
+// against the sensor at 192.168.0.10 (the repository holds no emulator). The driver takes
+// range_min/max, the angles and the scan period from the device's PP, and the number of rays
+// from the values the device sent (urg_library's urg_get_distance returns the count decoded).
+
+TEST(RealDeviceFiguresScip, Utm30lxEwParametersAsUrgNode2Reads) {
+  const LidarModel& m = *findLidarModel("UTM-30LX");
+  const double step = 2.0 * M_PI / 1440.0;
+  // "range_min 0.023", "range_max 60.0": PP DMIN 23, DMAX 60000.
+  EXPECT_EQ(m.pp.dmin_mm, 23);
+  EXPECT_EQ(m.pp.dmax_mm, 60000);
+  // "angle_min (2 pi * -540) / 1440", "angle_max (2 pi * 540) / 1440", "angle_increment
+  // 2 pi / 1440", 1081 ranges: ARES 1440, AMIN 0, AMAX 1080, AFRT 540.
+  EXPECT_EQ(m.pp.ares, 1440);
+  EXPECT_NEAR(m.pp.angleRad(m.pp.amin), -540 * step, 1e-12);
+  EXPECT_NEAR(m.pp.angleRad(m.pp.amax), 540 * step, 1e-12);
+  EXPECT_EQ(m.pp.amax - m.pp.amin + 1, 1081);
+  // "scan_time 0.025", "time_increment (270 / 360) * 0.025 / 1080": SCAN 2400 rpm.
+  EXPECT_NEAR(60.0 / m.pp.scan_rpm, 0.025, 1e-12);
+  EXPECT_NEAR(m.pp.stepPeriodS(), (270.0 / 360.0) * 0.025 / 1080.0, 1e-12);
+  EXPECT_TRUE(m.scip_intensity);  // its intensity tests get intensities (ME)
+}
+
+// A GD reply with `values` (3 characters each) as the SCIP2.0 specification lays it out:
+// echo, status 00, the time stamp, 64-character blocks, each line with its checksum, LF LF.
+std::string gdReplyOf(const std::string& echo, uint32_t stamp_ms,
+                      const std::vector<uint32_t>& values) {
+  std::string data;
+  for (uint32_t v : values) data += scip::encodeValue(v, 3);
+  std::string reply = echo + "\n" + scip::withChecksum("00") + "\n" +
+                      scip::withChecksum(scip::encodeValue(stamp_ms, 4)) + "\n";
+  for (size_t i = 0; i < data.size(); i += 64) {
+    reply += scip::withChecksum(data.substr(i, 64)) + "\n";
+  }
+  return reply + "\n";
+}
+
+// urg_node2's intensity test asks the UTM-30LX-EW for steps 180..900 in clusters of 2 (721
+// steps) and gets 361 rays; its multi-echo test asks for steps 0..1080 in clusters of 99 and
+// gets 11: the device sends ceil(steps / cluster) values, the last cluster cut short by the
+// end step (here step 900 alone; steps 990..1080). Our decoder expects the same counts and
+// takes no other.
+TEST(RealDeviceFiguresScip, Utm30lxEwClusterCountsAsTheDeviceSendsThem) {
+  struct Case {
+    const char* echo;
+    size_t values;
+  };
+  for (const Case& c : {Case{"GD0180090002", 361}, Case{"GD0000108099", 11}}) {
+    const std::vector<uint32_t> ok(c.values, 1500);
+    const auto events = decodeAll<scip::Decoder, scip::Event>(gdReplyOf(c.echo, 1000, ok));
+    EXPECT_TRUE(only<DecodeError>(events).empty()) << c.echo;
+    const auto scans = only<scip::ScanData>(events);
+    ASSERT_EQ(scans.size(), 1u) << c.echo;
+    EXPECT_EQ(scans[0].ranges_mm.size(), c.values) << c.echo;
+    // One value short: not this reply.
+    const std::vector<uint32_t> short_by_one(c.values - 1, 1500);
+    const auto bad = decodeAll<scip::Decoder, scip::Event>(gdReplyOf(c.echo, 1000, short_by_one));
+    EXPECT_TRUE(only<scip::ScanData>(bad).empty()) << c.echo;
+    EXPECT_FALSE(only<DecodeError>(bad).empty()) << c.echo;
+  }
+  // The 361 rays at the PP's angles: ray 360 is step 900 alone, where urg_node2's
+  // angle_max "(2 pi * 360) / 1440" puts it too (ray 0 is at its cluster's middle, 180.5;
+  // urg_node2 gives the cluster's first step, 180: lidar_models.hpp).
+  const scip::Params pp = scip::parseParams({{"DMIN", "23"},
+                                             {"DMAX", "60000"},
+                                             {"ARES", "1440"},
+                                             {"AMIN", "0"},
+                                             {"AMAX", "1080"},
+                                             {"AFRT", "540"},
+                                             {"SCAN", "2400"}});
+  const auto scans = only<scip::ScanData>(decodeAll<scip::Decoder, scip::Event>(
+      gdReplyOf("GD0180090002", 1000, std::vector<uint32_t>(361, 1500))));
+  ASSERT_EQ(scans.size(), 1u);
+  const Scan2D scan = scip::toScan2D(scans[0], pp);
+  const double step = 2.0 * M_PI / 1440.0;
+  EXPECT_NEAR(scan.rayAngle(360), 360 * step, 1e-6);  // angles are floats
+  EXPECT_NEAR(scan.rayAngle(0), -359.5 * step, 1e-6);
+}
+
 // scip/urg04lx_pp_urgnetwork.txt and urg04lx_vv_urgnetwork.txt: a classic URG-04LX's PP and VV
 // replies as Hokuyo's urgnetwork wiki prints them (every checksum holds).
 TEST(RealCapturesScip, Urg04lxPpAndVvReplies) {
