@@ -15,10 +15,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <thread>
 #include <vector>
 
+#include "core/lcm_schema.hpp"
+#include "net/udpm_receiver.hpp"
+#include "processes/channels.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/process_status_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "tools/bench/hostile_traffic.hpp"
 #include "tools/bench/proc_stats.hpp"
@@ -99,17 +104,56 @@ std::vector<Bytes> hostileSecond(int rate, uint32_t second) {
 
 struct Rss {
   int64_t start_kib = 0, max_kib = 0, end_kib = 0;
+  int64_t peak_kib = 0;  // VmHWM: the kernel's own peak, between the samples too
+};
+
+// The target's last status message (its counters), heard through sweepmap's receive path. The
+// flood's own forged status messages (invalid, or naming another process) are not it.
+class StatusListener {
+ public:
+  explicit StatusListener(const std::string& process) : receiver_(kDefaultLcmUrl) {
+    receiver_.subscribe("STATUS_.*",
+                        [this, process](const std::string&, const uint8_t* d, size_t n) {
+                          // Validated first, as every node does: the flood's 2^26 counters would
+                          // take lcm-gen's decoder to gigabytes.
+                          process_status_t s;
+                          if (LcmSchema::builtIn().validate(d, n).empty() &&
+                              s.decode(d, 0, static_cast<int>(n)) > 0 && s.process == process) {
+                            last_ = s;
+                          }
+                        });
+  }
+  void poll() {
+    while (receiver_.handleTimeout(0) > 0) {
+    }
+  }
+  // "name value" of the non-zero counters whose name starts with `prefix`.
+  std::string counters(const std::string& prefix) const {
+    if (!last_) return "no status heard";
+    std::string out;
+    for (int i = 0; i < last_->ncounters; ++i) {
+      if (last_->counter_names[i].rfind(prefix, 0) != 0 || last_->counter_values[i] == 0) continue;
+      out += (out.empty() ? "" : ", ") + last_->counter_names[i] + " " +
+             std::to_string(last_->counter_values[i]);
+    }
+    return out;
+  }
+
+ private:
+  net::UdpmReceiver receiver_;
+  std::optional<process_status_t> last_;
 };
 
 // Floods for o.seconds, a tick every 25 ms (a scan each, hostile datagrams spread evenly), and
 // samples the target's RSS every second. False if the target died.
-bool flood(ProcessGroup& group, pid_t target, const FloodOptions& o, Rss* rss, uint64_t* sent) {
+bool flood(ProcessGroup& group, pid_t target, const FloodOptions& o, StatusListener& status,
+           Rss* rss, uint64_t* sent) {
   std::vector<std::unique_ptr<hostile::MulticastSender>> senders;
   for (int i = 0; i < 16; ++i) {
     senders.push_back(std::make_unique<hostile::MulticastSender>("239.255.76.67", 7667));
   }
   hostile::MulticastSender& good = *senders[0];
-  rss->start_kib = rss->max_kib = statusKib(target, "VmRSS");
+  rss->start_kib = rss->max_kib = statusKib(target, "VmRSS:");
   const auto t0 = BenchClock::now();
   int64_t tick = 0, window_start = wallUs();
   std::vector<Bytes> second_batch;
@@ -117,7 +161,7 @@ bool flood(ProcessGroup& group, pid_t target, const FloodOptions& o, Rss* rss, u
     if (!group.running(target)) return false;
     if (tick % 40 == 0) {
       second_batch = hostileSecond(o.rate, static_cast<uint32_t>(tick / 40));
-      const int64_t kib = statusKib(target, "VmRSS");
+      const int64_t kib = statusKib(target, "VmRSS:");
       rss->max_kib = std::max(rss->max_kib, kib);
       rss->end_kib = kib;
     }
@@ -132,10 +176,12 @@ bool flood(ProcessGroup& group, pid_t target, const FloodOptions& o, Rss* rss, u
     for (size_t i = from; i < from + per_tick; ++i) {
       *sent += senders[i % senders.size()]->send({second_batch[i]}, 0);
     }
+    status.poll();
     ++tick;
     std::this_thread::sleep_until(t0 + std::chrono::microseconds(25000 * tick));
   }
-  rss->end_kib = statusKib(target, "VmRSS");
+  rss->end_kib = statusKib(target, "VmRSS:");
+  rss->peak_kib = statusKib(target, "VmHWM:");
   rss->max_kib = std::max(rss->max_kib, rss->end_kib);
   return group.running(target);
 }
@@ -166,14 +212,15 @@ int main(int argc, char** argv) {
   std::this_thread::sleep_for(std::chrono::seconds(2));  // started and subscribed
   Rss rss;
   uint64_t sent = 0;
-  const bool alive = flood(group, target, o, &rss, &sent);
+  StatusListener status(o.process);
+  const bool alive = flood(group, target, o, status, &rss, &sent);
   std::printf(
       "flood of sweepmap-%s for %.0f s (%d hostile datagrams/s from 16 senders, 40 scans/s): "
-      "%llu datagrams sent; RSS at the start %.1f MiB, max %.1f MiB, at the end %.1f MiB; "
-      "%s (its output: %s)\n",
+      "%llu datagrams sent; RSS at the start %.1f MiB, largest sample %.1f MiB, at the end "
+      "%.1f MiB, peak (VmHWM) %.1f MiB; %s (its output: %s)\nits last status: %s\n",
       o.process.c_str(), o.seconds, o.rate, static_cast<unsigned long long>(sent),
-      rss.start_kib / 1024.0, rss.max_kib / 1024.0, rss.end_kib / 1024.0,
-      alive ? "it lived" : "IT DIED", log.c_str());
+      rss.start_kib / 1024.0, rss.max_kib / 1024.0, rss.end_kib / 1024.0, rss.peak_kib / 1024.0,
+      alive ? "it lived" : "IT DIED", log.c_str(), status.counters("net_").c_str());
   if (alive) group.stop(target, 10.0);
   return alive ? 0 : 1;
 }
