@@ -164,6 +164,11 @@ bool flood(ProcessGroup& group, pid_t target, const FloodOptions& o, StatusListe
       const int64_t kib = statusKib(target, "VmRSS:");
       rss->max_kib = std::max(rss->max_kib, kib);
       rss->end_kib = kib;
+      if (tick % (40 * 60) == 0) {  // a line a minute: growth or a plateau
+        std::printf("%4lld s: RSS %.1f MiB, CPU %.1f s\n", static_cast<long long>(tick / 40),
+                    kib / 1024.0, processCpuSeconds(target));
+        std::fflush(stdout);
+      }
     }
     *sent += good.send(hostile::datagramsOf({{"LIDAR_SCAN", scan(tick)}}, tick), 0);
     if (tick % 200 == 199) {
@@ -214,6 +219,7 @@ int main(int argc, char** argv) {
   uint64_t sent = 0;
   StatusListener status(o.process);
   const bool alive = flood(group, target, o, status, &rss, &sent);
+  const double cpu_s = processCpuSeconds(target);
   std::printf(
       "flood of sweepmap-%s for %.0f s (%d hostile datagrams/s from 16 senders, 40 scans/s): "
       "%llu datagrams sent; RSS at the start %.1f MiB, largest sample %.1f MiB, at the end "
@@ -221,6 +227,13 @@ int main(int argc, char** argv) {
       o.process.c_str(), o.seconds, o.rate, static_cast<unsigned long long>(sent),
       rss.start_kib / 1024.0, rss.max_kib / 1024.0, rss.end_kib / 1024.0, rss.peak_kib / 1024.0,
       alive ? "it lived" : "IT DIED", log.c_str(), status.counters("net_").c_str());
+  // What the flooded process spent on everything it received (the kernel's share included):
+  // the receive path's cost per datagram end to end.
+  std::printf(
+      "its CPU: %.1f s in %.0f s (%.1f %% of one core), %.2f us per datagram sent: "
+      "%.0f datagrams/s per core\n",
+      cpu_s, o.seconds, 100.0 * cpu_s / o.seconds, 1e6 * cpu_s / static_cast<double>(sent),
+      static_cast<double>(sent) / cpu_s);
   if (alive) group.stop(target, 10.0);
   return alive ? 0 : 1;
 }
