@@ -90,12 +90,12 @@ class Intruder {
   }
   ~Intruder() { stop(); }
   void start() {
-    sent_ = sender_->send(datagrams_);
+    sent_ = sender_->send(datagrams_, kBurst, kPauseUs);
     passes_ = 1;
     thread_ = std::thread([this] {
       while (!stop_) {
         sleepS(0.1);  // a pass every ~0.1 s: hostile, not a CPU benchmark
-        sender_->send(datagrams_);
+        sender_->send(datagrams_, kBurst, kPauseUs);
         ++passes_;
       }
     });
@@ -110,6 +110,8 @@ class Intruder {
   size_t sentInFirstPass() const { return sent_; }
 
  private:
+  // ~10 000 datagrams a second at most: hostile, not a test of socket buffers.
+  static constexpr int kBurst = 10, kPauseUs = 1000;
   std::vector<hostile::Bytes> datagrams_;
   std::unique_ptr<hostile::MulticastSender> sender_;
   std::thread thread_;
@@ -405,58 +407,59 @@ class IntruderTest : public TwoHostsTest {
     for (size_t i = 0; i < unsigned_forged; ++i)
       forged.push_back(hostile::wronglySigned(forged[i]));
     forged_ = forged.size();
+    for (const hostile::Forged& m : forged) forged_payloads_.insert(m.payload);
     for (hostile::Bytes& d : hostile::datagramsOf(forged, 1000)) pass.push_back(std::move(d));
     return pass;
   }
 
   size_t malformed_ = 0;  // malformed datagrams per pass
   size_t forged_ = 0;     // well-formed messages per pass, each in one datagram or more
+  std::set<hostile::Bytes> forged_payloads_;
   std::unique_ptr<NetworkNamespace> intruder_, link_;
+
+  void expectNothingReachedANode(const fs::path& dir) const;
 };
 
 // Every process of the run, on both hosts: each hears the whole link.
 const char* const kEveryStatus[] = {"STATUS_ASSEMBLER", "STATUS_MAPPER", "STATUS_LIDAR",
                                     "STATUS_MOTOR"};
 
-// The scans a log holds, by the time of their first ray.
-std::map<int64_t, std::vector<uint8_t>> scansOf(const std::string& log) {
-  std::map<int64_t, std::vector<uint8_t>> out;
+// The laptop's scans come from the Pi's lidar alone: one scan counter, rising, and plenty of
+// scans. (Not compared with the Pi's log one for one: a flood that fills a socket buffer on a
+// loaded machine may cost either recorder a scan, and that is no forgery.)
+::testing::AssertionResult scansOfOneLidar(const std::string& log) {
+  int64_t last = -1;
+  size_t n = 0;
   for (const auto& m : readChannel(log, channels::kLidarScan)) {
     lidar_scan_t scan;
-    EXPECT_TRUE(decodeMessage(m, &scan)) << log;
-    out[scan.utime] = m.data;
+    if (!decodeMessage(m, &scan)) return ::testing::AssertionFailure() << "scan " << n << " bad";
+    if (scan.seq <= last) {
+      return ::testing::AssertionFailure() << "scan " << n << ": counter " << scan.seq << " after "
+                                           << last << ": another sender's scan";
+    }
+    last = scan.seq;
+    ++n;
   }
-  return out;
-}
-
-// The laptop logged exactly the scans the Pi sent, byte for byte, from the time both recorders
-// ran (either may start a little before the other).
-::testing::AssertionResult allSentByThePi(const fs::path& dir) {
-  auto sent = scansOf((dir / "pi.lcmlog").string());
-  auto got = scansOf((dir / "laptop.lcmlog").string());
-  if (sent.empty() || got.empty()) {
-    return ::testing::AssertionFailure()
-           << sent.size() << " scans sent by the Pi, " << got.size() << " logged on the laptop";
-  }
-  const int64_t from = std::max(sent.begin()->first, got.begin()->first);
-  sent.erase(sent.begin(), sent.lower_bound(from));
-  got.erase(got.begin(), got.lower_bound(from));
-  if (got.size() < 10 || got != sent) {
-    return ::testing::AssertionFailure() << got.size() << " scans logged on the laptop, "
-                                         << sent.size() << " sent by the Pi, not the same";
-  }
-  return ::testing::AssertionSuccess() << got.size() << " scans equal";
+  if (n < 100) return ::testing::AssertionFailure() << "only " << n << " scans";
+  return ::testing::AssertionSuccess() << n << " scans of one lidar";
 }
 
 // Nothing the intruder sent reached a node: every process lived (stopInOrder checks their exit
-// statuses), the laptop heard exactly the scans the Pi sent, the sweeps are the Pi's, no node
-// counted an invalid or refused message (those would have got past the transport), no
-// MAP_SAVE was honoured, and the live map is the replay's.
-void expectNothingReachedANode(const fs::path& dir) {
+// statuses); no message the intruder forged is in either host's log, and the laptop's scans
+// are the Pi's; no node counted an invalid or refused message (those would have got past the
+// transport); no MAP_SAVE was honoured; and the live map is the replay's (had a node taken
+// what the recorder refused, it would differ).
+void IntruderTest::expectNothingReachedANode(const fs::path& dir) const {
   const nlohmann::json summary = readJson(dir / "offline" / "summary.json");
   EXPECT_EQ(summary["sweeps"].size(), 2u) << readFile(dir / "replay.txt");
-  EXPECT_EQ(checkSweepsAgainstSent(dir, summary), 0);
-  EXPECT_TRUE(allSentByThePi(dir));
+  for (const char* log : {"laptop.lcmlog", "pi.lcmlog"}) {
+    size_t forged = 0;
+    for (const hostile::Forged& m : hostile::messagesOfLog((dir / log).string(), {})) {
+      forged += forged_payloads_.count(m.payload);
+    }
+    EXPECT_EQ(forged, 0u) << log << " holds forged messages";
+  }
+  EXPECT_TRUE(scansOfOneLidar((dir / "laptop.lcmlog").string()));
   for (const char* status : kEveryStatus) {
     const LastStatus s = lastStatus((dir / "laptop.lcmlog").string(), status);
     ASSERT_TRUE(s.found) << status;
