@@ -8,6 +8,7 @@
 #include "processes/cli_common.hpp"
 #include "processes/lidar_node.hpp"
 #include "processes/live_runner.hpp"
+#include "processes/message_codec.hpp"
 #include "processes/sim_car.hpp"
 #include "processes/sim_setup.hpp"
 #include "processes/truth_sweep_node.hpp"
@@ -66,7 +67,8 @@ int runSimulated(const CommonOptions& common, const Rig& loaded, const std::stri
   LidarNode node(rig.lidar, &device);
   TruthSweepNode truth_sweep(&truth, rig.sim.alpha_true_deg * M_PI / 180.0);
   const truth_rig_t truth_rig = makeTruthRig(rig, scene_config, scene, wallUtime());
-  lcm.publish(channels::kTruthRig, &truth_rig);
+  publishAll(lcm, {Message{truth_rig.utime, channels::kTruthRig, encodeMessage(truth_rig)}},
+             common.auth.get());
   installStopSignals();
   return runLive(lcm, {&follower, &node, &truth_sweep}, liveOptions(common));
 }

@@ -41,9 +41,12 @@ int runSim(const RotatingLidarConfig& rig, const CommonOptions& common, uint64_t
   lcm::LCM lcm(common.lcm_url);
   const int64_t start = wallUtime();
   SimStepper stepper(rig.motor, rig.sim, stepperSeed(seed), kSimInitialShaftAngleRad, start,
-                     [&lcm](const ShaftSegment& s) {
+                     [&lcm, &common](const ShaftSegment& s) {
+                       // Signed as everything else (with --key-file): the simulated lidar
+                       // follows the shaft from it, and drops what is unsigned.
                        const truth_shaft_t m = toLcm(s, wallUtime());
-                       lcm.publish(channels::kTruthShaft, &m);
+                       publishAll(lcm, {Message{m.utime, channels::kTruthShaft, encodeMessage(m)}},
+                                  common.auth.get());
                      });
   return runController(lcm, rig, stepper, sweeps, start, liveOptions(common));
 }

@@ -9,6 +9,7 @@
 #include <fstream>
 #include <limits>
 #include <map>
+#include <set>
 #include <sstream>
 
 #include "core/event_log.hpp"
@@ -174,6 +175,35 @@ TEST(LcmSchemaValidate, DamagedMessagesNeverCrashIt) {
         LcmSchema::builtIn().validate(b.data(), b.size());
       }
     }
+  }
+}
+
+// The schema is every .lcm file of lcmtypes/, and fuzz_lcm_message reaches every type from its
+// saved corpus: fuzz/corpus/lcm_message holds a valid message of each type the schema knows.
+// A new .lcm file without a seed fails here (add one: fuzz/corpus/lcm_message/<type>).
+TEST(LcmSchema, TheMessageFuzzCorpusHoldsAValidMessageOfEveryType) {
+  namespace fs = std::filesystem;
+  const LcmSchema& schema = LcmSchema::builtIn();
+  size_t files = 0;
+  for (const auto& f : fs::directory_iterator(SWEEPMAP_SOURCE_DIR "/lcmtypes")) {
+    files += f.path().extension() == ".lcm";
+  }
+  EXPECT_EQ(lcmTypeSources().size(), files);
+  EXPECT_EQ(schema.structs().size(), files);
+  std::set<std::string> seeded;
+  for (const auto& f : fs::directory_iterator(SWEEPMAP_SOURCE_DIR "/fuzz/corpus/lcm_message")) {
+    std::ifstream in(f.path(), std::ios::binary);
+    const std::vector<uint8_t> b((std::istreambuf_iterator<char>(in)),
+                                 std::istreambuf_iterator<char>());
+    if (!schema.validate(b.data(), b.size()).empty()) continue;
+    int64_t fingerprint = 0;
+    for (size_t k = 0; k < 8; ++k)
+      fingerprint = static_cast<int64_t>((static_cast<uint64_t>(fingerprint) << 8) | b[k]);
+    seeded.insert(schema.byFingerprint(fingerprint)->name);
+  }
+  for (const LcmStruct& t : schema.structs()) {
+    EXPECT_TRUE(seeded.count(t.name)) << t.name << ": no valid message of it in "
+                                      << "fuzz/corpus/lcm_message (fuzz_lcm_message's seeds)";
   }
 }
 

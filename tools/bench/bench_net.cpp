@@ -4,8 +4,8 @@
 //    headers), against copying the same datagrams (the floor: memcpy of the bytes);
 //  - good traffic reassembled per second (a 1081-ray scan in one datagram, a 200 kB sweep
 //    chunk in 4 fragments);
-//  - the CPU cost of signing and verifying at the on-board rates (40 scans/s, 400 IMU/s,
-//    100 wheel readings/s), as a share of one core;
+//  - the CPU cost of signing and verifying at each rig's on-board rates (what its on-board
+//    processes publish), as a share of one core;
 //  - memory held while a flood of spoofed senders opens large messages.
 // bench_net [seconds per figure, default 1]
 #include <unistd.h>
@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <optional>
 #include <random>
 #include <string>
@@ -119,28 +120,73 @@ void benchGoodTraffic(double seconds) {
       scans, chunks, chunk_d.size());
 }
 
-// Sign + verify per second by message size, and the share of a core at the on-board rates.
+// What each rig's on-board processes publish (sweepmap sim and replay of each rig, the
+// rig files' rates): channel, messages per second, bytes per message. Rig A: the UST-10LX's
+// scans at 40 Hz and the motor's state at 10 Hz; rig B: the X4's scans at 7 Hz, the IMU at
+// 200 Hz, the wheel board at 50 Hz and the EKF's two poses at 50 Hz; rig C: profiles at the
+// sensor's full-window 170 Hz and the turntable's state. Each also publishes ~2 status
+// messages a second.
+struct Stream {
+  const char* channel;
+  double per_s;
+  size_t bytes;
+};
+struct OnBoard {
+  const char* rig;
+  std::vector<Stream> streams;
+};
+const std::vector<OnBoard>& onBoardRates() {
+  static const std::vector<OnBoard> rigs = {
+      {"rig A", {{"LIDAR_SCAN", 40, 4388}, {"MOTOR_STATE", 10, 65}, {"STATUS", 2, 64}}},
+      {"rig B",
+       {{"LIDAR_SCAN", 7, 2920},
+        {"IMU", 200, 88},
+        {"WHEEL_TICKS", 50, 32},
+        {"ODOMETRY_POSE", 50, 137},
+        {"WHEEL_ODOMETRY", 50, 137},
+        {"STATUS", 2, 76}}},
+      {"rig C", {{"PROFILE", 170, 8227}, {"MOTOR_STATE", 10, 65}, {"STATUS", 2, 64}}}};
+  return rigs;
+}
+
+// Signing (each publisher) and verifying (each receiver) per second, by message size; and for
+// each rig, the share of one core that signing all it publishes, and verifying it once, take.
 void benchSigning(double seconds) {
   std::array<uint8_t, kAuthKeyBytes> key{};
   key.fill(3);
   const MessageAuth auth(key);
-  const Bytes scan(4400, 7), imu(112, 1), ticks(40, 2);
-  double signed_rate[3];
-  const Bytes* payloads[3] = {&scan, &imu, &ticks};
-  for (int k = 0; k < 3; ++k) {
-    signed_rate[k] = rate(seconds, [&](uint64_t) {
-      const Bytes s = auth.sign("CH", payloads[k]->data(), payloads[k]->size());
-      const auto verified = auth.verify("CH", s.data(), s.size());
+  std::map<size_t, std::pair<double, double>> per_s;  // bytes -> sign/s, verify/s
+  for (const OnBoard& rig : onBoardRates()) {
+    for (const Stream& s : rig.streams) per_s[s.bytes];
+  }
+  for (auto& [bytes, r] : per_s) {
+    const Bytes payload(bytes, 7);
+    r.first = rate(seconds / 4, [&](uint64_t) {
+      const Bytes s = auth.sign("CHANNEL", payload.data(), payload.size());
+      g_sink = g_sink + s.back();
+    });
+    const Bytes signed_payload = auth.sign("CHANNEL", payload.data(), payload.size());
+    r.second = rate(seconds / 4, [&](uint64_t) {
+      const auto verified = auth.verify("CHANNEL", signed_payload.data(), signed_payload.size());
       if (!verified) std::abort();
-      g_sink = g_sink + *verified + s.back();
+      g_sink = g_sink + *verified;
     });
   }
-  // On-board rates: 40 scans/s, 400 IMU samples/s, 100 wheel readings/s.
-  const double share = 40.0 / signed_rate[0] + 400.0 / signed_rate[1] + 100.0 / signed_rate[2];
-  std::printf(
-      "sign+verify: %.0f scans/s, %.0f IMU/s, %.0f wheel readings/s per core; at the "
-      "on-board rates %.3f %% of one core (x86 of this machine)\n",
-      signed_rate[0], signed_rate[1], signed_rate[2], 100.0 * share);
+  std::printf("sign: %.0f/s of 4.4 kB scans, %.0f/s of 88 B IMU samples per core\n",
+              per_s[4388].first, per_s[88].first);
+  for (const OnBoard& rig : onBoardRates()) {
+    double sign = 0.0, verify = 0.0, messages = 0.0, bytes = 0.0;
+    for (const Stream& s : rig.streams) {
+      sign += s.per_s / per_s[s.bytes].first;
+      verify += s.per_s / per_s[s.bytes].second;
+      messages += s.per_s;
+      bytes += s.per_s * static_cast<double>(s.bytes);
+    }
+    std::printf(
+        "%s on board (%.0f messages/s, %.0f kB/s): signing %.3f %% of one core, verifying "
+        "once %.3f %% (x86 of this machine)\n",
+        rig.rig, messages, bytes / 1e3, 100.0 * sign, 100.0 * verify);
+  }
 }
 
 // Memory while spoofed senders each open a large message.
