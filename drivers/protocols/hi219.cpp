@@ -119,6 +119,12 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
   });
 }
 
+void Decoder::finish(std::vector<Event>* out) {
+  buffer_.finish(&counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
+}
+
 // 5A A5, the payload's length, its CRC, the payload.
 ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
                               std::vector<Event>* out) {

@@ -52,6 +52,9 @@ using Event = std::variant<Frame, DecodeError>;
 class Decoder {
  public:
   void feed(const uint8_t* data, size_t size, std::vector<Event>* out);
+  // The end of the input: the bytes held for a frame that cannot complete are searched again
+  // (PacketBuffer::finish).
+  void finish(std::vector<Event>* out);
   const DecoderCounters& counters() const { return counters_; }
   void reset();
 
