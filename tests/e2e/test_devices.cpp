@@ -369,6 +369,8 @@ TEST(DecodeRigBDevices, Hi219AndWheelBoardBytes) {
 struct SerialCase {
   std::string model, scheme;
   std::vector<std::string> sets;  // the rig's lidar section for this device
+  // angle_tolerance_rad: X4: the emulator's interpolation tolerance (0.1°) and the 1/64° of the
+  // protocol.
   double period_s, range_resolution_m, angle_tolerance_rad;
 };
 
@@ -410,7 +412,7 @@ TEST_P(SerialDevicesTest, PtyStreamsAndComesBackAfterHangUp) {
 
 INSTANTIATE_TEST_SUITE_P(
     Serial, SerialDevicesTest,
-    ::testing::Values(SerialCase{"x4", "ydlidar", {}, 1.0 / 7.0, 0.0003, 0.1 * M_PI / 180},
+    ::testing::Values(SerialCase{"x4", "ydlidar", {}, 1.0 / 7.0, 0.0003, 0.12 * M_PI / 180},
                       SerialCase{"rplidar",
                                  "rplidar",
                                  {"lidar.beam_count=360", "lidar.angle_min_deg=-180",
