@@ -244,13 +244,24 @@ class ScipSession : public LidarSession {
 
 // ---- 360° serial lidars (YDLIDAR X4, RPLIDAR) -------------------------------------------
 
+// One sample of a 360° lidar, as the session hands it to the RevolutionAssembler.
+struct TurnSample {
+  double device_deg = 0.0;   // its angle, [0, 360)
+  double travel_deg = 0.0;   // the angle the device's motion is followed by (X4: the raw one)
+  double distance_mm = 0.0;  // 0: no return
+  float intensity = 0.0f;
+  int64_t utime = 0;
+  bool ring_start = false;  // the first sample of a turn (X4 zero packet, RPLIDAR S flag)
+};
+
 // Samples into revolutions. A LIDAR_SCAN is one turn of the device, from one ring start (the
 // X4's zero packet, the RPLIDAR's S flag) to the next, the ring start's sample first: every
 // sample of the turn, in time order, at its own angle (angles_rad: the device angle wrapped to
 // [-180, 180) deg, the lidar frame) and time (utime of the first, time_increment_ns the mean
 // step to the last), its range 0 for no return or outside the rig's limits. Nothing is binned
 // onto a grid. The turn the stream starts in has no ring start before it: dropped (counted),
-// as is a turn that runs on past a whole revolution (its ring start lost in a bad packet).
+// as is a turn that travels on past 1.5 revolutions (its closing ring start was lost in a bad
+// packet): never a scan of two turns.
 class RevolutionAssembler {
  public:
   struct Counters {
@@ -266,32 +277,33 @@ class RevolutionAssembler {
     seen_before_first_ = false;
     rate_hz_ = 0.0;
   }
-  void add(double device_deg, double distance_mm, float intensity, bool has_intensity,
-           int64_t utime, bool ring_start, std::vector<Scan2D>* out) {
+  void add(const TurnSample& x, bool has_intensity, std::vector<Scan2D>* out) {
     ++counters_.samples;
-    double theta = device_deg * M_PI / 180.0;
+    double theta = x.device_deg * M_PI / 180.0;
     if (theta >= M_PI) theta -= 2.0 * M_PI;
-    if (ring_start) {
-      if (state_ == kInTurn) finish(utime, out);
+    if (x.ring_start) {
+      if (state_ == kInTurn && travel_deg_ > kMaxTurnDeg) ++counters_.broken_turns;
+      if (state_ == kInTurn && travel_deg_ <= kMaxTurnDeg) finish(x.utime, out);
       if (state_ == kBeforeFirst && seen_before_first_) ++counters_.partial_turns;
       current_.clear();
       state_ = kInTurn;
-      travel_ = 0.0;
+      travel_deg_ = 0.0;
     } else if (state_ == kInTurn) {
-      travel_ += std::remainder(theta - current_.back().theta, 2.0 * M_PI);
+      travel_deg_ += std::remainder(x.travel_deg - last_travel_deg_, 360.0);
       const auto max_samples = static_cast<size_t>(kMaxTurnsOfSamples) *
                                static_cast<size_t>(std::max(1, rig_.steps_per_revolution));
-      if (travel_ > kMaxTravel || current_.size() >= max_samples) {
-        ++counters_.broken_turns;  // no ring start for more than a turn: wait for the next
+      if (travel_deg_ > kMaxTravelDeg || current_.size() >= max_samples) {
+        ++counters_.broken_turns;  // no ring start for far too long: wait for the next
         current_.clear();
         state_ = kLost;
       }
     }
+    last_travel_deg_ = x.travel_deg;
     if (state_ != kInTurn) {
       seen_before_first_ = seen_before_first_ || state_ == kBeforeFirst;
       return;
     }
-    current_.push_back({theta, distance_mm * 1e-3, intensity, utime});
+    current_.push_back({theta, x.distance_mm * 1e-3, x.intensity, x.utime});
     has_intensity_ = has_intensity;
   }
   const Counters& counters() const { return counters_; }
@@ -300,11 +312,12 @@ class RevolutionAssembler {
   double turnRateHz() const { return rate_hz_; }
 
  private:
-  // A turn is broken once it has travelled this far without a ring start (the next one was
-  // lost in a bad packet), or holds this many times the rig's samples per turn. A real turn
-  // travels 360 deg give or take the X4's angle correction (within +-90 deg) at its ends, and
-  // a real X4 starting up sends jumps of 180 deg that read either way (tests/data/real: scan2).
-  static constexpr double kMaxTravel = 2.0 * M_PI * 2.5;
+  // A turn travels 360 deg (on the X4's raw angles, which its range-dependent correction does
+  // not shake) give or take a packet: one closed after more than kMaxTurnDeg lost a ring start
+  // in between; one that runs on past kMaxTravelDeg, or holds kMaxTurnsOfSamples times the
+  // rig's samples per turn, is given up at once (memory stays bounded whatever comes).
+  static constexpr double kMaxTurnDeg = 540.0;
+  static constexpr double kMaxTravelDeg = 900.0;
   static constexpr int kMaxTurnsOfSamples = 4;
   struct Entry {
     double theta, range_m;
@@ -345,7 +358,7 @@ class RevolutionAssembler {
   std::vector<Entry> current_;
   State state_ = kBeforeFirst;
   bool seen_before_first_ = false, has_intensity_ = false;
-  double travel_ = 0.0, rate_hz_ = 0.0;
+  double travel_deg_ = 0.0, last_travel_deg_ = 0.0, rate_hz_ = 0.0;
   int64_t seq_ = 0;
   Counters counters_;
 };
@@ -537,8 +550,10 @@ class X4Session : public LidarSession {
         const size_t n = p->samples.size();
         for (size_t i = 0; i < n; ++i) {
           const auto t = sent - static_cast<int64_t>(std::llround((n - 1 - i) * dt_us));
-          turns_.add(p->samples[i].angle_deg, p->samples[i].distance_mm, 0.0f, false, t,
-                     p->ring_start && i == 0, scans);
+          const ydlidar::Sample& s = p->samples[i];
+          turns_.add(
+              {s.angle_deg, s.raw_angle_deg, s.distance_mm, 0.0f, t, p->ring_start && i == 0},
+              false, scans);
         }
       }
     }
@@ -644,8 +659,9 @@ class RplidarSession : public LidarSession {
         errors->push_back(at(d->offset) + d->what);
       } else if (const auto* batch = std::get_if<rplidar::Samples>(&e)) {
         for (const rplidar::Sample& s : batch->samples) {
-          turns_.add(s.angle_deg, s.distance_mm, static_cast<float>(s.quality), true,
-                     line_.at(s.end_offset) - sample_us, s.start, scans);
+          turns_.add({s.angle_deg, s.angle_deg, s.distance_mm, static_cast<float>(s.quality),
+                      line_.at(s.end_offset) - sample_us, s.start},
+                     true, scans);
         }
       }
     }
