@@ -384,5 +384,89 @@ TEST(RealCapturesX4External, OneScanPerRevolutionWithEverySample) {
   }
 }
 
+// --- RPLIDAR standard scan, captures we may not copy -----------------------------------------
+
+// CodreanuDan/RPLidar_RoomScanner (no licence; README.md): an RPLIDAR's health reply, then the
+// SCAN descriptor and 5-byte samples, dumped as hex text ("0xa5" per line, or "A5 5A ..."),
+// in FrameGrabber/scripts/Measurements/. Read again here apart from our decoder, by the
+// protocol document: after A5 5A 05 00 00 40 81, 5-byte samples whose S and !S differ and whose
+// C bit is 1 (else one byte on); turns from one S = 1 to the next.
+std::string hexText(const std::string& text) {
+  std::string bytes;
+  for (size_t i = 0; i + 1 < text.size();) {
+    if (text[i] == '0' && (text[i + 1] == 'x' || text[i + 1] == 'X')) i += 2;
+    if (i + 1 < text.size() && std::isxdigit(static_cast<unsigned char>(text[i])) &&
+        std::isxdigit(static_cast<unsigned char>(text[i + 1]))) {
+      bytes.push_back(static_cast<char>(std::stoi(text.substr(i, 2), nullptr, 16)));
+      i += 2;
+    } else {
+      ++i;
+    }
+  }
+  return bytes;
+}
+
+struct RawRpSample {
+  double angle_deg, distance_mm;
+};
+std::vector<std::vector<RawRpSample>> rawRplidarTurns(const std::string& b) {
+  std::vector<std::vector<RawRpSample>> turns(1);  // turns[0]: before the first S = 1
+  size_t i = b.find(std::string("\xA5\x5A\x05\x00\x00\x40\x81", 7));
+  if (i == std::string::npos) return {};
+  const auto u = [&](size_t k) { return static_cast<unsigned>(static_cast<uint8_t>(b[k])); };
+  for (i += 7; i + 5 <= b.size();) {
+    const unsigned q6 = (u(i + 1) >> 1) | (u(i + 2) << 7);
+    if ((u(i) & 1) == ((u(i) >> 1) & 1) || (u(i + 1) & 1) != 1 || q6 >= 360 * 64) {
+      ++i;
+      continue;
+    }
+    if (u(i) & 1) turns.emplace_back();
+    turns.back().push_back({q6 / 64.0, (u(i + 3) | (u(i + 4) << 8)) / 4.0});
+    i += 5;
+  }
+  return turns;
+}
+
+// Every complete turn of each dump one LIDAR_SCAN, with every valid sample (0.15 .. 12 m) in
+// it at its own angle.
+TEST(RealCapturesRplidarExternal, OneScanPerTurnWithEverySample) {
+  LidarConfig a1;
+  a1.steps_per_revolution = 360;
+  a1.range_min_m = 0.15;
+  a1.range_max_m = 12.0;
+  a1.scan_rate_hz = 5.5;
+  for (const char* file :
+       {"sample_data_2.txt", "sample_data_pyserial_1.txt", "sample_data_pyserial_3.txt"}) {
+    const auto text = externalCapture(file);
+    if (!text) GTEST_SKIP() << "SWEEPMAP_EXTERNAL_CAPTURES/" << file << " not found";
+    const std::string bytes = hexText(*text);
+    const auto turns = rawRplidarTurns(bytes);
+    ASSERT_GE(turns.size(), 3u) << file;
+    auto session = makeLidarSession(DeviceProtocol::kRplidar, a1, {ScanTime::kStream, 0});
+    std::vector<Scan2D> scans;
+    std::vector<std::string> errors;
+    session->onBytes(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), -1, &scans,
+                     &errors);
+    session->finish(&scans, &errors);
+    ASSERT_EQ(scans.size(), turns.size() - 2) << file;  // neither the first nor the open last
+    size_t valid = 0, present = 0;
+    for (size_t k = 0; k < scans.size(); ++k) {
+      const auto& turn = turns[k + 1];
+      EXPECT_EQ(scans[k].ranges_m.size(), turn.size()) << file << " turn " << k;
+      for (size_t i = 0; i < turn.size(); ++i) {
+        if (turn[i].distance_mm < 150.0 || turn[i].distance_mm > 12000.0) continue;
+        ++valid;
+        if (i >= scans[k].ranges_m.size()) continue;
+        const double da = std::remainder(scans[k].angles_rad[i] / kDeg - turn[i].angle_deg, 360.0);
+        present += std::abs(scans[k].ranges_m[i] * 1e3 - turn[i].distance_mm) < 1e-3 &&
+                   std::abs(da) < 0.01;
+      }
+    }
+    std::cout << file << ": " << scans.size() << " turns, " << valid << " valid samples, "
+              << present << " present (" << 100.0 * double(present) / double(valid) << " %)\n";
+    EXPECT_GE(double(present), 0.999 * double(valid)) << file;
+  }
+}
+
 }  // namespace
 }  // namespace sweepmap
