@@ -369,8 +369,8 @@ TEST(DecodeRigBDevices, Hi219AndWheelBoardBytes) {
 struct SerialCase {
   std::string model, scheme;
   std::vector<std::string> sets;  // the rig's lidar section for this device
-  // angle_tolerance_rad: X4: the emulator's interpolation tolerance (0.1°) and the 1/64° of the
-  // protocol.
+  // angle_tolerance_rad: X4: the emulator's interpolation tolerance (0.1°) and the 1/64° steps
+  // of FSA and LSA.
   double period_s, range_resolution_m, angle_tolerance_rad;
 };
 
@@ -406,13 +406,17 @@ TEST_P(SerialDevicesTest, PtyStreamsAndComesBackAfterHangUp) {
   EXPECT_GT(m.rays_compared, 1000u);
   const auto counters = lidarCounters(log_, nullptr);
   EXPECT_GE(counters.at("reconnects"), 1);
+  // The session's counts in the lidar process's status: every scan a turn of its samples.
+  EXPECT_GE(counters.at("turns"), static_cast<int64_t>(got.size()));
+  EXPECT_GT(counters.at("samples"), counters.at("turns") * 300);
+  EXPECT_EQ(counters.at("broken_turns"), 0);
   // Scans after the port came back (5 s + 1 s down).
   EXPECT_GT(got.back().utime - got.front().utime, 7000000);
 }
 
 INSTANTIATE_TEST_SUITE_P(
     Serial, SerialDevicesTest,
-    ::testing::Values(SerialCase{"x4", "ydlidar", {}, 1.0 / 7.0, 0.0003, 0.12 * M_PI / 180},
+    ::testing::Values(SerialCase{"x4", "ydlidar", {}, 1.0 / 7.0, 0.0003, 0.13 * M_PI / 180},
                       SerialCase{"rplidar",
                                  "rplidar",
                                  {"lidar.beam_count=360", "lidar.angle_min_deg=-180",
