@@ -5,7 +5,8 @@
 namespace sweepmap {
 
 std::string validateScan(const Scan2D& scan, int expected_beams) {
-  if (expected_beams > 0 && scan.ranges_m.size() != static_cast<size_t>(expected_beams)) {
+  if (expected_beams > 0 && scan.angles_rad.empty() &&
+      scan.ranges_m.size() != static_cast<size_t>(expected_beams)) {
     return "wrong length: " + std::to_string(scan.ranges_m.size()) + " ranges, expected " +
            std::to_string(expected_beams);
   }

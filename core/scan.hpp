@@ -35,7 +35,9 @@ struct Scan2D {
   }
 };
 
-// Checks a scan from outside: length (when expected_beams > 0), finite header and ranges,
+// Checks a scan from outside: length (when expected_beams > 0 and the scan is on a grid: a
+// scan with its own angles, one turn of a 360° lidar, holds as many samples as the turn had),
+// finite header and ranges,
 // ranges 0 (no return) or within the sensor's limits (with headroom for noise).
 // Returns an empty string when valid, else the reason.
 std::string validateScan(const Scan2D& scan, int expected_beams);

@@ -1,5 +1,6 @@
 #include "drivers/lidar_sessions.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -257,105 +258,123 @@ class ScipSession : public LidarSession {
 
 // ---- 360° serial lidars (YDLIDAR X4, RPLIDAR) -------------------------------------------
 
-// Samples (device angle, range, time) into scans on the rig's ray grid. A scan is one turn
-// from -180° to +180° in the lidar frame (device angles wrapped), so rays are in time
-// order; each ray keeps the sample nearest its grid angle, with that sample's own angle.
-class TurnAssembler {
+// One sample of a 360° lidar, as the session hands it to the RevolutionAssembler.
+struct TurnSample {
+  double device_deg = 0.0;   // its angle, [0, 360)
+  double travel_deg = 0.0;   // the angle the device's motion is followed by (X4: the raw one)
+  double distance_mm = 0.0;  // 0: no return
+  float intensity = 0.0f;
+  int64_t utime = 0;
+  bool ring_start = false;  // the first sample of a turn (X4 zero packet, RPLIDAR S flag)
+};
+
+// Samples into revolutions. A LIDAR_SCAN is one turn of the device, from one ring start (the
+// X4's zero packet, the RPLIDAR's S flag) to the next, the ring start's sample first: every
+// sample of the turn, in time order, at its own angle (angles_rad: the device angle wrapped to
+// [-180, 180) deg, the lidar frame) and time (utime of the first, time_increment_ns the mean
+// step to the last), its range 0 for no return or outside the rig's limits. Nothing is binned
+// onto a grid. The turn the stream starts in has no ring start before it: dropped (counted),
+// as is a turn that travels on past 1.5 revolutions (its closing ring start was lost in a bad
+// packet): never a scan of two turns.
+class RevolutionAssembler {
  public:
-  explicit TurnAssembler(const LidarConfig& grid) : grid_(grid) {}
+  struct Counters {
+    int64_t samples = 0;        // samples fed
+    int64_t turns = 0;          // complete turns emitted
+    int64_t partial_turns = 0;  // the turn a stream starts in, dropped
+    int64_t broken_turns = 0;   // more than a revolution without a ring start, dropped
+  };
+  explicit RevolutionAssembler(const LidarConfig& rig) : rig_(rig) {}
   void clear() {
     current_.clear();
-    have_last_ = false;
-    partial_ = true;
+    state_ = kBeforeFirst;
+    seen_before_first_ = false;
     rate_hz_ = 0.0;
   }
-  void add(double device_deg, double distance_mm, float intensity, bool has_intensity,
-           int64_t utime, std::vector<Scan2D>* out) {
-    double theta = device_deg * M_PI / 180.0;
-    if (theta >= M_PI) theta -= 2.0 * M_PI;                     // [-180, 180): -180 starts a turn
-    if (have_last_ && theta < last_theta_ - M_PI) finish(out);  // a new turn
-    have_last_ = true;
-    last_theta_ = theta;
-    current_.push_back({theta, distance_mm * 1e-3, intensity, utime});
+  void add(const TurnSample& x, bool has_intensity, std::vector<Scan2D>* out) {
+    ++counters_.samples;
+    double theta = x.device_deg * M_PI / 180.0;
+    if (theta >= M_PI) theta -= 2.0 * M_PI;
+    if (x.ring_start) {
+      if (state_ == kInTurn && travel_deg_ > kMaxTurnDeg) ++counters_.broken_turns;
+      if (state_ == kInTurn && travel_deg_ <= kMaxTurnDeg) finish(x.utime, out);
+      if (state_ == kBeforeFirst && seen_before_first_) ++counters_.partial_turns;
+      current_.clear();
+      state_ = kInTurn;
+      travel_deg_ = 0.0;
+    } else if (state_ == kInTurn) {
+      travel_deg_ += std::remainder(x.travel_deg - last_travel_deg_, 360.0);
+      const auto max_samples = static_cast<size_t>(kMaxTurnsOfSamples) *
+                               static_cast<size_t>(std::max(1, rig_.steps_per_revolution));
+      if (travel_deg_ > kMaxTravelDeg || current_.size() >= max_samples) {
+        ++counters_.broken_turns;  // no ring start for far too long: wait for the next
+        current_.clear();
+        state_ = kLost;
+      }
+    }
+    last_travel_deg_ = x.travel_deg;
+    if (state_ != kInTurn) {
+      seen_before_first_ = seen_before_first_ || state_ == kBeforeFirst;
+      return;
+    }
+    current_.push_back({theta, x.distance_mm * 1e-3, x.intensity, x.utime});
     has_intensity_ = has_intensity;
   }
-  int64_t partialTurns() const { return partial_turns_; }
-  // Turns per second of the last complete turn: the angle its samples cover over their time
-  // span (a gap between turns does not count). 0 until one is seen.
+  const Counters& counters() const { return counters_; }
+  // Turns per second of the last complete turn, from its first sample to the next ring start;
+  // 0 until one is timed.
   double turnRateHz() const { return rate_hz_; }
 
  private:
+  // A turn travels 360 deg (on the X4's raw angles, which its range-dependent correction does
+  // not shake) give or take a packet: one closed after more than kMaxTurnDeg lost a ring start
+  // in between; one that runs on past kMaxTravelDeg, or holds kMaxTurnsOfSamples times the
+  // rig's samples per turn, is given up at once (memory stays bounded whatever comes).
+  static constexpr double kMaxTurnDeg = 540.0;
+  static constexpr double kMaxTravelDeg = 900.0;
+  static constexpr int kMaxTurnsOfSamples = 4;
   struct Entry {
     double theta, range_m;
     float intensity;
     int64_t utime;
   };
-  void finish(std::vector<Scan2D>* out) {
-    if (partial_) {
-      // The turn the stream started in: incomplete, dropped.
-      partial_ = false;
-      ++partial_turns_;
-      current_.clear();
-      return;
-    }
-    // (A sample exactly at the grid's end, +180°, is the next turn's -180°.)
-    const int n = grid_.beam_count;
-    const double a0 = grid_.angle_min_deg * M_PI / 180.0;
-    const double inc = grid_.angle_increment_deg * M_PI / 180.0;
+  // The turn in current_, closed by a ring start at `next_utime`.
+  void finish(int64_t next_utime, std::vector<Scan2D>* out) {
+    const size_t n = current_.size();
     Scan2D s;
-    s.angle_min_rad = a0;
-    s.angle_increment_rad = inc;
-    s.range_min_m = grid_.range_min_m;
-    s.range_max_m = grid_.range_max_m;
     s.seq = seq_++;
-    s.ranges_m.assign(static_cast<size_t>(n), 0.0f);
-    s.angles_rad.resize(static_cast<size_t>(n));
-    for (int i = 0; i < n; ++i)
-      s.angles_rad[static_cast<size_t>(i)] = static_cast<float>(a0 + inc * i);
-    if (has_intensity_) s.intensities.assign(static_cast<size_t>(n), 0.0f);
-    std::vector<double> best(static_cast<size_t>(n), 1e9);
-    int first_index = -1;
-    int64_t first_utime = 0;
-    std::vector<Entry> next;  // samples past the grid's end: the next turn's first ray
-    for (const Entry& e : current_) {
-      int i = static_cast<int>(std::lround((e.theta - a0) / inc));
-      if (i >= n && inc > 0) {
-        next.push_back(e);
-        next.back().theta -= 2.0 * M_PI;
-        continue;
-      }
-      i = ((i % n) + n) % n;
-      const auto k = static_cast<size_t>(i);
-      const double off = std::fabs(std::remainder(e.theta - (a0 + inc * i), 2.0 * M_PI));
-      if (first_index < 0) {
-        first_index = i;
-        first_utime = e.utime;
-      }
-      if (off >= best[k]) continue;
-      best[k] = off;
-      s.angles_rad[k] = static_cast<float>(e.theta);
-      const bool valid = e.range_m >= grid_.range_min_m && e.range_m <= grid_.range_max_m;
-      s.ranges_m[k] = valid ? static_cast<float>(e.range_m) : 0.0f;
-      if (has_intensity_) s.intensities[k] = e.intensity;
+    s.utime = current_.front().utime;
+    s.angle_min_rad = current_.front().theta;
+    s.angle_increment_rad = 2.0 * M_PI / static_cast<double>(n);
+    s.range_min_m = rig_.range_min_m;
+    s.range_max_m = rig_.range_max_m;
+    const int64_t span_us = current_.back().utime - current_.front().utime;
+    s.time_increment_ns = n > 1 && span_us > 0
+                              ? span_us * 1000 / static_cast<int64_t>(n - 1)
+                              : static_cast<int64_t>(std::llround(rig_.rayPeriodS() * 1e9));
+    s.ranges_m.resize(n);
+    s.angles_rad.resize(n);
+    if (has_intensity_) s.intensities.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const Entry& e = current_[i];
+      const bool valid = e.range_m >= rig_.range_min_m && e.range_m <= rig_.range_max_m;
+      s.ranges_m[i] = valid ? static_cast<float>(e.range_m) : 0.0f;
+      s.angles_rad[i] = static_cast<float>(e.theta);
+      if (has_intensity_) s.intensities[i] = e.intensity;
     }
-    const double ray_s = grid_.rayPeriodS();
-    s.time_increment_ns = static_cast<int64_t>(std::llround(ray_s * 1e9));
-    s.utime = first_utime - static_cast<int64_t>(std::llround(first_index * ray_s * 1e6));
-    rate_hz_ = 0.0;  // unknown: a turn whose samples all came at once
-    if (current_.size() > 1 && current_.back().utime > current_.front().utime) {
-      const double covered = current_.back().theta - current_.front().theta;
-      rate_hz_ =
-          covered / (2.0 * M_PI) / (1e-6 * double(current_.back().utime - current_.front().utime));
-    }
+    rate_hz_ = next_utime > s.utime ? 1e6 / static_cast<double>(next_utime - s.utime) : 0.0;
+    ++counters_.turns;
     out->push_back(std::move(s));
-    current_ = std::move(next);
   }
 
-  LidarConfig grid_;
+  enum State { kBeforeFirst, kInTurn, kLost };
+  LidarConfig rig_;
   std::vector<Entry> current_;
-  bool have_last_ = false, partial_ = true, has_intensity_ = false;
-  double last_theta_ = 0.0, rate_hz_ = 0.0;
-  int64_t seq_ = 0, partial_turns_ = 0;
+  State state_ = kBeforeFirst;
+  bool seen_before_first_ = false, has_intensity_ = false;
+  double travel_deg_ = 0.0, last_travel_deg_ = 0.0, rate_hz_ = 0.0;
+  int64_t seq_ = 0;
+  Counters counters_;
 };
 
 // Host time of a stream offset: the chunk that holds it arrived at `arrival`, and a UART
@@ -448,6 +467,13 @@ void drainQuiet(ByteStream& stream, const std::function<int64_t()>& now) {
   }
 }
 
+LidarSession::Counters turnCounters(const RevolutionAssembler::Counters& c) {
+  return {{"samples", c.samples},
+          {"turns", c.turns},
+          {"partial_turns", c.partial_turns},
+          {"broken_turns", c.broken_turns}};
+}
+
 class X4Session : public LidarSession {
  public:
   X4Session(const LidarConfig& expected, const SessionOptions& options)
@@ -462,7 +488,6 @@ class X4Session : public LidarSession {
     decoder_.reset();
     turns_.clear();
     pending_.clear();
-    seen_ = 0;
     rate_check_.reset();
     ydlidar::DeviceInfo info;
     stream.write(std::string("\xA5\x90", 2));
@@ -503,6 +528,28 @@ class X4Session : public LidarSession {
     events.swap(pending_);
     decoder_.feed(data, size, &events);
     line_.chunk(arrival, decoder_.counters().bytes);
+    handle(events, scans, errors);
+  }
+
+  void finish(std::vector<Scan2D>* scans, std::vector<std::string>* errors) override {
+    std::vector<ydlidar::Event> events;
+    events.swap(pending_);
+    decoder_.finish(&events);
+    handle(events, scans, errors);
+  }
+  void stop(ByteStream& stream) override {
+    stream.write(std::string("\xA5\x65", 2), 200);
+    stream.setDtr(false);
+  }
+  DecoderCounters decoderCounters() const override { return decoder_.counters(); }
+  Counters sessionCounters() const override { return turnCounters(turns_.counters()); }
+  std::string identity() const override { return identity_; }
+
+ private:
+  // Each packet's samples into turns. A packet leaves the device when its last sample has been
+  // measured, and the X4 measures at a steady rate: sample i of n at sent - (n - 1 - i) dt.
+  void handle(const std::vector<ydlidar::Event>& events, std::vector<Scan2D>* scans,
+              std::vector<std::string>* errors) {
     const double dt_us = expected_.rayPeriodS() * 1e6;
     for (const ydlidar::Event& e : events) {
       if (const auto* d = std::get_if<DecodeError>(&e)) {
@@ -513,35 +560,26 @@ class X4Session : public LidarSession {
                             ", error code " + std::to_string(h->error_code));
         }
       } else if (const auto* p = std::get_if<ydlidar::Packet>(&e)) {
-        // The packet left the device when its last sample was measured.
         const int64_t sent = line_.at(p->offset);
         const size_t n = p->samples.size();
         for (size_t i = 0; i < n; ++i) {
           const auto t = sent - static_cast<int64_t>(std::llround((n - 1 - i) * dt_us));
-          turns_.add(p->samples[i].angle_deg, p->samples[i].distance_mm, 0.0f, false, t, scans);
+          const ydlidar::Sample& s = p->samples[i];
+          turns_.add(
+              {s.angle_deg, s.raw_angle_deg, s.distance_mm, 0.0f, t, p->ring_start && i == 0},
+              false, scans);
         }
       }
     }
-    rate_check_.update(expected_, "X4", turns_.turnRateHz(),
-                       static_cast<int64_t>(scans->size()) + seen_);
-    seen_ += static_cast<int64_t>(scans->size());
+    rate_check_.update(expected_, "X4", turns_.turnRateHz(), turns_.counters().turns);
   }
 
-  void stop(ByteStream& stream) override {
-    stream.write(std::string("\xA5\x65", 2), 200);
-    stream.setDtr(false);
-  }
-  DecoderCounters decoderCounters() const override { return decoder_.counters(); }
-  std::string identity() const override { return identity_; }
-
- private:
   LidarConfig expected_;
   LineClock line_;
-  TurnAssembler turns_;
+  RevolutionAssembler turns_;
   ydlidar::Decoder decoder_;
   std::vector<ydlidar::Event> pending_;
   std::string identity_ = "YDLIDAR";
-  int64_t seen_ = 0;
   TurnRateCheck rate_check_;
 };
 
@@ -559,7 +597,6 @@ class RplidarSession : public LidarSession {
     decoder_.reset();
     turns_.clear();
     pending_.clear();
-    seen_ = 0;
     rate_check_.reset();
     rplidar::DeviceInfo info;
     stream.write(rplidar::request(rplidar::kCmdInfo));
@@ -607,21 +644,14 @@ class RplidarSession : public LidarSession {
     events.swap(pending_);
     decoder_.feed(data, size, &events);
     line_.chunk(arrival, decoder_.counters().bytes);
-    const auto sample_us = static_cast<int64_t>(std::llround(5 * line_.byteUs()));
-    for (const rplidar::Event& e : events) {
-      if (const auto* d = std::get_if<DecodeError>(&e)) {
-        errors->push_back(at(d->offset) + d->what);
-      } else if (const auto* batch = std::get_if<rplidar::Samples>(&e)) {
-        for (const rplidar::Sample& s : batch->samples) {
-          // Sent as soon as measured: its time is when its first byte left the device.
-          turns_.add(s.angle_deg, s.distance_mm, static_cast<float>(s.quality), true,
-                     line_.at(s.end_offset) - sample_us, scans);
-        }
-      }
-    }
-    rate_check_.update(expected_, "RPLIDAR", turns_.turnRateHz(),
-                       static_cast<int64_t>(scans->size()) + seen_);
-    seen_ += static_cast<int64_t>(scans->size());
+    handle(events, scans, errors);
+  }
+
+  void finish(std::vector<Scan2D>* scans, std::vector<std::string>* errors) override {
+    std::vector<rplidar::Event> events;
+    events.swap(pending_);
+    decoder_.finish(&events);
+    handle(events, scans, errors);
   }
 
   void stop(ByteStream& stream) override {
@@ -629,16 +659,35 @@ class RplidarSession : public LidarSession {
     stream.setDtr(true);  // motor off
   }
   DecoderCounters decoderCounters() const override { return decoder_.counters(); }
+  Counters sessionCounters() const override { return turnCounters(turns_.counters()); }
   std::string identity() const override { return identity_; }
 
  private:
+  // Samples into turns, each sample sent as soon as measured: its time is when its first byte
+  // left the device; S = 1 starts a turn.
+  void handle(const std::vector<rplidar::Event>& events, std::vector<Scan2D>* scans,
+              std::vector<std::string>* errors) {
+    const auto sample_us = static_cast<int64_t>(std::llround(5 * line_.byteUs()));
+    for (const rplidar::Event& e : events) {
+      if (const auto* d = std::get_if<DecodeError>(&e)) {
+        errors->push_back(at(d->offset) + d->what);
+      } else if (const auto* batch = std::get_if<rplidar::Samples>(&e)) {
+        for (const rplidar::Sample& s : batch->samples) {
+          turns_.add({s.angle_deg, s.angle_deg, s.distance_mm, static_cast<float>(s.quality),
+                      line_.at(s.end_offset) - sample_us, s.start},
+                     true, scans);
+        }
+      }
+    }
+    rate_check_.update(expected_, "RPLIDAR", turns_.turnRateHz(), turns_.counters().turns);
+  }
+
   LidarConfig expected_;
   LineClock line_;
-  TurnAssembler turns_;
+  RevolutionAssembler turns_;
   rplidar::Decoder decoder_;
   std::vector<rplidar::Event> pending_;
   std::string identity_ = "RPLIDAR";
-  int64_t seen_ = 0;
   TurnRateCheck rate_check_;
 };
 

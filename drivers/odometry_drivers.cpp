@@ -49,14 +49,19 @@ void awaitFirstFrame(ByteStream& stream, int timeout_ms, const std::string& what
                     std::to_string(read_ahead->size()) + " bytes read)");
 }
 
-// What both sessions' onBytes share: the chunk through the decoder, the line clock set for it,
-// each decode error reported with its stream offset, every other event to `on_event`.
+// What both sessions' onBytes share: the chunk through the decoder (or, `at_end`, the end of
+// the input: Decoder::finish), the line clock set for it, each decode error reported with its
+// stream offset, every other event to `on_event`.
 template <class Decoder, class Event, class OnEvent>
 void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* data, size_t size,
                  int64_t arrival_utime, bool raw, int64_t* fed, LineClock* line,
-                 std::vector<std::string>* errors, OnEvent on_event) {
+                 std::vector<std::string>* errors, OnEvent on_event, bool at_end = false) {
   events->clear();
-  decoder.feed(data, size, events);
+  if (at_end) {
+    decoder.finish(events);
+  } else {
+    decoder.feed(data, size, events);
+  }
   *fed += static_cast<int64_t>(size);
   line->arrival = raw ? -1 : arrival_utime;
   line->chunk_end = *fed;
@@ -85,29 +90,40 @@ void Hi219Session::reset() {
 
 int Hi219Session::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                           std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
+  return decode(data, size, arrival_utime, false, samples, errors);
+}
+
+int Hi219Session::finish(std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
+  return decode(nullptr, 0, line_.arrival, true, samples, errors);
+}
+
+int Hi219Session::decode(const uint8_t* data, size_t size, int64_t arrival_utime, bool at_end,
+                         std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
   int n = 0;
-  decodeChunk(decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
-              [&](const hi219::Event& e) {
-                const auto& f = std::get<hi219::Frame>(e);
-                if (f.id >= 0) user_id_ = f.id;
-                if (!f.has_gyro || !f.has_accel) return;  // not a sample the odometry can use
-                ImuSample s{};
-                if (f.has_time) {
-                  // Raw: the IMU's clock; else the frame arrived complete at the receive time
-                  // of its last byte.
-                  s.utime = raw_ ? int64_t{f.time_ms} * 1000
-                                 : clock_.observe(f.time_ms, line_.at(f.offset + f.size));
-                } else {
-                  s.utime = line_.at(f.offset);
-                }
-                for (int k = 0; k < 3; ++k) {
-                  s.gyro[k] = f.gyro_rad_s[k];
-                  s.accel[k] = f.accel_m_s2[k];
-                  s.rpy[k] = f.has_euler ? f.rpy_rad[k] : std::numeric_limits<double>::quiet_NaN();
-                }
-                samples->push_back(s);
-                ++n;
-              });
+  decodeChunk(
+      decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
+      [&](const hi219::Event& e) {
+        const auto& f = std::get<hi219::Frame>(e);
+        if (f.id >= 0) user_id_ = f.id;
+        if (!f.has_gyro || !f.has_accel) return;  // not a sample the odometry can use
+        ImuSample s{};
+        if (f.has_time) {
+          // Raw: the IMU's clock; else the frame arrived complete at the receive time
+          // of its last byte.
+          s.utime = raw_ ? int64_t{f.time_ms} * 1000
+                         : clock_.observe(f.time_ms, line_.at(f.offset + f.size));
+        } else {
+          s.utime = line_.at(f.offset);
+        }
+        for (int k = 0; k < 3; ++k) {
+          s.gyro[k] = f.gyro_rad_s[k];
+          s.accel[k] = f.accel_m_s2[k];
+          s.rpy[k] = f.has_euler ? f.rpy_rad[k] : std::numeric_limits<double>::quiet_NaN();
+        }
+        samples->push_back(s);
+        ++n;
+      },
+      at_end);
   return n;
 }
 
@@ -138,28 +154,39 @@ void WheelBoardSession::reset() {
 
 int WheelBoardSession::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                                std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
+  return decode(data, size, arrival_utime, false, ticks, errors);
+}
+
+int WheelBoardSession::finish(std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
+  return decode(nullptr, 0, line_.arrival, true, ticks, errors);
+}
+
+int WheelBoardSession::decode(const uint8_t* data, size_t size, int64_t arrival_utime, bool at_end,
+                              std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
   int n = 0;
-  decodeChunk(decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
-              [&](const wheelboard::Event& e) {
-                const auto* t = std::get_if<wheelboard::Ticks>(&e);
-                if (!t) return;  // a SPEED frame of a two-way capture
-                WheelTicks w{};
-                if (raw_) {
-                  // The board's own clock, unwrapped past 32 bits, from its first reading.
-                  if (!board_clock_.have) {
-                    board_clock0_ = int64_t{t->time_us} - static_cast<int32_t>(t->time_us);
-                  }
-                  w.utime = board_clock0_ + board_clock_(t->time_us);
-                } else {
-                  const int64_t complete = line_.at(t->offset + wheelboard::kTicksFrameBytes);
-                  w.utime = clock_.observe(t->time_us, complete);
-                }
-                w.left = left_(static_cast<uint32_t>(t->left));
-                w.right = right_(static_cast<uint32_t>(t->right));
-                w.flags = t->flags;
-                ticks->push_back(w);
-                ++n;
-              });
+  decodeChunk(
+      decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
+      [&](const wheelboard::Event& e) {
+        const auto* t = std::get_if<wheelboard::Ticks>(&e);
+        if (!t) return;  // a SPEED frame of a two-way capture
+        WheelTicks w{};
+        if (raw_) {
+          // The board's own clock, unwrapped past 32 bits, from its first reading.
+          if (!board_clock_.have) {
+            board_clock0_ = int64_t{t->time_us} - static_cast<int32_t>(t->time_us);
+          }
+          w.utime = board_clock0_ + board_clock_(t->time_us);
+        } else {
+          const int64_t complete = line_.at(t->offset + wheelboard::kTicksFrameBytes);
+          w.utime = clock_.observe(t->time_us, complete);
+        }
+        w.left = left_(static_cast<uint32_t>(t->left));
+        w.right = right_(static_cast<uint32_t>(t->right));
+        w.flags = t->flags;
+        ticks->push_back(w);
+        ++n;
+      },
+      at_end);
   return n;
 }
 

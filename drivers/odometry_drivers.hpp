@@ -65,12 +65,16 @@ class Hi219Session {
   // Returns the samples completed.
   int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
               std::vector<ImuSample>* samples, std::vector<std::string>* errors);
+  // The end of the input (a file): the bytes held for a frame are searched again.
+  int finish(std::vector<ImuSample>* samples, std::vector<std::string>* errors);
   const DecoderCounters& counters() const { return decoder_.counters(); }
   int64_t clockResets() const { return clock_.resets(); }
   int userId() const { return user_id_; }
   void reset();
 
  private:
+  int decode(const uint8_t* data, size_t size, int64_t arrival_utime, bool at_end,
+             std::vector<ImuSample>* samples, std::vector<std::string>* errors);
   hi219::Decoder decoder_;
   DeviceClockSync clock_;
   LineClock line_;
@@ -89,12 +93,16 @@ class WheelBoardSession {
   WheelBoardSession(int baud, bool raw);
   int onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
               std::vector<WheelTicks>* ticks, std::vector<std::string>* errors);
+  // The end of the input (a file): the bytes held for a frame are searched again.
+  int finish(std::vector<WheelTicks>* ticks, std::vector<std::string>* errors);
   const DecoderCounters& counters() const { return decoder_.counters(); }
   int64_t framesLost() const { return decoder_.sequenceGaps(); }
   int64_t clockResets() const { return clock_.resets(); }
   void reset();
 
  private:
+  int decode(const uint8_t* data, size_t size, int64_t arrival_utime, bool at_end,
+             std::vector<WheelTicks>* ticks, std::vector<std::string>* errors);
   wheelboard::Decoder decoder_;
   DeviceClockSync clock_;
   LineClock line_;

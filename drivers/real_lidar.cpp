@@ -23,7 +23,9 @@ int RealLidar::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                        std::vector<std::string>* errors) {
   decoded_.clear();
   session_->onBytes(data, size, arrival_utime, &decoded_, errors);
+  LidarSession::Counters counters = session_->sessionCounters();
   std::lock_guard<std::mutex> lock(mutex_);
+  session_counters_.swap(counters);
   for (Scan2D& s : decoded_) queue_.push_back(std::move(s));
   if (queue_.size() > max_queued_scans_) {
     const size_t drop = queue_.size() - max_queued_scans_;
@@ -35,7 +37,9 @@ int RealLidar::onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
 
 std::vector<std::pair<std::string, int64_t>> RealLidar::extraCounters() {
   std::lock_guard<std::mutex> lock(mutex_);
-  return {{"queue_drops", queue_drops_}};
+  LidarSession::Counters out = {{"queue_drops", queue_drops_}};
+  out.insert(out.end(), session_counters_.begin(), session_counters_.end());
+  return out;
 }
 
 }  // namespace sweepmap

@@ -31,10 +31,17 @@ class LidarSession {
   // beyond its replies (the stream's first data) are decoded then.
   virtual void onBytes(const uint8_t* data, size_t size, int64_t arrival_utime,
                        std::vector<Scan2D>* scans, std::vector<std::string>* errors) = 0;
+  // The end of the input (a capture file): bytes held for a packet that cannot complete are
+  // searched again, what they hold is decoded (a turn left open is not a scan).
+  virtual void finish(std::vector<Scan2D>* scans, std::vector<std::string>* errors) {}
   // Best effort before closing on shutdown (stop the stream, motor off).
   virtual void stop(ByteStream& stream) {}
   // Decoder counters of the current connection (reset on reconnect).
   virtual DecoderCounters decoderCounters() const = 0;
+  // What the session made of the decoded packets, cumulative (360° lidars: samples, turns,
+  // partial_turns, broken_turns); in the lidar process's status beside the decoder's.
+  using Counters = std::vector<std::pair<std::string, int64_t>>;
+  virtual Counters sessionCounters() const { return {}; }
   virtual int64_t clockResets() const { return 0; }
   // "UST-10LX serial H1234567 firmware 1.2.3", after start().
   virtual std::string identity() const = 0;
@@ -74,6 +81,7 @@ class RealLidar : public LidarDevice, public StreamDevice {
   std::mutex mutex_;             // guards the two below
   std::vector<Scan2D> queue_;
   int64_t queue_drops_ = 0;
+  LidarSession::Counters session_counters_;  // the worker's copy of sessionCounters()
 };
 
 // The driver for `uri`'s protocol, checked against what the rig file says of the lidar

@@ -14,6 +14,7 @@ void addCounters(DecoderCounters* total, const DecoderCounters& c) {
   total->resyncs += c.resyncs;
   total->discarded_bytes += c.discarded_bytes;
   total->device_errors += c.device_errors;
+  total->anomalies += c.anomalies;
 }
 
 // Hands every chunk read to the tap before the session sees it.
@@ -90,6 +91,8 @@ DeviceHealth StreamDevice::health() {
                 {"resyncs", d.resyncs},
                 {"discarded_bytes", d.discarded_bytes},
                 {"device_errors", d.device_errors},
+                {"packets", d.packets},
+                {"anomalies", d.anomalies},
                 {"timeouts", timeouts_},
                 {"reconnects", reconnects_},
                 {"connect_failures", connect_failures_},

@@ -1,16 +1,28 @@
 // What every decoder fuzz target checks: the input split in two at a position taken from
-// its first byte, fed to a fresh decoder; afterwards the counters must be consistent with
+// its first byte, fed to a fresh decoder, then the end of the input (finish(), where the
+// decoder has it); afterwards the counters must be consistent with
 // the bytes fed and every error offset must lie inside them. abort() on a violation, so
 // libFuzzer (and the corpus replay) report it.
 #pragma once
 
 #include <cstdint>
 #include <cstdlib>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include "drivers/protocols/decoder.hpp"
 
 namespace sweepmap {
+
+// Whether the decoder has finish() (the end of the input: held bytes searched again).
+template <class Decoder, class Event, class = void>
+struct HasFinish : std::false_type {};
+template <class Decoder, class Event>
+struct HasFinish<
+    Decoder, Event,
+    std::void_t<decltype(std::declval<Decoder&>().finish(std::declval<std::vector<Event>*>()))>>
+    : std::true_type {};
 
 template <class Decoder, class Event>
 void fuzzDecoder(const uint8_t* data, size_t size) {
@@ -20,6 +32,7 @@ void fuzzDecoder(const uint8_t* data, size_t size) {
   std::vector<Event> out;
   d.feed(data + 1, cut - 1, &out);
   d.feed(data + cut, size - cut, &out);
+  if constexpr (HasFinish<Decoder, Event>::value) d.finish(&out);
   const DecoderCounters& c = d.counters();
   const auto fed = static_cast<int64_t>(size - 1);
   if (c.bytes != fed || c.discarded_bytes < 0 || c.discarded_bytes > fed || c.scans > c.packets ||

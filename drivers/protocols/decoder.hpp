@@ -28,6 +28,8 @@ struct DecoderCounters {
   int64_t resyncs = 0;          // times bytes were skipped to find the next packet start
   int64_t discarded_bytes = 0;  // bytes skipped while resynchronising
   int64_t device_errors = 0;    // replies that carry an error status or bad health
+  int64_t anomalies = 0;  // packets whose fields disagree, decoded by the vendor's rule (X4: LSA
+                          // below FSA off the 360 -> 0 wrap)
 };
 
 // The bytes a decoder skips while it looks for the next packet start: one resync and one
@@ -95,17 +97,17 @@ class PacketBuffer {
   bool feed(const uint8_t* data, size_t size, DecoderCounters* counters, Step step) {
     counters->bytes += static_cast<int64_t>(size);
     buffer_.insert(buffer_.end(), data, data + size);
-    size_t at = 0;
-    while (at < buffer_.size()) {
-      const int64_t offset = offset_ + static_cast<int64_t>(at);
-      const ParseStep s = step(buffer_.data() + at, buffer_.size() - at, offset);
-      if (s.kind == ParseStep::kWait) break;
-      if (s.kind == ParseStep::kSkip) skipped_.skip(offset, s.bytes);
-      at += s.bytes;
-    }
-    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
-    offset_ += static_cast<int64_t>(at);
-    return buffer_.empty();
+    return decode(step, false);
+  }
+
+  // The input has ended (the end of a file): a start still waiting for its rest will never
+  // get it, so it was a false start or a packet cut short. Its first byte is skipped and the
+  // bytes after it searched again, so a false sync (say a length field that runs past the
+  // end) loses no good packet after it; what is left at the end is reported as skipped.
+  template <class Event, class Step>
+  void finish(DecoderCounters* counters, std::vector<Event>* out, Step step) {
+    decode(step, true);
+    skipped_.flush(counters, out);
   }
 
   // The same, reporting the skipped run at the end when nothing is left.
@@ -142,6 +144,26 @@ class PacketBuffer {
   }
 
  private:
+  // Steps from the front until a start waits for more bytes (at the end of the input: skips
+  // that start's first byte instead); drops what was taken or skipped.
+  template <class Step>
+  bool decode(Step step, bool at_end) {
+    size_t at = 0;
+    while (at < buffer_.size()) {
+      const int64_t offset = offset_ + static_cast<int64_t>(at);
+      ParseStep s = step(buffer_.data() + at, buffer_.size() - at, offset);
+      if (s.kind == ParseStep::kWait) {
+        if (!at_end) break;
+        s = ParseStep::skip();
+      }
+      if (s.kind == ParseStep::kSkip) skipped_.skip(offset, s.bytes);
+      at += s.bytes;
+    }
+    buffer_.erase(buffer_.begin(), buffer_.begin() + static_cast<std::ptrdiff_t>(at));
+    offset_ += static_cast<int64_t>(at);
+    return buffer_.empty();
+  }
+
   std::vector<uint8_t> buffer_;
   int64_t offset_ = 0;  // stream offset of buffer_[0]
   SkippedRun skipped_;

@@ -1,5 +1,6 @@
 #include "drivers/protocols/hi219.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -119,6 +120,12 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
   });
 }
 
+void Decoder::finish(std::vector<Event>* out) {
+  buffer_.finish(&counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
+}
+
 // 5A A5, the payload's length, its CRC, the payload.
 ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
                               std::vector<Event>* out) {
@@ -147,6 +154,30 @@ std::string encodeFrame(const std::string& payload) {
   s.push_back(static_cast<char>(crc & 0xff));
   s.push_back(static_cast<char>(crc >> 8));
   return s + payload;
+}
+
+std::string encodeOldItems(const Frame& f) {
+  std::string s;
+  const auto put16 = [&](double v) {
+    const auto q = static_cast<int16_t>(std::clamp(std::lround(v), -32768L, 32767L));
+    s.push_back(static_cast<char>(static_cast<uint16_t>(q) & 0xff));
+    s.push_back(static_cast<char>(static_cast<uint16_t>(q) >> 8));
+  };
+  s.push_back(static_cast<char>(0x90));
+  s.push_back(static_cast<char>(f.id < 0 ? 0 : f.id));
+  s.push_back(static_cast<char>(0xA0));
+  for (double v : f.accel_m_s2) put16(v / kGravity * 1e3);  // mG
+  s.push_back(static_cast<char>(0xB0));
+  for (double v : f.gyro_rad_s) put16(v / kDeg * 10.0);  // 0.1 deg/s
+  s.push_back(static_cast<char>(0xC0));
+  for (double v : f.mag_ut) put16(v * 10.0);  // mGauss
+  s.push_back(static_cast<char>(0xD0));
+  put16(f.rpy_rad[1] / kDeg * 100.0);  // pitch, 0.01 deg
+  put16(f.rpy_rad[0] / kDeg * 100.0);  // roll
+  put16(f.rpy_rad[2] / kDeg * 10.0);   // yaw, 0.1 deg
+  s.push_back(static_cast<char>(0xF0));
+  putf(&s, f.pressure_pa);
+  return s;
 }
 
 std::string encodeImusol(const Frame& f) {

@@ -52,6 +52,9 @@ using Event = std::variant<Frame, DecodeError>;
 class Decoder {
  public:
   void feed(const uint8_t* data, size_t size, std::vector<Event>* out);
+  // The end of the input: the bytes held for a frame that cannot complete are searched again
+  // (PacketBuffer::finish).
+  void finish(std::vector<Event>* out);
   const DecoderCounters& counters() const { return counters_; }
   void reset();
 
@@ -66,6 +69,10 @@ class Decoder {
 std::string encodeFrame(const std::string& payload);
 // The 0x91 record of `f` (SI values back to the record's units).
 std::string encodeImusol(const Frame& f);
+// The old item set of `f`, as an HI219 sends by default: 0x90 ID, 0xA0 acceleration, 0xB0
+// angular rate, 0xC0 magnetic field, 0xD0 Euler angles, 0xF0 pressure (the manual's sample
+// frame, section 6.3.4.1); values rounded to the items' units.
+std::string encodeOldItems(const Frame& f);
 
 }  // namespace hi219
 }  // namespace sweepmap

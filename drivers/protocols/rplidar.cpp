@@ -64,16 +64,28 @@ void Decoder::reset() {
   scanning_ = false;
 }
 
+ParseStep Decoder::parse(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out) {
+  if (p[0] == 0xA5) {
+    if (const auto step = parseReply(p, left, offset, out)) return *step;
+  }
+  return parseSample(p, left, offset, out);
+}
+
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
-  const bool all_taken =
-      buffer_.feed(data, size, &counters_, [&](const uint8_t* p, size_t left, int64_t offset) {
-        if (p[0] == 0xA5) {
-          if (const auto step = parseReply(p, left, offset, out)) return *step;
-        }
-        return parseSample(p, left, offset, out);
-      });
+  const bool all_taken = buffer_.feed(
+      data, size, &counters_,
+      [&](const uint8_t* p, size_t left, int64_t offset) { return parse(p, left, offset, out); });
   flushBatch(out);
   if (all_taken) flushSkipped(out);
+}
+
+void Decoder::finish(std::vector<Event>* out) {
+  std::vector<Event> skipped;
+  buffer_.finish(&counters_, &skipped, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parse(p, left, offset, out);
+  });
+  flushBatch(out);  // the samples go out before the error that follows them
+  out->insert(out->end(), skipped.begin(), skipped.end());
 }
 
 void Decoder::flushBatch(std::vector<Event>* out) {

@@ -65,10 +65,14 @@ using Event = std::variant<DeviceInfo, Health, SampleRate, ScanStart, Samples, D
 class Decoder {
  public:
   void feed(const uint8_t* data, size_t size, std::vector<Event>* out);
+  // The end of the input: bytes held for a packet that cannot complete are searched again
+  // (PacketBuffer::finish).
+  void finish(std::vector<Event>* out);
   const DecoderCounters& counters() const { return counters_; }
   void reset();
 
  private:
+  ParseStep parse(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
   std::optional<ParseStep> parseReply(const uint8_t* p, size_t left, int64_t offset,
                                       std::vector<Event>* out);
   ParseStep parseSample(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);

@@ -50,6 +50,12 @@ void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
   });
 }
 
+void Decoder::finish(std::vector<Event>* out) {
+  buffer_.finish(&counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parseFrame(p, left, offset, out);
+  });
+}
+
 // A5 5B, type, length, sequence number, payload, CRC.
 ParseStep Decoder::parseFrame(const uint8_t* p, size_t left, int64_t offset,
                               std::vector<Event>* out) {

@@ -65,6 +65,9 @@ using Event = std::variant<Ticks, Speed, DecodeError>;
 class Decoder {
  public:
   void feed(const uint8_t* data, size_t size, std::vector<Event>* out);
+  // The end of the input: bytes held for a packet that cannot complete are searched again
+  // (PacketBuffer::finish).
+  void finish(std::vector<Event>* out);
   const DecoderCounters& counters() const { return counters_; }
   // Frames lost, from the gaps in the sequence numbers (per frame type).
   int64_t sequenceGaps() const { return gaps_; }

@@ -63,19 +63,38 @@ Health decodeHealth(const uint8_t* c, int64_t offset) {
   return h;
 }
 
-// The samples' distances and angles: first-level by interpolation FSA..LSA, then corrected.
-Packet decodePacket(const uint8_t* p, const PacketHeader& h, int64_t offset) {
+}  // namespace
+
+// The first-level angle step between a packet's samples [deg], as the vendor SDK computes it
+// (YDLIDAR/YDLidar-SDK src/YDlidarDriver.cpp, commit d37ace902f73, waitPackage, case 7): a
+// packet of one sample has none; LSA below FSA is the 360 -> 0 wrap only when FSA > 270 deg
+// and LSA < 90 deg, else the packet's angles are not trusted and the previous packet's step
+// is kept (a real X4 sends such packets: tests/data/real/README.md).
+double Decoder::sampleStep(size_t lsn, uint16_t fsa, uint16_t lsa) {
+  if (lsn <= 1) return 0.0;
+  const int first = fsa >> 1, last = lsa >> 1;  // 1/64 deg
+  if (last < first && !(first > 270 * 64 && last < 90 * 64)) {
+    ++counters_.anomalies;
+    return last_step_deg_;
+  }
+  const int span = last >= first ? last - first : 360 * 64 + last - first;
+  last_step_deg_ = span / 64.0 / static_cast<double>(lsn - 1);
+  return last_step_deg_;
+}
+
+namespace {
+
+// The samples' distances and angles: first-level from FSA by `step_deg`, then corrected.
+Packet decodePacket(const uint8_t* p, const PacketHeader& h, double step_deg, int64_t offset) {
   Packet packet;
   packet.ring_start = h.ct & 1;
   packet.offset = offset;
   packet.end_offset = offset + static_cast<int64_t>(kHeader + 2 * h.lsn);
-  const double first = (h.fsa >> 1) / 64.0, last = (h.lsa >> 1) / 64.0;
-  double span = last - first;
-  if (span < 0) span += 360.0;
+  const double first = (h.fsa >> 1) / 64.0;
   for (size_t i = 0; i < h.lsn; ++i) {
     Sample s;
     s.distance_mm = le16(p + kHeader + 2 * i) / 4.0;
-    s.raw_angle_deg = h.lsn > 1 ? first + span * static_cast<double>(i) / double(h.lsn - 1) : first;
+    s.raw_angle_deg = first + step_deg * static_cast<double>(i);
     double a = s.raw_angle_deg + angleCorrectionDeg(s.distance_mm);
     a = std::fmod(a, 360.0);
     if (a < 0) a += 360.0;
@@ -96,15 +115,26 @@ double angleCorrectionDeg(double d) {
 void Decoder::reset() {
   counters_ = {};
   buffer_.clear();
+  last_step_deg_ = 0.0;
+}
+
+ParseStep Decoder::parse(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out) {
+  if (p[0] == 0xA5) return parseReply(p, left, offset, out);
+  if (p[0] == 0xAA) return parsePacket(p, left, offset, out);
+  return ParseStep::skip();
 }
 
 void Decoder::feed(const uint8_t* data, size_t size, std::vector<Event>* out) {
   // Buffered: at most one packet header's worth is waited for, a packet is at most
   // 10 + 2 * 255 bytes.
   buffer_.feed(data, size, &counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
-    if (p[0] == 0xA5) return parseReply(p, left, offset, out);
-    if (p[0] == 0xAA) return parsePacket(p, left, offset, out);
-    return ParseStep::skip();
+    return parse(p, left, offset, out);
+  });
+}
+
+void Decoder::finish(std::vector<Event>* out) {
+  buffer_.finish(&counters_, out, [&](const uint8_t* p, size_t left, int64_t offset) {
+    return parse(p, left, offset, out);
   });
 }
 
@@ -155,7 +185,7 @@ ParseStep Decoder::parsePacket(const uint8_t* p, size_t left, int64_t offset,
   }
   buffer_.flushSkipped(&counters_, out);
   ++counters_.packets;
-  out->push_back(decodePacket(p, h, offset));
+  out->push_back(decodePacket(p, h, sampleStep(h.lsn, h.fsa, h.lsa), offset));
   return ParseStep::take(total);
 }
 

@@ -9,8 +9,11 @@
 //   PH AA 55 | CT (bit 0: 1 = the ring's zero packet, LSN 1) | LSN samples |
 //   FSA, LSA (bit 0 is a check bit, 1; angle = (x >> 1) / 64 deg) | CS | LSN x Si
 // CS is the XOR of the packet's 16-bit words: PH, FSA, every Si, CT|LSN<<8 and LSA.
-// Distance = Si / 4 mm. Sample i's first-level angle interpolates FSA..LSA (across 360);
-// the second-level, range-dependent correction (the X4's triangulation geometry) adds
+// Distance = Si / 4 mm. Sample i's first-level angle interpolates FSA..LSA (across 360),
+// by the vendor SDK's rule: LSA < FSA is the wrap only when FSA > 270 deg and LSA < 90 deg,
+// otherwise (a real X4 sends such packets) the previous packet's step is kept from FSA and the
+// packet counted as an anomaly (Decoder::sampleStep); the second-level, range-dependent correction
+// (the X4's triangulation geometry) adds
 //   AngCorrect(d) = 0 for d = 0, else atan(21.8 (155.3 - d) / (155.3 d)) [deg], d in mm.
 // Angles grow clockwise seen from the top, 0 at the device's front mark. sweepmap's frame
 // L: Z_L = the 0 deg mark, Y_L = the 90 deg mark, X_L = the device's top (right-handed), so
@@ -66,13 +69,20 @@ using Event = std::variant<DeviceInfo, Health, ScanStart, Packet, DecodeError>;
 class Decoder {
  public:
   void feed(const uint8_t* data, size_t size, std::vector<Event>* out);
+  // The end of the input: bytes held for a packet that cannot complete are searched again
+  // (PacketBuffer::finish).
+  void finish(std::vector<Event>* out);
   const DecoderCounters& counters() const { return counters_; }
   void reset();
 
  private:
+  ParseStep parse(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
   ParseStep parseReply(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
   ParseStep parsePacket(const uint8_t* p, size_t left, int64_t offset, std::vector<Event>* out);
+  double sampleStep(size_t lsn, uint16_t fsa, uint16_t lsa);
   DecoderCounters counters_;
+  double last_step_deg_ =
+      0.0;  // the last packet's step (the SDK's IntervalSampleAngle_LastPackage)
   PacketBuffer buffer_{"YDLIDAR", "to the next packet"};
 };
 

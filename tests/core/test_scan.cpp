@@ -27,6 +27,16 @@ TEST(ValidateScan, RejectsWrongLength) {
   EXPECT_NE(validateScan(goodScan(), 6).find("wrong length"), std::string::npos);
 }
 
+// One turn of a 360° lidar carries its own angles and as many samples as the turn had: the
+// rig's ray count is not its length; its angles must still match its ranges.
+TEST(ValidateScan, ATurnWithItsOwnAnglesHasItsOwnLength) {
+  Scan2D s = goodScan();
+  s.angles_rad = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f};
+  EXPECT_EQ(validateScan(s, 714), "");
+  s.angles_rad.pop_back();
+  EXPECT_NE(validateScan(s, 714).find("wrong length"), std::string::npos);
+}
+
 TEST(ValidateScan, RejectsNonFiniteAndOutOfRange) {
   Scan2D s = goodScan();
   s.ranges_m[3] = std::numeric_limits<float>::quiet_NaN();

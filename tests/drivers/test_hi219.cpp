@@ -104,5 +104,50 @@ TEST(Hi219, SplitAtEveryPositionGarbageAndBadCrc) {
   EXPECT_GE(d.counters().resyncs, 2);
 }
 
+// A false 5A A5 whose length field runs past the end of the input (issue 22): once the input
+// ends, the bytes held for it are searched again, so the good frames after it are decoded, and
+// the false start is counted; the same false start before good frames that complete it fails
+// its CRC and is searched again at once. Nothing is lost either way.
+TEST(Hi219, FalseHeaderLosesNoGoodFrameAfterIt) {
+  const std::string false_header = hex("5A A5 F0 01 12 34");  // 496 bytes of payload announced
+  for (const std::string& tail : {std::string(), std::string(600, '\x00')}) {
+    const std::string s = kItems + false_header + kImusol + kItems + tail;
+    hi219::Decoder d;
+    std::vector<hi219::Event> out;
+    d.feed(reinterpret_cast<const uint8_t*>(s.data()), s.size(), &out);
+    d.finish(&out);
+    std::vector<hi219::Frame> f;
+    std::vector<DecodeError> errors;
+    for (const auto& e : out) {
+      if (const auto* x = std::get_if<hi219::Frame>(&e)) f.push_back(*x);
+      if (const auto* x = std::get_if<DecodeError>(&e)) errors.push_back(*x);
+    }
+    ASSERT_EQ(f.size(), 3u) << "tail " << tail.size();
+    EXPECT_EQ(f[1].time_ms, 310205u);
+    EXPECT_EQ(f[1].offset, static_cast<int64_t>(kItems.size() + false_header.size()));
+    EXPECT_GE(d.counters().resyncs, 1);
+    ASSERT_FALSE(errors.empty());
+    EXPECT_EQ(errors.front().offset, static_cast<int64_t>(kItems.size()));  // the false start
+    if (tail.empty()) {
+      EXPECT_EQ(d.counters().checksum_errors, 0);  // never completed: skipped
+      EXPECT_EQ(d.counters().discarded_bytes, static_cast<int64_t>(false_header.size()));
+    } else {
+      EXPECT_EQ(d.counters().checksum_errors, 1);  // completed by what followed: a bad CRC
+    }
+  }
+  // A false header at the very end, after good frames: they are out before it, it is reported.
+  const std::string s = kImusol + kItems + false_header;
+  hi219::Decoder d;
+  std::vector<hi219::Event> out;
+  d.feed(reinterpret_cast<const uint8_t*>(s.data()), s.size(), &out);
+  EXPECT_EQ(out.size(), 2u);
+  d.finish(&out);
+  ASSERT_EQ(out.size(), 3u);
+  ASSERT_TRUE(std::holds_alternative<DecodeError>(out[2]));
+  EXPECT_EQ(std::get<DecodeError>(out[2]).offset, static_cast<int64_t>(s.size() - 6));
+  EXPECT_EQ(d.counters().discarded_bytes, 6);
+  EXPECT_EQ(d.counters().resyncs, 1);
+}
+
 }  // namespace
 }  // namespace sweepmap

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <string>
 
 #include "drivers/lidar_sessions.hpp"
@@ -360,6 +361,85 @@ TEST(X4Session, ScanRateFarFromTheRigsStopsTheDriverAHostStallDoesNot) {
   const std::string e = feedX4Turns(12.0, 40);
   EXPECT_NE(e.find("scan rate: the rig file says 7 Hz, the X4 turns at 12"), std::string::npos)
       << e;
+}
+
+// Turns of an X4 as the session makes them: the stream starts inside a turn (dropped), each
+// zero packet (at the index mark) opens a turn of every sample until the next, and a zero
+// packet lost to a bad check code loses its two turns, never makes a scan of both.
+TEST(X4Session, OneScanPerTurnFromZeroPacketToZeroPacket) {
+  LidarConfig x4;
+  x4.beam_count = 714;
+  x4.steps_per_revolution = 714;
+  x4.range_min_m = 0.12;
+  x4.range_max_m = 10.0;
+  x4.scan_rate_hz = 7.0;
+  std::string bytes = ydlidar::encodeDescriptor(5, 1, ydlidar::kTypeScan);
+  // Part of a turn, then 6 turns from 348 deg: the zero packet, then 12 packets of 30 samples.
+  bytes += ydlidar::encodePacket(false, 200.0, 347.5, std::vector<double>(40, 1500.0));
+  for (int t = 0; t < 6; ++t) {
+    std::string zero = ydlidar::encodePacket(true, 348.0, 348.0, {1000.0});
+    if (t == 3) zero[8] ^= 0x01;  // a bad check code: the zero packet is dropped
+    bytes += zero;
+    for (int p = 0; p < 12; ++p) {
+      const double a = 348.5 + p * 30.0;
+      bytes += ydlidar::encodePacket(false, a, a + 29.0, std::vector<double>(30, 2000.0 + t));
+    }
+  }
+  bytes += ydlidar::encodePacket(true, 348.0, 348.0, {1000.0});
+  auto session = makeLidarSession(DeviceProtocol::kYdlidarX4, x4, {ScanTime::kStream, 0});
+  std::vector<Scan2D> scans;
+  std::vector<std::string> errors;
+  session->onBytes(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), -1, &scans,
+                   &errors);
+  session->finish(&scans, &errors);
+  ASSERT_EQ(scans.size(), 4u);  // turns 0, 1, 4, 5; turns 2 + 3 (no zero packet between) lost
+  const float expected_range[4] = {2.0f, 2.001f, 2.004f, 2.005f};
+  for (size_t k = 0; k < scans.size(); ++k) {
+    const Scan2D& s = scans[k];
+    ASSERT_EQ(s.ranges_m.size(), 1u + 12 * 30) << k;  // the zero packet's sample and the turn's
+    ASSERT_EQ(s.angles_rad.size(), s.ranges_m.size());
+    EXPECT_FLOAT_EQ(s.ranges_m[0], 1.0f);
+    EXPECT_NEAR(s.ranges_m[1], expected_range[k], 1e-6);
+    EXPECT_TRUE(validateScan(s, x4.beam_count).empty());
+    for (size_t i = 1; i < s.ranges_m.size(); ++i) EXPECT_GT(s.rayUtime(i), s.rayUtime(i - 1));
+  }
+  std::map<std::string, int64_t> c;
+  for (const auto& [name, value] : session->sessionCounters()) c[name] = value;
+  EXPECT_EQ(c["turns"], 4);
+  EXPECT_EQ(c["partial_turns"], 1);
+  EXPECT_EQ(c["broken_turns"], 1);
+  EXPECT_EQ(session->decoderCounters().checksum_errors, 1);
+}
+
+// RPLIDAR: a turn from one sample with S = 1 to the next, with the samples' qualities.
+TEST(RplidarSession, OneScanPerTurnFromStartFlagToStartFlag) {
+  LidarConfig a1;
+  a1.steps_per_revolution = 360;
+  a1.range_min_m = 0.15;
+  a1.range_max_m = 12.0;
+  a1.scan_rate_hz = 5.5;
+  std::string bytes = rplidar::encodeDescriptor(5, 1, rplidar::kTypeScan);
+  for (int i = 100; i < 360; ++i) bytes += rplidar::encodeSample(false, 10, i, 1000.0);
+  for (int t = 0; t < 3; ++t) {
+    for (int i = 0; i < 360; ++i)
+      bytes += rplidar::encodeSample(i == 0, i % 2 ? 47 : 0, i + 0.5, i % 2 ? 1000.0 + t : 0.0);
+  }
+  bytes += rplidar::encodeSample(true, 47, 0.25, 1000.0);
+  auto session = makeLidarSession(DeviceProtocol::kRplidar, a1, {ScanTime::kStream, 0});
+  std::vector<Scan2D> scans;
+  std::vector<std::string> errors;
+  session->onBytes(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), -1, &scans,
+                   &errors);
+  ASSERT_EQ(scans.size(), 3u);
+  for (size_t k = 0; k < 3; ++k) {
+    ASSERT_EQ(scans[k].ranges_m.size(), 360u);
+    ASSERT_EQ(scans[k].intensities.size(), 360u);
+    EXPECT_NEAR(scans[k].angles_rad[0], 0.5 * M_PI / 180.0, 1e-6);
+    EXPECT_NEAR(scans[k].angles_rad[359], (359.5 - 360.0) * M_PI / 180.0, 1e-6);
+    EXPECT_EQ(scans[k].ranges_m[0], 0.0f);
+    EXPECT_NEAR(scans[k].ranges_m[1], 1.0 + 0.001 * k, 1e-6);
+    EXPECT_EQ(scans[k].intensities[1], 47.0f);
+  }
 }
 
 TEST(Rplidar, RequestsDescriptorsAndSampleBits) {

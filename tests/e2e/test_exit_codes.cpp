@@ -199,6 +199,8 @@ std::vector<Row> deviceAndOpsRows(const Inputs& in) {
        {help,
         bad,
         {"missing file", {"scip", path("nope.cap"), "--out", path("d.lcmlog")}, 2},
+        // Bytes of another kind (an LCM log as X4 bytes): no message decoded.
+        {"wrong kind", {"x4", a, "--out", path("d.lcmlog")}, 1},
         {"empty log", {"scip", empty, "--out", path("d.lcmlog")}, 1},
         {"--out taken", {"scip", empty, "--out", taken("decode")}, 2}}},
       {"sweepmap",

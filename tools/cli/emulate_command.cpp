@@ -36,6 +36,7 @@ struct EmulateOptions {
   LinkFaults faults;
   std::string truth;
   int64_t start_utime = 0;
+  std::string imu_frames = "91";  // hi219: 91 (the 0x91 record) | old (the old item set)
 };
 
 bool isLidarModel(const std::string& m) { return m == "ust10lx" || m == "x4" || m == "rplidar"; }
@@ -195,7 +196,11 @@ void serveAll(const EmulateOptions& o, const std::vector<std::string>& models, b
     const LinkFaults faults = model == faulty ? o.faults : LinkFaults{};
     const std::function<std::unique_ptr<EmulatedLidar>(int64_t)> make =
         [&, model](int64_t now_us) -> std::unique_ptr<EmulatedLidar> {
-      if (model == "hi219") return std::make_unique<Hi219Device>(f.imu, f.device_clock, now_us);
+      if (model == "hi219") {
+        return std::make_unique<Hi219Device>(
+            f.imu, f.device_clock, now_us,
+            o.imu_frames == "old" ? Hi219Frames::kOldItems : Hi219Frames::kImusol91);
+      }
       if (model == "wheel-board") {
         return std::make_unique<WheelBoardDevice>(f.ticks, f.device_clock, now_us);
       }
@@ -281,6 +286,12 @@ Runner addEmulateCommand(CLI::App& app) {
   cmd->add_option("--scene", o->world.scene, "scene file or name (default: the rig kind's)");
   cmd->add_option("--set", o->world.overrides, "override a rig key: key=value (repeatable)");
   cmd->add_option("--seed", o->world.seed, "simulation seed")->capture_default_str();
+  cmd->add_option("--imu-frames", o->imu_frames,
+                  "hi219: what the IMU streams: 91 (the 0x91 record, with its time stamp) or old "
+                  "(the old item set 0x90 A0 B0 C0 D0 F0 an HI219 sends by default, no time "
+                  "stamp)")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"91", "old"}));
   cmd->add_flag("--follow-lcm", o->world.follow_lcm,
                 "ust10lx: follow TRUTH_SHAFT from a simulated stepper, publish TRUTH_RIG and "
                 "TRUTH_SWEEP");

@@ -22,6 +22,8 @@
 namespace sweepmap {
 namespace {
 
+constexpr int64_t kMaxReportedErrors = 1000;
+
 DeviceProtocol protocolOf(const std::string& name) {
   if (name == "scip") return DeviceProtocol::kScip;
   if (name == "x4") return DeviceProtocol::kYdlidarX4;
@@ -94,6 +96,32 @@ int runCapture(const CaptureOptions& o, const LidarConfig& expected, std::ostrea
 
 namespace {
 
+// What a decode found, after the problems it listed one by one with their offsets.
+void reportCounts(const DecodeOptions& o, const DecodeResult& r, const std::string& what,
+                  std::ostream& report) {
+  const DecoderCounters& c = r.counters;
+  report << "decode: " << r.bytes << " bytes, " << r.scans << " " << what << " -> " << o.out
+         << "\n  found: " << c.packets << " packets";
+  for (const auto& [name, value] : r.session) report << ", " << value << " " << name;
+  report << "\n  problems: " << c.checksum_errors << " checksum errors, " << c.resyncs
+         << " resyncs, " << c.discarded_bytes << " bytes skipped (offsets above), "
+         << c.device_errors << " device errors, " << c.anomalies << " anomalies";
+  if (r.errors > kMaxReportedErrors) {
+    report << " (" << r.errors - kMaxReportedErrors << " more problems not listed)";
+  }
+  report << "\n";
+  if (!r.file_error.empty()) report << "decode: " << r.file_error << "\n";
+}
+
+// Each problem with its offset, the first kMaxReportedErrors of them.
+void reportErrors(const DecodeOptions& o, const std::vector<std::string>& errors, DecodeResult* r,
+                  std::ostream& report) {
+  for (const std::string& e : errors) {
+    if (r->errors < kMaxReportedErrors) report << o.in << ": " << e << "\n";
+    ++r->errors;
+  }
+}
+
 // The rig-B devices: HI219 frames to IMU, wheel board frames to WHEEL_TICKS, by the drivers'
 // own sessions (drivers/odometry_drivers.hpp). IMU axes as the IMU reports them (its mounting
 // is the driver's business); Euler angles when the frame has them, else NaN.
@@ -108,35 +136,42 @@ DecodeResult decodeRigBDevice(const DecodeOptions& o, const Capture& capture,
   std::vector<ImuSample> samples;
   std::vector<WheelTicks> ticks;
   std::vector<std::string> errors;
-  for (const CaptureChunk& chunk : capture.chunks) {
-    r.bytes += static_cast<int64_t>(chunk.bytes.size());
+  // One chunk of the capture (nullptr: the end of the input) through the session.
+  const auto decode = [&](const CaptureChunk* chunk) {
     samples.clear();
     ticks.clear();
     errors.clear();
     Outbox out;
     if (is_imu) {
-      imu.onBytes(chunk.bytes.data(), chunk.bytes.size(), chunk.utime, &samples, &errors);
+      if (chunk) {
+        imu.onBytes(chunk->bytes.data(), chunk->bytes.size(), chunk->utime, &samples, &errors);
+      } else {
+        imu.finish(&samples, &errors);
+      }
       for (const ImuSample& s : samples) out.publish(channels::kImu, s.utime, toLcm(s));
       r.scans += static_cast<int64_t>(samples.size());
     } else {
-      board.onBytes(chunk.bytes.data(), chunk.bytes.size(), chunk.utime, &ticks, &errors);
+      if (chunk) {
+        board.onBytes(chunk->bytes.data(), chunk->bytes.size(), chunk->utime, &ticks, &errors);
+      } else {
+        board.finish(&ticks, &errors);
+      }
       for (const WheelTicks& t : ticks) out.publish(channels::kWheelTicks, t.utime, toLcm(t));
       r.scans += static_cast<int64_t>(ticks.size());
     }
-    for (const std::string& e : errors) {
-      if (r.errors < 1000) report << o.in << ": " << e << "\n";
-      ++r.errors;
-    }
+    reportErrors(o, errors, &r, report);
     for (const Message& m : out.take()) log.write(m.utime, m.channel, m.data);
+  };
+  for (const CaptureChunk& chunk : capture.chunks) {
+    r.bytes += static_cast<int64_t>(chunk.bytes.size());
+    decode(&chunk);
   }
+  decode(nullptr);
   log.close();
   r.file_error = capture.error;
-  const DecoderCounters c = is_imu ? imu.counters() : board.counters();
-  report << "decode: " << r.bytes << " bytes, " << r.scans
-         << (is_imu ? " IMU samples" : " wheel readings") << " -> " << o.out << " ("
-         << c.checksum_errors << " CRC errors, " << c.resyncs << " resyncs"
-         << (is_imu ? "" : ", " + std::to_string(board.framesLost()) + " frames lost") << ")\n";
-  if (!r.file_error.empty()) report << "decode: " << r.file_error << "\n";
+  r.counters = is_imu ? imu.counters() : board.counters();
+  if (!is_imu) r.session = {{"frames lost", board.framesLost()}};
+  reportCounts(o, r, is_imu ? "IMU samples" : "wheel readings", report);
   return r;
 }
 
@@ -167,15 +202,16 @@ DecodeResult runDecode(const DecodeOptions& o, const LidarConfig& expected, std:
   DecodeResult r;
   std::vector<Scan2D> scans;
   std::vector<std::string> errors;
-  for (const CaptureChunk& chunk : capture.chunks) {
+  // The scans and problems of one chunk (nullptr: the end of the input).
+  const auto decode = [&](const CaptureChunk* chunk) {
     scans.clear();
     errors.clear();
-    session->onBytes(chunk.bytes.data(), chunk.bytes.size(), chunk.utime, &scans, &errors);
-    r.bytes += static_cast<int64_t>(chunk.bytes.size());
-    for (const std::string& e : errors) {
-      if (r.errors < 1000) report << o.in << ": " << e << "\n";
-      ++r.errors;
+    if (chunk) {
+      session->onBytes(chunk->bytes.data(), chunk->bytes.size(), chunk->utime, &scans, &errors);
+    } else {
+      session->finish(&scans, &errors);
     }
+    reportErrors(o, errors, &r, report);
     for (const Scan2D& s : scans) {
       const std::string why = validateScan(s, 0);  // any length: each ray has its angle
       if (!why.empty()) {
@@ -188,14 +224,17 @@ DecodeResult runDecode(const DecodeOptions& o, const LidarConfig& expected, std:
       for (const Message& m : out.take()) log.write(m.utime, m.channel, m.data);
       ++r.scans;
     }
+  };
+  for (const CaptureChunk& chunk : capture.chunks) {
+    r.bytes += static_cast<int64_t>(chunk.bytes.size());
+    decode(&chunk);
   }
+  decode(nullptr);
   log.close();
   r.file_error = capture.error;
-  const DecoderCounters c = session->decoderCounters();
-  report << "decode: " << r.bytes << " bytes, " << r.scans << " scans -> " << o.out << " ("
-         << c.checksum_errors << " checksum errors, " << c.resyncs << " resyncs, "
-         << c.discarded_bytes << " bytes skipped, " << c.device_errors << " device errors)\n";
-  if (!r.file_error.empty()) report << "decode: " << r.file_error << "\n";
+  r.counters = session->decoderCounters();
+  r.session = session->sessionCounters();
+  reportCounts(o, r, "scans (LIDAR_SCAN)", report);
   return r;
 }
 

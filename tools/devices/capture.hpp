@@ -7,6 +7,7 @@
 #include <string>
 
 #include "core/rig_components.hpp"
+#include "drivers/real_lidar.hpp"
 
 namespace sweepmap {
 
@@ -29,12 +30,16 @@ struct DecodeOptions {
 };
 
 struct DecodeResult {
-  int64_t bytes = 0, scans = 0, errors = 0;
-  std::string file_error;  // the capture ends in a broken record (its offset)
+  int64_t bytes = 0, scans = 0, errors = 0;  // scans: messages written (scans, IMU samples, ...)
+  std::string file_error;                    // the capture ends in a broken record (its offset)
+  DecoderCounters counters;                  // the decoder's (packets, checksum errors, skips)
+  LidarSession::Counters session;            // the session's (360° lidars: samples, turns)
 };
 
 // Decodes `in` as the driver would have; every problem is reported with its byte offset in
-// the device's stream. Scans go to `out` as LIDAR_SCAN (log time = scan time).
+// the device's stream, then what was found: messages, packets, samples and turns, checksum
+// errors, resyncs and the bytes skipped. Scans go to `out` as LIDAR_SCAN (log time = scan
+// time).
 DecodeResult runDecode(const DecodeOptions& options, const LidarConfig& expected,
                        std::ostream& report);
 

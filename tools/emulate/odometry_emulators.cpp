@@ -16,8 +16,9 @@ int64_t DeviceClockModel::at(int64_t power_on_us, int64_t t_us) const {
       std::floor(offset_us + static_cast<double>(t_us - power_on_us) * (1.0 + drift_ppm * 1e-6)));
 }
 
-Hi219Device::Hi219Device(ImuSource source, const DeviceClockModel& clock, int64_t power_on_us)
-    : source_(std::move(source)), clock_(clock), power_on_us_(power_on_us) {}
+Hi219Device::Hi219Device(ImuSource source, const DeviceClockModel& clock, int64_t power_on_us,
+                         Hi219Frames frames)
+    : source_(std::move(source)), clock_(clock), power_on_us_(power_on_us), frames_(frames) {}
 
 void Hi219Device::advance(int64_t now_us, std::string* out) {
   for (const ImuSample& s : source_(now_us)) {
@@ -37,7 +38,8 @@ void Hi219Device::advance(int64_t now_us, std::string* out) {
     f.quat_wxyz = {cr * cp * cy + sr * sp * sy, sr * cp * cy - cr * sp * sy,
                    cr * sp * cy + sr * cp * sy, cr * cp * sy - sr * sp * cy};
     f.pressure_pa = 101325.0;
-    *out += hi219::encodeFrame(hi219::encodeImusol(f));
+    *out += hi219::encodeFrame(frames_ == Hi219Frames::kOldItems ? hi219::encodeOldItems(f)
+                                                                 : hi219::encodeImusol(f));
   }
 }
 

@@ -34,9 +34,14 @@ struct DeviceClockModel {
   int64_t at(int64_t power_on_us, int64_t t_us) const;
 };
 
+// What an emulated HI219 streams: the 0x91 record, or the old item set (0x90 A0 B0 C0 D0 F0)
+// that the HI219 of Miao 2022's era sends by default (it has no time stamp).
+enum class Hi219Frames { kImusol91, kOldItems };
+
 class Hi219Device : public EmulatedLidar {
  public:
-  Hi219Device(ImuSource source, const DeviceClockModel& clock, int64_t power_on_us);
+  Hi219Device(ImuSource source, const DeviceClockModel& clock, int64_t power_on_us,
+              Hi219Frames frames = Hi219Frames::kImusol91);
   void receive(const uint8_t* data, size_t size, int64_t now_us, std::string* out) override {}
   void advance(int64_t now_us, std::string* out) override;
   void reset(int64_t now_us) override {}
@@ -45,6 +50,7 @@ class Hi219Device : public EmulatedLidar {
   ImuSource source_;
   DeviceClockModel clock_;
   int64_t power_on_us_;
+  Hi219Frames frames_;
 };
 
 class WheelBoardDevice : public EmulatedLidar {

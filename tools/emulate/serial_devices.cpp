@@ -13,6 +13,11 @@ double wrap360(double deg) {
   return d < 0 ? d + 360.0 : d;
 }
 
+// The X4's mirror (raw) angle of a sample: the true direction less AngCorrect(d).
+double x4RawAngle(const SampleFeed::Sample& s) {
+  return s.distance_mm > 0 ? s.angle_deg - ydlidar::angleCorrectionDeg(s.distance_mm) : s.angle_deg;
+}
+
 }  // namespace
 
 std::deque<SampleFeed::Sample>& SampleFeed::pending(int64_t now_us) {
@@ -61,6 +66,9 @@ void X4Device::receive(const uint8_t* data, size_t size, int64_t now_us, std::st
       *out += ydlidar::encodeDescriptor(5, 1, ydlidar::kTypeScan);
       feed_.skipTo(now_us);
       scanning_ = true;
+      last_sent_deg_ = last_sent_raw_ = -1.0;
+      turn_travel_deg_ = 0.0;
+      target_ = 0;
     } else if (cmd == ydlidar::kCmdInfo) {
       *out += ydlidar::encodeInfo(ydlidar::kModelX4, 1, 5, 1, "2019031200000042");
     } else if (cmd == ydlidar::kCmdHealth) {
@@ -69,47 +77,88 @@ void X4Device::receive(const uint8_t* data, size_t size, int64_t now_us, std::st
   }
 }
 
+// Whether `s`, coming after a sample at raw angle `prev_raw` (< 0: none since A5 60), starts a
+// turn: the first sample after A5 60 does, then the one whose raw (mirror) angle passes the
+// index mark, once the turn is more than 3/4 round (near objects make raw angles jitter).
+void X4Device::sent(const SampleFeed::Sample& s) {
+  if (last_sent_deg_ >= 0.0) {
+    turn_travel_deg_ += std::remainder(s.angle_deg - last_sent_deg_, 360.0);
+  }
+  last_sent_deg_ = s.angle_deg;
+  last_sent_raw_ = std::fmod(x4RawAngle(s) + 360.0, 360.0);
+}
+
+bool X4Device::ringStart(const SampleFeed::Sample& s, double prev_raw) const {
+  if (prev_raw < 0.0) return true;
+  const double raw = std::fmod(x4RawAngle(s) + 360.0, 360.0);
+  const double step = std::fmod(raw - prev_raw + 360.0, 360.0);
+  const double to_mark = std::fmod(kIndexMarkDeg - prev_raw + 360.0, 360.0);
+  return turn_travel_deg_ > 270.0 && to_mark > 0.0 && to_mark <= step && step < 180.0;
+}
+
+// How many of the measured samples at the front of `q` the next packet takes (0: wait).
+size_t X4Device::packetLength(const std::deque<SampleFeed::Sample>& q, int64_t now_us) {
+  const auto raw = [](const SampleFeed::Sample& s) { return x4RawAngle(s); };
+  if (target_ == 0) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    target_ = u(rng_) < kShortPacketShare ? std::uniform_int_distribution<size_t>(1, 39)(rng_) : 40;
+  }
+  // Grow while its samples are measured, no turn starts, and a linear interpolation of the
+  // raw angles stays within 0.01° of each one.
+  size_t n = 1;
+  while (n < q.size() && n < target_ && q[n].utime <= now_us) {
+    if (ringStart(q[n], std::fmod(raw(q[n - 1]) + 360.0, 360.0))) break;
+    double span = raw(q[n]) - raw(q[0]);
+    span -= 360.0 * std::round(span / 360.0);
+    bool linear = true;
+    for (size_t i = 1; i < n && linear; ++i) {
+      double d = raw(q[i]) - raw(q[0]);
+      d -= 360.0 * std::round(d / 360.0);
+      linear = std::fabs(d - span * double(i) / double(n)) <= kLinearToleranceDeg;
+    }
+    if (!linear) break;
+    ++n;
+  }
+  // Wait while the packet can still grow: its next sample not measured yet (the source hands
+  // samples out ahead of their time), unless its first is 10 ms old.
+  const bool can_grow = n < target_ && (n == q.size() || q[n].utime > now_us);
+  if (can_grow && now_us - q[0].utime < 10000) return 0;
+  return n;
+}
+
 void X4Device::advance(int64_t now_us, std::string* out) {
   std::deque<SampleFeed::Sample>& q = feed_.pending(now_us);
   if (!scanning_) {
     while (!q.empty() && q.front().utime <= now_us) q.pop_front();
     return;
   }
-  const auto raw = [](const SampleFeed::Sample& s) {
-    return s.distance_mm > 0 ? s.angle_deg - ydlidar::angleCorrectionDeg(s.distance_mm)
-                             : s.angle_deg;
-  };
   for (;;) {
     if (q.empty() || q.front().utime > now_us) return;
-    if (q.front().turn_start) {
-      // The zero packet: one sample, at the 0° mark.
+    if (ringStart(q.front(), last_sent_raw_)) {
+      // The zero packet: one sample, where the turn starts.
       const auto& s = q.front();
-      *out += ydlidar::encodePacket(true, raw(s), raw(s), {s.distance_mm});
+      *out += ydlidar::encodePacket(true, x4RawAngle(s), x4RawAngle(s), {s.distance_mm});
+      sent(s);
+      turn_travel_deg_ = 0.0;
       q.pop_front();
       continue;
     }
-    // Grow the packet while its samples are measured, it has < 40, no turn starts, and a
-    // linear interpolation of the raw angles stays within 0.01° of each one.
-    size_t n = 1;
-    while (n < q.size() && n < 40 && q[n].utime <= now_us && !q[n].turn_start) {
-      const double first = raw(q[0]);
-      double span = raw(q[n]) - first;
-      span -= 360.0 * std::round(span / 360.0);
-      bool linear = true;
-      for (size_t i = 1; i < n && linear; ++i) {
-        double d = raw(q[i]) - first;
-        d -= 360.0 * std::round(d / 360.0);
-        linear = std::fabs(d - span * double(i) / double(n)) <= 0.01;
-      }
-      if (!linear) break;
-      ++n;
-    }
-    // Wait for a fuller packet unless its first sample is 8 ms old.
-    if (n < 40 && n == q.size() && now_us - q[0].utime < 8000) return;
+    const size_t n = packetLength(q, now_us);
+    if (n == 0) return;
     std::vector<double> d(n);
     for (size_t i = 0; i < n; ++i) d[i] = q[i].distance_mm;
-    *out += ydlidar::encodePacket(false, raw(q[0]), raw(q[n - 1]), d);
-    for (size_t i = 0; i < n; ++i) q.pop_front();
+    const double first = x4RawAngle(q[0]);
+    double last = x4RawAngle(q[n - 1]);
+    // Now and then a packet whose LSA lies just below its FSA, as a real X4 sends
+    // (tests/data/real/README.md): the host keeps the previous packet's step.
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    if (n > 1 && first > 2.0 && first < 270.0 && u(rng_) < kAnomalyShare) last = first - 1.171875;
+    *out += ydlidar::encodePacket(false, first, last, d);
+    for (size_t i = 0; i < n; ++i) {
+      sent(q.front());
+      q.pop_front();
+    }
+    target_ = 0;
   }
 }
 

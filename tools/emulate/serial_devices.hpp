@@ -4,11 +4,14 @@
 // (their rays are known ahead: the simulated car's path is scripted); ray i of a scan is
 // measured at rayUtime(i) in the direction rayAngle(i) (lidar frame L, the device angle).
 //
-// X4: identity model 6 (X4), firmware 1.5, hardware 1. Packets of at most 40 samples, sent
-// when their last sample has been measured; the zero packet (CT bit 0, one sample) where a
-// turn passes the 0° mark. The X4 reports mirror (raw) angles: raw = true - AngCorrect(d);
-// the host interpolates raw angles linearly inside a packet, so a packet is closed early
-// where that interpolation would be off by more than 0.01° for one of its samples.
+// X4: identity model 6 (X4), firmware 1.5, hardware 1. Packets of 40 samples, some cut short
+// (1 to 39, at random), sent when their last sample has been measured; the zero packet (CT bit
+// 0, one sample) where the turn starts: the first sample after A5 60 wherever it is, then
+// where the device passes its index mark (348°), as a real X4 does; now and then a packet
+// whose LSA lies below its FSA, off the 360 -> 0 wrap. The X4 reports mirror (raw) angles: raw
+// = true - AngCorrect(d); the host interpolates raw angles linearly inside a packet, so a
+// packet is closed early where that interpolation would be off by more than
+// kLinearToleranceDeg for one of its samples.
 // RPLIDAR A1: identity model 0x18 (A1M8), firmware 1.29, hardware 7; 5-byte samples, S = 1
 // on the first sample of each turn (at the 0° mark), quality 47 for a return, 0 for none;
 // RESET prints the A1's start-up banner. Neither device answers while it is scanning except
@@ -16,6 +19,7 @@
 #pragma once
 
 #include <deque>
+#include <random>
 #include <string>
 
 #include "drivers/protocols/rplidar.hpp"
@@ -46,15 +50,32 @@ class SampleFeed {
 
 class X4Device : public EmulatedLidar {
  public:
-  explicit X4Device(ScanSource source) : feed_(std::move(source)) {}
+  // Where a real X4 puts its zero packets once turning (tests/data/real/README.md: 348.0 ..
+  // 348.6 deg in three streams), the share of packets cut short (about 9 % there, 1 .. 39
+  // samples) and of packets with LSA below FSA off the wrap (1 of 1949 there).
+  static constexpr double kIndexMarkDeg = 348.0;
+  static constexpr double kShortPacketShare = 0.09;
+  static constexpr double kAnomalyShare = 1.0 / 2000.0;
+  // A packet ends early where the host's linear interpolation of its raw angles would miss a
+  // sample's by more than this (the X4's own resolution is 0.5°).
+  static constexpr double kLinearToleranceDeg = 0.1;
+  explicit X4Device(ScanSource source, uint64_t seed = 22) : feed_(std::move(source)), rng_(seed) {}
   void receive(const uint8_t* data, size_t size, int64_t now_us, std::string* out) override;
   void advance(int64_t now_us, std::string* out) override;
   void reset(int64_t now_us) override;
 
  private:
+  bool ringStart(const SampleFeed::Sample& s, double prev_raw) const;
+  void sent(const SampleFeed::Sample& s);
+  size_t packetLength(const std::deque<SampleFeed::Sample>& q, int64_t now_us);
   SampleFeed feed_;
   std::string command_;
   bool scanning_ = false;
+  double last_sent_deg_ = -1.0;   // the last sample sent: its angle; < 0: none yet
+  double last_sent_raw_ = -1.0;   // and its raw (mirror) angle
+  double turn_travel_deg_ = 0.0;  // since the last zero packet
+  size_t target_ = 0;             // the packet being filled: its length, 0 = not chosen yet
+  std::mt19937_64 rng_;
 };
 
 class RplidarDevice : public EmulatedLidar {
