@@ -243,9 +243,9 @@ std::string layerColour(const Layer& layer, size_t index) {
 }
 
 // The palette of height-coloured layers and its colour bar.
-void writeHeightPalette(std::ostringstream& s, const PlotRange& z) {
+void writeHeightPalette(std::ostringstream& s, const PlotRange& z, const std::string& label) {
   s << "set palette rgbformulae 33,13,10\nset cbrange [" << z.min << ":" << z.max << "]\n"
-    << "set cblabel 'height z [m]'\n";
+    << "set cblabel " << quoted(label) << "\n";
 }
 
 // A legend entry with a marker large enough to see (the layer itself is drawn without one:
@@ -286,7 +286,7 @@ void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
   }
   if (const auto z = options.z_band_m ? options.z_band_m : heightRange(coloured);
       z && !coloured.empty()) {
-    writeHeightPalette(s, *z);
+    writeHeightPalette(s, *z, options.height_label);
   }
   for (size_t l = 0; l < layers.size(); ++l) {
     const Layer& layer = layers[l];
@@ -391,7 +391,7 @@ void plotPerspective(const std::string& png_path, const std::vector<Layer>& laye
     drawn.push_back(pointsToDraw(layer, std::nullopt, options.max_points_per_layer));
     if (layer.by_height) coloured.insert(coloured.end(), drawn.back().begin(), drawn.back().end());
   }
-  if (const auto z = heightRange(coloured)) writeHeightPalette(s, *z);
+  if (const auto z = heightRange(coloured)) writeHeightPalette(s, *z, options.height_label);
   const Camera camera = cameraFor(drawn, options);
   std::vector<std::string> plots, legend;
   for (size_t l = 0; l < layers.size(); ++l) {

@@ -44,6 +44,7 @@ struct PlotOptions {
   // Larger layers are subsampled with a fixed stride. 50 000 filled circles of 0.3 already
   // cover a 1200 x 900 picture; drawing 200 000 took most of a replay's time.
   size_t max_points_per_layer = 50000;
+  std::string height_label = "height z [m]";  // the colour bar of by_height layers
 };
 
 // Top view (x-y) of the layers, drawn in order (the last on top), equal axis scaling.
@@ -59,6 +60,7 @@ struct PerspectiveOptions {
   double rot_z_deg = 35.0;  // and its turn about z
   double point_size = 0.25;
   size_t max_points_per_layer = 60000;
+  std::string height_label = "height z [m]";
   int width_px = 1200;
   int height_px = 900;
 };

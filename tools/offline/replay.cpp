@@ -150,7 +150,7 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   if (options.plots && !first_O.empty()) {
     plotFirstSweep(out, first_Op, first_O);
     drawViews3d(out, "replay", "rig A replay, " + std::to_string(result.sweeps) + " sweeps", "O",
-                all_O, mapper.map().occupiedCentres(), rig.mapper.resolution_m);
+                all_O, mapper.map().occupiedCentres(), rig.mapper.resolution_m, true);
   }
   return result;
 }

@@ -148,7 +148,7 @@ MobileReplayResult replayMobileLog(const std::string& log_path, const MobileLida
   if (plots && !c.cloud.empty()) {
     plotTopViewOf(out, c);
     drawViews3d(out, "replay", "rig B replay", "world", c.cloud, mapper.map().occupiedCentres(),
-                rig.mapper.resolution_m);
+                rig.mapper.resolution_m, true);
   }
   return result;
 }

@@ -134,7 +134,7 @@ ProfileReplayResult replayProfileLog(const std::string& log_path, const Rotating
   if (plots && !sweeps.empty()) {
     plotTopViewOf(out, sweeps);
     drawViews3d(out, "replay", "rig C replay", "O_r", allPoints(sweeps),
-                mapper.map().occupiedCentres(), rig.mapper.resolution_m);
+                mapper.map().occupiedCentres(), rig.mapper.resolution_m, false);
   }
   return r;
 }

@@ -9,7 +9,7 @@ namespace sweepmap {
 
 void drawViews3d(const std::filesystem::path& out, const std::string& tool, const std::string& what,
                  const std::string& frame, const std::vector<Eigen::Vector3f>& cloud,
-                 const std::vector<Eigen::Vector3f>& map_voxels, double voxel_m) {
+                 const std::vector<Eigen::Vector3f>& map_voxels, double voxel_m, bool room) {
   PerspectiveOptions o;
   const auto draw = [&](const std::string& file, const Layer& layer) {
     if (layer.points.empty()) return;
@@ -19,13 +19,25 @@ void drawViews3d(const std::filesystem::path& out, const std::string& tool, cons
       std::cerr << tool << ": " << file << " not drawn: " << e.what() << "\n";
     }
   };
-  o.title = what + ": the cloud in perspective (frame " + frame + "), shaded by height";
-  draw("cloud_3d.png", Layer{"cloud", "", cloud, true});
+  // Seen from above, a room's ceiling hides everything under it: leave it out.
+  const ZBand band = room ? wallBand(cloud) : ZBand{};
+  Layer layer{"cloud", "", {}, true};
+  for (const auto& p : cloud) {
+    if (!band.valid || p.z() <= band.max) layer.points.push_back(p);
+  }
+  o.title = what + ": the cloud in perspective (frame " + frame + "), shaded by height" +
+            (band.valid ? ", ceiling left out" : "");
+  draw("cloud_3d.png", layer);
+  Layer voxels{"occupied voxels", "", {}, true};
+  for (const auto& p : map_voxels) {
+    if (!band.valid || p.z() <= band.max) voxels.points.push_back(p);
+  }
   char res[32];
   std::snprintf(res, sizeof res, "%.0f mm", voxel_m * 1000.0);
-  o.title = what + ": the map's occupied " + res + " voxels in perspective, shaded by height";
+  o.title = what + ": the map's occupied " + res + " voxels in perspective, shaded by height" +
+            (band.valid ? ", ceiling left out" : "");
   o.point_size = 0.45;
-  draw("map_3d.png", Layer{"occupied voxels", "", map_voxels, true});
+  draw("map_3d.png", voxels);
 }
 
 ZBand wallBand(const std::vector<Eigen::Vector3f>& cloud, double margin_m) {
