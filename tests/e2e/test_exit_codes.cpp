@@ -94,7 +94,7 @@ struct Inputs {
   Case bad{"bad option", {"--no-such-option"}, 2};
 };
 
-// sim, replay, demo, spy, bench.
+// sim, replay, demo, spy, bench, export.
 std::vector<Row> offlineRows(const Inputs& in) {
   const auto& [path, missing, taken, a, b, empty, help, bad] = in;
   return {
@@ -123,6 +123,20 @@ std::vector<Row> offlineRows(const Inputs& in) {
         {"--out taken", {"--out", taken("demo")}, 2}}},
       {"sweepmap", {"spy"}, {help, bad}},
       {"sweepmap", {"bench"}, {help, bad, {"missing file", {"--rig", missing}, 2}}},
+      {"sweepmap",
+       {"export", "mcap"},
+       {help,
+        bad,
+        {"missing file", {path("nope.lcmlog"), "--rig", "rig_a", "--out", path("x.mcap")}, 2},
+        {"empty log", {empty, "--rig", "rig_a", "--out", path("e.mcap")}, 1},
+        {"--out taken", {a, "--rig", "rig_a", "--out", taken("export_mcap")}, 2}}},
+      {"sweepmap",
+       {"export", "las"},
+       {help,
+        bad,
+        {"missing file", {path("nope.ply"), "--out", path("x.las")}, 2},
+        {"empty log", {empty, "--out", path("e.las")}, 1},
+        {"--out taken", {a, "--out", taken("export_las")}, 2}}},
   };
 }
 

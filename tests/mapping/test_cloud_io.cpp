@@ -1,8 +1,13 @@
 #include <gtest/gtest.h>
+#include <pcl/io/ply_io.h>
+#include <pcl/point_types.h>
 
+#include <cmath>
 #include <cstring>
+#include <fstream>
 
 #include "mapping/cloud_io.hpp"
+#include "mapping/las_io.hpp"
 #include "mapping/synthetic_room.hpp"
 #include "mapping_test_util.hpp"
 
@@ -83,6 +88,76 @@ TEST(CloudIo, PlyHasAHeaderAndBytesRepeat) {
     std::memcpy(xyz, bytes.data() + end + 11 + 12 * i, 12);
     EXPECT_EQ(Eigen::Vector3f(xyz[0], xyz[1], xyz[2]), points[i]) << i;
   }
+}
+
+// pcl_viewer reads PLY through pcl::io::loadPLYFile: it must get the same points back.
+TEST(CloudIo, PclsPlyReaderReadsOurPlyBack) {
+  const auto dir = freshTestDir();
+  const auto points = samplePoints();
+  writePlyBinary((dir / "a.ply").string(), points);
+  pcl::PointCloud<pcl::PointXYZ> cloud;
+  ASSERT_EQ(pcl::io::loadPLYFile((dir / "a.ply").string(), cloud), 0);
+  ASSERT_EQ(cloud.size(), points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    ASSERT_EQ(Eigen::Vector3f(cloud[i].x, cloud[i].y, cloud[i].z), points[i]) << i;
+  }
+}
+
+TEST(CloudIo, PcdAndPlyWrittenTogether) {
+  const auto dir = freshTestDir();
+  writePcdAndPly((dir / "cloud").string(), samplePoints());
+  EXPECT_EQ(filesIn(dir), (std::vector<std::string>{"cloud.pcd", "cloud.ply"}));
+  EXPECT_EQ(readPlyVertices((dir / "cloud.ply").string()).size(), samplePoints().size());
+}
+
+TEST(LasIo, HeaderFieldsOfLas14Format6) {
+  const auto dir = freshTestDir();
+  const std::vector<LasPoint> points = {{1.0, -2.0, 0.5, 100.25, 7}, {3.0, 4.0, -1.5, 101.5, 9}};
+  const LasSummary s = writeLas14((dir / "a.las").string(), points);
+  const std::string b = fileBytes(dir / "a.las");
+  ASSERT_EQ(b.size(), 375u + 2 * 30u);
+  EXPECT_EQ(s.bytes, b.size());
+  auto at = [&](size_t off, auto v) {
+    std::memcpy(&v, b.data() + off, sizeof v);
+    return v;
+  };
+  EXPECT_EQ(b.substr(0, 4), "LASF");
+  EXPECT_EQ(b[24], 1);
+  EXPECT_EQ(b[25], 4);
+  EXPECT_EQ(at(94, uint16_t{}), 375);
+  EXPECT_EQ(at(96, uint32_t{}), 375u);
+  EXPECT_EQ(b[104], 6);
+  EXPECT_EQ(at(105, uint16_t{}), 30);
+  EXPECT_EQ(at(107, uint32_t{}), 0u);  // legacy count: 0 for format 6
+  EXPECT_EQ(at(247, uint64_t{}), 2u);
+  EXPECT_EQ(at(255, uint64_t{}), 2u);  // return 1
+  EXPECT_EQ(at(179, double{}), 3.0);   // max x
+  EXPECT_EQ(at(187, double{}), 1.0);   // min x
+  EXPECT_EQ(at(219, double{}), -1.5);  // min z
+  const double scale = at(131, double{}), offset_x = at(155, double{});
+  EXPECT_NEAR(at(375 + 30, int32_t{}) * scale + offset_x, 3.0, scale / 2);
+  EXPECT_EQ(at(375 + 12, uint16_t{}), 7);
+  EXPECT_EQ(b[375 + 14], 0x11);  // return 1 of 1
+  EXPECT_EQ(at(375 + 30 + 22, double{}), 101.5);
+  EXPECT_THROW(writeLas14((dir / "b.las").string(), {{NAN, 0, 0, 0, 0}}), std::runtime_error);
+}
+
+TEST(LasIo, PlyReaderRefusesWhatItCannotRead) {
+  const auto dir = freshTestDir();
+  const std::string ascii = (dir / "ascii.ply").string();
+  {
+    std::ofstream out(ascii);
+    out << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+           "property float z\nend_header\n1 2 3\n";
+  }
+  EXPECT_THROW(readPlyVertices(ascii), std::runtime_error);
+  const std::string cut = (dir / "cut.ply").string();
+  {
+    std::ofstream out(cut, std::ios::binary);
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000\nproperty float x\n"
+           "property float y\nproperty float z\nend_header\n";
+  }
+  EXPECT_THROW(readPlyVertices(cut), std::runtime_error);
 }
 
 TEST(CloudIo, FailuresNameThePath) {

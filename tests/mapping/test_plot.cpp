@@ -47,6 +47,26 @@ TEST_F(PlotTest, TopViewWritesAPng) {
   EXPECT_TRUE(isPng(fileBytes(dir_ / "nothing.png")));
 }
 
+TEST_F(PlotTest, PerspectiveAndHeightColouredTopViewWriteTheSamePngTwice) {
+  RoomSweepSpec spec;
+  spec.scans = 60;
+  spec.beams = 181;
+  const Layer room{"room", "", syntheticRoomSweep(spec), true};
+  const Layer path{"path", "blue", {{1.0f, 1.0f, 1.0f}, {2.0f, 1.0f, 1.0f}}};
+  PerspectiveOptions options;
+  options.title = "perspective";
+  options.max_points_per_layer = 3000;
+  plotPerspective((dir_ / "a.png").string(), {room, path}, options);
+  plotPerspective((dir_ / "b.png").string(), {room, path}, options);
+  EXPECT_TRUE(isPng(fileBytes(dir_ / "a.png")));
+  EXPECT_EQ(fileBytes(dir_ / "a.png"), fileBytes(dir_ / "b.png"));  // deterministic
+  plotPerspective((dir_ / "empty.png").string(), {Layer{"none", "", {}, true}}, options);
+  EXPECT_TRUE(isPng(fileBytes(dir_ / "empty.png")));
+  plotTopView((dir_ / "top.png").string(), {room, path}, PlotOptions{});
+  EXPECT_TRUE(isPng(fileBytes(dir_ / "top.png")));
+  EXPECT_EQ(filesIn(dir_), (std::vector<std::string>{"a.png", "b.png", "empty.png", "top.png"}));
+}
+
 TEST_F(PlotTest, SeriesWritesAPng) {
   Series line{"error [mm]", {0, 1, 2, 3}, {1.0, 0.5, 0.25, 0.125}, "linespoints", ""};
   Series hist{"histogram", {0, 1, 2, 3}, {3, 5, 2, 1}, "boxes", "gray"};

@@ -14,11 +14,14 @@ Runner addReplayCommand(CLI::App& app) {
       "kind. rotating_lidar: assembler and mapper: DIR/sweeps/*.pcd|.ply, DIR/map.bt, "
       "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. mobile_lidar: sweepmap-odometry "
       "(wheel odometry + EKF), the world-frame assembler (each ray with its own interpolated "
-      "pose and the configured mounting) and the mapper: DIR/map.bt, DIR/cloud.pcd, "
+      "pose and the configured mounting) and the mapper: DIR/map.bt, DIR/cloud.pcd|.ply, "
       "DIR/derived.lcmlog, DIR/summary.json, DIR/top_view.png. rotating_profile: every PROFILE "
       "placed in the turntable frame O_r by the generalised Eq. 7 of Zhao 2021 with the rig's "
-      "geometry (its calibration file if it names one): DIR/cloud.pcd, DIR/sweeps/*.pcd (one per "
-      "turntable sweep), DIR/summary.json; malformed profiles are skipped and counted. Unknown "
+      "geometry (its calibration file if it names one): DIR/cloud.pcd|.ply, DIR/sweeps/*.pcd|.ply "
+      "(one per turntable sweep), DIR/map.bt, DIR/summary.json, DIR/top_view.png (coloured by "
+      "height); malformed profiles are skipped and counted. Every kind also draws DIR/cloud_3d.png "
+      "and DIR/map_3d.png: the final cloud and the map's occupied voxels in perspective, shaded by "
+      "height (a room's ceiling left out); --no-plots skips all pictures. Unknown "
       "channels are skipped. Corrupt regions and a truncated tail are skipped to the next good "
       "event header (as LCM's own reader does): every event outside them is replayed, the "
       "skipped byte ranges are reported (and in summary.json's error), and the exit status is 1");
@@ -42,7 +45,7 @@ Runner addReplayCommand(CLI::App& app) {
   cmd->add_option("--out", o->out, "output folder (new or empty; see --force)")->required();
   cmd->add_flag("--force", o->force, "empty a non-empty --out folder first");
   cmd->add_option("--set", o->sets, "override a rig config key: key=value (repeatable)");
-  cmd->add_flag("--no-plots", o->no_plots, "skip the PNG top view");
+  cmd->add_flag("--no-plots", o->no_plots, "skip the PNG pictures (top view, 3D views)");
   cmd->add_flag("--quiet", o->quiet, "no progress on stderr (it shows only on a terminal)");
   return [o]() -> int {
     const Rig rig = loadRig(o->rig, o->sets);  // a ConfigError: exit status 2

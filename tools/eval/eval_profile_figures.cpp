@@ -54,7 +54,7 @@ void drawErrors(const std::string& png, const ProfileEvaluation& ev, bool zoom_o
     series.push_back(ser);
   }
   for (const double bound : {0.1, -0.1}) {
-    series.push_back({bound > 0 ? "+-0.1 % (the issue's bound)" : "",
+    series.push_back({bound > 0 ? "+-0.1 % (sweepmap's error bound for a calibrated rig)" : "",
                       {-0.5, 6.5},
                       {bound, bound},
                       "lines",
@@ -85,6 +85,15 @@ void drawProfileFigures(const ProfileEvaluation& ev, Figures* figures) {
                "The first test-piece scan assembled with our calibration, seen from above in "
                "the piece's frame: top face, groove walls, groove bottoms.",
                [&](const std::string& png) { drawCloud(png, ev.example); });
+  figures->add("test_piece_3d.png",
+               "The same scan in perspective, shaded by height: the grooves and holes of the "
+               "piece as a person sees them.",
+               [&](const std::string& png) {
+                 PerspectiveOptions o;
+                 o.title = "Test piece, scan 1, in perspective (mm), shaded by height";
+                 o.height_label = "height h [mm]";
+                 plotPerspective(png, {{"piece", "", ev.example.cloud, true}}, o);
+               });
   figures->add("feature_errors.png",
                "Each feature's error per setting, mean and standard deviation over the scans: "
                "the wrong settings move the sizes along the scan (diameters, rectangle length).",

@@ -28,7 +28,7 @@ std::vector<Eigen::Vector3f> sideView(const std::vector<Eigen::Vector3f>& cloud,
 Series histogramSeries(const DeviationStats& d, const std::string& title, const std::string& color,
                        const std::string& style) {
   Series s;
-  s.title = title + ": RMS " + fixed(d.rmsMm(), 1) + " mm";
+  s.title = title + ": " + d.rmsLabel();
   s.color = color;
   s.style = style;
   for (size_t i = 0; i < d.bins.size(); ++i) {
@@ -68,12 +68,14 @@ void trajectoryErrorFigure(const MobileEvaluation& ev, Figures* fig) {
 void topViewFigure(const MobileEvaluation& ev, Figures* fig) {
   PlotOptions po;
   po.point_size = 0.12;
-  po.title = "Top view of the cloud (below 2 m) with the EKF path";
+  po.title =
+      "Top view of the cloud between 0.05 and 2 m (no floor, no ceiling), coloured by "
+      "height, with the EKF path";
   po.z_band_m = PlotRange{0.05, 2.0};
   fig->add("top_view.png", "Top view (Fig. 11B): the cloud without floor and ceiling.",
            [&](const std::string& png) {
              plotTopView(png,
-                         {{"cloud", "gray40", ev.cloud},
+                         {{"cloud", "", ev.cloud, true},
                           {"EKF path", "blue", pathPoints(ev.track(), 1.0f)}},
                          po);
            });
@@ -121,6 +123,20 @@ void deviationsFigure(const RoomMeasures& room, Figures* fig) {
            [&](const std::string& png) { plotSeries(png, s, so); });
 }
 
+void perspectiveFigure(const MobileEvaluation& ev, Figures* fig) {
+  PerspectiveOptions po;
+  po.title = "The world-frame cloud in perspective, shaded by height, with the EKF path";
+  fig->add("cloud_3d.png",
+           "The whole cloud in perspective, shaded by height: walls should stand straight and "
+           "meet at the corners, the floor and ceiling lie flat.",
+           [&](const std::string& png) {
+             plotPerspective(png,
+                             {{"cloud", "", ev.cloud, true},
+                              {"EKF path", "blue", pathPoints(ev.track(), 0.0f)}},
+                             po);
+           });
+}
+
 void loopClosureFigure(const MobileEvaluation& ev, Figures* fig) {
   const LoopClosure& lc = ev.loop;
   const size_t scans = ev.log.scans.size();
@@ -158,6 +174,7 @@ void drawMobileFigures(const MobileEvaluation& ev, Figures* fig) {
   trajectoryFigure(ev, fig);
   if (ev.hasTruth()) trajectoryErrorFigure(ev, fig);
   topViewFigure(ev, fig);
+  perspectiveFigure(ev, fig);
   for (int axis : {0, 1}) sideViewFigure(ev, axis, fig);
   if (ev.before) {
     deviationComparisonFigure("ceiling", ev.before->ceiling, ev.room.ceiling, fig);
