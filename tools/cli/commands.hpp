@@ -26,5 +26,6 @@ Runner addStatusCommand(CLI::App& app);
 Runner addRecordCommand(CLI::App& app);
 Runner addSystemdCommand(CLI::App& app);
 Runner addLaunchCommand(CLI::App& app);
+Runner addViewCommand(CLI::App& app);
 
 }  // namespace sweepmap

@@ -1,5 +1,5 @@
 // sweepmap: one tool, one subcommand per job (sim, replay, demo, spy, bench, calib, eval,
-// import, emulate, capture, decode, dump, status, record, systemd, launch); each serves every rig
+// import, emulate, capture, decode, dump, status, record, systemd, launch, view); each serves every rig
 // kind its rig file names. Exit status: core/exit_codes.hpp (docs/reference/exit-codes.md).
 #include <iostream>
 #include <map>
@@ -31,6 +31,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addRecordCommand(app));
   add(sweepmap::addSystemdCommand(app));
   add(sweepmap::addLaunchCommand(app));
+  add(sweepmap::addViewCommand(app));
   if (const auto code = sweepmap::parseCommandLine(app, argc, argv)) return *code;
   for (auto& [sub, run] : runners) {
     if (sub->parsed()) {
