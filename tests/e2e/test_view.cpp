@@ -112,11 +112,12 @@ class ViewTest : public PrivateNetworkTest {
 };
 
 // The box the room's walls, floor and ceiling bound, in frame O (the rig's axis at the
-// scene's rig position, yaw 0): [min, max] per axis, the door recess left out.
+// scene's rig position, yaw 0): [min, max] per axis; the door leaf, set back door_depth_m into
+// the +Y wall, is the room's farthest surface that way.
 std::array<std::array<double, 2>, 3> roomInFrameO() {
   const SceneConfig s = loadScene(kScene);
   return {{{-s.room_length_m / 2 - s.rig_x_m, s.room_length_m / 2 - s.rig_x_m},
-           {-s.room_width_m / 2 - s.rig_y_m, s.room_width_m / 2 - s.rig_y_m},
+           {-s.room_width_m / 2 - s.rig_y_m, s.room_width_m / 2 - s.rig_y_m + s.door_depth_m},
            {-s.rig_z_m, s.room_height_m - s.rig_z_m}}};
 }
 
@@ -159,9 +160,8 @@ TEST_F(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   EXPECT_EQ(page["points_drawn"], page["check"]["server"]);
   EXPECT_GT(page["points_drawn"].get<int64_t>(), 0);
   EXPECT_GT(page["non_blank"].get<double>(), 0.02) << "the screenshot is (nearly) blank";
-  // The drawn extent (1 % and 99 % quantiles per axis: the walls, floor and ceiling, not the
-  // range noise's tail or the door recess, which holds less than 1 % of the points) is the
-  // room's within a voxel.
+  // The drawn extent (1 % and 99 % quantiles per axis: the surfaces, not the range noise's
+  // tail) is the room's within a voxel.
   const auto room = roomInFrameO();
   for (int a = 0; a < 3; ++a) {
     for (int side = 0; side < 2; ++side) {
@@ -175,7 +175,7 @@ TEST_F(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   EXPECT_EQ(status["you"]["frames_dropped"], 0) << status["you"];
   // The view took every chunk the assembler published: its intake was not held up.
   EXPECT_EQ(status["board"]["view_model"]["chunks"].get<size_t>(), chunksOf(log).size());
-  EXPECT_EQ(status["board"]["map"]["sweeps"], 4);
+  EXPECT_EQ(status["board"]["mapper"]["sweeps"], 4);
 }
 
 // A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps,

@@ -1,7 +1,7 @@
 // Live view check (run by tests/e2e/test_view.cpp inside the live run's network namespace):
 // node view_live.js URL SWEEPS TIMEOUT_S SCREENSHOT.png
 // Loads the page, waits until it has drawn SWEEPS sweeps, the mapper has inserted them and the
-// server has sent everything (its queue empty, nothing sent between two status frames), then
+// server has sent everything (its queue empty, no cloud sent between two status frames), then
 // prints one JSON object of what the page shows: console errors, the points drawn against the
 // points the server says it sent, the extent of the drawn points, the voxels, the non-blank
 // fraction of the canvas, and the server's status. The C++ test judges it.
@@ -20,10 +20,14 @@ async function main() {
     out.connected = true;
     await until(page, (n) => {
       const v = window.sweepmapView, s = v.status;
-      if (!s || v.sweeps() < n || !s.board || !s.board.map || s.board.map.sweeps < n) return false;
+      if (!s || v.sweeps() < n || !s.board || !s.board.mapper || s.board.mapper.sweeps < n) return false;
       if (s.you.queued_frames !== 0) return false;
-      const quiet = window.__lastSent === s.you.frames_sent;
-      window.__lastSent = s.you.frames_sent;
+      // No cloud point sent between two status frames (scans and statuses still flow).
+      if (window.__lastSeq === v.statusSeq) return false;  // the same status frame
+      window.__lastSeq = v.statusSeq;
+      const sent = `${s.you.points} ${s.board.view_model.chunks}`;
+      const quiet = window.__lastSent === sent;
+      window.__lastSent = sent;
       return quiet;
     }, Number(timeoutArg), `${sweeps} sweeps drawn and the server quiet`, sweeps);
     await page.evaluate(() => window.sweepmapView.setCamera('fit'));

@@ -18,8 +18,11 @@ async function seek(page, utime) {
     const v = window.sweepmapView, t = v.time, s = v.status;
     if (!t || t.playing || Math.abs(t.utime - u) > (t.end - t.start) / 1000 || !s) return false;
     if (s.you.queued_frames !== 0) return false;
-    const quiet = window.__lastSent === s.you.frames_sent;
-    window.__lastSent = s.you.frames_sent;
+    if (window.__lastSeq === v.statusSeq) return false;  // the same status frame
+    window.__lastSeq = v.statusSeq;
+    const sent = `${s.you.points} ${s.board.view_model.chunks}`;
+    const quiet = window.__lastSent === sent;
+    window.__lastSent = sent;
     return quiet;
   }, 30, `the view at ${utime}`, utime);
   return page.evaluate(() => {

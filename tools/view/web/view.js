@@ -33,7 +33,7 @@ const state = {
   mode: null, connected: false, sweeps: new Map(), colour: 'height',
   zRange: [Infinity, -Infinity], voxelRes: 0.05, voxelCount: 0, lastCheck: null,
   status: null, frames: 0, fps: 0, latencies: [], pendingLatency: [], time: null,
-  messages: 0, dragging: false,
+  messages: 0, dragging: false, statusSeq: 0,
 };
 
 // Colours: a blue-green-yellow-red ramp for t in [0, 1].
@@ -157,42 +157,36 @@ function pointsDrawn() {
 }
 
 // ---- Voxels ------------------------------------------------------------------------------
-const voxelGeometry = new THREE.BoxBufferGeometry(1, 1, 1);
-const voxelMaterial = new THREE.MeshLambertMaterial({ color: 0xff9933, transparent: true,
-  opacity: 0.45, clippingPlanes: clipPlanes, depthWrite: false });
-let voxelMesh = null;
-let voxelCapacity = 0;
-function growVoxels(capacity) {
-  const mesh = new THREE.InstancedMesh(voxelGeometry, voxelMaterial, capacity);
-  mesh.frustumCulled = false;
-  const m = new THREE.Matrix4();
-  for (let i = 0; i < state.voxelCount; i++) {
-    voxelMesh.getMatrixAt(i, m);
-    mesh.setMatrixAt(i, m);
-  }
-  if (voxelMesh) { scene.remove(voxelMesh); voxelMesh.dispose && voxelMesh.dispose(); }
-  voxelMesh = mesh;
-  voxelMesh.visible = $('voxels').checked;
-  voxelCapacity = capacity;
-  scene.add(voxelMesh);
-}
+// Each occupied voxel as a square of the voxel's size at its centre (one vertex per voxel: a
+// software renderer draws hundreds of thousands of them, where it would not draw as many boxes).
+const voxelMaterial = new THREE.PointsMaterial({ color: 0xff9933, size: 0.05,
+  sizeAttenuation: true, transparent: true, opacity: 0.35, depthWrite: false,
+  clippingPlanes: clipPlanes });
+let voxelXyz = new Float32Array(3 * 16384);
+const voxelGeometry = new THREE.BufferGeometry();
+voxelGeometry.setAttribute('position', new THREE.BufferAttribute(voxelXyz, 3));
+const voxelPoints = new THREE.Points(voxelGeometry, voxelMaterial);
+voxelPoints.frustumCulled = false;
+scene.add(voxelPoints);
 function addVoxels(view) {
   const n = view.getUint32(4, true);
   const res = view.getFloat32(8, true);
   state.voxelRes = res;
-  if (state.voxelCount + n > voxelCapacity) {
-    growVoxels(Math.max(2 * voxelCapacity, state.voxelCount + n, 16384));
+  voxelMaterial.size = res;
+  if (3 * (state.voxelCount + n) > voxelXyz.length) {
+    const grown = new Float32Array(Math.max(2 * voxelXyz.length, 3 * (state.voxelCount + n)));
+    grown.set(voxelXyz.subarray(0, 3 * state.voxelCount));
+    voxelXyz = grown;
+    voxelGeometry.setAttribute('position', new THREE.BufferAttribute(voxelXyz, 3));
   }
-  const m = new THREE.Matrix4();
   for (let k = 0; k < n; k++) {
-    const o = 16 + 12 * k;
-    m.makeScale(res * 0.9, res * 0.9, res * 0.9);
-    m.setPosition((view.getInt32(o, true) + 0.5) * res, (view.getInt32(o + 4, true) + 0.5) * res,
-      (view.getInt32(o + 8, true) + 0.5) * res);
-    voxelMesh.setMatrixAt(state.voxelCount++, m);
+    const o = 16 + 12 * k, i = 3 * state.voxelCount++;
+    voxelXyz[i] = (view.getInt32(o, true) + 0.5) * res;
+    voxelXyz[i + 1] = (view.getInt32(o + 4, true) + 0.5) * res;
+    voxelXyz[i + 2] = (view.getInt32(o + 8, true) + 0.5) * res;
   }
-  voxelMesh.count = state.voxelCount;
-  voxelMesh.instanceMatrix.needsUpdate = true;
+  voxelGeometry.setDrawRange(0, state.voxelCount);
+  voxelGeometry.attributes.position.needsUpdate = true;
 }
 
 // ---- Pose, path, scan --------------------------------------------------------------------
@@ -246,6 +240,7 @@ function drawScan(view) {
 function text(s) { return String(s).replace(/[&<>"]/g, (c) => `&#${c.charCodeAt(0)};`); }
 function showStatus(msg) {
   state.status = msg;
+  state.statusSeq++;
   state.lastCheck = { server: msg.you.points, drawn: pointsDrawn() };
   const rows = [];
   const procs = (msg.board && msg.board.processes) || {};
@@ -255,7 +250,7 @@ function showStatus(msg) {
       `<td>${p.age_s.toFixed(1)} s</td><td>${text(p.detail)}</td></tr>`);
   }
   $('processes').innerHTML = rows.join('') || '<tr><td>no STATUS_* seen yet</td></tr>';
-  const m = msg.board && msg.board.map;
+  const m = msg.board && msg.board.mapper;
   $('mapper').textContent = m ? `mapper: ${m.sweeps} sweeps, ${m.occupied_voxels} occupied voxels`
     : '';
   const y = msg.you;
@@ -267,14 +262,14 @@ function showStatus(msg) {
 }
 function showCounts() {
   $('counts').textContent = `${state.sweeps.size} sweeps, ${pointsDrawn()} points, ` +
-    `${state.voxelCount} voxels (${state.voxelRes} m)`;
+    `${state.voxelCount} voxels (${state.voxelRes.toFixed(3)} m)`;
 }
 
 // ---- Connection --------------------------------------------------------------------------
 function resetAll() {
   for (const id of [...state.sweeps.keys()]) removeSweep(id);
   state.voxelCount = 0;
-  if (voxelMesh) voxelMesh.count = 0;
+  voxelGeometry.setDrawRange(0, 0);
   pathCount = 0;
   pathGeometry.setDrawRange(0, 0);
   poseArrow.visible = false;
@@ -374,7 +369,7 @@ $('cam-fit').onclick = () => view(new THREE.Vector3(-0.6, -0.6, 0.5).normalize()
   new THREE.Vector3(0, 0, 1));
 $('colour').onchange = () => { state.colour = $('colour').value; recolourAll(); };
 $('point-size').oninput = () => { pointMaterial.size = Number($('point-size').value); };
-$('voxels').onchange = () => { if (voxelMesh) voxelMesh.visible = $('voxels').checked; };
+$('voxels').onchange = () => { voxelPoints.visible = $('voxels').checked; };
 function setClip() {
   clipPlanes[0].constant = -Number($('clip-min').value);
   clipPlanes[1].constant = Number($('clip-max').value);
@@ -466,6 +461,7 @@ window.sweepmapView = {
   get mode() { return state.mode; },
   get lastCheck() { return state.lastCheck; },
   get status() { return state.status; },
+  get statusSeq() { return state.statusSeq; },
   get fps() { return state.fps; },
   get frames() { return state.frames; },
   get time() { return state.time; },
