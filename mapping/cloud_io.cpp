@@ -75,6 +75,11 @@ void writePlyBinary(const std::string& path, const std::vector<Eigen::Vector3f>&
   writeFileAtomic(path, bytes);
 }
 
+void writePcdAndPly(const std::string& stem, const std::vector<Eigen::Vector3f>& points) {
+  writePcdBinary(stem + ".pcd", points);
+  writePlyBinary(stem + ".ply", points);
+}
+
 std::vector<Eigen::Vector3f> readPcd(const std::string& path) {
   // Through the untyped blob first: to check the fields (PCL would fill missing ones with
   // zeros and only warn), and because PCL's conversion of an empty blob indexes an empty

@@ -17,6 +17,10 @@ namespace sweepmap {
 void writePcdBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points);
 void writePlyBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points);
 
+// Both files of a cloud: `stem + ".pcd"` (PCL's tools) and `stem + ".ply"` (CloudCompare,
+// MeshLab, and every reader without PCD support, such as Debian 12's CloudCompare).
+void writePcdAndPly(const std::string& stem, const std::vector<Eigen::Vector3f>& points);
+
 // Reads the x, y, z fields of any PCD file (ASCII, binary or compressed). Throws
 // std::runtime_error naming `path` on failure.
 std::vector<Eigen::Vector3f> readPcd(const std::string& path);

@@ -444,6 +444,15 @@ MapStats OccupancyMap::stats() const {
   return impl_->statsFrom(counts);
 }
 
+std::vector<Eigen::Vector3f> OccupancyMap::occupiedCentres() const {
+  const octomap::OcTree& tree = impl_->tree;
+  std::vector<Eigen::Vector3f> out;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (tree.isNodeOccupied(*it)) out.emplace_back(it.getX(), it.getY(), it.getZ());
+  }
+  return out;
+}
+
 bool OccupancyMap::matchesOctomapReference() const {
   const octomap::OcTree& tree = impl_->tree;
   octomap::OcTree reference(tree);  // deep copy

@@ -86,6 +86,10 @@ class OccupancyMap {
   int64_t skippedPoints() const;
   const MapperConfig& config() const;
 
+  // Centres of the occupied leaves [m] (a pruned block of occupied voxels: its centre), in the
+  // tree's order (deterministic): what the report's 3D map picture draws.
+  std::vector<Eigen::Vector3f> occupiedCentres() const;
+
   // State of the full-depth voxel containing `p_m` (map frame, metres).
   Occupancy occupancyAt(const Eigen::Vector3d& p_m) const;
   bool occupiedAt(const Eigen::Vector3d& p_m) const {

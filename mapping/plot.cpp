@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <Eigen/Geometry>  // cross
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -200,6 +201,63 @@ bool gnuplotAvailable() {
   return false;
 }
 
+namespace {
+
+// The points of `layer` to draw: finite, inside `z_band` if set, at most `max_points` with a
+// fixed stride (the same input always gives the same picture).
+std::vector<Eigen::Vector3f> pointsToDraw(const Layer& layer,
+                                          const std::optional<PlotRange>& z_band,
+                                          size_t max_points) {
+  std::vector<const Eigen::Vector3f*> kept;
+  kept.reserve(layer.points.size());
+  for (const Eigen::Vector3f& p : layer.points) {
+    if (!p.allFinite()) continue;
+    if (z_band && (p.z() < z_band->min || p.z() > z_band->max)) continue;
+    kept.push_back(&p);
+  }
+  const size_t n = kept.size();
+  const size_t m = std::min(n, max_points);
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(m);
+  for (size_t k = 0; k < m; ++k) out.push_back(*kept[static_cast<size_t>((uint64_t{k} * n) / m)]);
+  return out;
+}
+
+// The 2nd and 98th percentile of the points' z: a colour range that outliers do not flatten.
+std::optional<PlotRange> heightRange(const std::vector<Eigen::Vector3f>& points) {
+  if (points.empty()) return std::nullopt;
+  std::vector<float> z;
+  z.reserve(points.size());
+  for (const auto& p : points) z.push_back(p.z());
+  const size_t lo = z.size() * 2 / 100, hi = (z.size() - 1) * 98 / 100;
+  std::nth_element(z.begin(), z.begin() + lo, z.end());
+  const float zmin = z[lo];
+  std::nth_element(z.begin(), z.begin() + hi, z.end());
+  const float zmax = z[hi];
+  return PlotRange{zmin, zmax > zmin ? zmax : zmin + 0.01};
+}
+
+// The colour of a layer drawn in one colour: its own, else the `index`-th default.
+std::string layerColour(const Layer& layer, size_t index) {
+  return layer.color.empty() ? "lt " + std::to_string(index + 1) : "rgb " + quoted(layer.color);
+}
+
+// The palette of height-coloured layers and its colour bar.
+void writeHeightPalette(std::ostringstream& s, const PlotRange& z) {
+  s << "set palette rgbformulae 33,13,10\nset cbrange [" << z.min << ":" << z.max << "]\n"
+    << "set cblabel 'height z [m]'\n";
+}
+
+// A legend entry with a marker large enough to see (the layer itself is drawn without one:
+// its points are too small to show their colour in the key).
+std::string legendEntry(const Layer& layer, size_t index) {
+  const std::string colour = layer.by_height ? "rgb 'gray40'" : layerColour(layer, index);
+  return "NaN with points pt 7 ps 2 lc " + colour + " title " +
+         quoted(layer.by_height ? layer.title + " (colour: height)" : layer.title);
+}
+
+}  // namespace
+
 void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
                  const PlotOptions& options) {
   checkPath(png_path);
@@ -215,46 +273,146 @@ void plotTopView(const std::string& png_path, const std::vector<Layer>& layers,
   s << "set xlabel " << quoted(options.x_label) << "\nset ylabel " << quoted(options.y_label)
     << "\n"
     << "set size ratio -1\n"  // one metre is as long on both axes
-    << "set key outside right top\n";
+    << "set key below\n";     // beside the plot it took a third of the width
   writeRange(s, "x", options.x_range_m);
   writeRange(s, "y", options.y_range_m);
 
-  std::vector<std::string> plots;
+  std::vector<std::string> plots, legend;
+  std::vector<std::vector<Eigen::Vector3f>> drawn;
+  std::vector<Eigen::Vector3f> coloured;  // every height-coloured point, for the colour range
+  for (const Layer& layer : layers) {
+    drawn.push_back(pointsToDraw(layer, options.z_band_m, options.max_points_per_layer));
+    if (layer.by_height) coloured.insert(coloured.end(), drawn.back().begin(), drawn.back().end());
+  }
+  if (const auto z = options.z_band_m ? options.z_band_m : heightRange(coloured);
+      z && !coloured.empty()) {
+    writeHeightPalette(s, *z);
+  }
   for (size_t l = 0; l < layers.size(); ++l) {
     const Layer& layer = layers[l];
-    std::vector<const Eigen::Vector3f*> kept;
-    kept.reserve(layer.points.size());
-    for (const Eigen::Vector3f& p : layer.points) {
-      if (!p.allFinite()) continue;
-      if (options.z_band_m && (p.z() < options.z_band_m->min || p.z() > options.z_band_m->max)) {
-        continue;
-      }
-      kept.push_back(&p);
-    }
-    if (kept.empty()) continue;  // gnuplot refuses an empty data file
-    // Fixed-stride subsampling: the same input always gives the same picture.
-    const size_t n = kept.size();
-    const size_t m = std::min(n, options.max_points_per_layer);
-    std::vector<float> xy;
-    xy.reserve(2 * m);
-    for (size_t k = 0; k < m; ++k) {
-      const Eigen::Vector3f& p = *kept[static_cast<size_t>((uint64_t{k} * n) / m)];
-      xy.push_back(p.x());
-      xy.push_back(p.y());
-    }
+    if (drawn[l].empty()) continue;  // gnuplot refuses an empty data file
+    std::vector<float> xyz;
+    xyz.reserve(3 * drawn[l].size());
+    for (const Eigen::Vector3f& p : drawn[l]) xyz.insert(xyz.end(), {p.x(), p.y(), p.z()});
     const std::string data_path = temps.make(".layer" + std::to_string(l) + ".tmp");
-    writeRaw(data_path, xy);
+    writeRaw(data_path, xyz);
     std::ostringstream c = scriptStream();
-    c << quoted(data_path) << " binary format='%float32%float32' using 1:2 with points pt 7 ps "
-      << options.point_size;
-    if (!layer.color.empty()) c << " lc rgb " << quoted(layer.color);
-    c << (layer.title.empty() ? std::string(" notitle") : " title " + quoted(layer.title));
+    c << quoted(data_path) << " binary format='%float32%float32%float32' using 1:2"
+      << (layer.by_height ? ":3" : "") << " with points pt 7 ps " << options.point_size << " lc "
+      << (layer.by_height ? "palette" : layerColour(layer, l)) << " notitle";
     plots.push_back(c.str());
+    if (!layer.title.empty()) legend.push_back(legendEntry(layer, l));
   }
-  if (plots.empty()) {
+  plots.insert(plots.end(), legend.begin(), legend.end());
+  if (drawn.empty() ||
+      std::all_of(drawn.begin(), drawn.end(), [](const auto& d) { return d.empty(); })) {
+    plots.clear();
     // Nothing to draw: an empty frame (autoscale has nothing to work with, so fix ranges).
     if (!options.x_range_m) s << "set xrange [-1:1]\n";
     if (!options.y_range_m) s << "set yrange [-1:1]\n";
+    plots.push_back("NaN notitle");
+  }
+  writePlotCommand(s, plots);
+  render(png_path, s.str(), temps, png_tmp);
+}
+
+namespace {
+
+// A pinhole camera looking at the middle of the points from `rot_x` degrees off vertical and
+// `rot_z` degrees round z, far enough (2.2 bounding radii) to see them all.
+struct Camera {
+  Eigen::Vector3f eye, forward, right, up;
+  float distance = 1.0f;
+};
+
+Camera cameraFor(const std::vector<std::vector<Eigen::Vector3f>>& drawn,
+                 const PerspectiveOptions& o) {
+  Eigen::Vector3f lo = Eigen::Vector3f::Constant(INFINITY), hi = -lo;
+  for (const auto& layer : drawn) {
+    for (const auto& p : layer) {
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+    }
+  }
+  const Eigen::Vector3f centre = 0.5f * (lo + hi);
+  const float radius = std::max(0.5f * (hi - lo).norm(), 0.01f);
+  const float tilt = static_cast<float>(o.rot_x_deg * M_PI / 180.0);
+  const float az = static_cast<float>(o.rot_z_deg * M_PI / 180.0);
+  const Eigen::Vector3f to_eye(std::sin(tilt) * std::sin(az), -std::sin(tilt) * std::cos(az),
+                               std::cos(tilt));
+  Camera c;
+  c.distance = 2.2f * radius;
+  c.eye = centre + c.distance * to_eye;
+  c.forward = -to_eye;
+  c.right = c.forward.cross(Eigen::Vector3f::UnitZ());
+  if (c.right.norm() < 1e-6f) c.right = Eigen::Vector3f::UnitX();
+  c.right.normalize();
+  c.up = c.right.cross(c.forward);
+  return c;
+}
+
+// The layer's points seen by the camera, far ones first (the near ones are drawn over them):
+// x, y on the image plane, the point size (shrinking with distance) and the height z.
+std::vector<float> project(const std::vector<Eigen::Vector3f>& points, const Camera& c,
+                           double point_size) {
+  std::vector<std::pair<float, size_t>> order;  // depth, index
+  order.reserve(points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    const float depth = (points[i] - c.eye).dot(c.forward);
+    if (depth > 0.05f * c.distance) order.push_back({depth, i});
+  }
+  std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+    return a.first > b.first || (a.first == b.first && a.second < b.second);
+  });
+  std::vector<float> out;
+  out.reserve(4 * order.size());
+  for (const auto& [depth, i] : order) {
+    const Eigen::Vector3f v = points[i] - c.eye;
+    out.insert(out.end(), {v.dot(c.right) / depth, v.dot(c.up) / depth,
+                           static_cast<float>(point_size) * c.distance / depth, points[i].z()});
+  }
+  return out;
+}
+
+}  // namespace
+
+void plotPerspective(const std::string& png_path, const std::vector<Layer>& layers,
+                     const PerspectiveOptions& options) {
+  checkPath(png_path);
+  TempFiles temps(png_path);
+  const std::string png_tmp = tmpPathFor(png_path);
+  std::ostringstream s = scriptStream();
+  writeHeader(s, png_tmp, options.width_px, options.height_px, options.title);
+  s << "unset grid\nunset xtics\nunset ytics\nunset border\nset size ratio -1\n"
+    << "set key below\n";
+  std::vector<std::vector<Eigen::Vector3f>> drawn;
+  std::vector<Eigen::Vector3f> coloured;
+  for (const Layer& layer : layers) {
+    drawn.push_back(pointsToDraw(layer, std::nullopt, options.max_points_per_layer));
+    if (layer.by_height) coloured.insert(coloured.end(), drawn.back().begin(), drawn.back().end());
+  }
+  if (const auto z = heightRange(coloured)) writeHeightPalette(s, *z);
+  const Camera camera = cameraFor(drawn, options);
+  std::vector<std::string> plots, legend;
+  for (size_t l = 0; l < layers.size(); ++l) {
+    const std::vector<float> data = project(drawn[l], camera, options.point_size);
+    if (data.empty()) continue;
+    const std::string data_path = temps.make(".view" + std::to_string(l) + ".tmp");
+    writeRaw(data_path, data);
+    plots.push_back(
+        quoted(data_path) + " binary format='%float32%float32%float32%float32' using 1:2:3" +
+        (layers[l].by_height ? ":4 with points pt 7 ps variable lc palette"
+                             : " with points pt 7 ps variable lc " + layerColour(layers[l], l)) +
+        " notitle");
+    // A height-shaded layer is explained by the colour bar; a coloured one (a path) by the key.
+    if (!layers[l].title.empty() && !layers[l].by_height) {
+      legend.push_back(legendEntry(layers[l], l));
+    }
+  }
+  plots.insert(plots.end(), legend.begin(), legend.end());
+  if (legend.empty()) s << "unset key\n";
+  if (plots.empty()) {
+    s << "set xrange [-1:1]\nset yrange [-1:1]\n";
     plots.push_back("NaN notitle");
   }
   writePlotCommand(s, plots);
@@ -407,6 +565,19 @@ void plotSurface(const std::string& png_path, const std::vector<double>& x,
     }
     out.close();
     if (!out) throw std::runtime_error("plot: cannot write temporary file " + data_path);
+  }
+  if (options.marker) {
+    // Drawn in front of the surface (a point among the surface's would be hidden by it), with
+    // a black stem up to the top of the surface so the eye finds it.
+    double top = options.marker->z();
+    for (double v : z) {
+      if (std::isfinite(v)) top = std::max(top, v);
+    }
+    const Eigen::Vector3d& m = *options.marker;
+    s << "set label 1 '' at " << m.x() << "," << m.y() << "," << m.z()
+      << " point pt 7 ps 2.5 lc rgb 'black' front\n"
+      << "set arrow 1 from " << m.x() << "," << m.y() << "," << m.z() << " to " << m.x() << ","
+      << m.y() << "," << top << " nohead front lw 2 lc rgb 'black'\n";
   }
   s << "splot " << quoted(data_path) << " using 1:2:3 with pm3d notitle";
   if (options.marker) {

@@ -27,5 +27,6 @@ Runner addRecordCommand(CLI::App& app);
 Runner addSystemdCommand(CLI::App& app);
 Runner addLaunchCommand(CLI::App& app);
 Runner addViewCommand(CLI::App& app);
+Runner addExportCommand(CLI::App& app);  // group: export mcap, export las
 
 }  // namespace sweepmap

@@ -55,15 +55,15 @@ MobileEvaluation loadEvaluation(const EvalMobileOptions& o, EvalMobileResult* re
   return ev;
 }
 
-// Trajectory errors, the world-frame cloud (written to out/cloud.pcd), the room's planes (also
-// with the mounting before calibration, when given), the density and the loop's ghost.
+// Trajectory errors, the world-frame cloud (written to out/cloud.pcd and .ply), the room's planes
+// (also with the mounting before calibration, when given), the density and the loop's ghost.
 void measure(const EvalMobileOptions& o, const fs::path& out, MobileEvaluation* ev) {
   ev->odometry = eval::trajectoryErrors(ev->log.wheels, ev->log.truth);
   ev->ekf = eval::trajectoryErrors(ev->log.ekf, ev->log.truth);
   eval::progressLine(o.progress, "assembling " + std::to_string(ev->log.scans.size()) +
                                      " scans in the world frame");
   ev->cloud = assembleWorld(ev->log, ev->track(), ev->mounting, &ev->scan_of_point);
-  writePcdBinary((out / "cloud.pcd").string(), ev->cloud);
+  writePcdAndPly((out / "cloud").string(), ev->cloud);
   eval::progressLine(o.progress, "RANSAC planes");
   ev->room = eval::measureRoom(ev->cloud);
   if (o.before) {

@@ -54,7 +54,7 @@ void drawErrors(const std::string& png, const ProfileEvaluation& ev, bool zoom_o
     series.push_back(ser);
   }
   for (const double bound : {0.1, -0.1}) {
-    series.push_back({bound > 0 ? "+-0.1 % (the issue's bound)" : "",
+    series.push_back({bound > 0 ? "+-0.1 % (sweepmap's error bound for a calibrated rig)" : "",
                       {-0.5, 6.5},
                       {bound, bound},
                       "lines",

@@ -3,6 +3,7 @@
 #include <Eigen/Geometry>  // cross
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace sweepmap {
 
@@ -39,6 +40,13 @@ void DeviationStats::merge(const DeviationStats& o) {
   within += o.within;
   outside_range += o.outside_range;
   for (size_t i = 0; i < bins.size() && i < o.bins.size(); ++i) bins[i] += o.bins[i];
+}
+
+std::string DeviationStats::rmsLabel() const {
+  if (count == 0) return "no points";
+  char text[48];
+  std::snprintf(text, sizeof text, "RMS %.1f mm", rmsMm());
+  return text;
 }
 
 double DeviationStats::rmsMm() const {

@@ -28,6 +28,8 @@ struct DeviationStats {
   void add(double deviation_mm, double within_mm);
   void merge(const DeviationStats& other);
   double rmsMm() const;
+  // "RMS 3.2 mm", or "no points" when nothing was measured (an RMS of 0.0 would read as perfect).
+  std::string rmsLabel() const;
   double shareWithin() const;  // 0 when empty
   double binCenterMm(size_t i) const;
 };

@@ -28,7 +28,7 @@ std::vector<Eigen::Vector3f> sideView(const std::vector<Eigen::Vector3f>& cloud,
 Series histogramSeries(const DeviationStats& d, const std::string& title, const std::string& color,
                        const std::string& style) {
   Series s;
-  s.title = title + ": RMS " + fixed(d.rmsMm(), 1) + " mm";
+  s.title = title + ": " + d.rmsLabel();
   s.color = color;
   s.style = style;
   for (size_t i = 0; i < d.bins.size(); ++i) {

@@ -72,12 +72,18 @@ std::map<Method, Series> phiErrorPerSweep(const ReportInput& in) {
   return per_sweep;
 }
 
-// The axes of Figs. 9 and 10: phi_error over the modes 1-7.
-SeriesPlotOptions phiErrorAxes(const std::string& title, const std::string& x_label) {
+// The axes of Figs. 9 and 10: phi_error over the modes that were run (a mode not run gets no
+// place on the axis), each labelled "mode N".
+SeriesPlotOptions phiErrorAxes(const ReportInput& in, const std::string& title,
+                               const std::string& x_label) {
   SeriesPlotOptions so;
   so.x_label = x_label;
   so.y_label = "phi_error (deg)";
-  so.x_range = PlotRange{0.5, 7.5};
+  if (!in.modes.empty()) {
+    so.x_range = PlotRange{in.modes.begin()->first - 0.5, in.modes.rbegin()->first + 0.5};
+  }
+  for (const auto& [mode, g] : in.modes)
+    so.x_tics.push_back({mode, "mode " + std::to_string(mode)});
   so.title = title;
   return so;
 }
@@ -85,7 +91,7 @@ SeriesPlotOptions phiErrorAxes(const std::string& title, const std::string& x_la
 void phiErrorFigure(const ReportInput& in, Figures* fig) {
   std::map<Method, Series> per_sweep = phiErrorPerSweep(in);
   const SeriesPlotOptions so =
-      phiErrorAxes("Fig. 9: phi_error of every sweep, uncorrected and corrected",
+      phiErrorAxes(in, "Fig. 9: phi_error of every sweep, uncorrected and corrected",
                    "scan mode (sweeps of a mode side by side)");
   fig->add("fig9_phi_error.png",
            "Fig. 9: phi_error of every sweep (mode on the x axis): red uncorrected C_O' "
@@ -100,7 +106,7 @@ void phiErrorFigure(const ReportInput& in, Figures* fig) {
 
 void phiErrorCorrectedFigure(const ReportInput& in, Figures* fig) {
   std::map<Method, Series> per_sweep = phiErrorPerSweep(in);
-  const SeriesPlotOptions so = phiErrorAxes("Fig. 9 (zoom): phi_error of every corrected sweep",
+  const SeriesPlotOptions so = phiErrorAxes(in, "Fig. 9 (zoom): phi_error of every corrected sweep",
                                             "scan mode (sweeps of a mode side by side)");
   fig->add("fig9_phi_error_corrected.png",
            "Fig. 9, zoomed on the corrected sweeps: the residual attitude error of each "
@@ -143,7 +149,7 @@ std::vector<Series> phiStatsSeries(const ReportInput& in, bool corrected_only) {
 void phiStatsFigure(const ReportInput& in, Figures* fig) {
   const std::vector<Series> stats = phiStatsSeries(in, false);
   const SeriesPlotOptions so =
-      phiErrorAxes("Fig. 10: max / mean / min of phi_error per mode", "scan mode");
+      phiErrorAxes(in, "Fig. 10: max / mean / min of phi_error per mode", "scan mode");
   fig->add("fig10_phi_error_stats.png",
            "Fig. 10: maximum, mean (with points) and minimum phi_error per mode; the band "
            "between max and min is the attitude uncertainty of the mode.",
@@ -153,7 +159,7 @@ void phiStatsFigure(const ReportInput& in, Figures* fig) {
 void phiStatsCorrectedFigure(const ReportInput& in, Figures* fig) {
   const std::vector<Series> stats = phiStatsSeries(in, true);
   const SeriesPlotOptions so = phiErrorAxes(
-      "Fig. 10 (zoom): max / mean / min of phi_error per mode, corrected", "scan mode");
+      in, "Fig. 10 (zoom): max / mean / min of phi_error per mode, corrected", "scan mode");
   fig->add("fig10_phi_error_stats_corrected.png",
            "Fig. 10, zoomed on the corrected sweeps (blue ray_plane, green centroid).",
            [&](const std::string& png) { plotSeries(png, stats, so); });
@@ -264,8 +270,10 @@ void mapErrorAllFigure(const ReportInput& in, const EvalSettings& s, Figures* fi
 
 void wallDeviationsFigure(int mode, const Group& g, const EvalSettings& s, Figures* fig) {
   Series h;
-  h.title = "mode " + std::to_string(mode) + ": RMS " + fixed(g.deviations.rmsMm(), 1) + " mm, " +
-            fixed(100.0 * g.deviations.shareWithin(), 2) + " % within +-40 mm";
+  h.title = "mode " + std::to_string(mode) + ": " + g.deviations.rmsLabel() +
+            (g.deviations.count > 0
+                 ? ", " + fixed(100.0 * g.deviations.shareWithin(), 2) + " % within +-40 mm"
+                 : std::string(" (no walls found)"));
   h.style = "boxes";
   h.color = "#4477aa";
   for (size_t i = 0; i < g.deviations.bins.size(); ++i) {
@@ -373,12 +381,12 @@ void naiveTopViewFigure(const Group& nv, const EvalSettings& s, Figures* fig) {
 // The deviation histogram as shares of the wall points (%).
 Series deviationShares(const DeviationStats& d, const std::string& label,
                        const std::string& color) {
-  Series h{label + ": RMS " + fixed(d.rmsMm(), 1) + " mm, " + fixed(100 * d.shareWithin(), 1) +
-               " % within +-40 mm",
-           {},
-           {},
-           "lines",
-           color};
+  Series h{
+      label + ": " + d.rmsLabel() + ", " + fixed(100 * d.shareWithin(), 1) + " % within +-40 mm",
+      {},
+      {},
+      "lines",
+      color};
   for (size_t i = 0; i < d.bins.size(); ++i) {
     h.x.push_back(d.binCenterMm(i));
     h.y.push_back(d.count > 0 ? 100.0 * static_cast<double>(d.bins[i]) / d.count : 0.0);

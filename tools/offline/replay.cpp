@@ -21,6 +21,7 @@
 #include "mapping/plot.hpp"
 #include "processes/mapper_node.hpp"
 #include "tools/offline/log_sweeps.hpp"
+#include "tools/offline/views_3d.hpp"
 
 namespace sweepmap {
 namespace {
@@ -112,7 +113,7 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   EventLogWriter derived((out / "derived.lcmlog").string());
   MapperNode mapper(rig.mapper, (out / "map.bt").string());
   nlohmann::json sweeps = nlohmann::json::array();
-  std::vector<Eigen::Vector3f> first_Op, first_O;
+  std::vector<Eigen::Vector3f> first_Op, first_O, all_O;
   ProgressOptions po;
   po.enabled = options.progress;
   Progress bar("replay", po);
@@ -127,10 +128,10 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
     std::ostringstream name;
     // Numbered in log order: sweep ids start again when the motor process restarts.
     name << "sweep_" << std::setw(6) << std::setfill('0') << result.sweeps;
-    writePcdBinary((out / "sweeps" / (name.str() + ".pcd")).string(), s.points);
-    writePlyBinary((out / "sweeps" / (name.str() + ".ply")).string(), s.points);
+    writePcdAndPly((out / "sweeps" / name.str()).string(), s.points);
     sweeps.push_back(sweepJson(s, truth, name.str()));
     result.points += static_cast<int64_t>(s.points.size());
+    if (options.plots) all_O.insert(all_O.end(), s.points.begin(), s.points.end());
     if (++result.sweeps == 1) {
       first_Op = s.points_Op;
       first_O = s.points;
@@ -146,7 +147,11 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
   result.error = read.error;
   result.log_duration_s = 1e-6 * static_cast<double>(read.last_utime - read.first_utime);
   writeSummary(out, options.log_path, read, sweeps, mapper, result, rig);
-  if (options.plots && !first_O.empty()) plotFirstSweep(out, first_Op, first_O);
+  if (options.plots && !first_O.empty()) {
+    plotFirstSweep(out, first_Op, first_O);
+    drawViews3d(out, "replay", "rig A replay, " + std::to_string(result.sweeps) + " sweeps", "O",
+                all_O, mapper.map().occupiedCentres(), rig.mapper.resolution_m);
+  }
   return result;
 }
 

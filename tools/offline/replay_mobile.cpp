@@ -18,6 +18,7 @@
 #include "processes/world_assembler_node.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "tools/offline/log_player.hpp"
+#include "tools/offline/views_3d.hpp"
 
 namespace sweepmap {
 namespace {
@@ -72,16 +73,30 @@ void writeSummary(const fs::path& out, const std::string& log_path, const LogPla
   writeFileAtomic((out / "summary.json").string(), s.dump(2) + "\n");
 }
 
+// The walls between floor and ceiling, coloured by height, and the paths drawn at the band's
+// middle (they are at z = 0, below it).
 void plotTopViewOf(const fs::path& out, const Collected& c) {
   PlotOptions po;
-  po.title = "Top view: world-frame cloud, EKF path (blue) and wheel-odometry path (red)";
   po.point_size = 0.2;
+  const ZBand band = wallBand(c.cloud);
+  std::vector<Eigen::Vector3f> odo = c.odo_path, ekf = c.ekf_path;
+  if (band.valid) {
+    po.z_band_m = PlotRange{band.min, band.max};
+    for (auto* path : {&odo, &ekf}) {
+      for (auto& p : *path) p.z() = static_cast<float>(0.5 * (band.min + band.max));
+    }
+  }
+  char title[160];
+  std::snprintf(title, sizeof title,
+                "Top view between floor and ceiling (z %.2f to %.2f m): the cloud by height, "
+                "the EKF and wheel-odometry paths",
+                band.min, band.max);
+  po.title =
+      band.valid ? title : "Top view: the world-frame cloud, the EKF and wheel-odometry paths";
   try {
-    plotTopView((out / "top_view.png").string(),
-                {{"cloud", "gray50", c.cloud},
-                 {"wheel odometry", "red", c.odo_path},
-                 {"EKF", "blue", c.ekf_path}},
-                po);
+    plotTopView(
+        (out / "top_view.png").string(),
+        {{"cloud", "", c.cloud, true}, {"wheel odometry", "red", odo}, {"EKF", "blue", ekf}}, po);
   } catch (const std::exception& e) {
     std::cerr << "replay: top view not drawn: " << e.what() << "\n";
   }
@@ -128,9 +143,13 @@ MobileReplayResult replayMobileLog(const std::string& log_path, const MobileLida
   result.error = played.error;
   result.scans = assembler.counter("scans");
   result.points = static_cast<int64_t>(c.cloud.size());
-  writePcdBinary((out / "cloud.pcd").string(), c.cloud);
+  writePcdAndPly((out / "cloud").string(), c.cloud);
   writeSummary(out, log_path, played, result, odometry, assembler, mapper, c);
-  if (plots && !c.cloud.empty()) plotTopViewOf(out, c);
+  if (plots && !c.cloud.empty()) {
+    plotTopViewOf(out, c);
+    drawViews3d(out, "replay", "rig B replay", "world", c.cloud, mapper.map().occupiedCentres(),
+                rig.mapper.resolution_m);
+  }
   return result;
 }
 

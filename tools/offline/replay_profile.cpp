@@ -16,6 +16,7 @@
 #include "processes/mapper_node.hpp"
 #include "processes/profile_assembler_node.hpp"
 #include "tools/offline/log_player.hpp"
+#include "tools/offline/views_3d.hpp"
 
 namespace sweepmap {
 
@@ -33,11 +34,11 @@ void writeClouds(const fs::path& out, const std::map<int32_t, Sweep>& sweeps) {
   std::vector<Eigen::Vector3f> all;
   for (const auto& [id, sweep] : sweeps) {
     char name[32];
-    std::snprintf(name, sizeof name, "sweep_%06d.pcd", id);
-    writePcdBinary((out / "sweeps" / name).string(), sweep.points);
+    std::snprintf(name, sizeof name, "sweep_%06d", id);
+    writePcdAndPly((out / "sweeps" / name).string(), sweep.points);
     all.insert(all.end(), sweep.points.begin(), sweep.points.end());
   }
-  writePcdBinary((out / "cloud.pcd").string(), all);
+  writePcdAndPly((out / "cloud").string(), all);
 }
 
 void writeSummary(const fs::path& out, const std::string& log_path, const ProfileGeometry& g,
@@ -67,17 +68,21 @@ void writeSummary(const fs::path& out, const std::string& log_path, const Profil
   writeFileAtomic((out / "summary.json").string(), s.dump(2) + "\n");
 }
 
-// Top view of the cloud, a colour per sweep (every 10th point: the picture is the same).
+// Every sweep's points together.
+std::vector<Eigen::Vector3f> allPoints(const std::map<int32_t, Sweep>& sweeps) {
+  std::vector<Eigen::Vector3f> all;
+  for (const auto& [id, sweep] : sweeps)
+    all.insert(all.end(), sweep.points.begin(), sweep.points.end());
+  return all;
+}
+
+// Top view of the cloud coloured by height (a top view of a turntable scan shows nothing of
+// the heights otherwise: plates and test pieces are told apart by them).
 void plotTopViewOf(const fs::path& out, const std::map<int32_t, Sweep>& sweeps) {
-  static const char* kColours[] = {"blue", "red", "dark-green", "orange", "purple", "gray40"};
-  std::vector<Layer> layers;
-  for (const auto& [id, sweep] : sweeps) {
-    Layer l{"sweep " + std::to_string(id), kColours[layers.size() % 6], {}};
-    for (size_t i = 0; i < sweep.points.size(); i += 10) l.points.push_back(sweep.points[i]);
-    layers.push_back(std::move(l));
-  }
+  std::vector<Layer> layers = {
+      {std::to_string(sweeps.size()) + " sweeps", "", allPoints(sweeps), true}};
   PlotOptions po;
-  po.title = "Top view: the profiles in the turntable's frame O_r, a colour per sweep";
+  po.title = "Top view: the profiles in the turntable's frame O_r, coloured by height";
   po.point_size = 0.2;
   try {
     plotTopView((out / "top_view.png").string(), layers, po);
@@ -126,7 +131,11 @@ ProfileReplayResult replayProfileLog(const std::string& log_path, const Rotating
   r.sweeps = static_cast<int>(sweeps.size());
   writeClouds(out, sweeps);
   writeSummary(out, log_path, assembler.geometry(), sweeps, r, played, mapper);
-  if (plots && !sweeps.empty()) plotTopViewOf(out, sweeps);
+  if (plots && !sweeps.empty()) {
+    plotTopViewOf(out, sweeps);
+    drawViews3d(out, "replay", "rig C replay", "O_r", allPoints(sweeps),
+                mapper.map().occupiedCentres(), rig.mapper.resolution_m);
+  }
   return r;
 }
 
