@@ -121,10 +121,30 @@ std::array<std::array<double, 2>, 3> roomInFrameO() {
            {-s.rig_z_m, s.room_height_m - s.rig_z_m}}};
 }
 
-// Rig A's processes in mode 2 (4 sweeps, ~5 MB of clouds and voxels) with the view, a page
-// and a stalled client: the page draws every point the server says it sent it and shows the
-// room, while the stalled client's frames are dropped and counted, and the view still takes
-// every chunk the assembler published.
+// What the reference Foxglove client (tests/js/foxglove_client.js) saw: the server's info, every
+// channel advertised in JSON with the schema @foxglove/schemas publishes for its name, messages
+// on each of `topics`, and every message valid against its schema.
+void expectFoxglove(const nlohmann::json& fox, const std::vector<std::string>& topics) {
+  ASSERT_TRUE(fox.is_object());
+  EXPECT_TRUE(fox["errors"].empty()) << fox["errors"];
+  EXPECT_EQ(fox["server_info"]["op"], "serverInfo");
+  ASSERT_FALSE(fox["channels"].empty());
+  for (const auto& c : fox["channels"]) {
+    EXPECT_EQ(c["encoding"], "json") << c;
+    EXPECT_EQ(c["schemaEncoding"], "jsonschema") << c;
+    const auto& t = fox["topics"][c["topic"].get<std::string>()];
+    EXPECT_TRUE(t["schema_matches_published"].get<bool>()) << c;
+    EXPECT_TRUE(t["problems"].empty()) << c["topic"] << ": " << t["problems"];
+  }
+  for (const std::string& topic : topics) {
+    EXPECT_GT(fox["topics"][topic]["messages"].get<int>(), 0) << topic;
+  }
+}
+
+// Rig A's processes in mode 2 (4 sweeps, ~5 MB of clouds and voxels) with the view, a page,
+// a stalled client and a Foxglove client: the page draws every point the server says it sent
+// it and shows the room, while the stalled client's frames are dropped and counted, the view
+// still takes every chunk the assembler published, and the Foxglove client gets valid messages.
 TEST_F(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   const auto dir = scratchDir("view_live");
   procs.setDir(dir);
@@ -141,11 +161,15 @@ TEST_F(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   const std::string shot = (dir / "live.png").string();
   const pid_t node = procs.start("node", {"node", sourcePath("tests/js/view_live.js"),
                                           "http://127.0.0.1:8080/", "4", "80", shot});
+  const pid_t foxglove = procs.start(
+      "foxglove", {"node", sourcePath("tests/js/foxglove_client.js"), "ws://127.0.0.1:8080/", "80",
+                   "/sweep_cloud", "/map", "/tf", "/lidar_scan", "/status"});
   sleepS(0.7);
   const pid_t motor =
       procs.start("motor", proc("motor", {"--sim", "--sweeps", "4", "--seed", "4"}));
   ASSERT_EQ(procs.wait(motor, 90.0), 0) << procs.said(motor);
   ASSERT_EQ(procs.wait(node, 90.0), 0) << procs.said(node);
+  ASSERT_EQ(procs.wait(foxglove, 90.0), 0) << procs.said(foxglove);
   procs.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 30.0}, {logger, 10.0}, {view, 10.0}},
                     0.5);
 
@@ -176,6 +200,8 @@ TEST_F(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   // The view took every chunk the assembler published: its intake was not held up.
   EXPECT_EQ(status["board"]["view_model"]["chunks"].get<size_t>(), chunksOf(log).size());
   EXPECT_EQ(status["board"]["mapper"]["sweeps"], 4);
+  expectFoxglove(lastJson(procs.said(foxglove)),
+                 {"/sweep_cloud", "/map", "/tf", "/lidar_scan", "/status"});
 }
 
 // A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps,

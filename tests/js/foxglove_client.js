@@ -1,17 +1,18 @@
 // The Foxglove WebSocket protocol of `sweepmap view`, through the reference client
 // (@foxglove/ws-protocol's FoxgloveClient over the `ws` package): node foxglove_client.js URL
-// TIMEOUT_S. Subscribes to every advertised channel, decodes each message (JSON) and validates
-// it against the published schema of its schema name (@foxglove/schemas); unsubscribes from the
-// first channel after its first message. Ends when every channel has had a message or at the
-// timeout, and prints one JSON object: the server's info, the channels, per topic the messages
-// received and the schema problems found, and messages after the unsubscribe.
+// TIMEOUT_S TOPIC... Subscribes to every advertised channel, decodes each message (JSON) and
+// validates it against the published schema of its schema name (@foxglove/schemas); unsubscribes
+// from the first channel after its first message. Ends when every TOPIC has had a message (and
+// 1.5 s more) or at the timeout, and prints one JSON object: the server's info, the channels, per
+// topic the messages received and the schema problems found, and messages after the
+// unsubscribe.
 'use strict';
 const { FoxgloveClient } = require('@foxglove/ws-protocol');
 const WebSocket = require('ws');
 const schemas = require('@foxglove/schemas/jsonschema');
 const { validate } = require('./json_schema.js');
 
-const [url, timeoutArg] = process.argv.slice(2);
+const [url, timeoutArg, ...expected] = process.argv.slice(2);
 const out = { channels: [], topics: {}, errors: [], after_unsubscribe: 0 };
 const client = new FoxgloveClient({ ws: new WebSocket(url, [FoxgloveClient.SUPPORTED_SUBPROTOCOL]) });
 const bySubscription = new Map();
@@ -22,8 +23,9 @@ function finish() {
   process.stdout.write(JSON.stringify(out) + '\n');
   process.exit(0);
 }
+let finishing = false;
 function allSeen() {
-  return out.channels.length > 0 && out.channels.every((c) => out.topics[c.topic].messages > 0);
+  return expected.every((t) => out.topics[t] && out.topics[t].messages > 0);
 }
 
 client.on('error', (e) => out.errors.push(String(e && e.message ? e.message : e)));
@@ -58,6 +60,9 @@ client.on('message', ({ subscriptionId, data }) => {
     unsubscribed = subscriptionId;
     client.unsubscribe(subscriptionId);
   }
-  if (allSeen()) setTimeout(finish, 1500);  // messages after the unsubscribe would show here
+  if (!finishing && allSeen()) {
+    finishing = true;
+    setTimeout(finish, 1500);  // messages after the unsubscribe would show here
+  }
 });
 setTimeout(finish, Number(timeoutArg) * 1000);

@@ -15,6 +15,7 @@
 #include "net/udpm_receiver.hpp"
 #include "processes/live_runner.hpp"
 #include "rigs/rig_file.hpp"
+#include "viz/foxglove_messages.hpp"
 
 namespace sweepmap {
 namespace {
@@ -67,22 +68,29 @@ struct Playback {
 
 class ViewApp {
  public:
-  explicit ViewApp(const ViewOptions& o) : options_(o) {}
+  ViewApp(const ViewOptions& o, std::optional<Rig> rig) : options_(o), rig_(std::move(rig)) {}
   int run();
 
  private:
   void startServer();
+  void startFoxglove();
+  void resetModel();
   void onViewOpen(const std::function<void(const std::vector<ViewFrame>&)>& attach);
   void onCommand(const std::string& text);
   std::string boardJson();
   void add(const Message& m, int64_t now_utime);
+  void feed(const Message& m, int64_t now_utime);
   void receiveLive();
   void playLog();
   void feedUntil(int64_t t, size_t* next);
   ViewFrame timeFrame();
 
   ViewOptions options_;
+  std::optional<Rig> rig_;  // Foxglove's frames; none: no Foxglove channels
   std::mutex model_mutex_;
+  std::unique_ptr<viz::FoxgloveConverter> foxglove_;
+  std::map<std::string, uint32_t> foxglove_ids_;  // topic -> channel id
+  int64_t last_map_utime_ = 0;
   std::unique_ptr<ViewModel> model_;
   std::unique_ptr<ViewServer> server_;
   std::atomic<bool> stop_{false};
@@ -147,7 +155,55 @@ std::string ViewApp::boardJson() {
 
 void ViewApp::add(const Message& m, int64_t now_utime) {
   std::lock_guard<std::mutex> lock(model_mutex_);
+  feed(m, now_utime);
+}
+
+// One message into the view and, converted, to the Foxglove clients (the model's lock held).
+void ViewApp::feed(const Message& m, int64_t now_utime) {
   model_->add(m, now_utime);
+  if (!foxglove_) return;
+  std::vector<viz::FoxgloveMessage> out =
+      foxglove_->convert(m.channel, m.data.data(), m.data.size(), now_utime * 1000);
+  // The map, when it changed, once a second (finish() gives it whatever its own schedule).
+  if (now_utime - last_map_utime_ >= 1'000'000) {
+    for (auto& f : foxglove_->finish(now_utime * 1000)) out.push_back(std::move(f));
+    last_map_utime_ = now_utime;
+  }
+  for (const viz::FoxgloveMessage& f : out) {
+    const auto id = foxglove_ids_.find(f.topic);
+    if (id != foxglove_ids_.end()) server_->broadcastFoxglove(id->second, f.log_time_ns, f.json);
+  }
+}
+
+// A seek back: the view and the Foxglove conversion start again (with the model's lock held).
+void ViewApp::resetModel() {
+  model_->reset();
+  if (foxglove_) foxglove_ = std::make_unique<viz::FoxgloveConverter>(*rig_);
+  last_map_utime_ = 0;
+}
+
+// The converted topics (viz/foxglove_messages.hpp), each with its published JSON schema.
+void ViewApp::startFoxglove() {
+  if (!rig_) {
+    std::cout << "sweepmap view: no --rig: no Foxglove channels (they need the rig's frames)\n";
+    return;
+  }
+  foxglove_ = std::make_unique<viz::FoxgloveConverter>(*rig_);
+  std::vector<FoxgloveChannel> channels;
+  for (const auto& [topic, schema_name] : viz::foxgloveTopics()) {
+    const viz::FoxgloveSchema* schema = viz::foxgloveSchema(schema_name);
+    if (!schema) continue;
+    FoxgloveChannel c;
+    c.id = static_cast<uint32_t>(channels.size() + 1);
+    c.topic = topic;
+    c.encoding = "json";
+    c.schema_name = schema_name;
+    c.schema = schema->data;
+    c.schema_encoding = schema->encoding;
+    foxglove_ids_[topic] = c.id;
+    channels.push_back(c);
+  }
+  server_->setFoxgloveChannels(channels);
 }
 
 // udpm:// through sweepmap's own receiver (one malformed datagram must not end the view);
@@ -179,7 +235,7 @@ void ViewApp::receiveLive() {
 void ViewApp::feedUntil(int64_t t, size_t* next) {
   std::lock_guard<std::mutex> lock(model_mutex_);
   while (*next < log_.messages.size() && log_.messages[*next].utime <= t) {
-    model_->add(log_.messages[*next], log_.messages[*next].utime);
+    feed(log_.messages[*next], log_.messages[*next].utime);
     ++*next;
   }
 }
@@ -227,7 +283,7 @@ void ViewApp::playLog() {
     }
     if (back) {
       std::lock_guard<std::mutex> lock(model_mutex_);
-      model_->reset();
+      resetModel();
       next = 0;
     }
     feedUntil(target, &next);
@@ -243,6 +299,7 @@ void ViewApp::startServer() {
   server_ = std::make_unique<ViewServer>(options_.server, cb);
   model_ = std::make_unique<ViewModel>(options_.model,
                                        [this](const ViewFrame& f) { server_->broadcast(f); });
+  startFoxglove();
 }
 
 int ViewApp::run() {
@@ -300,9 +357,10 @@ int runView(const ViewOptions& options) {
     std::cerr << "sweepmap view: " << o.log << ": no such file\n";
     return kExitUsage;
   }
+  std::optional<Rig> rig;
   if (!o.rig.empty()) {
-    const Rig rig = loadRig(o.rig, o.rig_sets);  // ConfigError: exit 2 in main
-    std::visit([&](const auto& c) { o.model.voxel_m = c.mapper.resolution_m; }, rig.config);
+    rig = loadRig(o.rig, o.rig_sets);  // ConfigError: exit 2 in main
+    std::visit([&](const auto& c) { o.model.voxel_m = c.mapper.resolution_m; }, rig->config);
   }
   if (o.server.web_dir.empty()) o.server.web_dir = webDir();
   if (!fs::exists(fs::path(o.server.web_dir) / "index.html")) {
@@ -310,7 +368,7 @@ int runView(const ViewOptions& options) {
               << " (SWEEPMAP_WEB_DIR)\n";
     return kExitUsage;
   }
-  return ViewApp(o).run();
+  return ViewApp(o, std::move(rig)).run();
 }
 
 }  // namespace sweepmap
