@@ -261,7 +261,9 @@ void FoxgloveConverter::State::cloud(const cloud_chunk_t& c, int64_t t_ns,
 }
 
 void FoxgloveConverter::State::map(int64_t t_ns, bool force, std::vector<FoxgloveMessage>* out) {
-  if (!map_changed || (!force && t_ns - last_map_ns < kMapPeriodNs)) return;
+  // INT64_MIN: no map sent yet (the difference would overflow).
+  if (!map_changed || (!force && last_map_ns != INT64_MIN && t_ns - last_map_ns < kMapPeriodNs))
+    return;
   std::vector<float> values;
   values.reserve(voxels.size() * 3);
   for (const auto& [i, j, k] : voxels) {  // voxel centres, in key order (deterministic)

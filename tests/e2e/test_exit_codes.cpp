@@ -188,7 +188,7 @@ std::vector<Row> calibEvalRows(const Inputs& in) {
   };
 }
 
-// import, emulate, capture, decode, dump, status, record, systemd, launch.
+// import, emulate, capture, decode, dump, status, record, systemd, launch, view.
 std::vector<Row> deviceAndOpsRows(const Inputs& in) {
   const auto& [path, missing, taken, a, b, empty, help, bad] = in;
   return {
@@ -234,6 +234,12 @@ std::vector<Row> deviceAndOpsRows(const Inputs& in) {
         bad,
         {"missing file", {path("nope.yaml"), "--host", "pi", "--out", path("units")}, 2}}},
       {"sweepmap", {"launch"}, {help, bad, {"missing file", {path("nope.yaml")}, 2}}},
+      {"sweepmap",
+       {"view"},
+       {help,
+        bad,
+        {"missing file", {path("nope.lcmlog"), "--port", "0"}, 2},
+        {"missing rig", {"--rig", missing, "--port", "0"}, 2}}},
   };
 }
 

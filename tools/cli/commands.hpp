@@ -26,6 +26,7 @@ Runner addStatusCommand(CLI::App& app);
 Runner addRecordCommand(CLI::App& app);
 Runner addSystemdCommand(CLI::App& app);
 Runner addLaunchCommand(CLI::App& app);
+Runner addViewCommand(CLI::App& app);
 Runner addExportCommand(CLI::App& app);  // group: export mcap, export las
 
 }  // namespace sweepmap

@@ -1,6 +1,6 @@
 // sweepmap: one tool, one subcommand per job (sim, replay, demo, spy, bench, calib, eval,
-// import, emulate, capture, decode, dump, status, record, systemd, launch, export); each serves
-// every rig kind its rig file names. Exit status: core/exit_codes.hpp
+// import, emulate, capture, decode, dump, status, record, systemd, launch, export, view); each
+// serves every rig kind its rig file names. Exit status: core/exit_codes.hpp
 // (docs/reference/exit-codes.md).
 #include <iostream>
 #include <map>
@@ -32,6 +32,7 @@ int main(int argc, char** argv) {
   add(sweepmap::addRecordCommand(app));
   add(sweepmap::addSystemdCommand(app));
   add(sweepmap::addLaunchCommand(app));
+  add(sweepmap::addViewCommand(app));
   add(sweepmap::addExportCommand(app));
   if (const auto code = sweepmap::parseCommandLine(app, argc, argv)) return *code;
   for (auto& [sub, run] : runners) {

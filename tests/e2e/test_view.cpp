@@ -1,0 +1,257 @@
+// `sweepmap view` in a real browser (Debian's chromium, headless, driven by puppeteer-core from
+// tests/js): live, inside a private network namespace with rig A's processes, beside a client
+// that connects and then stops reading; and from a log, through its time slider. The node
+// scripts report what the page shows as JSON; this file judges it.
+#include <arpa/inet.h>
+#include <gtest/gtest.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <array>
+
+#include "core/event_log.hpp"
+#include "processes/channels.hpp"
+#include "processes/message_codec.hpp"
+#include "sim/scene.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "tests/e2e/fixtures.hpp"
+
+namespace sweepmap {
+namespace test {
+namespace {
+
+const std::string kRig = sourcePath("config/rig_a.yaml");
+const std::string kScene = sourcePath("config/scene_conference_room.yaml");
+const std::string kUrl = kDefaultLcmUrl;
+constexpr int kPort = 8080;   // inside the test's own network namespace
+const double kVoxelM = 0.05;  // rig_a.yaml's mapper.resolution_m
+
+// Why the browser tests cannot run here ("" when they can).
+std::string browserMissing() {
+  if (!fs::exists("/usr/bin/chromium")) return "no /usr/bin/chromium (tools/ops/setup.sh)";
+  if (!fs::exists(sourcePath("tests/js/node_modules/puppeteer-core"))) {
+    return "no tests/js/node_modules (tools/ops/setup.sh installs it)";
+  }
+  return "";
+}
+
+// The last line of a node script's output that is a JSON object.
+nlohmann::json lastJson(const std::string& said) {
+  const size_t at = said.rfind("\n{");
+  const std::string line = said.substr(at == std::string::npos ? 0 : at + 1);
+  return nlohmann::json::parse(line.substr(0, line.find('\n')), nullptr, false);
+}
+
+// A TCP connection to the port that becomes a /ws WebSocket and then never reads: a page whose
+// tab hangs. Its receive buffer is made small, so the server meets the stall early.
+class StalledClient {
+ public:
+  explicit StalledClient(int port) {
+    fd_ = ::socket(AF_INET, SOCK_STREAM, 0);
+    const int small = 4096;
+    ::setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &small, sizeof(small));
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    connected_ = ::connect(fd_, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0;
+    const std::string upgrade =
+        "GET /ws HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+        "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n";
+    connected_ = connected_ && ::send(fd_, upgrade.data(), upgrade.size(), 0) ==
+                                   static_cast<ssize_t>(upgrade.size());
+  }
+  ~StalledClient() { ::close(fd_); }
+  bool connected() const { return connected_; }
+
+ private:
+  int fd_ = -1;
+  bool connected_ = false;
+};
+
+// Waits until something listens on the port (the view is up).
+bool waitForPort(int port, double timeout_s) {
+  for (double t = 0; t < timeout_s; t += 0.1) {
+    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in a{};
+    a.sin_family = AF_INET;
+    a.sin_port = htons(port);
+    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0;
+    ::close(fd);
+    if (ok) return true;
+    sleepS(0.1);
+  }
+  return false;
+}
+
+class ViewTest : public PrivateNetworkTest {
+ protected:
+  void SetUp() override {
+    PrivateNetworkTest::SetUp();
+    if (const std::string why = browserMissing(); !why.empty()) GTEST_SKIP() << why;
+  }
+  // `sweepmap view ARGS --port kPort`, up and listening.
+  pid_t startView(const std::vector<std::string>& args) {
+    std::vector<std::string> argv = {binPath("sweepmap"), "view", "--port", std::to_string(kPort)};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const pid_t view = procs.start("view", argv);
+    EXPECT_TRUE(waitForPort(kPort, 10.0)) << procs.said("view");
+    return view;
+  }
+  nlohmann::json runNode(const std::string& script, const std::vector<std::string>& args,
+                         double timeout_s) {
+    std::vector<std::string> argv = {"node", sourcePath("tests/js/" + script)};
+    argv.insert(argv.end(), args.begin(), args.end());
+    const pid_t node = procs.start("node", argv);
+    EXPECT_EQ(procs.wait(node, timeout_s), 0) << procs.said("node");
+    return lastJson(procs.said("node"));
+  }
+  Launcher procs;
+};
+
+// The box the room's walls, floor and ceiling bound, in frame O (the rig's axis at the
+// scene's rig position, yaw 0): [min, max] per axis; the door leaf, set back door_depth_m into
+// the +Y wall, is the room's farthest surface that way.
+std::array<std::array<double, 2>, 3> roomInFrameO() {
+  const SceneConfig s = loadScene(kScene);
+  return {{{-s.room_length_m / 2 - s.rig_x_m, s.room_length_m / 2 - s.rig_x_m},
+           {-s.room_width_m / 2 - s.rig_y_m, s.room_width_m / 2 - s.rig_y_m + s.door_depth_m},
+           {-s.rig_z_m, s.room_height_m - s.rig_z_m}}};
+}
+
+// What the reference Foxglove client (tests/js/foxglove_client.js) saw: the server's info, every
+// channel advertised in JSON with the schema @foxglove/schemas publishes for its name, messages
+// on each of `topics`, and every message valid against its schema.
+void expectFoxglove(const nlohmann::json& fox, const std::vector<std::string>& topics) {
+  ASSERT_TRUE(fox.is_object());
+  EXPECT_TRUE(fox["errors"].empty()) << fox["errors"];
+  EXPECT_EQ(fox["server_info"]["op"], "serverInfo");
+  ASSERT_FALSE(fox["channels"].empty());
+  for (const auto& c : fox["channels"]) {
+    EXPECT_EQ(c["encoding"], "json") << c;
+    EXPECT_EQ(c["schemaEncoding"], "jsonschema") << c;
+    const auto& t = fox["topics"][c["topic"].get<std::string>()];
+    EXPECT_TRUE(t["schema_matches_published"].get<bool>()) << c;
+    EXPECT_TRUE(t["problems"].empty()) << c["topic"] << ": " << t["problems"];
+  }
+  for (const std::string& topic : topics) {
+    EXPECT_GT(fox["topics"][topic]["messages"].get<int>(), 0) << topic;
+  }
+}
+
+// Rig A's processes in mode 2 (4 sweeps, ~5 MB of clouds and voxels) with the view, a page,
+// a stalled client and a Foxglove client: the page draws every point the server says it sent
+// it and shows the room, while the stalled client's frames are dropped and counted, the view
+// still takes every chunk the assembler published, and the Foxglove client gets valid messages.
+TEST_F(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
+  const auto dir = scratchDir("view_live");
+  procs.setDir(dir);
+  const ProcessCommand proc{{"--rig", kRig, "--set", "motor.mode=2", "--lcm-url", kUrl}};
+  const std::string log = (dir / "live.lcmlog").string();
+  const pid_t logger = procs.start("logger", loggerCommand(kUrl, log, "SWEEP_CLOUD"));
+  const pid_t view = startView({"--lcm-url", kUrl, "--rig", kRig, "--client-queue-mb", "2"});
+  const pid_t mapper = procs.start("mapper", proc("mapper"));
+  const pid_t assembler = procs.start("assembler", proc("assembler"));
+  const pid_t lidar =
+      procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "4"}));
+  StalledClient stalled(kPort);
+  ASSERT_TRUE(stalled.connected());
+  const std::string shot = (dir / "live.png").string();
+  const pid_t node = procs.start("node", {"node", sourcePath("tests/js/view_live.js"),
+                                          "http://127.0.0.1:8080/", "4", "80", shot});
+  const pid_t foxglove = procs.start(
+      "foxglove", {"node", sourcePath("tests/js/foxglove_client.js"), "ws://127.0.0.1:8080/", "80",
+                   "/sweep_cloud", "/map", "/tf", "/lidar_scan", "/status"});
+  sleepS(0.7);
+  const pid_t motor =
+      procs.start("motor", proc("motor", {"--sim", "--sweeps", "4", "--seed", "4"}));
+  ASSERT_EQ(procs.wait(motor, 90.0), 0) << procs.said(motor);
+  ASSERT_EQ(procs.wait(node, 90.0), 0) << procs.said(node);
+  ASSERT_EQ(procs.wait(foxglove, 90.0), 0) << procs.said(foxglove);
+  procs.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 30.0}, {logger, 10.0}, {view, 10.0}},
+                    0.5);
+
+  const nlohmann::json page = lastJson(procs.said(node));
+  ASSERT_TRUE(page.is_object()) << procs.said(node);
+  ASSERT_FALSE(page.contains("failure")) << page["failure"] << "\n" << page["at_failure"].dump();
+  EXPECT_TRUE(page["errors"].empty()) << page["errors"];
+  EXPECT_EQ(page["mode"], "live");
+  EXPECT_EQ(page["sweeps"], 4);
+  // What the page draws is what the server sent it (after its thinning arithmetic).
+  EXPECT_EQ(page["check"]["drawn"], page["check"]["server"]);
+  EXPECT_EQ(page["points_drawn"], page["check"]["server"]);
+  EXPECT_GT(page["points_drawn"].get<int64_t>(), 0);
+  EXPECT_GT(page["non_blank"].get<double>(), 0.02) << "the screenshot is (nearly) blank";
+  // The drawn extent (1 % and 99 % quantiles per axis: the surfaces, not the range noise's
+  // tail) is the room's within a voxel.
+  const auto room = roomInFrameO();
+  for (int a = 0; a < 3; ++a) {
+    for (int side = 0; side < 2; ++side) {
+      EXPECT_NEAR(page["extent"][a][side].get<double>(), room[a][side], kVoxelM)
+          << "axis " << a << (side ? " max" : " min");
+    }
+  }
+  const nlohmann::json& status = page["status"];
+  // The stalled client's frames were dropped and counted; the page lost none.
+  EXPECT_GT(status["view"]["frames_dropped_all"].get<int64_t>(), 0) << status["view"];
+  EXPECT_EQ(status["you"]["frames_dropped"], 0) << status["you"];
+  // The view took every chunk the assembler published: its intake was not held up.
+  EXPECT_EQ(status["board"]["view_model"]["chunks"].get<size_t>(), chunksOf(log).size());
+  EXPECT_EQ(status["board"]["mapper"]["sweeps"], 4);
+  expectFoxglove(lastJson(procs.said(foxglove)),
+                 {"/sweep_cloud", "/map", "/tf", "/lidar_scan", "/status"});
+}
+
+// A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps,
+// back to the start none, between the two sweeps' clouds one.
+TEST_F(ViewTest, TimeSliderReplaysALog) {
+  const auto dir = scratchDir("view_log");
+  procs.setDir(dir);
+  const std::string sim = (dir / "sim.lcmlog").string();
+  ASSERT_EQ(sweepmap({"sim", "--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "2",
+                      "--seed", "3", "--out", sim}),
+            0);
+  ASSERT_EQ(replayInto(dir / "replay", sim, {"--rig", kRig}), 0) << readFile(dir / "replay.txt");
+  const std::string derived = (dir / "replay" / "derived.lcmlog").string();
+  // The log times of each sweep's first and last chunk.
+  std::map<int64_t, std::pair<int64_t, int64_t>> times;
+  EventLogReader reader(derived);
+  LogEvent e;
+  int64_t start = -1, end = 0;
+  while (reader.next(&e)) {
+    if (start < 0) start = e.utime;
+    end = e.utime;
+    if (e.channel != channels::kSweepCloud) continue;
+    cloud_chunk_t c;
+    ASSERT_TRUE(decodeMessage(e.data.data(), e.data.size(), &c));
+    auto [it, fresh] = times.try_emplace(c.sweep_id, e.utime, e.utime);
+    it->second.second = e.utime;
+  }
+  ASSERT_EQ(times.size(), 2u);
+  const int64_t between = (times.begin()->second.second + times.rbegin()->second.first) / 2;
+  startView({derived, "--rig", kRig});
+  const nlohmann::json page = runNode("view_log.js",
+                                      {"http://127.0.0.1:8080/", std::to_string(end),
+                                       std::to_string(start), std::to_string(between)},
+                                      90.0);
+  ASSERT_TRUE(page.is_object()) << procs.said("node");
+  ASSERT_FALSE(page.contains("failure")) << page["failure"];
+  EXPECT_TRUE(page["errors"].empty()) << page["errors"];
+  EXPECT_EQ(page["mode"], "log");
+  ASSERT_EQ(page["seeks"].size(), 3u);
+  const std::vector<int> sweeps = {2, 0, 1};
+  for (size_t i = 0; i < 3; ++i) {
+    const auto& s = page["seeks"][i];
+    EXPECT_EQ(s["sweeps"], sweeps[i]) << "seek " << i << ": " << s;
+    EXPECT_EQ(s["check"]["drawn"], s["check"]["server"]) << s;
+    EXPECT_EQ(s["points_drawn"], s["check"]["server"]) << s;
+  }
+  EXPECT_GT(page["seeks"][0]["points_drawn"].get<int64_t>(),
+            page["seeks"][2]["points_drawn"].get<int64_t>());
+}
+
+}  // namespace
+}  // namespace test
+}  // namespace sweepmap

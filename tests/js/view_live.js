@@ -1,0 +1,55 @@
+// Live view check (run by tests/e2e/test_view.cpp inside the live run's network namespace):
+// node view_live.js URL SWEEPS TIMEOUT_S SCREENSHOT.png
+// Loads the page, waits until it has drawn SWEEPS sweeps, the mapper has inserted them and the
+// server has sent everything (its queue empty, no cloud sent between two status frames), then
+// prints one JSON object of what the page shows: console errors, the points drawn against the
+// points the server says it sent, the extent of the drawn points, the voxels, the non-blank
+// fraction of the canvas, and the server's status. The C++ test judges it.
+'use strict';
+const { launch, openPage, nonBlankFraction, until } = require('./browser.js');
+
+async function main() {
+  const [url, sweepsArg, timeoutArg, screenshot] = process.argv.slice(2);
+  const sweeps = Number(sweepsArg);
+  const errors = [];
+  const { browser, close } = await launch();
+  const out = { errors };
+  let page = null;
+  try {
+    page = await openPage(browser, url, errors);
+    out.connected = true;
+    await until(page, (n) => {
+      const v = window.sweepmapView, s = v.status;
+      if (!s || v.sweeps() < n || !s.board || !s.board.mapper || s.board.mapper.sweeps < n) return false;
+      if (s.you.queued_frames !== 0) return false;
+      // No cloud point sent between two status frames (scans and statuses still flow).
+      if (window.__lastSeq === v.statusSeq) return false;  // the same status frame
+      window.__lastSeq = v.statusSeq;
+      const sent = `${s.you.points} ${s.board.view_model.chunks}`;
+      const quiet = window.__lastSent === sent;
+      window.__lastSent = sent;
+      return quiet;
+    }, Number(timeoutArg), `${sweeps} sweeps drawn and the server quiet`, sweeps);
+    await page.evaluate(() => window.sweepmapView.setCamera('fit'));
+    await page.waitForFunction((f) => window.sweepmapView.frames > f + 3, {},
+      await page.evaluate(() => window.sweepmapView.frames));
+    Object.assign(out, await page.evaluate(() => {
+      const v = window.sweepmapView;
+      return { check: v.lastCheck, points_drawn: v.pointsDrawn(), sweeps: v.sweeps(),
+        voxels: v.voxels(), extent: v.extent(0.01), status: v.status, mode: v.mode,
+        latencies_ms: v.latenciesMs };
+    }));
+    out.non_blank = await nonBlankFraction(page);
+    if (screenshot) await page.screenshot({ path: screenshot });
+  } catch (e) {
+    out.failure = e.message;
+    if (page) {
+      out.at_failure = await page.evaluate(() => ({ sweeps: window.sweepmapView.sweeps(),
+        status: window.sweepmapView.status })).catch(() => null);
+    }
+  } finally {
+    await close();
+  }
+  process.stdout.write(JSON.stringify(out) + '\n');
+}
+main();

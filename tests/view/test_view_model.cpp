@@ -1,0 +1,115 @@
+// ViewModel: the point budget thins the oldest sweep first and the pages' arithmetic (a
+// ClientQueue's count) follows it; voxels are counted once; bad messages are refused. ClientQueue:
+// bulk frames are dropped oldest first and counted, latest frames replace, control frames pass.
+#include <gtest/gtest.h>
+
+#include "processes/channels.hpp"
+#include "processes/message_codec.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "tools/view/client_queue.hpp"
+#include "tools/view/view_model.hpp"
+
+namespace sweepmap {
+namespace {
+
+// One chunk of `n` points on a line along x, 0.1 m apart.
+Message chunk(int64_t sweep, int index, int count, int n) {
+  cloud_chunk_t c{};
+  c.utime = 1000 * sweep;
+  c.sweep_id = sweep;
+  c.chunk_index = index;
+  c.chunk_count = count;
+  c.total_points = n * count;
+  c.frame = "O";
+  c.npoints = n;
+  for (int i = 0; i < n; ++i) c.xyz_m.push_back({0.1f * float(i + index * n), 0.0f, 0.0f});
+  return Message{c.utime, channels::kSweepCloud, encodeMessage(c)};
+}
+
+struct Recorder {
+  std::vector<ViewFrame> frames;
+  ClientQueue page{1u << 30};
+  ViewModel::Sink sink() {
+    return [this](const ViewFrame& f) {
+      frames.push_back(f);
+      page.push(f);
+    };
+  }
+  void drain() {
+    while (page.pop()) {
+    }
+  }
+};
+
+TEST(ViewModel, BudgetThinsTheOldestSweepFirstAndThePageCountFollows) {
+  Recorder r;
+  ViewModelOptions o;
+  o.point_budget = 1500;
+  ViewModel m(o, r.sink());
+  m.add(chunk(0, 0, 2, 501), 0);
+  m.add(chunk(0, 1, 2, 501), 0);
+  EXPECT_EQ(m.pointsOnScreen(), 1002u);
+  m.add(chunk(1, 0, 1, 700), 0);  // 1702 > 1500: sweep 0 loses every second point
+  EXPECT_EQ(m.pointsOnScreen(), 251u + 251u + 700u);
+  EXPECT_EQ(m.counters().thinned, 1);
+  r.drain();
+  EXPECT_EQ(r.page.counters().points_drawn, static_cast<int64_t>(m.pointsOnScreen()));
+  // A late chunk of the thinned sweep comes thinned.
+  m.add(chunk(0, 2, 3, 101), 0);
+  EXPECT_EQ(r.frames.back().points, 51u);
+  r.drain();
+  EXPECT_EQ(r.page.counters().points_drawn, static_cast<int64_t>(m.pointsOnScreen()));
+}
+
+TEST(ViewModel, SweepsPastTheLastThinningAreRemovedOldestFirst) {
+  Recorder r;
+  ViewModelOptions o;
+  o.point_budget = 1000;
+  ViewModel m(o, r.sink());
+  // 100 sweeps at 1/64 still hold 1600 points: the oldest go.
+  for (int s = 0; s < 100; ++s) m.add(chunk(s, 0, 1, 990), 0);
+  EXPECT_LE(m.pointsOnScreen(), 1000u);
+  EXPECT_GT(m.counters().removed_sweeps, 0);
+  r.drain();
+  EXPECT_EQ(r.page.counters().points_drawn, static_cast<int64_t>(m.pointsOnScreen()));
+}
+
+TEST(ViewModel, VoxelsAreSentOnceAndMalformedChunksAreCounted) {
+  Recorder r;
+  ViewModel m(ViewModelOptions{}, r.sink());
+  m.add(chunk(0, 0, 1, 10), 0);  // 10 points 0.1 m apart at 0.05 m: 10 voxels
+  m.add(chunk(1, 0, 1, 10), 0);  // the same points again: no new voxel
+  EXPECT_EQ(m.voxels(), 10u);
+  Message bad = chunk(2, 0, 1, 10);
+  bad.data.resize(bad.data.size() - 5);
+  m.add(bad, 0);
+  EXPECT_EQ(m.counters().malformed, 1);
+  EXPECT_EQ(m.counters().chunks, 2);
+}
+
+ViewFrame frame(ViewFrame::Kind kind, size_t bytes, const std::string& key = "") {
+  ViewFrame f;
+  f.kind = kind;
+  f.key = key;
+  f.data = std::make_shared<const std::string>(bytes, 'x');
+  return f;
+}
+
+TEST(ClientQueue, DropsOldestBulkReplacesLatestKeepsControl) {
+  ClientQueue q(1000);
+  q.push(frame(ViewFrame::kBulk, 400));
+  q.push(frame(ViewFrame::kLatest, 50, "pose"));
+  q.push(frame(ViewFrame::kBulk, 400));
+  q.push(frame(ViewFrame::kLatest, 60, "pose"));  // replaces the first pose
+  q.push(frame(ViewFrame::kControl, 10));
+  q.push(frame(ViewFrame::kBulk, 400));  // no room: the oldest bulk frame goes
+  const ClientCounters c = q.counters();
+  EXPECT_EQ(c.frames_dropped, 1);
+  EXPECT_EQ(c.replaced, 1);
+  EXPECT_EQ(c.queued_frames, 4u);
+  EXPECT_LE(c.queued_bytes, 1000u);
+  EXPECT_EQ(q.pop()->kind, ViewFrame::kLatest);  // the bulk frame before it was dropped
+}
+
+}  // namespace
+}  // namespace sweepmap

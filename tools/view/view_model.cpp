@@ -1,0 +1,352 @@
+#include "tools/view/view_model.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <nlohmann/json.hpp>
+
+#include "processes/channels.hpp"
+#include "processes/message_codec.hpp"
+#include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/profile_t.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr int kKeyBits = 21;
+constexpr int64_t kKeyOffset = int64_t{1} << (kKeyBits - 1);
+constexpr uint64_t kKeyMask = (uint64_t{1} << kKeyBits) - 1;
+
+template <class T>
+void putLe(std::string& out, T v) {
+  char b[sizeof(T)];
+  std::memcpy(b, &v, sizeof(T));  // the hosts we build for are little-endian
+  out.append(b, sizeof(T));
+}
+
+std::string binaryHeader(BinaryFrame type, uint32_t n) {
+  std::string h;
+  putLe<uint8_t>(h, static_cast<uint8_t>(type));
+  h.append(3, '\0');
+  putLe<uint32_t>(h, n);
+  return h;
+}
+
+ViewFrame control(const nlohmann::json& j, ViewFrame::Effect effect = ViewFrame::kNone,
+                  int64_t sweep = -1) {
+  ViewFrame f;
+  f.kind = ViewFrame::kControl;
+  f.data = std::make_shared<const std::string>(j.dump());
+  f.effect = effect;
+  f.sweep = sweep;
+  return f;
+}
+
+ViewFrame latest(const std::string& key, std::shared_ptr<const std::string> data, bool binary) {
+  ViewFrame f;
+  f.kind = ViewFrame::kLatest;
+  f.key = key;
+  f.binary = binary;
+  f.data = std::move(data);
+  return f;
+}
+
+ViewFrame bulk(std::string data, bool binary) {
+  ViewFrame f;
+  f.kind = ViewFrame::kBulk;
+  f.binary = binary;
+  f.data = std::make_shared<const std::string>(std::move(data));
+  return f;
+}
+
+// Packs a voxel's integer coordinates; false when outside +-2^20 voxels.
+bool voxelKey(const float* p, double res, uint64_t* key) {
+  uint64_t k = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (!std::isfinite(p[a])) return false;
+    const double v = std::floor(p[a] / res);
+    if (v < -kKeyOffset || v >= kKeyOffset) return false;
+    k |= (static_cast<uint64_t>(static_cast<int64_t>(v) + kKeyOffset) & kKeyMask) << (a * kKeyBits);
+  }
+  *key = k;
+  return true;
+}
+
+std::string voxelFrame(const std::vector<uint64_t>& keys, double res) {
+  std::string out = binaryHeader(BinaryFrame::kVoxels, static_cast<uint32_t>(keys.size()));
+  putLe<float>(out, static_cast<float>(res));
+  putLe<uint32_t>(out, 0);
+  for (uint64_t k : keys) {
+    for (int a = 0; a < 3; ++a) {
+      putLe<int32_t>(out, static_cast<int32_t>(
+                              static_cast<int64_t>((k >> (a * kKeyBits)) & kKeyMask) - kKeyOffset));
+    }
+  }
+  return out;
+}
+
+// Every 2^thinning-th point of `xyz` (the first one kept).
+std::vector<float> decimate(const float* xyz, size_t n, int thinning) {
+  const size_t stride = size_t{1} << thinning;
+  std::vector<float> out;
+  out.reserve((n + stride - 1) / stride * 3);
+  for (size_t i = 0; i < n; i += stride) out.insert(out.end(), xyz + 3 * i, xyz + 3 * i + 3);
+  return out;
+}
+
+}  // namespace
+
+ViewModel::ViewModel(const ViewModelOptions& options, Sink sink)
+    : options_(options), sink_(std::move(sink)), board_(options.board) {}
+
+void ViewModel::add(const Message& msg, int64_t now_utime) {
+  ++counters_.messages;
+  now_utime_ = now_utime;
+  board_.add(msg, now_utime);
+  if (msg.channel == channels::kSweepCloud) {
+    addCloud(msg);
+  } else if (msg.channel == channels::kOdometryPose) {
+    addPose(msg);
+  } else if (msg.channel == channels::kLidarScan) {
+    addScan(msg);
+  } else if (msg.channel == channels::kProfile) {
+    addProfile(msg);
+  }
+}
+
+void ViewModel::reset() {
+  sweeps_.clear();
+  cloud_to_view_.clear();
+  points_on_screen_ = 0;
+  voxels_.clear();
+  path_.clear();
+  last_pose_.clear();
+  last_scan_utime_ = 0;
+  last_scan_.reset();
+  board_ = StatusBoard(options_.board);
+  sink_(control({{"type", "reset"}}, ViewFrame::kReset));
+}
+
+ViewModel::ViewSweep& ViewModel::sweepFor(int64_t utime, int64_t cloud_sweep, int chunk_count,
+                                          const std::string& frame) {
+  const auto key = std::make_pair(utime, cloud_sweep);
+  if (auto it = cloud_to_view_.find(key); it != cloud_to_view_.end()) {
+    if (auto s = sweeps_.find(it->second); s != sweeps_.end()) return s->second;
+  }
+  // One-chunk clouds (rig B: a scan; rig C: a profile) join the newest view sweep while it
+  // is small and, outside the world frame, of the same turntable sweep.
+  if (chunk_count == 1 && !sweeps_.empty()) {
+    ViewSweep& last = sweeps_.rbegin()->second;
+    if (last.grouped && last.points < kGroupPoints &&
+        (frame == "world" || last.cloud_sweep == cloud_sweep)) {
+      cloud_to_view_[key] = last.id;
+      return last;
+    }
+  }
+  if (cloud_to_view_.size() > 100'000) cloud_to_view_.clear();  // bounded; old keys are done
+  ViewSweep& s = sweeps_[next_sweep_id_];
+  s.id = next_sweep_id_++;
+  s.utime = utime;
+  s.cloud_sweep = cloud_sweep;
+  s.grouped = chunk_count == 1;
+  cloud_to_view_[key] = s.id;
+  return s;
+}
+
+void ViewModel::addCloud(const Message& msg) {
+  cloud_chunk_t c;
+  if (!decodeMessage(msg.data.data(), msg.data.size(), &c) || c.npoints < 0 ||
+      c.xyz_m.size() != static_cast<size_t>(c.npoints)) {
+    ++counters_.malformed;
+    return;
+  }
+  ++counters_.chunks;
+  counters_.points_received += c.npoints;
+  ViewSweep& s = sweepFor(c.utime, c.sweep_id, c.chunk_count, c.frame);
+  for (int a = 0; a < 3; ++a) s.origin[a] = static_cast<float>(c.sensor_origin_m[a]);
+  std::vector<float> xyz;
+  xyz.reserve(c.xyz_m.size() * 3);
+  for (const auto& p : c.xyz_m) xyz.insert(xyz.end(), p.begin(), p.end());
+  Chunk chunk;
+  chunk.received_utime = now_utime_;
+  chunk.xyz = s.thinning == 0 ? std::move(xyz) : decimate(xyz.data(), xyz.size() / 3, s.thinning);
+  addVoxels(chunk.xyz);
+  const size_t n = chunk.xyz.size() / 3;
+  s.points += n;
+  points_on_screen_ += n;
+  s.chunks.push_back(std::move(chunk));
+  sink_(cloudFrame(s, s.chunks.back()));
+  keepBudget();
+}
+
+ViewFrame ViewModel::cloudFrame(const ViewSweep& s, const Chunk& c) const {
+  const uint32_t n = static_cast<uint32_t>(c.xyz.size() / 3);
+  std::string out = binaryHeader(BinaryFrame::kCloud, n);
+  putLe<int64_t>(out, s.id);
+  putLe<int64_t>(out, s.utime);
+  putLe<int64_t>(out, c.received_utime);
+  for (float o : s.origin) putLe<float>(out, o);
+  putLe<uint32_t>(out, 0);
+  out.append(reinterpret_cast<const char*>(c.xyz.data()), c.xyz.size() * sizeof(float));
+  ViewFrame f = bulk(std::move(out), true);
+  f.sweep = s.id;
+  f.points = n;
+  f.effect = ViewFrame::kAddPoints;
+  return f;
+}
+
+void ViewModel::thin(ViewSweep& s) {
+  size_t kept = 0;
+  for (Chunk& c : s.chunks) {
+    c.xyz = decimate(c.xyz.data(), c.xyz.size() / 3, 1);
+    kept += c.xyz.size() / 3;
+  }
+  points_on_screen_ -= s.points - kept;
+  s.points = kept;
+  ++s.thinning;
+  ++counters_.thinned;
+  sink_(control({{"type", "thin"}, {"sweep", s.id}}, ViewFrame::kThin, s.id));
+}
+
+// Oldest first: the oldest view sweep still above 1/2^kMaxThinning is thinned; when all are
+// there, the oldest is removed. The newest sweep is thinned last of all.
+void ViewModel::keepBudget() {
+  while (points_on_screen_ > options_.point_budget && !sweeps_.empty()) {
+    ViewSweep* victim = nullptr;
+    for (auto& [id, s] : sweeps_) {
+      if (s.thinning < kMaxThinning && s.points > 0) {
+        victim = &s;
+        break;
+      }
+    }
+    if (victim) {
+      thin(*victim);
+      continue;
+    }
+    auto oldest = sweeps_.begin();
+    points_on_screen_ -= oldest->second.points;
+    ++counters_.removed_sweeps;
+    sink_(
+        control({{"type", "remove"}, {"sweep", oldest->first}}, ViewFrame::kRemove, oldest->first));
+    sweeps_.erase(oldest);
+  }
+}
+
+void ViewModel::addVoxels(const std::vector<float>& xyz) {
+  std::vector<uint64_t> fresh;
+  for (size_t i = 0; i + 2 < xyz.size(); i += 3) {
+    uint64_t key;
+    if (!voxelKey(&xyz[i], options_.voxel_m, &key)) continue;
+    auto it = voxels_.find(key);
+    if (it != voxels_.end()) {
+      ++it->second;
+    } else if (voxels_.size() >= options_.max_voxels) {
+      ++counters_.voxels_refused;
+    } else {
+      voxels_.emplace(key, 1);
+      fresh.push_back(key);
+    }
+  }
+  if (!fresh.empty()) sink_(bulk(voxelFrame(fresh, options_.voxel_m), true));
+}
+
+void ViewModel::addPose(const Message& msg) {
+  pose2d_t p;
+  if (!decodeMessage(msg.data.data(), msg.data.size(), &p) || !std::isfinite(p.x_m) ||
+      !std::isfinite(p.y_m) || !std::isfinite(p.theta_rad)) {
+    ++counters_.malformed;
+    return;
+  }
+  nlohmann::json j = {{"type", "pose"}, {"utime", p.utime},     {"x", p.x_m},
+                      {"y", p.y_m},     {"theta", p.theta_rad}, {"trusted", p.trusted}};
+  last_pose_ = j.dump();
+  sink_(latest("pose", std::make_shared<const std::string>(last_pose_), false));
+  const size_t n = path_.size();
+  if (n >= 2 && std::hypot(p.x_m - path_[n - 2], p.y_m - path_[n - 1]) < options_.path_step_m) {
+    return;
+  }
+  if (n / 2 >= options_.max_path_points) path_.erase(path_.begin(), path_.begin() + n / 2);
+  path_.push_back(static_cast<float>(p.x_m));
+  path_.push_back(static_cast<float>(p.y_m));
+  sink_(bulk(nlohmann::json({{"type", "path"}, {"xy", {p.x_m, p.y_m}}}).dump(), false));
+}
+
+void ViewModel::addScan(const Message& msg) {
+  lidar_scan_t s;
+  if (!decodeMessage(msg.data.data(), msg.data.size(), &s)) {
+    ++counters_.malformed;
+    return;
+  }
+  if (last_scan_utime_ != 0 && s.utime - last_scan_utime_ < options_.scan_period_s * 1e6 &&
+      s.utime >= last_scan_utime_) {
+    return;
+  }
+  std::vector<float> yz;
+  yz.reserve(s.ranges_m.size() * 2);
+  for (size_t i = 0; i < s.ranges_m.size(); ++i) {
+    const float r = s.ranges_m[i];
+    if (!(r > 0.0f) || !std::isfinite(r)) continue;
+    const float a = s.nangles == s.nranges ? s.angles_rad[i]
+                                           : s.angle_min_rad + s.angle_increment_rad * float(i);
+    yz.push_back(r * std::sin(a));  // p_L = r [0, sin a, cos a] (Yuan 2021 Eq. 4)
+    yz.push_back(r * std::cos(a));
+  }
+  emitScan(s.utime, yz);
+}
+
+void ViewModel::addProfile(const Message& msg) {
+  profile_t p;
+  if (!decodeMessage(msg.data.data(), msg.data.size(), &p)) {
+    ++counters_.malformed;
+    return;
+  }
+  if (last_scan_utime_ != 0 && p.utime - last_scan_utime_ < options_.scan_period_s * 1e6 &&
+      p.utime >= last_scan_utime_) {
+    return;
+  }
+  std::vector<float> yz;
+  for (size_t i = 0; i < p.y_mm.size() && i < p.z_mm.size(); ++i) {
+    yz.push_back(p.y_mm[i] * 1e-3f);
+    yz.push_back(p.z_mm[i] * 1e-3f);
+  }
+  emitScan(p.utime, yz);
+}
+
+void ViewModel::emitScan(int64_t utime, const std::vector<float>& yz) {
+  last_scan_utime_ = utime;
+  std::string out = binaryHeader(BinaryFrame::kScan, static_cast<uint32_t>(yz.size() / 2));
+  putLe<int64_t>(out, utime);
+  out.append(reinterpret_cast<const char*>(yz.data()), yz.size() * sizeof(float));
+  last_scan_ = std::make_shared<const std::string>(std::move(out));
+  sink_(latest("scan", last_scan_, true));
+}
+
+std::vector<ViewFrame> ViewModel::snapshot() const {
+  std::vector<ViewFrame> out;
+  for (const auto& [id, s] : sweeps_) {
+    for (const Chunk& c : s.chunks) out.push_back(cloudFrame(s, c));
+  }
+  std::vector<uint64_t> keys;
+  keys.reserve(std::min<size_t>(voxels_.size(), 65536));
+  for (const auto& [key, hits] : voxels_) {
+    keys.push_back(key);
+    if (keys.size() == 65536) {
+      out.push_back(bulk(voxelFrame(keys, options_.voxel_m), true));
+      keys.clear();
+    }
+  }
+  if (!keys.empty()) out.push_back(bulk(voxelFrame(keys, options_.voxel_m), true));
+  if (!path_.empty()) {
+    nlohmann::json xy = nlohmann::json::array();
+    for (float v : path_) xy.push_back(v);
+    out.push_back(bulk(nlohmann::json({{"type", "path"}, {"xy", xy}}).dump(), false));
+  }
+  if (!last_pose_.empty()) {
+    out.push_back(latest("pose", std::make_shared<const std::string>(last_pose_), false));
+  }
+  if (last_scan_) out.push_back(latest("scan", last_scan_, true));
+  return out;
+}
+
+}  // namespace sweepmap
