@@ -40,6 +40,9 @@ class StatusBoard {
   int unhealthy(int64_t now_utime) const;
   // Processes seen (any status of theirs, stale or not).
   size_t processes() const { return processes_.size(); }
+  // Datagrams this monitor's own receive path refused (malformed, not allowed, not signed):
+  // shown beside the malformed messages.
+  void setDatagramsRefused(int64_t n) { datagrams_refused_ = n; }
 
  private:
   struct NodeStatus {
@@ -87,6 +90,7 @@ class StatusBoard {
   std::optional<Map> map_;
   std::optional<Sweep> sweep_;
   int64_t malformed_ = 0;
+  int64_t datagrams_refused_ = 0;
 };
 
 struct StatusOptions {
