@@ -434,7 +434,8 @@ TEST_F(HostileTest, RigCProcessesTakeEveryAttackAndTheScanStillEqualsReplay) {
 
 // With a shared key on every process, a forger on the LAN who replays the sensors' messages
 // unsigned (or signs them with another key) reaches no node: the live clouds and map are those
-// of the replay of the signed run's recording, and the forgeries are counted.
+// of the replay of the signed run's recording, and the forgeries are counted. The lidar and the
+// motor (simulated devices) take the crash datagrams meanwhile.
 TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
   const auto dir = scratchDir("hostile_key");
   procs.setDir(dir);
@@ -458,6 +459,9 @@ TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
   const pid_t forger = procs.start("forger", playerCommand(kUrl, forged));
   const pid_t motor =
       procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}));
+  // The drivers' processes (lidar, motor) take the crash datagrams too, while they run.
+  ASSERT_NO_FATAL_FAILURE(sendDatagrams(
+      crashDatagrams({"TRUTH_SHAFT", "LIDAR_SCAN", "MOTOR_STATE", "SCAN_WINDOW"}, 400)));
   ASSERT_EQ(procs.wait(motor, 90.0), 0) << procs.said(motor);
   EXPECT_EQ(procs.wait(forger, 60.0), 0) << procs.said(forger);
   procs.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {recorder, 10.0}}, 0.8);
@@ -474,6 +478,9 @@ TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
   int sweeps = 0;
   for (const auto& [k, bytes] : live) sweeps += k.second == 0;
   EXPECT_EQ(sweeps, 2);  // the forged sweep made none
+  for (const char* status : {"STATUS_LIDAR", "STATUS_MOTOR", "STATUS_ASSEMBLER"}) {
+    expectDatagramRefusalsCounted(rec, status);
+  }
 }
 
 // The command line of a generated unit's ExecStart (our paths have no spaces to quote).
