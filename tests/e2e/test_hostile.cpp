@@ -459,9 +459,20 @@ TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
   const pid_t forger = procs.start("forger", playerCommand(kUrl, forged));
   const pid_t motor =
       procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}));
+  // `sweepmap status` with the key reads the signed statuses.
+  const pid_t status =
+      procs.start("status", {binPath("sweepmap"), "status", "--once", "--json", "--window", "2.5",
+                             "--lcm-url", kUrl, "--key-file", key});
   // The drivers' processes (lidar, motor) take the crash datagrams too, while they run.
   ASSERT_NO_FATAL_FAILURE(sendDatagrams(
       crashDatagrams({"TRUTH_SHAFT", "LIDAR_SCAN", "MOTOR_STATE", "SCAN_WINDOW"}, 400)));
+  EXPECT_EQ(procs.wait(status, 20.0), 0) << procs.said(status);
+  const nlohmann::json snapshot = nlohmann::json::parse(procs.said(status), nullptr, false);
+  ASSERT_FALSE(snapshot.is_discarded()) << procs.said(status);
+  for (const char* p : {"assembler", "lidar", "motor"}) {
+    EXPECT_TRUE(snapshot["processes"].contains(p)) << p << ": " << procs.said(status);
+  }
+  EXPECT_EQ(snapshot["malformed"].get<int64_t>(), 0) << procs.said(status);
   ASSERT_EQ(procs.wait(motor, 90.0), 0) << procs.said(motor);
   EXPECT_EQ(procs.wait(forger, 60.0), 0) << procs.said(forger);
   procs.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {recorder, 10.0}}, 0.8);

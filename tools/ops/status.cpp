@@ -321,9 +321,11 @@ int onceStatus(const StatusBoard& board, int64_t now, const StatusOptions& o) {
 // that one malformed datagram kills is no monitor), any other provider through liblcm.
 class StatusSource {
  public:
-  explicit StatusSource(const std::string& url, StatusBoard* board) : board_(board) {
+  explicit StatusSource(const StatusOptions& o, StatusBoard* board) : board_(board) {
+    const std::string& url = o.lcm_url;
     if (net::isUdpmUrl(url)) {
-      udpm_ = std::make_unique<net::UdpmReceiver>(url);
+      udpm_ = std::make_unique<net::UdpmReceiver>(
+          url, net::securityOptions(url, o.allow_senders, o.key_file));
       udpm_->subscribe(".*", [this](const std::string& c, const uint8_t* d, size_t n) {
         board_->add(Message{nowUtime(), c, std::vector<uint8_t>(d, d + n)}, nowUtime());
       });
@@ -358,7 +360,7 @@ int runStatus(const StatusOptions& o) {
   StatusBoard board(o.board);
   std::unique_ptr<StatusSource> source;
   try {
-    source = std::make_unique<StatusSource>(o.lcm_url, &board);
+    source = std::make_unique<StatusSource>(o, &board);
   } catch (const std::exception& e) {
     std::cerr << "sweepmap status: " << e.what() << "\n";
     return kExitUsage;

@@ -99,6 +99,10 @@ struct StatusOptions {
   bool json = false;      // with once: JSON instead of the table
   double window_s = 2.5;  // once: how long to listen (a 1 Hz status is seen at least twice)
   StatusBoardOptions board;
+  // As the processes take them: hear only these senders, only messages signed with this key
+  // (a deployment with the key on signs every status: without it, none would decode).
+  std::vector<std::string> allow_senders;
+  std::string key_file;
 };
 
 // Runs the dashboard (refreshing once a second until SIGINT/SIGTERM) or one snapshot. Returns
