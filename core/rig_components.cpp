@@ -152,6 +152,62 @@ void MapperConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "prob_miss", &prob_miss, "", "sensor model: occupancy probability of a miss");
   s.add(p + "clamp_min", &clamp_min, "", "lower clamping threshold");
   s.add(p + "clamp_max", &clamp_max, "", "upper clamping threshold");
+  s.add(p + "max_pending_sweeps", &max_pending_sweeps, "",
+        "sweeps being assembled at once; beyond, the oldest goes into the map as it is "
+        "(`incomplete_sweeps`)");
+  s.add(p + "max_pending_points", &max_pending_points, "",
+        "points held in sweeps being assembled (12 bytes each); beyond, as above");
+  s.add(p + "save_interval_s", &save_interval_s, "s",
+        "at most one MAP_SAVE request honoured per this long (`refused_saves`)");
+  s.add(p + "max_requested_files", &max_requested_files, "",
+        "map files MAP_SAVE requests may create in a run (`refused_saves`)");
+}
+
+namespace {
+void requirePositive(bool ok, const std::string& path, const std::string& key) {
+  if (!ok) throw ConfigError(path + ": key '" + key + "' must be > 0");
+}
+}  // namespace
+
+void MapperConfig::validateBounds(const std::string& path, const std::string& p) const {
+  requirePositive(max_pending_sweeps > 0, path, p + "max_pending_sweeps");
+  requirePositive(max_pending_points > 0, path, p + "max_pending_points");
+  requirePositive(save_interval_s > 0, path, p + "save_interval_s");
+  requirePositive(max_requested_files > 0, path, p + "max_requested_files");
+}
+
+void NetworkConfig::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "queue_messages", &queue_messages, "",
+        "receive queue bound in messages (--queue-capacity overrides it); a message that finds "
+        "it full is dropped (`dropped`)");
+  s.add(p + "queue_mib", &queue_mib, "MiB", "receive queue bound in bytes, as above");
+  s.add(p + "max_message_mib", &max_message_mib, "MiB",
+        "largest fragmented LCM message accepted (`net_refused_message_too_large`)");
+  s.add(p + "pending_messages_per_sender", &pending_messages_per_sender, "",
+        "fragmented messages being reassembled per sender (`net_refused_sender_limit`)");
+  s.add(p + "pending_mib_per_sender", &pending_mib_per_sender, "MiB",
+        "fragment bytes held per sender (`net_refused_sender_limit`)");
+  s.add(p + "pending_mib", &pending_mib, "MiB",
+        "fragment bytes held for all senders (`net_refused_memory_limit`)");
+  s.add(p + "max_senders", &max_senders, "",
+        "senders with messages being reassembled (`net_refused_sender_limit`)");
+  s.add(p + "fragment_timeout_s", &fragment_timeout_s, "s",
+        "an unfinished message expires this long after its last fragment "
+        "(`net_refused_timed_out`)");
+}
+
+void NetworkConfig::validate(const std::string& path, const std::string& p) const {
+  requirePositive(queue_messages > 0, path, p + "queue_messages");
+  requirePositive(queue_mib > 0, path, p + "queue_mib");
+  // A fragmented message is at most 2^28 bytes on LCM's wire (liblcm's own bound).
+  if (!(max_message_mib > 0 && max_message_mib <= 256)) {
+    throw ConfigError(path + ": key '" + p + "max_message_mib' must be in (0, 256]");
+  }
+  requirePositive(pending_messages_per_sender > 0, path, p + "pending_messages_per_sender");
+  requirePositive(pending_mib_per_sender > 0, path, p + "pending_mib_per_sender");
+  requirePositive(pending_mib > 0, path, p + "pending_mib");
+  requirePositive(max_senders > 0, path, p + "max_senders");
+  requirePositive(fragment_timeout_s > 0, path, p + "fragment_timeout_s");
 }
 
 void SimRigConfig::declare(ConfigSchema& s, const std::string& p) {

@@ -106,7 +106,33 @@ struct MapperConfig {
   // one update of the tree's inner nodes (OccupancyMap::insertClouds; same map). 0: each
   // sweep on its own.
   double batch_s = 0.0;
+  // Bounds: sweeps being assembled (the oldest goes into the map as it is, counted as
+  // incomplete, when one is reached), and MAP_SAVE requests from the network (rate, names).
+  int max_pending_sweeps = 4;
+  int max_pending_points = 4'000'000;  // 48 MB of xyz floats
+  double save_interval_s = 1.0;        // at most one MAP_SAVE honoured per this long
+  int max_requested_files = 16;        // names a run's MAP_SAVE requests may create
   void declare(ConfigSchema& s, const std::string& prefix);
+  // Throws ConfigError naming `path` and the key of a bound that is not positive.
+  void validateBounds(const std::string& path, const std::string& prefix) const;
+};
+
+// Bounds of a live process's receive path (keys network.* of every rig file): its queue of
+// messages for the nodes, and the reassembly of fragmented LCM datagrams
+// (net/lcm_datagram.hpp). What a bound refuses is counted in the nodes' status (`dropped`,
+// `net_refused_<reason>`).
+struct NetworkConfig {
+  int queue_messages = 10000;
+  double queue_mib = 64.0;
+  double max_message_mib = 16.0;        // a fragmented message's declared size
+  int pending_messages_per_sender = 4;  // messages being reassembled, per sender
+  double pending_mib_per_sender = 24.0;
+  double pending_mib = 64.0;  // all senders together
+  int max_senders = 64;       // senders with messages being reassembled
+  double fragment_timeout_s =
+      1.0;  // an unfinished message expires this long after its last fragment
+  void declare(ConfigSchema& s, const std::string& prefix);
+  void validate(const std::string& path, const std::string& prefix) const;
 };
 
 // Error model of the simulated rig A (Yuan 2021 section 2). Read by the simulator only.

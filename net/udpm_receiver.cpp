@@ -138,13 +138,18 @@ UdpmReceiver::UdpmReceiver(const std::string& url, ReceiverOptions options)
     check(setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_LOOP, &loop, sizeof loop), "IP_MULTICAST_LOOP");
     const int rcvbuf = u.recv_buf_size > 0 ? u.recv_buf_size : 2048 * 1024;
     setsockopt(fd_, SOL_SOCKET, SO_RCVBUF, &rcvbuf, sizeof rcvbuf);  // best effort, as liblcm
+    // Bound to the group's address, not to every address (liblcm binds INADDR_ANY): a datagram
+    // sent to this host's own address and the port (unicast, from anywhere it routes) is not
+    // ours, and with IP_MULTICAST_ALL off neither is another group's traffic on the same port.
     sockaddr_in addr{};
     addr.sin_family = AF_INET;
-    addr.sin_addr.s_addr = htonl(INADDR_ANY);
+    inet_pton(AF_INET, u.group.c_str(), &addr.sin_addr);
     addr.sin_port = htons(u.port);
     check(::bind(fd_, reinterpret_cast<sockaddr*>(&addr), sizeof addr), "bind");
+    const int all = 0;
+    setsockopt(fd_, IPPROTO_IP, IP_MULTICAST_ALL, &all, sizeof all);  // Linux >= 2.6.31
     ip_mreq mreq{};
-    inet_pton(AF_INET, u.group.c_str(), &mreq.imr_multiaddr);
+    mreq.imr_multiaddr = addr.sin_addr;
     mreq.imr_interface.s_addr = htonl(INADDR_ANY);
     check(setsockopt(fd_, IPPROTO_IP, IP_ADD_MEMBERSHIP, &mreq, sizeof mreq),
           "IP_ADD_MEMBERSHIP (is there a multicast route? see docs: ip route add 224.0.0.0/4)");

@@ -49,6 +49,9 @@ struct EkfConfig {
   double max_speed_m_s = 5.0;       // beyond: absurd input
   double max_turn_rate_rad_s = 20.0;
   double trusted_theta_sigma_rad = 0.2;  // beyond: not trusted
+  // After an input is refused (invalid, or stamped off its stream), poses are not trusted
+  // (and the odometry DEGRADED) until good input has covered this much message time.
+  double refused_input_window_s = 2.0;
 };
 
 using EkfState = Eigen::Matrix<double, 6, 1>;

@@ -28,7 +28,11 @@ void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "max_speed_m_s", &ekf.max_speed_m_s, "m/s", "faster wheel speeds are absurd");
   s.add(p + "max_turn_rate_rad_s", &ekf.max_turn_rate_rad_s, "rad/s", "faster rates are absurd");
   s.add(p + "trusted_theta_sigma_rad", &ekf.trusted_theta_sigma_rad, "rad",
-        "heading sigma beyond which the pose is not trusted");
+        "heading sigma beyond which the pose is not trusted (and the status DEGRADED)");
+  s.add(p + "refused_input_window_s", &ekf.refused_input_window_s, "s",
+        "after a refused IMU or WHEEL_TICKS message (invalid, or stamped off its stream), poses "
+        "are not trusted and the status is DEGRADED until good input has covered this much "
+        "message time");
 }
 
 }  // namespace sweepmap

@@ -9,6 +9,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <variant>
 #include <vector>
 
 #include "core/command_line.hpp"
@@ -24,12 +25,14 @@ struct CommonOptions {
   std::string rig_path;
   std::vector<std::string> overrides;
   std::string lcm_url = kDefaultLcmUrl;
-  size_t queue_capacity = LiveOptions{}.queue_capacity;
+  size_t queue_capacity = 0;               // --queue-capacity; 0: the rig's network.queue_messages
   std::vector<std::string> allow_senders;  // --allow-senders
   std::string key_file;                    // --key-file
   // Parsed from the two above by loadRigOrReport.
   std::set<uint32_t> allowed_senders;
   std::shared_ptr<const net::MessageAuth> auth;
+  // The rig's receive-path bounds (network.*), copied by loadRigOrReport.
+  NetworkConfig network;
 };
 
 // --rig's help names the kinds this process takes, with their reference rigs' names.
@@ -51,8 +54,7 @@ inline void addCommonOptions(CLI::App& app, CommonOptions& o,
   app.add_option("--lcm-url", o.lcm_url, "LCM provider URL")->capture_default_str();
   app.add_option("--queue-capacity", o.queue_capacity,
                  "receive queue bound [messages]; a message that finds it full is dropped and "
-                 "counted (`dropped` in the status)")
-      ->capture_default_str()
+                 "counted (`dropped` in the status); default: the rig's network.queue_messages")
       ->check(atLeast(1));
   app.add_option("--allow-senders", o.allow_senders,
                  "receive only from these IPv4 addresses (comma-separated; counted as "
@@ -75,13 +77,29 @@ inline void parseSecurityOptions(CommonOptions& o) {
 // start-up exchanges all time out sooner): the process withholds its watchdog ping.
 constexpr int64_t kDeviceWorkerStallMs = 10000;
 
-// The live runner's options with the command line's queue bound.
+// The datagram reassembler's bounds from a rig's network.* keys.
+inline net::ReassemblyLimits reassemblyLimits(const NetworkConfig& n) {
+  constexpr double kMiB = 1 << 20;
+  net::ReassemblyLimits l;
+  l.max_message_bytes = static_cast<size_t>(n.max_message_mib * kMiB);
+  l.max_pending_per_sender = static_cast<size_t>(n.pending_messages_per_sender);
+  l.max_pending_bytes_per_sender = static_cast<size_t>(n.pending_mib_per_sender * kMiB);
+  l.max_pending_bytes = static_cast<size_t>(n.pending_mib * kMiB);
+  l.max_senders = static_cast<size_t>(n.max_senders);
+  l.fragment_timeout_us = static_cast<int64_t>(n.fragment_timeout_s * 1e6);
+  return l;
+}
+
+// The live runner's options: the URL, the security options and the rig's bounds (the
+// command line's --queue-capacity over network.queue_messages).
 inline LiveOptions liveOptions(const CommonOptions& o) {
-  LiveOptions options;
-  options.lcm_url = o.lcm_url;
+  LiveOptions options(o.lcm_url);
   options.allowed_senders = o.allowed_senders;
   options.auth = o.auth;
-  options.queue_capacity = o.queue_capacity;
+  options.queue_capacity =
+      o.queue_capacity > 0 ? o.queue_capacity : static_cast<size_t>(o.network.queue_messages);
+  options.queue_capacity_bytes = static_cast<size_t>(o.network.queue_mib * (1 << 20));
+  options.reassembly = reassemblyLimits(o.network);
   return options;
 }
 
@@ -91,7 +109,9 @@ inline LiveOptions liveOptions(const CommonOptions& o) {
 inline std::optional<Rig> loadRigOrReport(CommonOptions& o) {
   try {
     parseSecurityOptions(o);
-    return loadRig(o.rig_path, o.overrides);
+    Rig rig = loadRig(o.rig_path, o.overrides);
+    o.network = std::visit([](const auto& c) { return c.network; }, rig.config);
+    return rig;
   } catch (const std::exception& e) {
     std::cerr << "config error: " << e.what() << "\n";
     return std::nullopt;

@@ -2,9 +2,7 @@
 
 #include <cerrno>
 #include <chrono>
-#include <condition_variable>
 #include <csignal>
-#include <deque>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
 #include <map>
@@ -15,6 +13,7 @@
 
 #include "core/exit_codes.hpp"
 #include "net/udpm_receiver.hpp"
+#include "processes/inbox.hpp"
 #include "processes/sd_notify.hpp"
 
 namespace sweepmap {
@@ -30,46 +29,6 @@ std::string thisProcessName() {
   const std::string prefix = "sweepmap-";
   return name.rfind(prefix, 0) == 0 ? name.substr(prefix.size()) : name;
 }
-
-class Inbox {
- public:
-  Inbox(size_t capacity, size_t capacity_bytes)
-      : capacity_(capacity), capacity_bytes_(capacity_bytes) {}
-  void push(Message m, bool wake) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (queue_.size() >= capacity_ || bytes_ + m.data.size() > capacity_bytes_) {
-      ++dropped_[m.channel];
-      return;
-    }
-    bytes_ += m.data.size();
-    queue_.push_back(std::move(m));
-    if (wake) cv_.notify_one();
-  }
-  // Waits until a message is there or `deadline`; returns everything queued.
-  std::deque<Message> popUntil(std::chrono::steady_clock::time_point deadline) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    cv_.wait_until(lock, deadline, [&] { return !queue_.empty(); });
-    std::deque<Message> out;
-    out.swap(queue_);
-    bytes_ = 0;
-    return out;
-  }
-  std::map<std::string, int64_t> takeDropped() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    std::map<std::string, int64_t> d;
-    d.swap(dropped_);
-    return d;
-  }
-
- private:
-  std::mutex mutex_;
-  std::condition_variable cv_;
-  std::deque<Message> queue_;
-  size_t capacity_;
-  size_t capacity_bytes_;
-  size_t bytes_ = 0;
-  std::map<std::string, int64_t> dropped_;
-};
 
 // LCM's receive callback: copies the message into the inbox. Subscribed with
 // subscribeFunction (a plain function and a context pointer), not with subscribe(channel,
@@ -114,6 +73,7 @@ class LiveRun {
     if (net::isUdpmUrl(options.lcm_url)) {
       net::ReceiverOptions receive;
       receive.allowed_senders = options.allowed_senders;
+      receive.limits = options.reassembly;
       if (options.auth) receive.auth = *options.auth;
       udpm_ = std::make_unique<net::UdpmReceiver>(options.lcm_url, std::move(receive));
     }

@@ -9,8 +9,10 @@
 #include <memory>
 #include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
+#include "net/lcm_datagram.hpp"
 #include "processes/node.hpp"
 
 namespace lcm {
@@ -23,12 +25,15 @@ class MessageAuth;
 namespace sweepmap {
 
 struct LiveOptions {
+  // The URL is required: a caller that forgot it must not be routed silently through liblcm's
+  // receive code (as a default of "memq://" would do for an udpm:// handle).
+  explicit LiveOptions(std::string url) : lcm_url(std::move(url)) {}
   // The provider URL the LCM handle was made with. An udpm:// URL (or "" under
   // LCM_DEFAULT_URL=udpm://...) is received by sweepmap's own validating receiver
   // (net/udpm_receiver.hpp), never by liblcm 1.3.1's, which one malformed datagram crashes;
   // liblcm then only publishes. Other providers (memq://, file://) are in-process: liblcm
   // receives them. Processes set it from --lcm-url (liveOptions in cli_common.hpp).
-  std::string lcm_url = "memq://";
+  std::string lcm_url;
   // Receive only from these IPv4 senders (host byte order); empty: any (udpm:// only).
   std::set<uint32_t> allowed_senders;
   // Set: every message published is signed with this key, and only messages signed with it
@@ -41,8 +46,10 @@ struct LiveOptions {
   // instead of two thread switches per message (which dominate the cost of a cheap node
   // such as the odometry's). Results do not change: nodes never read the wall clock for them.
   bool wake_on_message = true;
-  size_t queue_capacity = 10000;            // messages
-  size_t queue_capacity_bytes = 64u << 20;  // and bytes (a Pi has little memory)
+  size_t queue_capacity = 10000;            // messages (the rig's network.queue_messages)
+  size_t queue_capacity_bytes = 64u << 20;  // and bytes (network.queue_mb; a Pi has little memory)
+  // The bounds of the datagram receive path (udpm:// only; the rig's network.* keys).
+  net::ReassemblyLimits reassembly;
   // Polled after every tick: return true to stop (e.g. the motor has done its sweeps).
   std::function<bool()> should_stop;
   // Polled before each sd_notify WATCHDOG=1 (under systemd or `sweepmap launch`): false

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <regex>
 
@@ -107,13 +108,17 @@ std::string MapperNode::refuseMapSave(const std::string& name, int64_t utime) co
     return "'" + shown + "' is not a file name of the pattern [A-Za-z0-9][A-Za-z0-9_.-]{0,63}.bt";
   }
   if (requested_save_done_ &&
-      utime - last_requested_save_utime_ < static_cast<int64_t>(kMapSaveIntervalS * 1e6)) {
-    return "one request per " + std::to_string(static_cast<int>(kMapSaveIntervalS)) + " s";
+      utime - last_requested_save_utime_ < static_cast<int64_t>(config_.save_interval_s * 1e6)) {
+    char text[64];
+    std::snprintf(text, sizeof text, "one request per %g s (mapper.save_interval_s)",
+                  config_.save_interval_s);
+    return text;
   }
   const bool own = name == std::filesystem::path(save_path_).filename().string();
-  if (!own && !written_.count(name) && written_.size() >= kMaxRequestedFiles + 1) {
-    return "this mapper has written " + std::to_string(kMaxRequestedFiles) +
-           " requested files already";
+  const size_t max_files = static_cast<size_t>(config_.max_requested_files);
+  if (!own && !written_.count(name) && written_.size() >= max_files + 1) {
+    return "this mapper has written " + std::to_string(max_files) +
+           " requested files already (mapper.max_requested_files)";
   }
   const std::filesystem::path target = std::filesystem::path(save_path_).parent_path() / name;
   std::error_code ec;
@@ -126,8 +131,9 @@ std::string MapperNode::refuseMapSave(const std::string& name, int64_t utime) co
 // Sweeps that never complete (a lost status, a forged chunk) must not pile up: over the bounds,
 // the oldest pending sweep goes into the map as it is.
 void MapperNode::boundPending(int64_t now_utime, Outbox& out) {
-  while (pending_.size() > kMaxPendingSweeps ||
-         (pending_points_ > kMaxPendingPoints && pending_.size() > 1)) {
+  while (
+      pending_.size() > static_cast<size_t>(config_.max_pending_sweeps) ||
+      (pending_points_ > static_cast<size_t>(config_.max_pending_points) && pending_.size() > 1)) {
     count("pending_evicted");
     insert(now_utime, pending_.begin()->first, out);
   }

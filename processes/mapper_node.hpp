@@ -32,14 +32,10 @@ class MapperNode : public Node {
   //
   // A MAP_SAVE request comes from the network: it is a request, not a command. It is honoured
   // only for a name of the pattern [A-Za-z0-9][A-Za-z0-9_.-]{0,63}.bt, never over a file this
-  // mapper did not write, at most once every kMapSaveIntervalS and for at most
-  // kMaxRequestedFiles names per run; everything refused is counted (`refused_saves`).
-  // Sweeps being assembled are bounded too (kMaxPendingSweeps, kMaxPendingPoints): the oldest
-  // goes into the map as it is (counted as incomplete) when a bound is reached.
-  static constexpr double kMapSaveIntervalS = 1.0;
-  static constexpr size_t kMaxRequestedFiles = 16;
-  static constexpr size_t kMaxPendingSweeps = 4;
-  static constexpr size_t kMaxPendingPoints = 4'000'000;  // 48 MB of xyz floats
+  // mapper did not write, at most once every config.save_interval_s and for at most
+  // config.max_requested_files names per run; everything refused is counted (`refused_saves`).
+  // Sweeps being assembled are bounded too (config.max_pending_sweeps, max_pending_points): the
+  // oldest goes into the map as it is (counted as `pending_evicted`) when a bound is reached.
   MapperNode(const MapperConfig& config, std::string save_path, int save_every = 0);
   ~MapperNode() override;
   std::vector<std::string> subscriptions() const override;
@@ -76,7 +72,7 @@ class MapperNode : public Node {
   int updates_since_save_ = 0;
   std::unique_ptr<OccupancyMap> map_;
   std::map<SweepKey, PendingSweep> pending_;
-  std::set<SweepKey> inserted_;  // the last kMaxPendingSweeps * 16 keys (late chunks)
+  std::set<SweepKey> inserted_;  // the last 1000 keys (late chunks)
   size_t pending_points_ = 0;
   std::set<std::string> written_;  // file names this mapper wrote in save_path's folder
   int64_t last_requested_save_utime_ = 0;

@@ -27,6 +27,7 @@ void Node::receive(const Message& msg, Outbox& out) {
       !why.empty()) {
     count("invalid_" + msg.channel);
     reportError("invalid", msg.channel + ": " + why);
+    onRefused(msg);
     return;
   }
   // Its own stamp against this node's clock and the channel's stream (stamp_guard.hpp).
@@ -36,6 +37,7 @@ void Node::receive(const Message& msg, Outbox& out) {
   if (std::string why; !stamps_.admit(msg.channel, stamp, msg.utime, &why)) {
     count("stamp_refused_" + msg.channel);
     reportError("stamp_refused", why);
+    onRefused(msg);
     return;
   }
   try {

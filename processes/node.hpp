@@ -85,6 +85,9 @@ class Node {
  protected:
   virtual void handle(const Message& msg, Outbox& out) = 0;
   virtual void advance(int64_t now_utime, Outbox& out) {}
+  // A message refused before handle() (invalid against its schema, or its stamp off its
+  // stream): counted already; a node whose estimate depends on that input may say so.
+  virtual void onRefused(const Message& msg) {}
   void count(const std::string& name, int64_t n = 1) { counters_[name] += n; }
   // For counters kept elsewhere (a device driver's): the status shows `value`.
   void setCounter(const std::string& name, int64_t value) { counters_[name] = value; }

@@ -1,5 +1,6 @@
 #include "processes/odometry_node.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <utility>
 
@@ -84,26 +85,51 @@ void OdometryNode::pollDevices(int64_t now_utime, Outbox& out) {
   }
 }
 
+// The status: DEGRADED while input was refused recently, the IMU is out, or the EKF's covariance
+// says its poses are not to be trusted (in that order of precedence); OK otherwise.
 void OdometryNode::checkImu(int64_t now_utime) {
-  if (!config_.use_imu || last_wheels_rx_ < 0) return;
-  const bool wheels_alive = now_utime - last_wheels_rx_ <= kImuTimeoutUs;
-  const bool imu_silent = now_utime - last_imu_rx_ > kImuTimeoutUs;
-  if (wheels_alive && imu_silent) {
-    if (!degraded()) count("imu_outages");
+  if (config_.use_imu && last_wheels_rx_ >= 0) {
+    const bool wheels_alive = now_utime - last_wheels_rx_ <= kImuTimeoutUs;
+    const bool imu_silent = now_utime - last_imu_rx_ > kImuTimeoutUs;
+    if (wheels_alive && imu_silent && !imu_out_) count("imu_outages");
+    if (wheels_alive && imu_silent) imu_out_ = true;
+    if (!imu_silent) imu_out_ = false;
+  }
+  if (ekf_started_ && refusedRecently(latest_stamp_)) {
+    setDegraded(refused_channel_ +
+                " input refused: poses not trusted until good input has covered " +
+                std::to_string(config_.ekf.refused_input_window_s) + " s");
+  } else if (imu_out_) {
     setDegraded("no IMU sample for " + std::to_string(kImuTimeoutUs / 1000) +
                 " ms: EKF on wheels alone");
-  } else if (!imu_silent) {
-    clearDegraded("IMU samples again: EKF fuses the gyro");
+  } else if (ekf_started_ && !ekf_.trusted()) {
+    setDegraded("EKF heading sigma over odometry.trusted_theta_sigma_rad: poses not trusted");
+  } else {
+    clearDegraded("IMU and wheels fused, input good: poses trusted");
   }
+}
+
+void OdometryNode::onRefused(const Message& msg) {
+  if (msg.channel == channels::kImu || msg.channel == channels::kWheelTicks) refused(msg.channel);
+}
+
+// Poses are not trusted until good input has covered the window from the latest good stamp.
+void OdometryNode::refused(const std::string& channel) {
+  count("refused_input");
+  refused_channel_ = channel;
+  trust_again_from_ =
+      latest_stamp_ + static_cast<int64_t>(config_.ekf.refused_input_window_s * 1e6);
 }
 
 void OdometryNode::onTicks(const Message& msg, Outbox& out) {
   wheel_ticks_t m;
   if (!decodeMessage(msg, &m)) {
     reportError("invalid", "malformed wheel_ticks_t");
+    refused(msg.channel);
     return;
   }
   if (!last_ticks_) {
+    latest_stamp_ = std::max(latest_stamp_, m.utime);
     last_ticks_ = Ticks{m.utime, m.left_ticks, m.right_ticks};
     if (!ekf_started_) {
       ekf_ = OdometryEkf(config_.ekf, m.utime);
@@ -114,6 +140,7 @@ void OdometryNode::onTicks(const Message& msg, Outbox& out) {
   if (m.utime <= last_ticks_->utime) {
     reportError("invalid", "wheel ticks at " + std::to_string(m.utime) + " us not after " +
                                std::to_string(last_ticks_->utime) + " us");
+    refused(msg.channel);
     return;
   }
   const double dt = 1e-6 * static_cast<double>(m.utime - last_ticks_->utime);
@@ -125,8 +152,10 @@ void OdometryNode::onTicks(const Message& msg, Outbox& out) {
     reportError("invalid", "absurd wheel speed " + std::to_string(vl) + ", " + std::to_string(vr) +
                                " m/s (ticks jumped?)");
     last_ticks_ = Ticks{m.utime, m.left_ticks, m.right_ticks};
+    refused(msg.channel);
     return;
   }
+  latest_stamp_ = std::max(latest_stamp_, m.utime);
   // Wheel odometry, Eq. 2-5, with the speeds over the interval just ended.
   last_twist_ = twistFromWheels(vl, vr, config_.ekf.wheel_distance_m);
   odometry_ = integrateOdometry(odometry_, last_twist_, dt);
@@ -144,12 +173,14 @@ void OdometryNode::onImu(const Message& msg) {
   imu_t m;
   if (!decodeMessage(msg, &m)) {
     reportError("invalid", "malformed imu_t");
+    refused(msg.channel);
     return;
   }
   if (!ekf_started_) {
     ekf_ = OdometryEkf(config_.ekf, m.utime);
     ekf_started_ = true;
   }
+  latest_stamp_ = std::max(latest_stamp_, m.utime);
   if (!ekf_.addGyro(m.utime, m.gyro_rad_s[2])) count("gyro_rejected");
   if (config_.ekf.yaw_sigma_rad > 0.0 && !ekf_.addYaw(m.utime, m.rpy_rad[2])) count("yaw_rejected");
 }
@@ -177,7 +208,7 @@ void OdometryNode::publish(int64_t utime, int64_t now, Outbox& out) {
   for (int r = 0; r < 3; ++r) {
     for (int c = 0; c < 3; ++c) e.covariance[r * 3 + c] = ekf_.covariance()(r, c);
   }
-  e.trusted = ekf_.trusted();
+  e.trusted = trustedAt(e.utime);
   if (!e.trusted) count("untrusted_poses");
   out.publish(channels::kOdometryPose, now, e);
 }

@@ -14,6 +14,12 @@
 // IMU outage: while wheel readings arrive and no IMU sample has come for imu_timeout (a
 // disconnected IMU is reconnecting), the status is DEGRADED ("EKF on wheels alone") and the EKF
 // goes on from the wheels alone; counted in imu_outages, cleared when samples return.
+//
+// Refused input: after an IMU or WHEEL_TICKS message is refused (invalid, stamped off its
+// stream, absurd), the poses say trusted = false and the status DEGRADED until good input has
+// covered ekf.refused_input_window_s of message time (the window is in message time, so live
+// and replay agree); so do they while the EKF's covariance says it is not to be trusted
+// (heading sigma over ekf.trusted_theta_sigma_rad).
 #pragma once
 
 #include <optional>
@@ -38,11 +44,15 @@ class OdometryNode : public Node {
  protected:
   void handle(const Message& msg, Outbox& out) override;
   void advance(int64_t now_utime, Outbox& out) override;
+  void onRefused(const Message& msg) override;
 
  private:
   void process(const Message& msg, Outbox& out);
   void pollDevices(int64_t now_utime, Outbox& out);
   void checkImu(int64_t now_utime);
+  void refused(const std::string& channel);
+  bool refusedRecently(int64_t stamp) const { return stamp < trust_again_from_; }
+  bool trustedAt(int64_t stamp) const { return ekf_.trusted() && !refusedRecently(stamp); }
   void onTicks(const Message& msg, Outbox& out);
   void onImu(const Message& msg);
   void publish(int64_t utime, int64_t now, Outbox& out);
@@ -61,6 +71,12 @@ class OdometryNode : public Node {
   WheelDevice* wheel_device_ = nullptr;
   // Receive times [us] of the latest IMU and wheel messages (-1: none yet).
   int64_t last_imu_rx_ = -1, last_wheels_rx_ = -1;
+  bool imu_out_ = false;
+  // Refused input: the latest stamp of good input, and the stamp from which poses are trusted
+  // again; the channel of the last refusal.
+  int64_t latest_stamp_ = 0;
+  int64_t trust_again_from_ = 0;
+  std::string refused_channel_;
 };
 
 }  // namespace sweepmap

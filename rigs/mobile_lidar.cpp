@@ -60,6 +60,7 @@ void MobileLidarConfig::declare(ConfigSchema& s) {
         "scans whose time falls in the same window of this length are inserted as one batch "
         "(one update of the tree's inner nodes and one MAP_STATS; the map is the same); 0: "
         "every scan on its own");
+  network.declare(s, "network.");
   sim.declare(s, "sim.");
 }
 
@@ -89,6 +90,8 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   if (!(c.mapper.batch_s >= 0.0 && c.mapper.batch_s <= 3600.0)) {
     throw ConfigError(path + ": key 'mapper.batch_s' must be in [0, 3600]");
   }
+  c.mapper.validateBounds(path, "mapper.");
+  c.network.validate(path, "network.");
   if (c.assembler.pose_channel != "ODOMETRY_POSE" && c.assembler.pose_channel != "WHEEL_ODOMETRY") {
     throw ConfigError(path +
                       ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");

@@ -50,7 +50,8 @@ struct MobileLidarConfig {
   MountingConfig mounting;
   WorldAssemblerConfig assembler;
   MapperConfig mapper;
-  SimMobileConfig sim;  // `sweepmap sim` only: the simulated car's truth and noise
+  NetworkConfig network;  // every live process: its receive queue and datagram reassembly
+  SimMobileConfig sim;    // `sweepmap sim` only: the simulated car's truth and noise
   void declare(ConfigSchema& s);
 };
 

@@ -15,6 +15,7 @@ void RotatingLidarConfig::declare(ConfigSchema& s) {
   plate.declare(s, "plate.");
   assembler.declare(s, "assembler.");
   mapper.declare(s, "mapper.");
+  network.declare(s, "network.");
   sim.declare(s, "sim.");
 }
 
@@ -62,6 +63,8 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   require(rig.mapper.clamp_min > 0 && rig.mapper.clamp_min < rig.mapper.clamp_max &&
               rig.mapper.clamp_max < 1,
           "mapper.clamp_max", "needs 0 < clamp_min < clamp_max < 1");
+  rig.mapper.validateBounds(path, "mapper.");
+  rig.network.validate(path, "network.");
   if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane") {
     throw ConfigError(path + ": key 'plate.beta_method' must be centroid or ray_plane");
   }

@@ -19,6 +19,7 @@ struct RotatingLidarConfig {
   PlateConfig plate;
   AssemblerConfig assembler;
   MapperConfig mapper;
+  NetworkConfig network;  // every live process: its receive queue and datagram reassembly
   SimRigConfig sim;
   void declare(ConfigSchema& s);
 };

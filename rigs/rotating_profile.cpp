@@ -37,6 +37,7 @@ void RotatingProfileConfig::declare(ConfigSchema& s) {
         "profiles whose time falls in the same window of this length are inserted as one batch "
         "(one update of the tree's inner nodes and one MAP_STATS; the map is the same); 0: "
         "every profile on its own");
+  network.declare(s, "network.");
   sim.declare(s, "sim.");
 }
 
@@ -62,6 +63,8 @@ void validate(const std::string& path, const RotatingProfileConfig& rig) {
   require(rig.mapper.resolution_m >= 0.0005, "mapper.resolution_m", "must be >= 0.0005");
   require(rig.mapper.batch_s >= 0.0 && rig.mapper.batch_s <= 3600.0, "mapper.batch_s",
           "must be in [0, 3600]");
+  rig.mapper.validateBounds(path, "mapper.");
+  rig.network.validate(path, "network.");
   const SimProfileConfig& s = rig.sim;
   require(s.scene == "plate" || s.scene == "test_piece", "sim.scene",
           "must be plate or test_piece");

@@ -32,8 +32,9 @@ struct RotatingProfileConfig {
   ProfilerConfig profiler;
   TurntableConfig turntable;
   ProfileGeometryConfig geometry;
-  MapperConfig mapper;   // sweepmap-mapper: the OctoMap of the profiles (one ray cast each)
-  SimProfileConfig sim;  // `sweepmap sim` only: the truth and the error sources
+  MapperConfig mapper;    // sweepmap-mapper: the OctoMap of the profiles (one ray cast each)
+  NetworkConfig network;  // every live process: its receive queue and datagram reassembly
+  SimProfileConfig sim;   // `sweepmap sim` only: the truth and the error sources
   void declare(ConfigSchema& s);
 };
 

@@ -34,14 +34,14 @@ bool privateNetwork(std::string* why) {
   return state == 1;
 }
 
-// Sends raw bytes to the group, as an attacker on the LAN would.
-void sendRaw(const std::vector<uint8_t>& bytes) {
+// Sends raw bytes to the group (or to `address`), as an attacker on the LAN would.
+void sendRaw(const std::vector<uint8_t>& bytes, const char* address = "239.255.76.67") {
   const int fd = socket(AF_INET, SOCK_DGRAM, 0);
   ASSERT_GE(fd, 0);
   sockaddr_in to{};
   to.sin_family = AF_INET;
   to.sin_port = htons(7671);
-  inet_pton(AF_INET, "239.255.76.67", &to.sin_addr);
+  inet_pton(AF_INET, address, &to.sin_addr);
   ASSERT_EQ(sendto(fd, bytes.data(), bytes.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to),
             static_cast<ssize_t>(bytes.size()));
   close(fd);
@@ -147,6 +147,22 @@ TEST(UdpmReceiver, AnAllowListDropsEveryOtherSender) {
   pump(receiver, got, 1);
   EXPECT_TRUE(got.messages.empty());
   EXPECT_EQ(receiver.counters().not_allowed, 3u);
+}
+
+// The socket is bound to the group, not to every address: a datagram sent straight to the
+// host's address and the port (unicast, which any host that routes to it can send) is not read.
+TEST(UdpmReceiver, HearsTheGroupOnlyNotUnicastToThePort) {
+  std::string why;
+  if (!privateNetwork(&why)) GTEST_SKIP() << why;
+  UdpmReceiver receiver(kUrl);
+  Received got;
+  got.attach(receiver, ".*");
+  sendRaw({'L', 'C', '0', '2', 0, 0, 0, 1, 'U', 'N', 'I', 0, 7}, "127.0.0.1");  // unicast
+  sendRaw({'L', 'C', '0', '2', 0, 0, 0, 2, 'G', 'R', 'P', 0, 7});
+  pump(receiver, got, 1);
+  ASSERT_EQ(got.messages.size(), 1u);
+  EXPECT_EQ(got.messages[0].first, "GRP");
+  EXPECT_EQ(receiver.counters().datagrams, 1u);
 }
 
 TEST(UdpmReceiver, WithAKeyOnlySignedMessagesPassAndLoseTheirSignature) {

@@ -79,6 +79,8 @@ TEST(DeployFile, ShippedFilesLoad) {
   for (const char* name : {"deploy_rig_a.yaml", "deploy_rig_b.yaml"}) {
     const Deployment d = loadDeployment(std::string(SWEEPMAP_SOURCE_DIR) + "/config/" + name);
     EXPECT_NE(d.lcm_url.find("ttl=1"), std::string::npos) << name;
+    EXPECT_EQ(d.key_file, "/etc/sweepmap/lcm.key") << name;
+    EXPECT_EQ(d.senderAddresses(), "192.168.1.10,192.168.1.20") << name;
     EXPECT_EQ(d.host("pi").processes.size(), 2u) << name;
     EXPECT_EQ(d.host("laptop").processes.size(), 3u) << name;
     // Every sweepmap process's rig loads with its --set overrides (the rig names resolve in
@@ -162,18 +164,68 @@ TEST(SystemdUnits, OneServicePerProcessAndATarget) {
         "\nWantedBy=sweepmap-laptop.target\n", "\nAfter=network-online.target time-sync.target\n",
         "\nEnvironment=LCM_DEFAULT_URL=udpm://239.255.76.67:7667?ttl=1\n",
         "\nExecStart=/usr/bin/sweepmap-mapper --rig rig_a --save \"my map.bt\" --lcm-url "
-        "udpm://239.255.76.67:7667?ttl=1\n"}) {
+        "udpm://239.255.76.67:7667?ttl=1 --allow-senders 192.168.1.10,192.168.1.20 --key-file "
+        "/etc/sweepmap/lcm.key\n",
+        "\nRestartPreventExitStatus=2\n"}) {
     EXPECT_NE(mapper.find(line), std::string::npos) << line << " not in\n" << mapper;
   }
   // lcm-logger does not speak sd_notify: a simple service without a watchdog.
   EXPECT_NE(units[0].text.find("\nType=simple\n"), std::string::npos);
   EXPECT_EQ(units[0].text.find("WatchdogSec"), std::string::npos);
-  EXPECT_NE(units[0].text.find("\nExecStart=lcm-logger -i run.lcmlog --lcm-url"),
-            std::string::npos);
+  EXPECT_NE(units[0].text.find("\nExecStart=lcm-logger -i run.lcmlog --lcm-url "
+                               "udpm://239.255.76.67:7667?ttl=1\n"),
+            std::string::npos);  // lcm-logger takes no --allow-senders nor --key-file
+  EXPECT_EQ(units[0].text.find("RestartPreventExitStatus"), std::string::npos);
   EXPECT_NE(units[2].text.find("\nWants=sweepmap-logger.service sweepmap-mapper.service\n"),
             std::string::npos);
   EXPECT_NE(units[2].text.find("\nWantedBy=multi-user.target\n"), std::string::npos);
   EXPECT_NE(systemdUnits(d, "pi", "/usr/bin")[0].text.find("\nRestart=always\n"),
+            std::string::npos);
+}
+
+// On by default in the units, off on a bench (`launch` without --secure, `systemd --insecure`):
+// every sweepmap process and `sweepmap record` hear only the file's hosts and sign with its key.
+TEST(SystemdUnits, SecureByDefaultWithTheHostsAndTheKeyFile) {
+  const Deployment d =
+      parseDeployment(replaced(kValid, "hosts:\n", "key_file: /etc/robot/k.key\nhosts:\n") +
+                          "      - {name: rec, command: sweepmap, args: [record, --out, logs]}\n"
+                          "      - {name: dump, command: sweepmap, args: [dump, x.lcmlog]}\n",
+                      "deploy.yaml");
+  EXPECT_EQ(d.key_file, "/etc/robot/k.key");
+  EXPECT_EQ(d.senderAddresses(), "192.168.1.10,192.168.1.20");
+  const auto units = systemdUnits(d, "pi", "/usr/bin");
+  ASSERT_EQ(units.size(), 4u);
+  const std::string secure =
+      " --allow-senders 192.168.1.10,192.168.1.20 --key-file /etc/robot/k.key\n";
+  EXPECT_NE(units[0].text.find("\nExecStart=/usr/bin/sweepmap-motor --rig rig_a --lcm-url "
+                               "udpm://239.255.76.67:7667?ttl=1" +
+                               secure),
+            std::string::npos)
+      << units[0].text;
+  EXPECT_NE(units[1].text.find("\nExecStart=/usr/bin/sweepmap record --out logs --lcm-url "
+                               "udpm://239.255.76.67:7667?ttl=1" +
+                               secure),
+            std::string::npos)
+      << units[1].text;
+  EXPECT_EQ(units[2].text.find("--key-file"), std::string::npos);  // `sweepmap dump` takes none
+  for (const auto& u : systemdUnits(d, "pi", "/usr/bin", false)) {
+    EXPECT_EQ(u.text.find("--allow-senders"), std::string::npos) << u.text;
+    EXPECT_EQ(u.text.find("--key-file"), std::string::npos) << u.text;
+  }
+  // A bench: launch's command lines have neither unless asked.
+  const DeployProcess& motor = d.host("pi").processes[0];
+  EXPECT_EQ(processArgv(d, motor, "/b").size(), 5u);
+  EXPECT_EQ(processArgv(d, motor, "/b", true).size(), 9u);
+}
+
+TEST(DeployFile, KeyFileAndAddressesAreChecked) {
+  const Deployment d = parseDeployment(kValid, "deploy.yaml");
+  EXPECT_EQ(d.key_file, "/etc/sweepmap/lcm.key");  // the default
+  EXPECT_NE(errorOf(replaced(kValid, "hosts:\n", "key_file: lcm.key\nhosts:\n"))
+                .find("key 'key_file': 'lcm.key': expected an absolute path"),
+            std::string::npos);
+  EXPECT_NE(errorOf(replaced(kValid, "address: 192.168.1.20", "address: the-pi"))
+                .find("key 'hosts.pi.address': 'the-pi': expected an IPv4 address"),
             std::string::npos);
 }
 

@@ -158,6 +158,33 @@ TEST(StatusBoard, StatusWithoutProcessNameIsItsOwnProcess) {
   EXPECT_EQ(board.unhealthy(0), 1);
 }
 
+// Issue 21: a string length of INT32_MIN, 2^26 or 2^31-1 counters (2.2 GB, then a crash) and a
+// detail that is not UTF-8 (--json printed nothing) are malformed: counted, never shown, and
+// the board goes on with the good statuses.
+TEST(StatusBoard, HostileStatusMessagesAreCountedNotDecoded) {
+  StatusBoard board;
+  auto patched = [](Message m, size_t at, uint32_t v) {
+    for (int i = 0; i < 4; ++i) m.data[at + i] = static_cast<uint8_t>(v >> (24 - 8 * i));
+    return m;
+  };
+  process_status_t s{};
+  s.process = "intruder";
+  const Message plain = encode("STATUS_INTRUDER", s);
+  board.add(patched(plain, 16, 0x80000000u), 0);  // the process's length
+  for (uint32_t n : {1u << 26, 0x7FFFFFFFu}) board.add(patched(plain, plain.data.size() - 4, n), 0);
+  s.detail = "bad \xff\xfe text";
+  board.add(encode("STATUS_INTRUDER", s), 0);
+  sweep_status_t sweep{};
+  const Message sweep_plain = encode("SWEEP_STATUS", sweep);
+  board.add(patched(sweep_plain, sweep_plain.data.size() - 9, 0x80000000u), 0);
+  board.add(status("assembler", process_status_t::OK, "", 3), 0);
+  const auto j = nlohmann::json::parse(board.json(0));
+  EXPECT_EQ(j["malformed"], 5);
+  EXPECT_FALSE(j["processes"].contains("intruder"));
+  EXPECT_EQ(j["processes"]["assembler"]["status"], "OK");
+  EXPECT_NE(board.text(0).find("5 malformed status messages ignored"), std::string::npos);
+}
+
 TEST(StatusBoard, NothingSeenSaysSo) {
   StatusBoard board;
   EXPECT_NE(board.text(0).find("no STATUS_* message seen"), std::string::npos);

@@ -6,6 +6,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
+#include "processes/cli_common.hpp"
 #include "processes/live_runner.hpp"
 #include "sweepmap/map_save_t.hpp"
 #include "sweepmap/process_status_t.hpp"
@@ -37,7 +38,7 @@ void runWith(bool wake_on_message) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   RecordingNode node;
-  LiveOptions options;
+  LiveOptions options("memq://");
   options.tick_period_ms = 10;
   options.wake_on_message = wake_on_message;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
@@ -83,7 +84,7 @@ TEST(LiveRunner, AFullQueueDropsAndCountsTheRest) {
   lcm::LCM lcm("memq://");
   ASSERT_TRUE(lcm.good());
   FloodingNode node(&lcm);
-  LiveOptions options;
+  LiveOptions options("memq://");
   options.wake_on_message = false;
   options.queue_capacity = 10;
   options.should_stop = [&] { return node.ticks >= 3; };
@@ -112,13 +113,39 @@ TEST(LiveRunner, NodesNameTheirProcessInTheirStatus) {
   ASSERT_TRUE(lcm.good());
   RecordingNode node;
   EXPECT_EQ(processInStatus(node), "recorder");
-  LiveOptions options;
+  LiveOptions options("memq://");
   options.should_stop = [] { return true; };
   EXPECT_EQ(runLive(lcm, {&node}, options), 0);
   EXPECT_EQ(processInStatus(node), "test_processes");
   options.process = "lidar";
   EXPECT_EQ(runLive(lcm, {&node}, options), 0);
   EXPECT_EQ(processInStatus(node), "lidar");
+}
+
+// A process's bounds come from its rig's network.* keys, --queue-capacity over the queue's.
+TEST(LiveOptions, BoundsFromTheRigsNetworkKeys) {
+  CommonOptions o;
+  o.lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  o.network.queue_messages = 7;
+  o.network.queue_mib = 2;
+  o.network.max_message_mib = 1;
+  o.network.pending_messages_per_sender = 3;
+  o.network.pending_mib_per_sender = 0.5;
+  o.network.pending_mib = 4;
+  o.network.max_senders = 5;
+  o.network.fragment_timeout_s = 0.25;
+  const LiveOptions l = liveOptions(o);
+  EXPECT_EQ(l.lcm_url, o.lcm_url);
+  EXPECT_EQ(l.queue_capacity, 7u);
+  EXPECT_EQ(l.queue_capacity_bytes, 2u << 20);
+  EXPECT_EQ(l.reassembly.max_message_bytes, 1u << 20);
+  EXPECT_EQ(l.reassembly.max_pending_per_sender, 3u);
+  EXPECT_EQ(l.reassembly.max_pending_bytes_per_sender, 1u << 19);
+  EXPECT_EQ(l.reassembly.max_pending_bytes, 4u << 20);
+  EXPECT_EQ(l.reassembly.max_senders, 5u);
+  EXPECT_EQ(l.reassembly.fragment_timeout_us, 250000);
+  o.queue_capacity = 3;  // --queue-capacity
+  EXPECT_EQ(liveOptions(o).queue_capacity, 3u);
 }
 
 }  // namespace

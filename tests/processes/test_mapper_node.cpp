@@ -183,14 +183,15 @@ TEST(MapperNode, MapSaveIsARequestNotACommand) {
     accepted += node.counter("saves") > before;
   }
   EXPECT_EQ(accepted,
-            static_cast<int>(MapperNode::kMaxRequestedFiles) - 1);  // elsewhere.bt was one
+            static_cast<int>(MapperConfig{}.max_requested_files) - 1);  // elsewhere.bt was one
   fs::remove_all(dir);
 }
 
 // Sweeps that never complete (a forged or lost chunk stream) are bounded: the oldest goes into
 // the map as it is, counted, and nothing piles up.
-TEST(MapperNode, PendingSweepsAreBounded) {
-  MapperNode node(MapperConfig{}, "");
+// The bound is the config's (mapper.max_pending_sweeps).
+void expectPendingSweepsBounded(const MapperConfig& config) {
+  MapperNode node(config, "");
   std::vector<Message> msgs;
   for (int k = 0; k < 50; ++k) {
     cloud_chunk_t m{};
@@ -203,10 +204,15 @@ TEST(MapperNode, PendingSweepsAreBounded) {
     msgs.push_back(encode(channels::kSweepCloud, m));
   }
   deliver(node, msgs);
-  EXPECT_EQ(node.counter("pending_evicted"),
-            50 - static_cast<int64_t>(MapperNode::kMaxPendingSweeps));
-  EXPECT_EQ(node.counter("incomplete_sweeps"),
-            50 - static_cast<int64_t>(MapperNode::kMaxPendingSweeps));
+  EXPECT_EQ(node.counter("pending_evicted"), 50 - config.max_pending_sweeps);
+  EXPECT_EQ(node.counter("incomplete_sweeps"), 50 - config.max_pending_sweeps);
+}
+
+TEST(MapperNode, PendingSweepsAreBounded) {
+  expectPendingSweepsBounded(MapperConfig{});
+  MapperConfig two;
+  two.max_pending_sweeps = 2;
+  expectPendingSweepsBounded(two);
 }
 
 // Rig B: one single-chunk world-frame sweep per lidar scan (7 Hz), the sensor moving.

@@ -120,6 +120,93 @@ TEST(OdometryNode, AMessageStampedADayAheadNeitherMovesTheEstimateNorFreezesItsC
   EXPECT_NEAR(clean.x_m, 0.4, 0.01);  // 2 s at 0.2 m/s: later ticks were not frozen out
 }
 
+// Issue 21: the EKF must not say `trusted` while its input is being refused. After a day-ahead
+// IMU or WHEEL_TICKS message (refused by the stamp guard), the poses say trusted = false and
+// the status DEGRADED, naming the channel, until good input has covered
+// odometry.refused_input_window_s (2 s) of message time; then trusted and OK again.
+TEST(OdometryNode, RefusedInputMakesPosesUntrustedAndStatusDegradedUntilGoodInputFlows) {
+  constexpr int64_t kDay = 86'400'000'000;
+  constexpr int64_t kRefusedAt = 2'000'000;  // k = 50
+  for (const std::string channel : {channels::kImu, channels::kWheelTicks}) {
+    OdometryNode node(config());
+    std::vector<std::pair<int64_t, bool>> poses;  // stamp, trusted
+    std::vector<std::pair<int64_t, process_status_t>> statuses;
+    auto deliver = [&](Message m, int64_t arrival) {
+      m.utime = arrival;
+      Outbox o;
+      node.receive(m, o);
+      node.tick(arrival, o);
+      node.publishStatus(arrival, o);
+      for (const auto& r : o.take()) {
+        pose2d_t p{};
+        process_status_t s;
+        if (r.channel == channels::kOdometryPose && decodeMessage(r, &p)) {
+          poses.emplace_back(p.utime, p.trusted);
+        }
+        if (r.channel == node.statusChannel() && decodeMessage(r, &s)) {
+          statuses.emplace_back(arrival, s);
+        }
+      }
+    };
+    for (int k = 0; k <= 250; ++k) {
+      const int64_t t = 1'000'000 + 20'000 * k;
+      const int64_t n = std::llround(318.30988618 * 0.02 * k);
+      deliver(ticks(t, n, n), t + 1000);
+      deliver(gyro(t + 5000, 0.01), t + 6000);
+      if (t == kRefusedAt) {
+        deliver(channel == channels::kImu ? gyro(t + kDay, 5.0) : ticks(t + kDay, n + 9999, n),
+                t + 7000);
+      }
+    }
+    EXPECT_EQ(node.counter("stamp_refused_" + channel), 1) << channel;
+    EXPECT_EQ(node.counter("refused_input"), 1) << channel;
+    for (const auto& [stamp, trusted] : poses) {
+      const bool in_window = stamp >= kRefusedAt && stamp < kRefusedAt + 2'000'000;
+      EXPECT_EQ(trusted, !in_window) << channel << " pose at " << stamp;
+    }
+    for (const auto& [arrival, s] : statuses) {
+      if (arrival < kRefusedAt) {
+        EXPECT_EQ(s.health, +process_status_t::OK) << arrival;
+      }
+      if (arrival > kRefusedAt + 7000 && arrival < kRefusedAt + 1'900'000) {
+        EXPECT_EQ(s.health, +process_status_t::DEGRADED) << channel << " " << arrival;
+        EXPECT_NE(s.detail.find(channel + " input refused"), std::string::npos) << s.detail;
+      }
+      if (arrival > kRefusedAt + 2'100'000) {
+        EXPECT_EQ(s.health, +process_status_t::OK) << channel << " " << arrival << " " << s.detail;
+      }
+    }
+  }
+}
+
+// The EKF's covariance says when its poses are not to be trusted (heading sigma over
+// odometry.trusted_theta_sigma_rad): then the status is DEGRADED too.
+TEST(OdometryNode, UntrustedCovarianceDegradesTheStatus) {
+  OdometryConfig c = config();
+  c.ekf.trusted_theta_sigma_rad = 1e-9;  // any heading uncertainty is too much
+  OdometryNode node(c);
+  Outbox o;
+  for (int k = 0; k < 20; ++k) {
+    Message m = ticks(1'000'000 + 20'000 * k, 10 * k, 10 * k);
+    m.utime = 1'001'000 + 20'000 * k;
+    node.receive(m, o);
+  }
+  node.tick(1'500'000, o);
+  node.publishStatus(1'500'000, o);
+  process_status_t s;
+  bool untrusted = false;
+  for (const auto& r : o.take()) {
+    pose2d_t p{};
+    if (r.channel == channels::kOdometryPose && decodeMessage(r, &p)) untrusted |= !p.trusted;
+    if (r.channel == node.statusChannel()) {
+      ASSERT_TRUE(decodeMessage(r, &s));
+    }
+  }
+  EXPECT_TRUE(untrusted);
+  EXPECT_EQ(s.health, +process_status_t::DEGRADED);
+  EXPECT_NE(s.detail.find("trusted_theta_sigma_rad"), std::string::npos) << s.detail;
+}
+
 TEST(OdometryNode, BadInputRejectedAndCounted) {
   OdometryNode node(config());
   std::vector<Message> msgs = {ticks(1000000, 0, 0),

@@ -141,7 +141,7 @@ TEST(SdNotify, LiveRunnerPingsFromItsWorkerLoopOnly) {
   ::setenv("WATCHDOG_USEC", "40000", 1);  // a ping at least every 20 ms
   lcm::LCM lcm("memq://");
   HangingNode node;
-  LiveOptions options;
+  LiveOptions options("memq://");
   options.tick_period_ms = 5;
   const auto start = Clock::now();
   options.should_stop = [&] {
@@ -178,7 +178,7 @@ TEST(SdNotify, AnUnhealthyProcessWithholdsItsPings) {
   ::setenv("WATCHDOG_USEC", "20000", 1);
   lcm::LCM lcm("memq://");
   HangingNode node;
-  LiveOptions options;
+  LiveOptions options("memq://");
   options.tick_period_ms = 5;
   options.healthy = [] { return false; };
   const auto start = Clock::now();

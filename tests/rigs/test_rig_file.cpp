@@ -56,6 +56,36 @@ TEST(RigFile, EveryShippedRigFileLoads) {
   }
 }
 
+// Every bound of a live process is a config key of every rig kind (network.*, the mapper's),
+// its shipped value the former hard-coded one, and a bound that is not positive is an error
+// naming the file and the key.
+TEST(RigFile, EveryBoundIsAConfigKeyOfEveryKind) {
+  for (const char* name : {"rig_a", "rig_b", "rig_c"}) {
+    const Rig rig = loadRig(name);
+    std::visit(
+        [&](const auto& c) {
+          EXPECT_EQ(c.network.queue_messages, NetworkConfig{}.queue_messages) << name;
+          EXPECT_EQ(c.network.max_senders, NetworkConfig{}.max_senders) << name;
+          EXPECT_EQ(c.network.fragment_timeout_s, NetworkConfig{}.fragment_timeout_s) << name;
+          EXPECT_EQ(c.mapper.max_pending_sweeps, MapperConfig{}.max_pending_sweeps) << name;
+          EXPECT_EQ(c.mapper.max_requested_files, MapperConfig{}.max_requested_files) << name;
+        },
+        rig.config);
+    for (const char* key :
+         {"network.max_senders", "network.queue_mib", "network.fragment_timeout_s",
+          "mapper.max_pending_sweeps", "mapper.save_interval_s"}) {
+      try {
+        loadRig(name, {std::string(key) + "=0"});
+        ADD_FAILURE() << name << " " << key << "=0 accepted";
+      } catch (const ConfigError& e) {
+        EXPECT_NE(std::string(e.what()).find(std::string("key '") + key + "' must be > 0"),
+                  std::string::npos)
+            << e.what();
+      }
+    }
+  }
+}
+
 TEST(RigFile, RigCIsARotatingProfileWithoutALidar) {
   const Rig c = loadRig("rotating_profile");  // the kind's name stands for rig_c
   EXPECT_EQ(c.kind(), RigKind::kRotatingProfile);

@@ -145,8 +145,7 @@ struct LcmSide {
       throw CommandError(kExitDeviceIo, "cannot open LCM at '" + o.lcm_url + "'");
     }
     publishAll(*lcm, world.startMessages(wallUtime()));
-    LiveOptions lo;
-    lo.lcm_url = o.lcm_url;
+    LiveOptions lo(o.lcm_url);
     lo.should_stop = [this] { return stop.load(); };
     thread = std::thread([this, nodes, lo] { runLive(*lcm, nodes, lo); });
   }

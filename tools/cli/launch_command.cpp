@@ -26,6 +26,10 @@ Runner addLaunchCommand(CLI::App& app) {
   auto no_watchdog = std::make_shared<bool>(false);
   cmd->add_flag("--no-watchdog", *no_watchdog,
                 "do not watch the processes' WATCHDOG=1 (a debugger's breakpoint is no hang)");
+  cmd->add_flag("--secure", o->secure,
+                "as the systemd units do: every sweepmap process and `sweepmap record` hear only "
+                "the file's host addresses (--allow-senders) and sign with its key_file "
+                "(--key-file); default off (a bench)");
   return [o, no_watchdog]() -> int {
     o->watchdog = !*no_watchdog;
     return runLaunch(*o);

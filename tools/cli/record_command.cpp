@@ -52,6 +52,19 @@ Runner addRecordCommand(CLI::App& app) {
   cmd->add_option("--key-file", o->key_file,
                   "shared key (chmod 600): record only messages signed with it (the log holds "
                   "them without their signature); default: no check");
+  cmd->add_option("--max-mb", o->max_mb,
+                  "stop cleanly (exit 0) before this recording's files together pass N MB "
+                  "(0: only --min-free-mb bounds them)")
+      ->capture_default_str()
+      ->check(atLeast(0));
+  cmd->add_option("--queue-capacity", o->queue_capacity,
+                  "bound of the queue between the receiver and the writer [messages]; a message "
+                  "that finds it full is dropped and counted")
+      ->capture_default_str()
+      ->check(atLeast(1));
+  cmd->add_option("--queue-mib", o->queue_mib, "the same queue's bound in MiB")
+      ->capture_default_str()
+      ->check(atLeast(1));
   return [o, force]() -> int {
     namespace fs = std::filesystem;
     std::error_code ec;

@@ -29,6 +29,12 @@ Runner addStatusCommand(CLI::App& app) {
                   "a process whose status has not come for this long is STALE")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  cmd->add_option("--allow-senders", o->allow_senders,
+                  "hear only these IPv4 addresses (comma-separated), as the processes do")
+      ->delimiter(',');
+  cmd->add_option("--key-file", o->key_file,
+                  "the deployment's shared key: read only statuses signed with it (where the "
+                  "processes sign, unsigned bytes do not decode)");
   return [o]() { return runStatus(*o); };
 }
 

@@ -19,9 +19,13 @@ Runner addSystemdCommand(CLI::App& app) {
       "LCM URL; started after network-online.target and time-sync.target) and "
       "sweepmap-<host>.target that starts and stops them together. Install: copy them to "
       "/etc/systemd/system, `systemctl daemon-reload`, `systemctl enable --now "
-      "sweepmap-<host>.target`");
+      "sweepmap-<host>.target`. Secure by default: every sweepmap process and `sweepmap record` "
+      "get "
+      "--allow-senders (the file's host addresses) and --key-file (its key_file, default "
+      "/etc/sweepmap/lcm.key: install it on every host with mode 0400 before starting)");
   struct Options {
     std::string deploy, host, out, bin_dir = "/usr/bin";
+    bool insecure = false;
   };
   auto o = std::make_shared<Options>();
   cmd->add_option("DEPLOY", o->deploy, "deployment file")->required()->check(CLI::ExistingFile);
@@ -30,10 +34,13 @@ Runner addSystemdCommand(CLI::App& app) {
   cmd->add_option("--bin-dir", o->bin_dir,
                   "where the sweepmap executables are installed on that host")
       ->capture_default_str();
+  cmd->add_flag("--insecure", o->insecure,
+                "no --allow-senders nor --key-file in the units: any host on the network is "
+                "heard, nothing is signed (a bench network only)");
   return [o]() -> int {
     try {
       const Deployment d = loadDeployment(o->deploy);
-      for (const auto& path : writeSystemdUnits(d, o->host, o->bin_dir, o->out)) {
+      for (const auto& path : writeSystemdUnits(d, o->host, o->bin_dir, o->out, !o->insecure)) {
         std::cout << path << "\n";
       }
     } catch (const ConfigError& e) {

@@ -1,5 +1,6 @@
 #include "tools/ops/deploy.hpp"
 
+#include <arpa/inet.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cctype>
@@ -169,10 +170,16 @@ Deployment parseDeployment(const std::string& yaml_text, const std::string& sour
     throw ConfigError(source + ":" + std::to_string(e.mark.line + 1) + ":" +
                       std::to_string(e.mark.column + 1) + ": " + e.msg);
   }
-  const Map top(source, root, "", {"lcm_url", "restart", "hosts"}, {"description"});
+  const Map top(source, root, "", {"lcm_url", "restart", "hosts"}, {"description", "key_file"});
   Deployment d;
   d.path = source;
   d.lcm_url = top.text("lcm_url");
+  if (top.has("key_file")) {
+    d.key_file = top.text("key_file");
+    if (d.key_file.front() != '/') {
+      fail(source, top["key_file"], "key_file", "'" + d.key_file + "': expected an absolute path");
+    }
+  }
   d.restart = parseRestart(source, top["restart"]);
   const YAML::Node hosts = top["hosts"];
   if (!hosts.IsMap() || hosts.size() == 0) fail(source, hosts, "hosts", "expected a map of hosts");
@@ -184,6 +191,12 @@ Deployment parseDeployment(const std::string& yaml_text, const std::string& sour
     checkName(source, kv.first, hkey);
     const Map hm(source, kv.second, hkey, {"address", "processes"}, {});
     h.address = hm.text("address");
+    // The address is who the other hosts' processes hear (--allow-senders): an IPv4 address.
+    in_addr unused{};
+    if (::inet_pton(AF_INET, h.address.c_str(), &unused) != 1) {
+      fail(source, hm["address"], hm.join("address"),
+           "'" + h.address + "': expected an IPv4 address (a.b.c.d)");
+    }
     const YAML::Node procs = hm["processes"];
     if (!procs.IsSequence()) fail(source, procs, hm.join("processes"), "expected a list");
     for (size_t i = 0; i < procs.size(); ++i) {
@@ -208,13 +221,27 @@ Deployment loadDeployment(const std::string& path) {
   return parseDeployment(s.str(), path);
 }
 
+std::string Deployment::senderAddresses() const {
+  std::string list;
+  for (const auto& h : hosts) list += (list.empty() ? "" : ",") + h.address;
+  return list;
+}
+
+bool takesSecurityOptions(const DeployProcess& p) {
+  if (p.command.rfind("sweepmap-", 0) == 0) return true;
+  return p.command == "sweepmap" && !p.args.empty() && p.args[0] == "record";
+}
+
 std::vector<std::string> processArgv(const Deployment& d, const DeployProcess& p,
-                                     const std::string& bin_dir) {
+                                     const std::string& bin_dir, bool secure) {
   const bool ours = p.command == "sweepmap" || p.command.rfind("sweepmap-", 0) == 0;
   std::vector<std::string> argv = {ours ? (std::filesystem::path(bin_dir) / p.command).string()
                                         : p.command};
   argv.insert(argv.end(), p.args.begin(), p.args.end());
   argv.insert(argv.end(), {"--lcm-url", d.lcm_url});
+  if (secure && takesSecurityOptions(p)) {
+    argv.insert(argv.end(), {"--allow-senders", d.senderAddresses(), "--key-file", d.key_file});
+  }
   return argv;
 }
 

@@ -11,7 +11,10 @@
 //         - {name: motor, command: sweepmap-motor, args: [--rig, rig_a]}
 //
 // Every process gets `--lcm-url URL` appended to its arguments and LCM_DEFAULT_URL=URL in its
-// environment. Unknown keys, missing keys and bad values are errors naming the file, the
+// environment. With security on (the generated systemd units; `sweepmap launch --secure`),
+// every sweepmap process and `sweepmap record` also get `--allow-senders` (the hosts'
+// addresses) and `--key-file` (the file's optional `key_file`, default
+// /etc/sweepmap/lcm.key). Unknown keys, missing keys and bad values are errors naming the file, the
 // line and column, and the key.
 #pragma once
 
@@ -43,9 +46,13 @@ struct DeployHost {
   std::vector<DeployProcess> processes;
 };
 
+// The shared key's default place on every host (mode 0400, owned by the service user).
+inline const char* const kDefaultDeployKeyFile = "/etc/sweepmap/lcm.key";
+
 struct Deployment {
   std::string path;  // the file it was read from
   std::string lcm_url;
+  std::string key_file = kDefaultDeployKeyFile;
   RestartPolicy restart;
   std::vector<DeployHost> hosts;
 
@@ -56,15 +63,22 @@ struct Deployment {
   double stopTimeout(const DeployProcess& p) const {
     return p.stop_timeout_s > 0 ? p.stop_timeout_s : restart.stop_timeout_s;
   }
+  // Every host's address, comma-separated in file order: the senders a process may hear.
+  std::string senderAddresses() const;
 };
+
+// Whether a process takes --allow-senders and --key-file: the sweepmap-* processes and
+// `sweepmap record`.
+bool takesSecurityOptions(const DeployProcess& p);
 
 // Throws ConfigError ("FILE:LINE:COL: key 'hosts.pi.processes[1].args': ...").
 Deployment loadDeployment(const std::string& path);
 Deployment parseDeployment(const std::string& yaml_text, const std::string& source);
 
 // argv of a process: the command (resolved in `bin_dir` for sweepmap and sweepmap-*, left
-// for PATH otherwise), its args, then --lcm-url URL.
+// for PATH otherwise), its args, then --lcm-url URL; with `secure`, then --allow-senders and
+// --key-file for a process that takes them (takesSecurityOptions).
 std::vector<std::string> processArgv(const Deployment& d, const DeployProcess& p,
-                                     const std::string& bin_dir);
+                                     const std::string& bin_dir, bool secure = false);
 
 }  // namespace sweepmap

@@ -105,7 +105,7 @@ class Supervisor {
     for (const auto& spec : d.processes(o.host)) {
       Proc p;
       p.spec = spec;
-      p.argv = processArgv(d, spec, bin_dir_);
+      p.argv = processArgv(d, spec, bin_dir_, o.secure);
       procs_.push_back(std::move(p));
     }
     events_.open(log_dir_ / "launch.txt", std::ios::app);

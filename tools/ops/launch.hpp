@@ -25,6 +25,9 @@ struct LaunchOptions {
   std::string log_dir = "launch-logs";
   std::string bin_dir;  // the sweepmap executables; "" = the folder of this executable
   bool watchdog = true;
+  // --allow-senders (the hosts' addresses) and --key-file (the file's key_file) for every
+  // process that takes them, as the systemd units have; off on a bench.
+  bool secure = false;
 };
 
 // Returns 0 after a clean stop (a signal, or every process finished), 1 when a process had to

@@ -10,13 +10,13 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <mutex>
 #include <stdexcept>
 #include <thread>
 
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
 #include "net/udpm_receiver.hpp"
+#include "processes/inbox.hpp"
 #include "processes/live_runner.hpp"
 #include "processes/node.hpp"
 #include "processes/sd_notify.hpp"
@@ -40,40 +40,6 @@ double freeMb(const std::string& path) {
 
 namespace {
 
-// Messages from the receive thread to the writer: bounded in bytes, drops counted (as
-// lcm-logger's callback only enqueues and its writer thread does the disk I/O).
-class RecordQueue {
- public:
-  explicit RecordQueue(size_t capacity_bytes) : capacity_bytes_(capacity_bytes) {}
-  void push(int64_t utime, const std::string& channel, const uint8_t* data, size_t size) {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (bytes_ + size > capacity_bytes_) {
-      ++dropped_;
-      return;
-    }
-    bytes_ += size;
-    queue_.push_back({utime, channel, std::vector<uint8_t>(data, data + size)});
-  }
-  std::deque<Message> take() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    std::deque<Message> out;
-    out.swap(queue_);
-    bytes_ = 0;
-    return out;
-  }
-  int64_t dropped() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    return dropped_;
-  }
-
- private:
-  std::mutex mutex_;
-  std::deque<Message> queue_;
-  size_t capacity_bytes_;
-  size_t bytes_ = 0;
-  int64_t dropped_ = 0;
-};
-
 // The log files of one recording: NAME (replaced), or NAME.NN every split_mb, NN counting
 // from the first number no file has yet, so that a restarted recorder continues the series
 // (lcm-logger's -f and -i).
@@ -85,11 +51,14 @@ class RecordFiles {
   }
   const std::string& path() const { return path_; }
   int64_t events() const { return events_ + (writer_ ? writer_->events() : 0); }
+  // Bytes in this recording's files.
+  int64_t bytes() const { return bytes_ + (writer_ ? static_cast<int64_t>(writer_->bytes()) : 0); }
   // Throws std::runtime_error when the disk refuses (the file then ends at an event).
   void write(const Message& m) {
     if (split_mb_ > 0 && static_cast<double>(writer_->bytes()) >= split_mb_ * 1e6) {
       writer_->close();
       events_ += writer_->events();
+      bytes_ += static_cast<int64_t>(writer_->bytes());
       ++part_;
       open();
     }
@@ -112,20 +81,41 @@ class RecordFiles {
   double split_mb_;
   int part_ = 0;
   int64_t events_ = 0;
+  int64_t bytes_ = 0;
   std::string path_;
   std::unique_ptr<EventLogWriter> writer_;
 };
 
+// Writes `messages` unless that takes the files past --max-mb; false when it would (said once).
+bool writeWithinBound(const RecordOptions& o, const std::deque<Message>& messages,
+                      RecordFiles& files) {
+  for (const Message& m : messages) {
+    // An event costs its header (28 bytes), its channel and its data (core/event_log.hpp).
+    const double after = static_cast<double>(files.bytes() + 28 + m.channel.size() + m.data.size());
+    if (o.max_mb > 0 && after > o.max_mb * 1e6) {
+      std::cerr << "record: stopped: the recording reached --max-mb " << o.max_mb
+                << " (the log ends with its last complete event)\n";
+      return false;
+    }
+    files.write(m);
+  }
+  return true;
+}
+
 // Writes what arrives until a stop, the duration or a low disk; returns the exit status.
-int writeUntilStopped(const RecordOptions& o, RecordQueue& queue, RecordFiles& files) {
+int writeUntilStopped(const RecordOptions& o, Inbox& queue, RecordFiles& files) {
   const auto start = std::chrono::steady_clock::now();
   SdNotifier notifier;  // under systemd or `sweepmap launch`: ready now, alive from this loop
   notifier.ready();
   int status = kExitOk;
+  bool full = false;  // --max-mb reached
   while (!stopRequested()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(100));
     notifier.alive();
-    for (const Message& m : queue.take()) files.write(m);
+    if (!writeWithinBound(o, queue.take(), files)) {
+      full = true;
+      break;
+    }
     files.flush();
     const double free = freeMb(o.out);
     if (free >= 0 && free < o.min_free_mb) {
@@ -140,9 +130,7 @@ int writeUntilStopped(const RecordOptions& o, RecordQueue& queue, RecordFiles& f
     if (o.duration_s > 0 && elapsed >= o.duration_s) break;
   }
   notifier.stopping();
-  if (status == kExitOk) {
-    for (const Message& m : queue.take()) files.write(m);
-  }
+  if (status == kExitOk && !full) writeWithinBound(o, queue.take(), files);
   files.close();
   return status;
 }
@@ -175,7 +163,9 @@ int runRecord(const RecordOptions& o) {
     return kExitDeviceIo;
   }
   installStopSignals();
-  RecordQueue queue(64u << 20);
+  // Messages from the receive thread to the writer (as lcm-logger's callback only enqueues and
+  // its writer thread does the disk I/O).
+  Inbox queue(o.queue_capacity, static_cast<size_t>(o.queue_mib * (1 << 20)));
   std::unique_ptr<net::UdpmReceiver> receiver;
   std::unique_ptr<RecordFiles> files;
   try {
@@ -190,7 +180,7 @@ int runRecord(const RecordOptions& o) {
     return kExitDeviceIo;
   }
   receiver->subscribe(channels, [&queue](const std::string& c, const uint8_t* d, size_t n) {
-    queue.push(wallUtime(), c, d, n);
+    queue.push(Message{wallUtime(), c, std::vector<uint8_t>(d, d + n)}, false);
   });
   std::cout << "record: " << o.preset << " channels to " << files->path()
             << (o.split_mb > 0 ? " (then .01, .02, ...)" : "") << " (stops below " << o.min_free_mb
@@ -209,7 +199,7 @@ int runRecord(const RecordOptions& o) {
   receiving = false;
   receive.join();
   const net::ReceiverCounters c = receiver->counters();
-  std::cerr << "record: " << files->events() << " events; " << queue.dropped()
+  std::cerr << "record: " << files->events() << " events; " << queue.droppedTotal()
             << " dropped (queue full), " << c.reassembly.refusedTotal() + c.truncated
             << " datagrams refused\n";
   return status;

@@ -29,6 +29,12 @@ struct RecordOptions {
   double duration_s = 0.0;                 // 0: until SIGINT/SIGTERM
   std::vector<std::string> allow_senders;  // IPv4 addresses; empty: any sender
   std::string key_file;                    // set: only messages signed with this key
+  // Bounds: the queue between the receive thread and the writer (a message that finds it full
+  // is dropped and counted), and what the files of this recording may hold together (0: only
+  // min_free_mb bounds it; reached: the recording stops, the log ends at an event, exit 0).
+  size_t queue_capacity = 10000;  // messages
+  double queue_mib = 64.0;
+  double max_mb = 0.0;
 };
 
 // The channel regex of a preset; throws std::invalid_argument for an unknown one.
@@ -37,7 +43,7 @@ std::string recordChannels(const std::string& preset);
 // Free space [MB] on the file system holding `path`, or -1 if it cannot be read.
 double freeMb(const std::string& path);
 
-// Returns 0 after a clean stop (signal or duration), 2 for bad options, 4 when the disk ran
+// Returns 0 after a clean stop (signal, duration or max_mb), 2 for bad options, 4 when the disk ran
 // low or refused a write, or the socket or file could not be opened.
 int runRecord(const RecordOptions& options);
 

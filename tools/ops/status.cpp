@@ -12,6 +12,7 @@
 #include <stdexcept>
 
 #include "core/exit_codes.hpp"
+#include "core/lcm_schema.hpp"
 #include "net/udpm_receiver.hpp"
 #include "processes/live_runner.hpp"
 #include "sweepmap/map_stats_t.hpp"
@@ -51,6 +52,15 @@ void StatusBoard::add(const Message& msg, int64_t now_utime) {
   const int64_t window = static_cast<int64_t>(options_.rate_window_s * 1e6);
   while (!c.rx.empty() && c.rx.front() <= now_utime - window) c.rx.pop_front();
 
+  const bool read = msg.channel.rfind(kStatusPrefix, 0) == 0 || msg.channel == "MAP_STATS" ||
+                    msg.channel == "SWEEP_STATUS";
+  // Nothing from the network is decoded before its type's schema says it is whole and sane
+  // (lcm-gen's decoders overflow on a string length of INT32_MIN and allocate whatever count a
+  // message claims: 2^26 status counters took 2.2 GB); text must be UTF-8.
+  if (read && !LcmSchema::builtIn().validate(msg.data.data(), msg.data.size()).empty()) {
+    ++malformed_;
+    return;
+  }
   if (msg.channel.rfind(kStatusPrefix, 0) == 0) {
     addStatus(msg, now_utime);
   } else if (msg.channel == "MAP_STATS") {
@@ -218,6 +228,9 @@ std::string StatusBoard::text(int64_t now) const {
       << ", phi_offset " << std::setprecision(3) << sweep_->phi_offset_deg << " deg\n";
   }
   if (malformed_ > 0) o << "\n" << malformed_ << " malformed status messages ignored\n";
+  if (datagrams_refused_ > 0) {
+    o << datagrams_refused_ << " datagrams refused by this monitor's receive path\n";
+  }
   if (processes_.empty()) o << "\nno STATUS_* message seen: is anything running on this URL?\n";
   return o.str();
 }
@@ -261,6 +274,7 @@ std::string StatusBoard::json(int64_t now) const {
                        {"reason", sweep_->reason}};
   }
   j["malformed"] = malformed_;
+  j["datagrams_refused"] = datagrams_refused_;
   j["unhealthy"] = unhealthy(now);
   // A detail of bytes that are not UTF-8 (the network is not trusted) is escaped, not fatal.
   return j.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
@@ -307,9 +321,11 @@ int onceStatus(const StatusBoard& board, int64_t now, const StatusOptions& o) {
 // that one malformed datagram kills is no monitor), any other provider through liblcm.
 class StatusSource {
  public:
-  explicit StatusSource(const std::string& url, StatusBoard* board) : board_(board) {
+  explicit StatusSource(const StatusOptions& o, StatusBoard* board) : board_(board) {
+    const std::string& url = o.lcm_url;
     if (net::isUdpmUrl(url)) {
-      udpm_ = std::make_unique<net::UdpmReceiver>(url);
+      udpm_ = std::make_unique<net::UdpmReceiver>(
+          url, net::securityOptions(url, o.allow_senders, o.key_file));
       udpm_->subscribe(".*", [this](const std::string& c, const uint8_t* d, size_t n) {
         board_->add(Message{nowUtime(), c, std::vector<uint8_t>(d, d + n)}, nowUtime());
       });
@@ -323,6 +339,9 @@ class StatusSource {
   void wait(int ms) {
     if (udpm_) {
       udpm_->handleTimeout(ms);
+      const net::ReceiverCounters& c = udpm_->counters();
+      board_->setDatagramsRefused(static_cast<int64_t>(c.reassembly.refusedTotal() + c.truncated +
+                                                       c.not_allowed + c.not_signed));
     } else {
       lcm_->handleTimeout(ms);
     }
@@ -341,7 +360,7 @@ int runStatus(const StatusOptions& o) {
   StatusBoard board(o.board);
   std::unique_ptr<StatusSource> source;
   try {
-    source = std::make_unique<StatusSource>(o.lcm_url, &board);
+    source = std::make_unique<StatusSource>(o, &board);
   } catch (const std::exception& e) {
     std::cerr << "sweepmap status: " << e.what() << "\n";
     return kExitUsage;

@@ -40,6 +40,9 @@ class StatusBoard {
   int unhealthy(int64_t now_utime) const;
   // Processes seen (any status of theirs, stale or not).
   size_t processes() const { return processes_.size(); }
+  // Datagrams this monitor's own receive path refused (malformed, not allowed, not signed):
+  // shown beside the malformed messages.
+  void setDatagramsRefused(int64_t n) { datagrams_refused_ = n; }
 
  private:
   struct NodeStatus {
@@ -87,6 +90,7 @@ class StatusBoard {
   std::optional<Map> map_;
   std::optional<Sweep> sweep_;
   int64_t malformed_ = 0;
+  int64_t datagrams_refused_ = 0;
 };
 
 struct StatusOptions {
@@ -95,6 +99,10 @@ struct StatusOptions {
   bool json = false;      // with once: JSON instead of the table
   double window_s = 2.5;  // once: how long to listen (a 1 Hz status is seen at least twice)
   StatusBoardOptions board;
+  // As the processes take them: hear only these senders, only messages signed with this key
+  // (a deployment with the key on signs every status: without it, none would decode).
+  std::vector<std::string> allow_senders;
+  std::string key_file;
 };
 
 // Runs the dashboard (refreshing once a second until SIGINT/SIGTERM) or one snapshot. Returns
