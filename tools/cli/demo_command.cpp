@@ -12,7 +12,8 @@ namespace sweepmap {
 Runner addDemoCommand(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "demo",
-      "The main job: run the rig's processes and lcm-logger as separate processes in a private "
+      "The main job: run the rig's processes and `sweepmap record` as separate processes in a "
+      "private "
       "network namespace with simulated devices, stop everything cleanly, replay the recorded "
       "log, and leave the log, clouds, maps and a PNG top view in the output directory. "
       "rotating_lidar: sweepmap-motor and -lidar (simulated stepper and lidar), -assembler, "

@@ -58,10 +58,16 @@ struct DemoRun {
     }
     return failures;
   }
+  // Every channel into the log, through sweepmap's own validating receive path and writer
+  // (`sweepmap record`), not lcm-logger: liblcm 1.3.1's receive code dies on one bad datagram.
   pid_t startLogger() {
     fs::remove(log);
-    return procs.start("lcm-logger", {"lcm-logger", "--lcm-url=" + url, "-f", log},
-                       logFile("logger"));
+    const fs::path file(log);
+    return procs.start(
+        "record",
+        {(bin / "sweepmap").string(), "record", "--lcm-url", url, "--preset", "all", "--out",
+         file.parent_path().string(), "--name", file.filename().string(), "--force"},
+        logFile("record"));
   }
 };
 
