@@ -90,6 +90,32 @@ TEST_F(NoiseFreeDrive, PointToPlaneRecoversMountingTo1e6Rad) {
   EXPECT_EQ(again.correspondences, r.correspondences);
 }
 
+// The fast solver's result does not depend on its number of threads (chunks reduced in a
+// fixed order), and agrees with the reference solver's on the same drive.
+TEST_F(NoiseFreeDrive, FastSolverIsTheSameOnAnyNumberOfThreadsAndAgreesWithTheReference) {
+  SimMobileConfig c = quiet();
+  c.duration_s = 32.0;
+  drive(c);
+  MountingCalibrationOptions o;
+  o.range_noise_fraction = 0.0;
+  o.threads = 1;
+  const MountingCalibrationResult one = calibrateMounting(scans_, track_, initial(), o);
+  o.threads = 3;
+  const MountingCalibrationResult three = calibrateMounting(scans_, track_, initial(), o);
+  ASSERT_TRUE(one.ok) << one.reason;
+  EXPECT_EQ(one.gamma_rad, three.gamma_rad);
+  EXPECT_EQ(one.beta_rad, three.beta_rad);
+  EXPECT_EQ(one.alpha_rad, three.alpha_rad);
+  EXPECT_EQ(one.correspondences, three.correspondences);
+  EXPECT_EQ(one.residual_after_m, three.residual_after_m);
+  o.reference_solver = true;
+  o.threads = 0;
+  const MountingCalibrationResult reference = calibrateMounting(scans_, track_, initial(), o);
+  EXPECT_NEAR(one.gamma_rad, reference.gamma_rad, 2e-6);
+  EXPECT_NEAR(one.beta_rad, reference.beta_rad, 2e-6);
+  EXPECT_NEAR(one.alpha_rad, reference.alpha_rad, 2e-6);
+}
+
 TEST_F(NoiseFreeDrive, PaperPointsFromTheTargetsEdgesRecoverGamma) {
   SimMobileConfig c = quiet();
   c.duration_s = 32.0;
