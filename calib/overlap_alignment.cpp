@@ -491,6 +491,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
     if (round >= 1 && change < o.convergence_rad) break;
   }
   res.covariance = covariance(H, chi2_dof, P, oo);
+  res.information = H.topLeftCorner(P, P) / std::max(1e-300, chi2_dof);
   res.chi2_per_dof = chi2_dof;
   res.ok = true;
   if (oo.progress) oo.progress(1.0);

@@ -69,6 +69,9 @@ struct OverlapResult {
   std::string reason;
   Eigen::VectorXd x;
   Eigen::MatrixXd covariance;  // of x (zero rows/columns for held parameters)
+  // The information matrix of every parameter, held ones too (normal matrix / chi2 per dof):
+  // what freeing a held one would give, without solving again.
+  Eigen::MatrixXd information;
   double residual_before_m = 0.0, residual_after_m = 0.0;  // RMS of the plain residuals
   double chi2_per_dof = 0.0;  // of the weighted residuals after the last round
   int correspondences = 0;

@@ -20,6 +20,8 @@ struct RigBBenchOptions {
   double circle_s = 60.0;        // simulated circle for the replay
   double loop_s = 130.0;         // simulated lab loop for the replay (one lap ~ 125 s)
   double mounting_s = 120.0;     // the docs' calibration circle for `calib mounting`
+  double rig_calib_s = 120.0;    // the drive of rig B's joint calibration, per seed
+  int rig_calib_seeds = 5;
 };
 
 // Returns 0; a part that cannot run (no network namespace) says why and is skipped.
