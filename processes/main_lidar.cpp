@@ -67,6 +67,8 @@ int runSimulated(const CommonOptions& common, const Rig& loaded, const std::stri
   TruthSweepNode truth_sweep(&truth, rig.sim.alpha_true_deg * M_PI / 180.0);
   const truth_rig_t truth_rig = makeTruthRig(rig, scene_config, scene, wallUtime());
   lcm.publish(channels::kTruthRig, &truth_rig);
+  const truth_rig_errors_t truth_errors = makeTruthRigErrors(rig.sim, wallUtime());
+  lcm.publish(channels::kTruthRigErrors, &truth_errors);
   installStopSignals();
   return runLive(lcm, {&follower, &node, &truth_sweep}, liveOptions(common));
 }
