@@ -130,7 +130,8 @@ struct State {
   double alpha;
   std::vector<SweepState> sweeps;
   double sigma_mm = 10.0;
-  double sigma_plate_rad = 2e-4;
+  double sigma_plate_rad = 3.5e-4;  // 0.02 deg until the plates' scatter is known
+  bool plate_robust = false;        // Cauchy on the plates once their scatter is known
   bool held[kParams] = {false, false, false, false};  // alpha, x, tilt, mirror
 };
 
@@ -286,7 +287,7 @@ Built buildProblem(const std::vector<RigASweep>& sweeps, const RigASolveOptions&
           new PlateCost{&sweeps[s].plate_rays, &ss.plate_hits, &o.plate, 1.0 / st->sigma_plate_rad};
       b.problem->AddResidualBlock(
           new ceres::NumericDiffCostFunction<PlateCost, ceres::CENTRAL, 1, 3, 1, 1>(cost),
-          b.plate_loss.get(), st->g, &st->alpha, &ss.phi);
+          st->plate_robust ? b.plate_loss.get() : nullptr, st->g, &st->alpha, &ss.phi);
     }
   }
   std::vector<int> held_g;
@@ -468,10 +469,17 @@ void reweigh(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, St
   st->sigma_mm = robustSigma(keptResiduals(*st));
   removeClutter(o, st);
   const std::vector<double> m = plateMismatches(sweeps, o, *st);
+  // Their scatter about their mean (alpha takes the mean), robustly; Cauchy from now on.
   if (m.size() >= 2) {
+    double mean = 0.0;
+    for (const double v : m) mean += v / double(m.size());
+    std::vector<double> centred;
+    for (const double v : m) centred.push_back(v - mean);
     double ss = 0.0;
-    for (const double v : m) ss += v * v;
-    st->sigma_plate_rad = std::max(1e-5, std::sqrt(ss / double(m.size() - 1)));
+    for (const double v : centred) ss += v * v;
+    const double sd = std::sqrt(ss / double(m.size() - 1));
+    st->sigma_plate_rad = std::max(1e-5, m.size() >= 5 ? std::min(sd, robustSigma(centred)) : sd);
+    st->plate_robust = true;
   }
 }
 
