@@ -96,13 +96,17 @@ std::vector<PlateRay> placePlateRays(const std::vector<SweepRay>& rays, const do
   return out;
 }
 
-// The plate of one sweep: parameters g (3), alpha (1), phi_s (1); numeric derivatives.
+// The plate of one sweep: parameters alpha (1), phi_s (1); numeric derivatives. The rays are
+// placed with g as the walls determined it (`g`, a snapshot): one centroid per sweep cannot
+// tell the offset from alpha (a sideways shift of the lidar turns the plate's centroid by
+// ~0.7 deg/mm), so the plates do not move g; g's uncertainty reaches alpha by propagation.
 struct PlateCost {
   const std::vector<SweepRay>* rays;
   const std::vector<char>* hits;
   const PlateModel* model;
+  const double* g;
   double inv_sigma;
-  bool operator()(const double* g, const double* alpha, const double* phi, double* e) const {
+  bool operator()(const double* alpha, const double* phi, double* e) const {
     const auto m = plateCentroidMismatch(*model, placePlateRays(*rays, g), alpha[0] - phi[0], hits);
     if (!m) return false;
     e[0] = *m * inv_sigma;
@@ -127,6 +131,7 @@ struct SweepState {
 
 struct State {
   double g[3];
+  double g_plate[3];  // g as the plates see it (the walls' last solution)
   double alpha;
   std::vector<SweepState> sweeps;
   double sigma_mm = 10.0;
@@ -283,11 +288,11 @@ Built buildProblem(const std::vector<RigASweep>& sweeps, const RigASolveOptions&
       }
     }
     if (ss.plate) {
-      auto* cost =
-          new PlateCost{&sweeps[s].plate_rays, &ss.plate_hits, &o.plate, 1.0 / st->sigma_plate_rad};
+      auto* cost = new PlateCost{&sweeps[s].plate_rays, &ss.plate_hits, &o.plate, st->g_plate,
+                                 1.0 / st->sigma_plate_rad};
       b.problem->AddResidualBlock(
-          new ceres::NumericDiffCostFunction<PlateCost, ceres::CENTRAL, 1, 3, 1, 1>(cost),
-          st->plate_robust ? b.plate_loss.get() : nullptr, st->g, &st->alpha, &ss.phi);
+          new ceres::NumericDiffCostFunction<PlateCost, ceres::CENTRAL, 1, 1, 1>(cost),
+          st->plate_robust ? b.plate_loss.get() : nullptr, &st->alpha, &ss.phi);
     }
   }
   std::vector<int> held_g;
@@ -438,6 +443,7 @@ State initState(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o)
   st.g[1] = o.nominal.tilt_deg * kDegToRad;
   st.g[2] = o.nominal.mirror_deg * kDegToRad;
   st.alpha = o.nominal.alpha_deg * kDegToRad;
+  std::copy(st.g, st.g + 3, st.g_plate);
   for (const RigASweep& s : sweeps) st.sweeps.push_back(initSweep(s, o, st));
   st.held[0] = std::none_of(st.sweeps.begin(), st.sweeps.end(),
                             [](const SweepState& ss) { return ss.plate; });
@@ -521,6 +527,46 @@ void checkResiduals(const RigASolveOptions& o, State* st, RigCalibration* r) {
   }
 }
 
+// alpha as the plates give it with the rays placed with g, the sweeps' attitudes held: the
+// mean of phi_s + the plate's angle in O'.
+double alphaFromPlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                       const State& st, const double* g) {
+  double sum = 0.0;
+  int n = 0;
+  for (size_t s = 0; s < st.sweeps.size(); ++s) {
+    if (!st.sweeps[s].plate) continue;
+    const PlateModelFit f =
+        fitPlateModel(o.plate, placePlateRays(sweeps[s].plate_rays, g), o.min_plate_hits);
+    if (!f.found) continue;
+    sum += st.sweeps[s].phi + f.angle_rad;
+    ++n;
+  }
+  return n ? sum / n : st.alpha;
+}
+
+// g's uncertainty into alpha's (raw units): J = d alpha / d g by central differences,
+// C_aa += J C_gg J^T, C_ag = J C_gg.
+void propagateToAlpha(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                      const State& st, Eigen::Matrix4d* c) {
+  const Eigen::Matrix3d cgg = c->bottomRightCorner<3, 3>();
+  if (!cgg.allFinite() || st.held[0]) return;
+  const double steps[3] = {1e-3, 1e-5, 1e-5};  // mm, rad, rad
+  Eigen::RowVector3d J = Eigen::RowVector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    if (st.held[i + 1]) continue;
+    double gp[3], gm[3];
+    std::copy(st.g, st.g + 3, gp);
+    std::copy(st.g, st.g + 3, gm);
+    gp[i] += steps[i];
+    gm[i] -= steps[i];
+    J(i) =
+        (alphaFromPlates(sweeps, o, st, gp) - alphaFromPlates(sweeps, o, st, gm)) / (2 * steps[i]);
+  }
+  (*c)(0, 0) += J * cgg * J.transpose();
+  const Eigen::RowVector3d cag = J * cgg;
+  for (int i = 0; i < 3; ++i) (*c)(0, i + 1) = (*c)(i + 1, 0) = cag(i);
+}
+
 }  // namespace
 
 RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o) {
@@ -537,10 +583,16 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
     Built b = buildProblem(sweeps, o, &st);
     solve(o, &b);
   }
+  std::copy(st.g, st.g + 3, st.g_plate);
   reweigh(sweeps, o, &st);
   Built b = buildProblem(sweeps, o, &st);
   if (!solve(o, &b)) r.warnings.push_back("the solver stopped before converging");
-  Eigen::Matrix4d cov = inUnits(covariance(&b, &st));
+  // The plates once more with the final g.
+  std::copy(st.g, st.g + 3, st.g_plate);
+  solve(o, &b);
+  Eigen::Matrix4d raw = covariance(&b, &st);
+  propagateToAlpha(sweeps, o, st, &raw);
+  Eigen::Matrix4d cov = inUnits(raw);
   r.parameters = parameterTable(st, o);
   ObservabilityLimits limits{o.max_sigma};
   std::vector<size_t> flagged = testObservability(cov, limits, &r.parameters);
@@ -552,7 +604,11 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
     holdAtNominal(flagged, o, &st);
     Built b2 = buildProblem(sweeps, o, &st);
     solve(o, &b2);
-    cov = inUnits(covariance(&b2, &st));
+    std::copy(st.g, st.g + 3, st.g_plate);
+    solve(o, &b2);
+    Eigen::Matrix4d raw2 = covariance(&b2, &st);
+    propagateToAlpha(sweeps, o, st, &raw2);
+    cov = inUnits(raw2);
     r.parameters = parameterTable(st, o);
     for (size_t i = 0; i < kParams; ++i) {
       r.parameters[i].sigma = std::sqrt(cov(Eigen::Index(i), Eigen::Index(i)));

@@ -65,7 +65,7 @@ struct RigASolveOptions {
   double clutter_limit_mm = 8.0;  // |median residual| of a wall cell above this: clutter
   int max_iterations = 100;
   // Observability limits: sigma of alpha [deg], x [mm], tilt [deg], mirror [deg].
-  std::vector<double> max_sigma = {0.05, 0.5, 0.05, 0.05};
+  std::vector<double> max_sigma = {0.5, 0.5, 0.05, 0.05};
   // A warning when the walls' cell medians (cells of 0.5 m pooled over the sweeps, 100 rays or
   // more: noise alone scatters them by ~1.5 mm) still scatter by more than this after the fit.
   double systematic_limit_mm = 4.0;
