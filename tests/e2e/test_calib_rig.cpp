@@ -64,9 +64,10 @@ TEST(CalibRig, EveryParameterOfARealisticBuildWithinThreeSigmaAndApplied) {
                    "calibration_file: " + calib.filename().string());
   std::ofstream(dir / "my_rig.yaml") << rig_text;
   const RotatingLidarConfig rig = loadRotatingLidarConfig((dir / "my_rig.yaml").string());
-  EXPECT_DOUBLE_EQ(rig.plate.alpha_deg, j["parameters"]["plate.alpha_deg"]["value"].get<double>());
-  EXPECT_DOUBLE_EQ(rig.geometry.scan_plane_tilt_deg,
-                   j["parameters"]["geometry.scan_plane_tilt_deg"]["value"].get<double>());
+  // (The file holds 12 significant digits.)
+  EXPECT_NEAR(rig.plate.alpha_deg, j["parameters"]["plate.alpha_deg"]["value"].get<double>(), 1e-9);
+  EXPECT_NEAR(rig.geometry.scan_plane_tilt_deg,
+              j["parameters"]["geometry.scan_plane_tilt_deg"]["value"].get<double>(), 1e-9);
 }
 
 TEST(CalibRig, OtherKindsAreNotYetSupported) {

@@ -220,10 +220,10 @@ void checkWalls(const Inputs& in, LidarAxisOffsetResult* r) {
       pts.push_back((1e-3 * placeRayMm(ray, r->offset_mm)).cast<float>());
     }
     const auto m = planeCellMediansMm(pts, idx, r->planes[k].normal,
-                                      -1e-3 * r->planes[k].distance_mm, 0.5, 40);
+                                      -1e-3 * r->planes[k].distance_mm, 0.5, 100);
     medians.insert(medians.end(), m.begin(), m.end());
   }
-  const std::string w = wallsDisagreeWarning(rmsOf(medians), 5.0);
+  const std::string w = wallsDisagreeWarning(rmsOf(medians), 2.5);
   if (!w.empty()) r->warnings.push_back(w);
 }
 
