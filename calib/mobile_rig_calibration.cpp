@@ -124,11 +124,11 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
   return solve(rays, model, first.x, *free, in);
 }
 
-calib::RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd& x,
-                             const MobileWheelParameters& w, const OverlapResult& r,
-                             const std::vector<bool>& free, const MobileOdometryRun& odo,
-                             double rms_before) {
-  calib::RigCalibration out;
+RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd& x,
+                      const MobileWheelParameters& w, const OverlapResult& r,
+                      const std::vector<bool>& free, const MobileOdometryRun& odo,
+                      double rms_before) {
+  RigCalibration out;
   const LidarMounting& n = in.nominal;
   struct Row {
     const char* key;
@@ -150,7 +150,7 @@ calib::RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::V
   };
   std::vector<int> index;
   for (const Row& row : rows) {
-    calib::CalibParameter p;
+    CalibParameter p;
     p.key = row.key;
     p.unit = row.unit;
     p.value = row.value;
@@ -161,12 +161,12 @@ calib::RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::V
     out.parameters.push_back(p);
     index.push_back(row.index);
   }
-  calib::CalibParameter bias{"odometry.gyro_bias_rad_s",
-                             odo.gyro_bias_rad_s,
-                             odo.gyro_bias_sigma_rad_s,
-                             "rad/s",
-                             true,
-                             std::nullopt};
+  CalibParameter bias{"odometry.gyro_bias_rad_s",
+                      odo.gyro_bias_rad_s,
+                      odo.gyro_bias_sigma_rad_s,
+                      "rad/s",
+                      true,
+                      std::nullopt};
   const auto t = in.truth.find(bias.key);
   if (t != in.truth.end()) bias.truth = t->second;
   out.parameters.push_back(bias);
@@ -182,7 +182,7 @@ calib::RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::V
   }
   out.rms_before = rms_before;
   out.rms_after = r.residual_after_m;
-  for (const calib::CalibParameter& p : out.parameters) {
+  for (const CalibParameter& p : out.parameters) {
     if (!p.observable)
       out.warnings.push_back(p.key + ": not observable from these logs; left at the rig file's");
   }
@@ -200,7 +200,7 @@ calib::RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::V
 
 }  // namespace
 
-calib::RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& in) {
+RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& in) {
   const std::vector<OverlapRay> rays =
       overlapRays(in.scans, in.nominal.nominal_rpy_rad, std::max(1, in.options.ray_stride));
   MobileWheelParameters w = in.wheels;
@@ -222,7 +222,7 @@ calib::RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& in) {
     std::vector<bool> try_free = free;
     r = solveObservable(rays, model, x, in, &try_free);
     if (!r.ok) {
-      calib::RigCalibration failed;
+      RigCalibration failed;
       failed.rms_before = failed.rms_after = 0.0;
       failed.warnings.push_back("nothing calibrated: " + r.reason);
       return failed;

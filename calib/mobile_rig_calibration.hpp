@@ -54,6 +54,6 @@ struct MobileRigCalibrationInput {
 // mounting.x_m, y_m, z_m, odometry.wheel_radius_m (left), odometry.wheel_radius_right_m,
 // odometry.wheel_distance_m, odometry.gyro_bias_rad_s, lidar.time_offset_s (the lidar's
 // stamps minus the odometry's clock).
-calib::RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& input);
+RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& input);
 
 }  // namespace sweepmap

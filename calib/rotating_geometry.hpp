@@ -40,6 +40,15 @@ inline Eigen::Vector3d lidarToOPrime(const Eigen::Vector3d& p_L, double phi_moto
   return rotZ(phi_motor_rad) * (p_L + t_L_Op_m);
 }
 
+// R_L^O' of a real build (Eq. 5-6 take I): the scan plane tilted by `tilt_rad` about Y_L
+// (its normal X_L leans toward Z) after the mirror's angle zero offset `mirror_rad` about X_L
+// (a ray reported at theta leaves at theta + mirror): Ry(tilt) Rx(-mirror).
+inline Eigen::Matrix3d lidarRotation(double tilt_rad, double mirror_rad) {
+  return (Eigen::AngleAxisd(tilt_rad, Eigen::Vector3d::UnitY()) *
+          Eigen::AngleAxisd(-mirror_rad, Eigen::Vector3d::UnitX()))
+      .toRotationMatrix();
+}
+
 // Eq. 7: phi_motor^k = k / K * sweep_angle.
 inline double motorAngleFromIndex(long k, long K, double sweep_angle_rad) {
   return static_cast<double>(k) / static_cast<double>(K) * sweep_angle_rad;

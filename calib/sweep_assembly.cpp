@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "calib/plate_model.hpp"
 #include "calib/rotating_geometry.hpp"
 
 namespace sweepmap {
@@ -26,8 +27,14 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   size_t total = 0;
   for (const auto& s : scans) total += s.ranges_m.size();
   out.points_Op.reserve(total);
+  // R_L^O' (identity unless the rig's scan plane is tilted or its mirror offset).
+  const bool rotated =
+      rig.geometry.scan_plane_tilt_deg != 0.0 || rig.geometry.mirror_offset_deg != 0.0;
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(rig.geometry.scan_plane_tilt_deg * kDegToRad,
+                                                      rig.geometry.mirror_offset_deg * kDegToRad);
   forEachSweepRay(scans, window.omega_rad_s, [&](const SweepRay& ray) {
-    const Eigen::Vector3d p_L = rotating::pointInLidar(ray.range_m, ray.theta_rad);
+    Eigen::Vector3d p_L = rotating::pointInLidar(ray.range_m, ray.theta_rad);
+    if (rotated) p_L = R_L * p_L;
     const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, ray.phi_rad, offset_x_m);
     out.points_Op.push_back(p_Op.cast<float>());
     const Eigen::Vector3d origin =
@@ -45,10 +52,16 @@ void correctSweep(const RotatingLidarConfig& rig, AssembledSweep* sweep) {
   AssembledSweep& out = *sweep;
   const PlateRegion region = PlateRegion::fromConfig(rig.plate);
   out.alpha_rad = rig.plate.alpha_deg * M_PI / 180.0;
-  out.plate = rig.plate.beta_method == "ray_plane"
-                  ? estimateBetaRayPlane(out.plate_rays, region, rig.plate.range_gate_mm * 1e-3,
-                                         rig.plate.min_points)
-                  : estimateBetaCentroid(out.points_Op, region, rig.plate.min_points);
+  if (rig.plate.beta_method == "model") {
+    const PlateModelFit f =
+        fitPlateModel(PlateModel::fromConfig(rig.plate), out.plate_rays, rig.plate.min_points);
+    out.plate = PlateEstimate{f.found, f.hits, f.angle_rad, f.reason};
+  } else {
+    out.plate = rig.plate.beta_method == "ray_plane"
+                    ? estimateBetaRayPlane(out.plate_rays, region, rig.plate.range_gate_mm * 1e-3,
+                                           rig.plate.min_points)
+                    : estimateBetaCentroid(out.points_Op, region, rig.plate.min_points);
+  }
   out.plate_check = PlateCheck{};
   if (out.plate.found) {
     out.plate_check =
@@ -78,6 +91,14 @@ void correctSweep(const RotatingLidarConfig& rig, AssembledSweep* sweep) {
   } else {
     out.points = out.points_Op;
   }
+}
+
+void uncorrectSweep(const std::string& reason, AssembledSweep* sweep) {
+  if (!sweep->corrected) return;
+  sweep->corrected = false;
+  sweep->phi_offset_rad = 0.0;
+  sweep->reason = reason;
+  sweep->points = sweep->points_Op;
 }
 
 }  // namespace sweepmap

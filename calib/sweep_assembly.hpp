@@ -79,4 +79,8 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
 // tools re-run it to compare methods or alphas without re-assembling.
 void correctSweep(const RotatingLidarConfig& rig, AssembledSweep* sweep);
 
+// Takes a correction back (C_O' published) for `reason`: e.g. scans of the window were lost,
+// so the plate may be incompletely seen and its beta moved.
+void uncorrectSweep(const std::string& reason, AssembledSweep* sweep);
+
 }  // namespace sweepmap

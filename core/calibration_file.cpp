@@ -24,6 +24,24 @@ struct CalibrationFileContent {
   std::vector<std::string> logs;
 };
 
+// The keys of `section` in the file (any; for a rig calibration file).
+std::vector<std::string> sectionKeys(const std::string& path, const std::string& section) {
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(path);
+  } catch (const YAML::BadFile&) {
+    throw ConfigError(path + ": cannot open calibration file");
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": line " + std::to_string(e.mark.line + 1) + ": " + e.msg);
+  }
+  std::vector<std::string> keys;
+  if (root.IsMap() && root[section] && root[section].IsMap()) {
+    for (const auto& kv : root[section]) keys.push_back(kv.first.as<std::string>());
+  }
+  if (keys.empty()) throw ConfigError(path + ": missing key '" + section + "'");
+  return keys;
+}
+
 CalibrationFileContent loadCalibrationFile(const std::string& path, const std::string& section,
                                            const std::vector<std::string>& keys) {
   YAML::Node root;
@@ -154,7 +172,25 @@ const CalibrationKind<LidarOffsetCalibration> kLidarOffset{
     "geometry",
     {{"lidar_offset_x_mm", &LidarOffsetCalibration::lidar_offset_x_mm}}};
 
+const char* const kRigCalibrationHeader =
+    "Rig calibration (sweepmap calib rig): rig-file keys, applied over the rig file's own by "
+    "its calibration_file key";
+
 }  // namespace
+
+RigCalibrationFile loadRigCalibration(const std::string& path) {
+  const std::vector<std::string> keys = sectionKeys(path, "parameters");
+  const CalibrationFileContent f = loadCalibrationFile(path, "parameters", keys);
+  RigCalibrationFile c;
+  for (const auto& k : keys) c.parameters.emplace_back(k, f.values.at(k));
+  c.source = f.source;
+  c.logs = f.logs;
+  return c;
+}
+
+void writeRigCalibration(const std::string& path, const RigCalibrationFile& c) {
+  writeCalibrationFile(path, kRigCalibrationHeader, "parameters", c.parameters, c.source, c.logs);
+}
 
 PlateCalibration loadPlateCalibration(const std::string& path) { return kPlate.load(path); }
 void writePlateCalibration(const std::string& path, const PlateCalibration& c) {

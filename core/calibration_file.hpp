@@ -85,4 +85,23 @@ LidarOffsetCalibration loadLidarOffsetCalibration(const std::string& path);
 void writeLidarOffsetCalibration(const std::string& path,
                                  const LidarOffsetCalibration& calibration);
 
+// A whole rig's calibration (sweepmap calib rig): rig-file keys with their calibrated values,
+// applied over the rig file's own by its top-level `calibration_file` key (relative to the rig
+// file). Rig-neutral: the keys are whatever the rig kind's schema has.
+//
+//   parameters:
+//     plate.alpha_deg: 29.3598
+//     geometry.lidar_offset_x_mm: 13.9
+//   source: {...}                  # as above, with each parameter's sigma
+struct RigCalibrationFile {
+  std::vector<std::pair<std::string, double>> parameters;  // in the order written
+  std::map<std::string, std::string> source;
+  std::vector<std::string> logs;
+};
+
+// Throws ConfigError naming the file and key when `parameters` is missing or empty, a value
+// is not a finite number, or a top-level key other than `parameters` and `source` is present.
+RigCalibrationFile loadRigCalibration(const std::string& path);
+void writeRigCalibration(const std::string& path, const RigCalibrationFile& calibration);
+
 }  // namespace sweepmap

@@ -118,6 +118,11 @@ void GeometryConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "calibration_file", &calibration_file, "",
         "calibration YAML (relative to the rig file) whose geometry.lidar_offset_x_mm replaces "
         "lidar_offset_x_mm (sweepmap calib axis-offset); empty: none");
+  s.add(p + "scan_plane_tilt_deg", &scan_plane_tilt_deg, "deg",
+        "scan plane tilted against the rotation axis (about Y_L; sweepmap calib rig)");
+  s.add(p + "mirror_offset_deg", &mirror_offset_deg, "deg",
+        "the lidar's angle zero offset: a ray reported at theta leaves at theta + this (about "
+        "X_L; sweepmap calib rig)");
 }
 
 void PlateConfig::declare(ConfigSchema& s, const std::string& p) {
@@ -126,6 +131,8 @@ void PlateConfig::declare(ConfigSchema& s, const std::string& p) {
         "calibration YAML (relative to the rig file) whose plate.alpha_deg replaces alpha_deg; "
         "empty: none");
   s.add(p + "height_mm", &height_mm, "mm", "z of the plate surface in frame O");
+  s.add(p + "thickness_mm", &thickness_mm, "mm",
+        "plate thickness below its surface (beta_method model: its inner edge's face)");
   s.add(p + "region_inner_radius_mm", &region_inner_radius_mm, "mm", "semi-ring inner radius");
   s.add(p + "region_outer_radius_mm", &region_outer_radius_mm, "mm", "semi-ring outer radius");
   s.add(p + "region_thickness_mm", &region_thickness_mm, "mm", "semi-ring thickness about height");
@@ -133,7 +140,8 @@ void PlateConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "base_distance_mm", &base_distance_mm, "mm", "hypotenuse to rotation axis");
   s.add(p + "min_points", &min_points, "", "fewest plate points for a correction");
   s.add(p + "beta_method", &beta_method, "",
-        "centroid (Yuan 2021) or ray_plane (rays meeting the plate plane in the region)");
+        "centroid (Yuan 2021), ray_plane (rays meeting the plate plane in the region) or model "
+        "(the plate's solid model, cast along the same rays: no sampling bias; calib/plate_model)");
   s.add(p + "range_gate_mm", &range_gate_mm, "mm",
         "ray_plane: largest |measured - plane range| of a plate ray");
 }
@@ -223,6 +231,42 @@ void SimRigConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "switch_hysteresis_deg", &switch_hysteresis_deg, "deg",
         "switch edge shift between the two approach directions");
   s.add(p + "lidar_latency_ms", &lidar_latency_ms, "ms", "delivery delay after a scan's last ray");
+  s.add(p + "scan_plane_tilt_deg", &scan_plane_tilt_deg, "deg",
+        "true tilt of the scan plane against the rotation axis (about Y_L)");
+  s.add(p + "mirror_offset_deg", &mirror_offset_deg, "deg",
+        "true offset of the lidar's angle zero (about X_L)");
+  s.add(p + "plate_thickness_mm", &plate_thickness_mm, "mm",
+        "true plate thickness below its upper surface");
+  s.add(p + "mixed_pixel_probability", &mixed_pixel_probability, "",
+        "a ray at a depth edge returns a range between the two surfaces");
+  s.add(p + "dropout_dark_probability", &dropout_dark_probability, "",
+        "no return from dark furniture (table, cabinet)");
+  s.add(p + "dropout_glancing_probability", &dropout_glancing_probability, "",
+        "no return at 90 deg incidence (0 up to 70 deg, linear between)");
+  s.add(p + "people", &people, "", "people walking through the room (moving boxes)");
+  s.add(p + "window_width_m", &window_width_m, "m",
+        "a window (no return) in the -Y wall, this wide; 0: none");
+  s.add(p + "whiteboard_proud_mm", &whiteboard_proud_mm, "mm",
+        "a whiteboard this far proud of the -X wall; 0: none");
+}
+
+std::vector<std::string> SimRigConfig::paperSettings() {
+  return {"sim.scan_plane_tilt_deg=0",
+          "sim.mirror_offset_deg=0",
+          "sim.plate_thickness_mm=0",
+          "sim.mixed_pixel_probability=0",
+          "sim.dropout_dark_probability=0",
+          "sim.dropout_glancing_probability=0",
+          "sim.people=0",
+          "sim.window_width_m=0",
+          "sim.whiteboard_proud_mm=0"};
+}
+
+void SimRigConfig::applyPaperSettings() {
+  scan_plane_tilt_deg = mirror_offset_deg = plate_thickness_mm = 0.0;
+  mixed_pixel_probability = dropout_dark_probability = dropout_glancing_probability = 0.0;
+  people = 0;
+  window_width_m = whiteboard_proud_mm = 0.0;
 }
 
 ScanMode scanMode(int mode) {

@@ -61,6 +61,11 @@ struct MotorConfig {
 
 struct GeometryConfig {
   double lidar_offset_x_mm = 13.9;  // t_L^O' = (offset, 0, 0), Eq. 5-6
+  // R_L^O' (Eq. 5-6; the paper's I): the scan plane tilted against the rotation axis (about
+  // Y_L: its normal X_L leans toward Z by this angle) and the mirror's angle zero offset (about
+  // X_L: a ray reported at theta leaves at theta + mirror_offset). rotating::lidarRotation.
+  double scan_plane_tilt_deg = 0.0;
+  double mirror_offset_deg = 0.0;
   // Calibration file (relative to the rig file) whose geometry.lidar_offset_x_mm replaces
   // lidar_offset_x_mm (sweepmap calib axis-offset); empty: use lidar_offset_x_mm.
   std::string calibration_file;
@@ -72,7 +77,8 @@ struct PlateConfig {
   // Calibration file (relative to the rig file) whose plate.alpha_deg replaces alpha_deg;
   // empty: use alpha_deg.
   std::string calibration_file;
-  double height_mm = -45.0;  // z of the plate's upper surface in frame O
+  double height_mm = -45.0;   // z of the plate's upper surface in frame O
+  double thickness_mm = 2.0;  // the plate's solid reaches this far below its upper surface
   double region_inner_radius_mm = 62.5;
   double region_outer_radius_mm = 115.5;
   double region_thickness_mm = 20.0;  // centred on height_mm
@@ -146,7 +152,22 @@ struct SimRigConfig {
   double switch_response_jitter_ms = 1.0;  // uniform +- jitter of the response time
   double switch_hysteresis_deg = 0.3;      // edge moves by this when approached from the other side
   double lidar_latency_ms = 50.0;          // a scan is delivered this long after its last ray
+  // A real build (not in the paper's model; its experiment sets them to 0: paperSettings()).
+  double scan_plane_tilt_deg = 0.3;  // true tilt of the scan plane against the axis (about Y_L)
+  double mirror_offset_deg = 0.2;    // true mirror angle zero offset (about X_L)
+  double plate_thickness_mm = 2.0;   // true plate: a solid this thick below its upper surface
+  // Real-scene artefacts (sim/artefacts.hpp), drawn from their own generator.
+  double mixed_pixel_probability = 0.5;       // a ray at a depth edge returns a range in between
+  double dropout_dark_probability = 0.3;      // no return from dark furniture (table, cabinet)
+  double dropout_glancing_probability = 0.5;  // no return at grazing incidence (rising from 70 deg)
+  int people = 2;                             // people walking through the room during the sweeps
+  double window_width_m = 1.5;                // a window (glass: no return) in the -Y wall; 0: none
+  double whiteboard_proud_mm = 20;            // a whiteboard this far proud of the -X wall; 0: none
   void declare(ConfigSchema& s, const std::string& prefix);
+  // The paper's settings of the keys above (Yuan 2021 models none of them: all 0).
+  static std::vector<std::string> paperSettings();
+  // The same on this struct.
+  void applyPaperSettings();
 };
 
 // Table 1 of Yuan 2021: 3D scan time T [s] and angular step gamma [deg] of modes 1..7.

@@ -177,6 +177,10 @@ void AssemblerNode::publishSweep(int64_t now_utime, const SweepWindow& window, O
                 " incomplete: " + std::to_string(sweep.missing_scans) + " of " +
                 std::to_string(sweep.missing_scans + sweep.scans) +
                 " scans missing (lost on the way, or dropped here as out of order or invalid)");
+    // The plate may be among what was lost: one scan lost over it in mode 1 moves phi by ~1 deg.
+    uncorrectSweep(
+        std::to_string(sweep.missing_scans) + " scans missing: the plate may be incompletely seen",
+        &sweep);
   }
   const auto chunks = toChunks(sweep, rig_.assembler.chunk_points);
   for (const auto& c : chunks) out.publish(channels::kSweepCloud, now_utime, c);

@@ -24,7 +24,9 @@ constexpr const char* kOdometryPose = "ODOMETRY_POSE";    // pose2d_t, EKF
 constexpr const char* kWheelOdometry = "WHEEL_ODOMETRY";  // pose2d_t, wheels alone
 constexpr const char* kTruthShaft = "TRUTH_SHAFT";        // truth_shaft_t, simulation only
 constexpr const char* kTruthRig = "TRUTH_RIG";            // truth_rig_t, simulation only
-constexpr const char* kTruthSweep = "TRUTH_SWEEP";        // truth_sweep_t, simulation only
+constexpr const char* kTruthRigErrors =
+    "TRUTH_RIG_ERRORS";  // truth_rig_errors_t, simulation only (rig A's build errors)
+constexpr const char* kTruthSweep = "TRUTH_SWEEP";  // truth_sweep_t, simulation only
 constexpr const char* kTruthPose =
     "TRUTH_POSE";  // pose2d_t, true body pose (rig B simulation only)
 constexpr const char* kTruthMounting =

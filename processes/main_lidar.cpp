@@ -67,7 +67,10 @@ int runSimulated(const CommonOptions& common, const Rig& loaded, const std::stri
   LidarNode node(rig.lidar, &device);
   TruthSweepNode truth_sweep(&truth, rig.sim.alpha_true_deg * M_PI / 180.0);
   const truth_rig_t truth_rig = makeTruthRig(rig, scene_config, scene, wallUtime());
-  publishAll(lcm, {Message{truth_rig.utime, channels::kTruthRig, encodeMessage(truth_rig)}},
+  const truth_rig_errors_t truth_errors = makeTruthRigErrors(rig.sim, wallUtime());
+  publishAll(lcm,
+             {Message{truth_rig.utime, channels::kTruthRig, encodeMessage(truth_rig)},
+              Message{truth_errors.utime, channels::kTruthRigErrors, encodeMessage(truth_errors)}},
              common.auth.get());
   installStopSignals();
   return runLive(lcm, {&follower, &node, &truth_sweep}, liveOptions(common));

@@ -19,6 +19,21 @@ truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scen
   return m;
 }
 
+truth_rig_errors_t makeTruthRigErrors(const SimRigConfig& sim, int64_t utime) {
+  truth_rig_errors_t m{};
+  m.utime = utime;
+  m.scan_plane_tilt_rad = sim.scan_plane_tilt_deg * M_PI / 180.0;
+  m.mirror_offset_rad = sim.mirror_offset_deg * M_PI / 180.0;
+  m.plate_thickness_m = sim.plate_thickness_mm * 1e-3;
+  m.mixed_pixel_probability = sim.mixed_pixel_probability;
+  m.dropout_dark_probability = sim.dropout_dark_probability;
+  m.dropout_glancing_probability = sim.dropout_glancing_probability;
+  m.people = sim.people;
+  m.window_width_m = sim.window_width_m;
+  m.whiteboard_proud_m = sim.whiteboard_proud_mm * 1e-3;
+  return m;
+}
+
 truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t sweep_id,
                                         int64_t utime, const PlatePose* plate) {
   const ProfileGeometry g = sim.trueGeometry();

@@ -7,6 +7,7 @@
 #include "sim/profiler.hpp"
 #include "sim/scene.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
+#include "sweepmap/truth_rig_errors_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 #include "sweepmap/truth_test_piece_t.hpp"
 
@@ -23,6 +24,8 @@ inline uint64_t lidarSeed(uint64_t seed) { return seed * 2 + 2; }
 
 truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scene_config,
                          const Scene& scene, int64_t utime);
+// The build's errors and the scene's artefacts (TRUTH_RIG_ERRORS), published beside it.
+truth_rig_errors_t makeTruthRigErrors(const SimRigConfig& sim, int64_t utime);
 
 // Rig C's truth (TRUTH_PROFILE_RIG) for sweep `sweep_id`, with the plate's true plane when
 // `plate` is given: what the offline simulation and the live simulated profiler publish.

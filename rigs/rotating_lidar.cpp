@@ -1,6 +1,8 @@
 #include "rigs/rotating_lidar.hpp"
 
 #include <filesystem>
+#include <iomanip>
+#include <sstream>
 
 #include "core/calibration_file.hpp"
 #include "rigs/rig_kind.hpp"
@@ -9,6 +11,9 @@ namespace sweepmap {
 
 void RotatingLidarConfig::declare(ConfigSchema& s) {
   s.add("rig", &rig, "", "rig kind: rotating_lidar (a 2D lidar turned by a stepper, Yuan 2021)");
+  s.add("calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) of sweepmap calib rig, whose rig-file keys "
+        "replace these values; empty: none");
   lidar.declare(s, "lidar.");
   motor.declare(s, "motor.");
   geometry.declare(s, "geometry.");
@@ -19,6 +24,31 @@ void RotatingLidarConfig::declare(ConfigSchema& s) {
   sim.declare(s, "sim.");
 }
 
+namespace {
+
+// The keys of a rig calibration file over the loaded rig: any key of the schema but the kind
+// and the calibration files.
+void applyRigCalibration(const std::string& rig_path, const std::string& file,
+                         ConfigSchema* schema) {
+  const RigCalibrationFile c =
+      loadFileBesideRig(rig_path, "calibration_file", file, loadRigCalibration);
+  const std::string where = pathBesideRig(rig_path, file);
+  for (const auto& [key, value] : c.parameters) {
+    if (key == "rig" || key.find("calibration_file") != std::string::npos) {
+      throw ConfigError(where + ": key 'parameters." + key + "' cannot be calibrated");
+    }
+    std::ostringstream v;
+    v << std::setprecision(17) << value;
+    try {
+      schema->set(key + "=" + v.str());
+    } catch (const ConfigError& e) {
+      throw ConfigError(where + ": key 'parameters." + key + "': " + e.what());
+    }
+  }
+}
+
+}  // namespace
+
 RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
                                             const std::vector<std::string>& overrides) {
   RotatingLidarConfig rig;
@@ -27,6 +57,7 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   schema.loadFile(path);
   for (const auto& o : overrides) schema.set(o);
   checkRigKind(path, rig.rig, "rotating_lidar");
+  if (!rig.calibration_file.empty()) applyRigCalibration(path, rig.calibration_file, &schema);
   // Calibration files are named relative to the rig file.
   if (!rig.plate.calibration_file.empty()) {
     rig.plate.alpha_deg = loadFileBesideRig(path, "plate.calibration_file",
@@ -65,9 +96,11 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
           "mapper.clamp_max", "needs 0 < clamp_min < clamp_max < 1");
   rig.mapper.validateBounds(path, "mapper.");
   rig.network.validate(path, "network.");
-  if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane") {
-    throw ConfigError(path + ": key 'plate.beta_method' must be centroid or ray_plane");
+  if (rig.plate.beta_method != "centroid" && rig.plate.beta_method != "ray_plane" &&
+      rig.plate.beta_method != "model") {
+    throw ConfigError(path + ": key 'plate.beta_method' must be centroid, ray_plane or model");
   }
+  require(rig.plate.thickness_mm >= 0, "plate.thickness_mm", "must be >= 0");
   return rig;
 }
 

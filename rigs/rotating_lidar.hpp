@@ -13,6 +13,9 @@ namespace sweepmap {
 
 struct RotatingLidarConfig {
   std::string rig = "rotating_lidar";  // the kind, checked on load
+  // `sweepmap calib rig`'s result (relative to this file): its rig-file keys replace these
+  // values; empty: none.
+  std::string calibration_file;
   LidarConfig lidar;
   MotorConfig motor;
   GeometryConfig geometry;
@@ -25,7 +28,8 @@ struct RotatingLidarConfig {
 };
 
 // Loads a rig file strictly (its `rig` key must say rotating_lidar), then applies
-// `key=value` overrides; a plate calibration file the rig names replaces plate.alpha_deg, a
+// `key=value` overrides; a rig calibration file (calibration_file) replaces the keys it holds, a
+// plate calibration file the rig names replaces plate.alpha_deg, a
 // geometry calibration file geometry.lidar_offset_x_mm.
 // Throws ConfigError naming the file and the key.
 RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,

@@ -37,6 +37,10 @@ SimLidar::SimLidar(const LidarConfig& lidar, const SimRigConfig& sim, const Plat
       truth_(truth),
       T_room_rig_(scene.T_room_rig()),
       plate_z_m_(plate.height_mm / 1000.0),
+      plate_thickness_m_(sim.plate_thickness_mm / 1000.0),
+      plate_base_m_(plate.base_distance_mm / 1000.0),
+      plate_half_m_(plate.hypotenuse_mm / 2000.0),
+      artefacts_(sim, scene, seed),
       rng_(seed),
       first_scan_utime_(first_scan_utime) {
   if (truth == nullptr) throw std::invalid_argument("SimLidar: no truth trajectory");
@@ -53,10 +57,19 @@ SimLidar::SimLidar(const LidarConfig& lidar, const SimRigConfig& sim, const Plat
   }
   const auto corners = plateVertices(plate, sim.alpha_true_deg * kDegToRad);
   for (size_t k = 0; k < 3; ++k) plate_xy_[k] = corners[k].head<2>();
+  plate_along_ = Eigen::Vector2d(std::cos(sim.alpha_true_deg * kDegToRad),
+                                 std::sin(sim.alpha_true_deg * kDegToRad));
+  plate_across_ = Eigen::Vector2d(-plate_along_.y(), plate_along_.x());
+  if (!(plate_thickness_m_ >= 0.0)) {
+    throw std::invalid_argument("SimLidar: sim.plate_thickness_mm must be >= 0");
+  }
+  const double tilt = sim.scan_plane_tilt_deg * kDegToRad;
   for (int i = 0; i < lidar.beam_count; ++i) {
-    const double theta = (lidar.angle_min_deg + i * lidar.angle_increment_deg) * kDegToRad;
+    const double theta =
+        (lidar.angle_min_deg + i * lidar.angle_increment_deg + sim.mirror_offset_deg) * kDegToRad;
     sin_theta_.push_back(std::sin(theta));
-    cos_theta_.push_back(std::cos(theta));
+    cos_theta_.push_back(std::cos(tilt) * std::cos(theta));
+    dir_x_.push_back(std::sin(tilt) * std::cos(theta));
   }
 }
 
@@ -93,30 +106,53 @@ Scan2D SimLidar::makeScan(int64_t index, int64_t utime) {
 
   // Nothing beyond this can come back inside range_max, whatever the noise.
   const double cast_range_m = lidar_.range_max_m + 6.0 * noise_sigma_m_;
+  std::vector<double> hits = trueRanges(utime, cast_range_m);
+  artefacts_.mixEdges(&hits);
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    const double noisy_m = hits[i] + noise_sigma_m_ * standard_normal_(rng_);
+    const bool valid =
+        hits[i] != 0.0 && noisy_m >= lidar_.range_min_m && noisy_m <= lidar_.range_max_m;
+    scan.ranges_m[i] = valid ? float(noisy_m) : 0.0f;
+  }
+  return scan;
+}
+
+std::vector<double> SimLidar::trueRanges(int64_t utime, double cast_range_m) {
+  std::vector<double> hits(size_t(lidar_.beam_count), 0.0);
   const Eigen::Matrix3d R_room_rig = T_room_rig_.linear();
+  Scan2D timing;
+  timing.utime = utime;
+  timing.time_increment_ns = time_increment_ns_;
   int64_t shaft_utime = utime - 1;  // shaft angle cached per microsecond
   double cos_phi = 0.0, sin_phi = 0.0;
-  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-    const int64_t ray_utime = scan.rayUtime(i);
+  for (size_t i = 0; i < hits.size(); ++i) {
+    const int64_t ray_utime = timing.rayUtime(i);
     if (ray_utime != shaft_utime) {
       const double phi = truth_->angleAt(ray_utime);
       cos_phi = std::cos(phi);
       sin_phi = std::sin(phi);
       shaft_utime = ray_utime;
     }
-    // Eq. 4-6 with the true shaft angle: frame L rotated by Rz(phi) about the axis.
+    // Eq. 4-6 with the true shaft angle and R_L^O' of the build: frame L turned by Rz(phi).
     const Eigen::Vector3d origin_o(cos_phi * offset_m_, sin_phi * offset_m_, 0.0);
-    const Eigen::Vector3d dir_o(-sin_phi * sin_theta_[i], cos_phi * sin_theta_[i], cos_theta_[i]);
-    std::optional<double> hit =
-        scene_->raycast(T_room_rig_ * origin_o, R_room_rig * dir_o, cast_range_m);
-    if (const auto plate = hitPlate(origin_o, dir_o); plate && (!hit || *plate < *hit)) {
+    const Eigen::Vector3d dir_o(cos_phi * dir_x_[i] - sin_phi * sin_theta_[i],
+                                sin_phi * dir_x_[i] + cos_phi * sin_theta_[i], cos_theta_[i]);
+    const Eigen::Vector3d origin_room = T_room_rig_ * origin_o;
+    const Eigen::Vector3d dir_room = R_room_rig * dir_o;
+    Scene::Hit what;
+    std::optional<double> hit = scene_->raycast(origin_room, dir_room, cast_range_m, &what);
+    if (hit && !artefacts_.returns(origin_room + *hit * dir_room, dir_room, what)) hit = 0.0;
+    const double limit_m = hit && *hit > 0.0 ? *hit : cast_range_m;
+    if (const auto obj = artefacts_.raycastObjects(origin_room, dir_room, limit_m, ray_utime)) {
+      hit = obj;
+    }
+    if (const auto plate = hitPlate(origin_o, dir_o);
+        plate && (!hit || *hit == 0.0 || *plate < *hit)) {
       hit = plate;
     }
-    const double noisy_m = hit.value_or(0.0) + noise_sigma_m_ * standard_normal_(rng_);
-    const bool valid = hit && noisy_m >= lidar_.range_min_m && noisy_m <= lidar_.range_max_m;
-    scan.ranges_m[i] = valid ? float(noisy_m) : 0.0f;
+    hits[i] = hit.value_or(0.0);
   }
-  return scan;
+  return hits;
 }
 
 std::optional<double> SimLidar::hitPlate(const Eigen::Vector3d& origin_o,
@@ -129,8 +165,19 @@ std::optional<double> SimLidar::hitPlate(const Eigen::Vector3d& origin_o,
   const double d1 = cross2(plate_xy_[2] - plate_xy_[1], p - plate_xy_[1]);
   const double d2 = cross2(plate_xy_[0] - plate_xy_[2], p - plate_xy_[2]);
   const bool inside = (d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0);
-  if (!inside) return std::nullopt;
-  return t;
+  if (inside) return t;
+  // The face of the hypotenuse (the edge toward the axis), plate_thickness_m_ tall below the
+  // upper surface: a ray passing just inside the edge, going outward and down, ends on it.
+  const double out = plate_along_.dot(dir_o.head<2>());
+  if (!(plate_thickness_m_ > 0.0) || !(out > 0.0)) return std::nullopt;
+  const double tf = (plate_base_m_ - plate_along_.dot(origin_o.head<2>())) / out;
+  if (!(tf > 0.0)) return std::nullopt;
+  const Eigen::Vector3d q = origin_o + tf * dir_o;
+  const double across = plate_across_.dot(q.head<2>());
+  const bool on_face = q.z() <= plate_z_m_ && q.z() >= plate_z_m_ - plate_thickness_m_ &&
+                       std::fabs(across) <= plate_half_m_;
+  if (!on_face) return std::nullopt;
+  return tf;
 }
 
 }  // namespace sweepmap

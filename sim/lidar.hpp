@@ -12,6 +12,12 @@
 // at Scan2D::rayUtime(i); the scan is delivered sim.lidar_latency_ms after its last ray.
 // Range noise N(0, sim.range_noise_sigma_mm) from one std::mt19937_64(seed), one draw per
 // ray in order; a noisy range outside [range_min_m, range_max_m], or no hit, reads 0.
+//
+// A real build (sim.*, 0 in the paper's model): the ray leaves along
+// Ry(tilt) (0, sin(theta + mirror), cos(theta + mirror)) in frame L (tilt =
+// sim.scan_plane_tilt_deg about Y_L, mirror = sim.mirror_offset_deg about X_L); the plate is a
+// solid sim.plate_thickness_mm thick below its upper surface, so rays that pass just inside its
+// hypotenuse end on that edge's face; the scene's artefacts are sim/artefacts.hpp's.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -24,6 +30,7 @@
 #include "core/rig_components.hpp"
 #include "devices/lidar_device.hpp"
 #include "devices/shaft_trajectory.hpp"
+#include "sim/artefacts.hpp"
 #include "sim/scene.hpp"
 
 namespace sweepmap {
@@ -48,6 +55,8 @@ class SimLidar : public LidarDevice {
  private:
   int64_t scanUtime(int64_t index) const;
   Scan2D makeScan(int64_t index, int64_t utime);
+  // The true range of every ray of a scan starting at `utime` (0: no return).
+  std::vector<double> trueRanges(int64_t utime, double cast_range_m);
   // Distance along the ray (frame O) to the plate, if it hits.
   std::optional<double> hitPlate(const Eigen::Vector3d& origin_o,
                                  const Eigen::Vector3d& dir_o) const;
@@ -61,8 +70,14 @@ class SimLidar : public LidarDevice {
   const ShaftTrajectory* truth_;
   Eigen::Isometry3d T_room_rig_;
   double plate_z_m_;
-  std::array<Eigen::Vector2d, 3> plate_xy_;  // plate corners in frame O's XY plane
-  std::vector<double> sin_theta_, cos_theta_;
+  double plate_thickness_m_;
+  std::array<Eigen::Vector2d, 3> plate_xy_;     // plate corners in frame O's XY plane
+  Eigen::Vector2d plate_along_, plate_across_;  // unit: the middle line, the hypotenuse
+  double plate_base_m_, plate_half_m_;
+  // Per ray: the direction in frame L, (sin tilt cos theta', sin theta', cos tilt cos theta')
+  // with theta' = theta + mirror offset.
+  std::vector<double> dir_x_, sin_theta_, cos_theta_;
+  SceneArtefacts artefacts_;
   std::mt19937_64 rng_;
   std::normal_distribution<double> standard_normal_;
   int64_t first_scan_utime_;

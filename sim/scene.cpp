@@ -329,15 +329,23 @@ std::optional<Eigen::AlignedBox3d> Scene::targetBoard() const {
 std::optional<double> Scene::raycast(const Eigen::Vector3d& origin_room,
                                      const Eigen::Vector3d& unit_dir_room,
                                      double max_range_m) const {
+  return raycast(origin_room, unit_dir_room, max_range_m, nullptr);
+}
+
+std::optional<double> Scene::raycast(const Eigen::Vector3d& origin_room,
+                                     const Eigen::Vector3d& unit_dir_room, double max_range_m,
+                                     Hit* hit_info) const {
   const double o[3] = {origin_room.x(), origin_room.y(), origin_room.z()};
   const double d[3] = {unit_dir_room.x(), unit_dir_room.y(), unit_dir_room.z()};
   const double inv[3] = {1.0 / d[0], 1.0 / d[1], 1.0 / d[2]};
   double best = max_range_m;
   bool hit = false;
-  for (const Slabs& b : slabs_) {
+  for (size_t index = 0; index < slabs_.size(); ++index) {
+    const Slabs& b = slabs_[index];
     // Slab test: the ray is inside the box for t in [t_enter, t_exit].
     double t_enter = -std::numeric_limits<double>::infinity();
     double t_exit = best;
+    int enter_axis = 0;
     bool miss = false;
     for (int k = 0; k < 3 && !miss; ++k) {
       if (d[k] == 0.0) {
@@ -347,6 +355,7 @@ std::optional<double> Scene::raycast(const Eigen::Vector3d& origin_room,
       double t0 = (b.lo[k] - o[k]) * inv[k];
       double t1 = (b.hi[k] - o[k]) * inv[k];
       if (t0 > t1) std::swap(t0, t1);
+      if (t0 > t_enter) enter_axis = k;
       t_enter = std::max(t_enter, t0);
       t_exit = std::min(t_exit, t1);
       miss = t_enter > t_exit;
@@ -354,6 +363,7 @@ std::optional<double> Scene::raycast(const Eigen::Vector3d& origin_room,
     if (!miss && t_enter > 0.0) {
       best = t_enter;
       hit = true;
+      if (hit_info) *hit_info = {index, enter_axis};
     }
   }
   if (!hit) return std::nullopt;

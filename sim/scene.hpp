@@ -95,6 +95,15 @@ class Scene {
   // (0, max_range_m]; nullopt if none. A box that contains the origin is not hit.
   std::optional<double> raycast(const Eigen::Vector3d& origin_room,
                                 const Eigen::Vector3d& unit_dir_room, double max_range_m) const;
+  // The same, and which box was hit (index into boxes()) through which face (the axis 0..2
+  // of its normal), when there is a hit.
+  struct Hit {
+    size_t box = 0;
+    int axis = 0;
+  };
+  std::optional<double> raycast(const Eigen::Vector3d& origin_room,
+                                const Eigen::Vector3d& unit_dir_room, double max_range_m,
+                                Hit* hit) const;
 
   // Pose of frame O in the room frame (truth).
   Eigen::Isometry3d T_room_rig() const { return T_room_rig_; }

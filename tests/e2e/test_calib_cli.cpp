@@ -48,8 +48,11 @@ int runSplit(const std::vector<std::string>& args, const fs::path& out, const fs
 
 // 50 mode-7 sweeps, seed 31, default error model: ~1000 s simulated, shared by the tests.
 std::string calibLog() {
-  return cachedSimLog("mode7x50_calib", {"--rig", kRig, "--scene", kScene, "--mode", "7",
-                                         "--sweeps", "50", "--seed", "31"});
+  std::vector<std::string> a = {"--rig", kRig,       "--scene", kScene,   "--mode",
+                                "7",     "--sweeps", "50",      "--seed", "31"};
+  const auto paper = paperModelArgs();  // the paper's error model
+  a.insert(a.end(), paper.begin(), paper.end());
+  return cachedSimLog("mode7x50_calib", a);
 }
 
 TEST(CalibCli, PlateAngleFromFiftyMode7Sweeps) {

@@ -216,11 +216,14 @@ TEST(EvalRotating, SmallPaperExperiment) {
 }
 
 std::vector<std::string> simArgs(int mode, int sweeps, int seed) {
-  return {"--rig",    kRig,
-          "--scene",  kScene,
-          "--mode",   std::to_string(mode),
-          "--sweeps", std::to_string(sweeps),
-          "--seed",   std::to_string(seed)};
+  std::vector<std::string> a = {"--rig",    kRig,
+                                "--scene",  kScene,
+                                "--mode",   std::to_string(mode),
+                                "--sweeps", std::to_string(sweeps),
+                                "--seed",   std::to_string(seed)};
+  const auto paper = paperModelArgs();  // the paper's error model
+  a.insert(a.end(), paper.begin(), paper.end());
+  return a;
 }
 
 TEST(EvalRotating, LogsWithTruth) {

@@ -25,6 +25,8 @@ std::vector<std::string> simArgs(int mode, int sweeps, int seed,
                                 "--sweeps", std::to_string(sweeps),
                                 "--seed",   std::to_string(seed)};
   for (const auto& s : sets) a.insert(a.end(), {"--set", s});
+  const auto paper = paperModelArgs();  // the paper's error model
+  a.insert(a.end(), paper.begin(), paper.end());
   return a;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "core/rig_components.hpp"
 #include "processes/node.hpp"
 #include "sweepmap/pose2d_t.hpp"
 
@@ -61,6 +62,14 @@ namespace test {
 // parallel CTest processes wait for one another) with `sweepmap sim <args> --out LOG` (any
 // rig kind: the args name the rig), and remade when the sweepmap binary changes.
 std::string cachedSimLog(const std::string& name, const std::vector<std::string>& sim_args);
+
+// `--set key=0` for each rig-A error and scene artefact the paper's model lacks
+// (SimRigConfig::paperSettings): appended by the tests of the paper's methods.
+inline std::vector<std::string> paperModelArgs() {
+  std::vector<std::string> a;
+  for (const auto& s : SimRigConfig::paperSettings()) a.insert(a.end(), {"--set", s});
+  return a;
+}
 // `sweepmap <args> --out DIR` run once per build (as above) for every test process that asks:
 // DIR, the exit status and the command's output (stdout and stderr).
 struct CachedRun {

@@ -29,6 +29,7 @@
 #include "sweepmap/switch_event_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
+#include "sweepmap/truth_rig_errors_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 #include "sweepmap/truth_shaft_t.hpp"
 #include "sweepmap/truth_sweep_t.hpp"
@@ -49,7 +50,7 @@ void expectFingerprint(const char* name) {
 }
 
 TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
-  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 20u);
+  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 21u);
   expectFingerprint<cloud_chunk_t>("cloud_chunk_t");
   expectFingerprint<imu_t>("imu_t");
   expectFingerprint<lidar_scan_t>("lidar_scan_t");
@@ -64,6 +65,7 @@ TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
   expectFingerprint<switch_event_t>("switch_event_t");
   expectFingerprint<truth_mounting_t>("truth_mounting_t");
   expectFingerprint<truth_profile_rig_t>("truth_profile_rig_t");
+  expectFingerprint<truth_rig_errors_t>("truth_rig_errors_t");
   expectFingerprint<truth_rig_t>("truth_rig_t");
   expectFingerprint<truth_shaft_t>("truth_shaft_t");
   expectFingerprint<truth_sweep_t>("truth_sweep_t");

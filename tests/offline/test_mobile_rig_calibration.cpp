@@ -36,7 +36,7 @@ std::string simulate(double duration_s, uint64_t seed) {
   return path;
 }
 
-const calib::CalibParameter& find(const calib::RigCalibration& r, const std::string& key) {
+const CalibParameter& find(const RigCalibration& r, const std::string& key) {
   for (const auto& p : r.parameters) {
     if (p.key == key) return p;
   }
@@ -48,7 +48,7 @@ TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheCalibrationCircle) {
   request.logs = {simulate(60.0, 1)};
   request.rig = kRig;
   request.progress = false;
-  const calib::RigCalibration r = runMobileRigCalibration(request);
+  const RigCalibration r = runMobileRigCalibration(request);
   for (const auto& p : r.parameters) {
     std::cerr << p.key << " " << p.value << " +- " << p.sigma << " " << p.unit
               << (p.observable ? "" : " (not observable)");
@@ -62,14 +62,14 @@ TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheCalibrationCircle) {
   // is not: it shares the antipodal shift with the wheels' scale and the lever arm, which a
   // circle cannot tell apart; see the report of issue 23.)
   for (const char* key : {"mounting.gamma_rad", "mounting.beta_rad"}) {
-    const calib::CalibParameter& p = find(r, key);
+    const CalibParameter& p = find(r, key);
     ASSERT_TRUE(p.truth.has_value());
     EXPECT_TRUE(p.observable) << key;
     EXPECT_GT(p.sigma, 0.0) << key;
     EXPECT_NEAR(p.value, *p.truth, 3 * p.sigma) << key;
   }
   // What the drive cannot determine is reported and left at the rig file's value.
-  const calib::CalibParameter& z = find(r, "mounting.z_m");
+  const CalibParameter& z = find(r, "mounting.z_m");
   EXPECT_FALSE(z.observable);
   EXPECT_EQ(z.value, 0.30);
   EXPECT_EQ(z.sigma, 0.0);

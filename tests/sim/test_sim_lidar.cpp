@@ -18,10 +18,14 @@ constexpr int64_t kFirstScanUtime = 1'000'000;
 size_t ray(double theta_deg) { return size_t(std::lround((theta_deg + 135.0) / 0.25)); }
 
 // Hand scene (rig at (1.2, 0.8, 1.0), walls at x = +-4, y = +-3, ceiling 3 m), noise-free
-// lidar unless a test turns the noise on.
+// lidar of the paper's model (no tilt, mirror offset, plate thickness or scene artefacts)
+// unless a test turns them on.
 class SimLidarTest : public ::testing::Test {
  protected:
-  SimLidarTest() { sim_.range_noise_sigma_mm = 0.0; }
+  SimLidarTest() {
+    sim_.range_noise_sigma_mm = 0.0;
+    sim_.applyPaperSettings();
+  }
 
   void build(const SceneConfig& scene_config = testing_scene::handScene()) {
     scene_ = std::make_unique<Scene>(scene_config, plate_);

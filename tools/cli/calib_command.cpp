@@ -12,6 +12,7 @@
 #include "tools/offline/calibrate_lidar_axis_offset.hpp"
 #include "tools/offline/calibrate_mounting.hpp"
 #include "tools/offline/calibrate_plate.hpp"
+#include "tools/offline/calibrate_rig.hpp"
 
 namespace sweepmap {
 namespace {
@@ -277,13 +278,74 @@ int runAxisOffset(CLI::App* axis, const AxisOffsetCalibRequest& a,
   return calibrateLidarAxisOffsetFromLogs(*l);
 }
 
+// `calib rig`: its flags into a RigCalibRequest.
+CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
+  auto* rig = calib->add_subcommand(
+      "rig",
+      "calibrate every parameter of the rig that its logs make observable, jointly, into one "
+      "calibration file the rig file's calibration_file points to (rotating_lidar; other kinds: "
+      "not yet supported)");
+  rig->footer(
+      "rotating_lidar (rig A): the plate angle alpha (plate.alpha_deg), the lidar-to-axis "
+      "offset (geometry.lidar_offset_x_mm), the scan plane's tilt against the axis "
+      "(geometry.scan_plane_tilt_deg) and the mirror's angle zero offset "
+      "(geometry.mirror_offset_deg), in one Ceres least squares: every ray of the room's walls "
+      "(RANSAC planes; the four walls facing +-X, +-Y fix each sweep's attitude) and of its "
+      "other planes, Cauchy loss, clutter proud of a wall removed by 0.25 m cells, and per sweep "
+      "the plate's solid model (plate.thickness_mm, its edge face) cast along the same rays as "
+      "saw the plate (calib/plate_model.hpp). Each parameter's sigma and their correlation from "
+      "the covariance; a parameter the logs do not determine is reported, left at the rig's "
+      "value and not written. Warns when the residuals show an error the model lacks. Record "
+      "what `sweepmap calib plan --rig RIG` says.\n\n"
+      "Writes OUT atomically (parameters: rig-file keys; source: sigmas, residuals, logs) and "
+      "prints the calibration_file line for the rig file, relative to its folder. The rig's "
+      "plate.beta_method should be model so the assembler finds the plate as the calibration "
+      "did. Human report and progress on stderr; --json prints {\"parameters\": {KEY: {value, "
+      "sigma, unit, observable, nominal, truth (simulated logs)}}, \"warnings\": [...], "
+      "correlation, residuals} on stdout.\n\n"
+      "Exit status: 0 calibrated; 1 nothing calibrated (no usable sweep, nothing observable, a "
+      "log that cannot be read); 2 bad option or rig (or a kind not yet supported), a missing "
+      "log, or an output folder that does not exist; 4 OUT cannot be written.\n"
+      "Example: sweepmap calib rig --rig rig_a --logs calib.lcmlog --out rig_calibration.yaml");
+  rig->add_option("--logs", r->logs, "LCM logs of the room (sweepmap sim, lcm-logger)")
+      ->required()
+      ->expected(1, -1);
+  rig->add_option("--rig", r->rig, "rig file or name the logs were recorded with")->required();
+  rig->add_option("--out", r->out, "calibration file to write (YAML, atomically)")->required();
+  rig->add_flag("--json", r->json, "print the result as JSON on stdout (no progress)");
+  rig->add_option("--set", r->sets, "override a rig config key: key=value (repeatable)");
+  rig->add_option("--plane-points", r->segmentation.max_rays_per_plane,
+                  "rays per plane and sweep at most (evenly strided)")
+      ->capture_default_str()
+      ->check(atLeast(10));
+  return rig;
+}
+
+struct PlanRequest {
+  std::string rig;
+  std::vector<std::string> sets;
+};
+
+CLI::App* addPlan(CLI::App* calib, std::shared_ptr<PlanRequest> p) {
+  auto* plan = calib->add_subcommand(
+      "plan",
+      "print what to record for `calib rig` (scene, sweeps, mode, duration) and why, "
+      "with the `sweepmap sim` command that makes that recording");
+  plan->footer("Exit status: 0 printed; 2 bad option or rig, or a kind not yet supported.");
+  plan->add_option("--rig", p->rig, "rig file or name")->required();
+  plan->add_option("--set", p->sets, "override a rig config key: key=value (repeatable)");
+  return plan;
+}
+
 }  // namespace
 
 Runner addCalibCommand(CLI::App& app) {
   auto* calib = app.add_subcommand(
       "calib",
       "Calibrate the rig from its own logs and write the result as a calibration file the rig "
-      "file points to. Subcommands by the rig's kind: plate-angle (rotating_lidar), mounting "
+      "file points to. `rig` calibrates every parameter at once (rotating_lidar; `plan` says "
+      "what to record for it); single parameters by the rig's kind: plate-angle (rotating_lidar), "
+      "mounting "
       "(mobile_lidar), axis-offset (rotating_profile; rotating_lidar: the lidar-to-axis "
       "offset)");
   calib->require_subcommand(1);
@@ -294,7 +356,17 @@ Runner addCalibCommand(CLI::App& app) {
   auto a = std::make_shared<AxisOffsetCalibRequest>();
   auto l = std::make_shared<LidarAxisOffsetCalibRequest>();
   CLI::App* axis = addAxisOffset(calib, a, l);
-  return [plate, o, mount, m, axis, a, l]() -> int {
+  auto r = std::make_shared<RigCalibRequest>();
+  r->segmentation.max_rays_per_plane = 2000;
+  CLI::App* rig = addRig(calib, r);
+  auto p = std::make_shared<PlanRequest>();
+  CLI::App* plan = addPlan(calib, p);
+  return [plate, o, mount, m, axis, a, l, rig, r, plan, p]() -> int {
+    if (plan->parsed()) return printCalibrationPlan(p->rig, p->sets);
+    if (rig->parsed()) {
+      checkOutputFile(r->out, r->logs);
+      return calibrateRigFromLogs(*r);
+    }
     if (plate->parsed()) checkOutputFile(o->out, o->logs);
     if (mount->parsed()) checkOutputFile(m->out, {m->log});
     if (axis->parsed()) checkOutputFile(a->out, a->logs);

@@ -73,7 +73,11 @@ struct PaperRun {
 PaperRun startPaperRun(const PaperExperimentOptions& o) {
   if (o.sweeps_per_mode < 1) throw std::runtime_error("--sweeps-per-mode must be at least 1");
   if (o.calib_sweeps < 1) throw std::runtime_error("--calib-sweeps must be at least 1");
-  const SimSetup setup = loadSimSetup(o.rig_path, o.scene_path, o.overrides);
+  // The paper's settings where it defines them (its model has no tilted scan plane, no mirror
+  // offset, a flat plate and no scene artefacts); the user's --set still wins.
+  std::vector<std::string> overrides = SimRigConfig::paperSettings();
+  overrides.insert(overrides.end(), o.overrides.begin(), o.overrides.end());
+  const SimSetup setup = loadSimSetup(o.rig_path, o.scene_path, overrides);
   PaperRun run{o,
                requireKind<RotatingLidarConfig>(setup.rig, "this experiment"),
                setup.scene,

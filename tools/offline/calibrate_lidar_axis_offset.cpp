@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "calib/rig_calibration.hpp"
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
@@ -205,6 +206,26 @@ nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLi
 
 }  // namespace
 
+// The walls' flatness with the estimated offset: their rays' cell medians against their
+// planes; a warning into r when they bend more than noise does.
+void checkWalls(const Inputs& in, LidarAxisOffsetResult* r) {
+  std::vector<double> medians;
+  for (size_t k = 0; k < in.planes.size() && k < r->planes.size(); ++k) {
+    if (!r->planes[k].wall) continue;
+    std::vector<Eigen::Vector3f> pts;
+    std::vector<int> idx;
+    for (const SweepRay& ray : in.planes[k].rays) {
+      idx.push_back(static_cast<int>(pts.size()));
+      pts.push_back((1e-3 * placeRayMm(ray, r->offset_mm)).cast<float>());
+    }
+    const auto m = planeCellMediansMm(pts, idx, r->planes[k].normal,
+                                      -1e-3 * r->planes[k].distance_mm, 0.5, 100);
+    medians.insert(medians.end(), m.begin(), m.end());
+  }
+  const std::string w = wallsDisagreeWarning(rmsOf(medians), 2.5);
+  if (!w.empty()) r->warnings.push_back(w);
+}
+
 int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   RotatingLidarConfig rig;
   if (!checkInputs(o, &rig)) return kExitUsage;
@@ -221,7 +242,8 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   LidarAxisOffsetOptions options;
   options.initial_offset_mm = Eigen::Vector3d(rig.geometry.lidar_offset_x_mm, 0.0, 0.0);
   options.estimate_y = o.estimate_y;
-  const LidarAxisOffsetResult r = solveLidarAxisOffset(in.planes, options);
+  LidarAxisOffsetResult r = solveLidarAxisOffset(in.planes, options);
+  checkWalls(in, &r);
   bool written = false;
   if (r.observable) {
     try {

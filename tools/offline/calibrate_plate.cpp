@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "calib/plate_angle.hpp"
+#include "calib/rig_calibration.hpp"
 #include "core/angles.hpp"
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
@@ -38,11 +39,15 @@ struct LogFailure {
 struct LogSweeps {
   std::vector<SweepNormals> sweeps;
   std::vector<RejectedSweep> rejected;
-  std::vector<LogFailure> log_errors;    // corrupt tails (the sweeps before them are used)
-  std::optional<double> alpha_true_rad;  // the first truth a log carries (simulated logs)
-  int seen = 0;                          // sweeps assembled
-  double walls_s = 0, read_s = 0;        // wall extraction; the rest of reading the logs
+  std::vector<LogFailure> log_errors;        // corrupt tails (the sweeps before them are used)
+  std::optional<double> alpha_true_rad;      // the first truth a log carries (simulated logs)
+  int seen = 0;                              // sweeps assembled
+  double walls_s = 0, read_s = 0;            // wall extraction; the rest of reading the logs
+  std::vector<double> wall_cell_medians_mm;  // the walls' flatness (calib/rig_calibration.hpp)
 };
+
+// Walls that bend more than noise does: another parameter of the rig is off.
+constexpr double kWallCellLimitMm = 2.0;  // 0.7 mm on the paper model, 3.5 with a 0.3 deg tilt
 
 // alpha fitted over the sweeps' normals.
 struct AlphaFit {
@@ -84,7 +89,11 @@ double takeSweep(const std::string& log, const AssembledSweep& s,
   }
   SweepNormals n;
   n.alpha_used_rad = s.alpha_rad;
-  for (const auto& w : e.walls) n.normals.push_back(w.normal);
+  for (const auto& w : e.walls) {
+    n.normals.push_back(w.normal);
+    const auto m = planeCellMediansMm(s.points, w.inlier_indices, w.normal, w.offset, 0.5, 100);
+    in->wall_cell_medians_mm.insert(in->wall_cell_medians_mm.end(), m.begin(), m.end());
+  }
   std::cerr << "  " << log << " sweep " << s.window.sweep_id << ": 4 walls, E_atti "
             << std::setprecision(4) << attitudeError(n) << " at alpha " << std::setprecision(8)
             << s.alpha_rad * kRadToDeg << " deg\n";
@@ -192,6 +201,8 @@ void reportHuman(const PlateAngleCalibRequest& o, const LogSweeps& in, const Alp
               << " deg: error " << std::setprecision(3)
               << (f.alpha_deg - *in.alpha_true_rad * kRadToDeg) << " deg\n";
   }
+  const std::string w = wallsDisagreeWarning(rmsOf(in.wall_cell_medians_mm), kWallCellLimitMm);
+  if (!w.empty()) std::cerr << "  warning: " << w << "\n";
   std::cerr << std::fixed << std::setprecision(2) << "  time: sweep assembly " << in.read_s
             << " s, wall extraction " << in.walls_s << " s, LM " << std::setprecision(3)
             << f.lm_s * 1e3 << " ms, total " << std::setprecision(2) << total_s << " s\n"
@@ -229,6 +240,9 @@ void reportJson(const PlateAngleCalibRequest& o, const LogSweeps& in, const Alph
                    {"lm", f.lm_s},
                    {"total", total_s}};
   j["out"] = o.out;
+  j["wall_cell_rms_mm"] = rmsOf(in.wall_cell_medians_mm);
+  const std::string w = wallsDisagreeWarning(rmsOf(in.wall_cell_medians_mm), kWallCellLimitMm);
+  j["warnings"] = w.empty() ? nlohmann::json::array() : nlohmann::json::array({w});
   std::cout << std::setprecision(12) << j.dump(2) << "\n";
 }
 

@@ -5,6 +5,7 @@
 #include "processes/assembler_node.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
+#include "sweepmap/truth_rig_errors_t.hpp"
 #include "sweepmap/truth_rig_t.hpp"
 #include "tools/offline/log_player.hpp"
 
@@ -34,6 +35,14 @@ LogReadResult forEachSweep(
       result.alpha_true_rad = t.alpha_true_rad;
       result.lidar_offset_x_true_m = t.lidar_offset_x_m;
       result.scene = t.scene;
+    }
+  });
+  player.handle(channels::kTruthRigErrors, [&](const Message& m) {
+    truth_rig_errors_t t;
+    if (decodeMessage(m, &t)) {
+      result.scan_plane_tilt_true_rad = t.scan_plane_tilt_rad;
+      result.mirror_offset_true_rad = t.mirror_offset_rad;
+      result.plate_thickness_true_m = t.plate_thickness_m;
     }
   });
   if (options.on_window_scans) assembler.setWindowObserver(options.on_window_scans);

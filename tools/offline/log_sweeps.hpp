@@ -32,7 +32,10 @@ struct LogReadResult {
   bool log_error = false;  // truncated or corrupt log (everything before it was processed)
   std::string error;
   std::optional<double> alpha_true_rad;
-  std::optional<double> lidar_offset_x_true_m;  // TRUTH_RIG's (simulated logs)
+  std::optional<double> lidar_offset_x_true_m;     // TRUTH_RIG's (simulated logs)
+  std::optional<double> scan_plane_tilt_true_rad;  // TRUTH_RIG_ERRORS' (simulated logs)
+  std::optional<double> mirror_offset_true_rad;
+  std::optional<double> plate_thickness_true_m;
   std::string scene;
 };
 

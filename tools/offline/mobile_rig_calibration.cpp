@@ -33,7 +33,7 @@ std::map<std::string, double> truthOf(const MobileLog& log) {
 
 }  // namespace
 
-calib::RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
+RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
   const MobileLidarConfig rig = loadMobileLidarConfig(resolveRigFile(request.rig), request.sets);
   ProgressOptions po;
   po.enabled = request.progress;
@@ -60,7 +60,7 @@ calib::RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& reque
   };
   progress.stage("joint least squares");
   in.progress = [&progress](double f) { progress.update(f); };
-  calib::RigCalibration result = calibrateMobileRig(in);
+  RigCalibration result = calibrateMobileRig(in);
   progress.finish();
   if (log.log_error) result.warnings.push_back(request.logs[0] + ": " + log.error);
   if (request.logs.size() > 1)

@@ -18,6 +18,6 @@ struct MobileRigCalibRequest {
 };
 
 // Throws ConfigError for a bad rig and LogError for a log that cannot be read.
-calib::RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request);
+RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request);
 
 }  // namespace sweepmap

@@ -58,6 +58,7 @@ SimResult simulate(const SimOptions& options, const std::function<void(const Mes
   const auto publishTruthRig = [&] {
     Outbox out;
     out.publish(channels::kTruthRig, now, makeTruthRig(rig, options.scene, scene, now));
+    out.publish(channels::kTruthRigErrors, now, makeTruthRigErrors(rig.sim, now));
     for (auto& m : out.take()) bus.publish(m);
   };
 

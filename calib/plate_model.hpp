@@ -1,0 +1,67 @@
+// The triangular plate as a solid (rig A): which rays of a sweep it should return, for an
+// estimate of its angle that carries no sampling bias.
+//
+// The ray-plane and centroid estimators (calib/plate.hpp) take the centroid of the plate's
+// points as its middle line; the rays sample the plate unevenly (they fan out from a lidar
+// centre off the axis, a 2 mm edge face returns some), so that centroid sits a fraction of a
+// degree off the middle line, and the calibrated alpha absorbs it: not the physical angle.
+// The model estimator compares like with like: the same rays cast at a model of the plate
+// (isosceles right triangle, upper surface at height, `thickness` of solid below it whose
+// hypotenuse face catches the rays that pass just inside the edge) give a predicted centroid,
+// and the plate's angle is the one whose predicted centroid points where the measured one
+// does. A lost scan or a dropout removes the ray from both.
+//
+// The coverage of a ray is smooth (logistic in its distance to each edge, `edge_m` wide): the
+// angle is a smooth function of the geometry (Ceres differentiates it numerically).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "calib/plate.hpp"
+#include "core/rig_components.hpp"
+
+namespace sweepmap {
+
+struct PlateModel {
+  double height_m = -0.045;  // upper surface, frame O / O'
+  double thickness_m = 0.002;
+  double hypotenuse_m = 0.112;
+  double base_distance_m = 0.05475;
+  double edge_m = 0.002;  // width of the coverage's smooth edge
+  double range_gate_m = 0.03;
+  static PlateModel fromConfig(const PlateConfig& plate);
+};
+
+// Smooth coverage in [0, 1] of the ray (origin, unit dir) by the model plate whose middle
+// line is at `angle_rad` from X (same frame).
+double plateCoverage(const PlateModel& m, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                     double angle_rad);
+
+struct PlateModelFit {
+  bool found = false;
+  double angle_rad = 0.0;     // the plate's middle line in the rays' frame
+  int hits = 0;               // rays whose range agrees with the upper surface
+  double residual_rad = 0.0;  // measured minus predicted centroid direction at angle_rad
+  std::string reason;
+};
+
+// The measured-minus-predicted centroid direction [rad] with the plate at `angle_rad`: the
+// measured centroid is of the upper-surface crossings of the rays whose range agrees with it
+// (within the gate), the predicted one of every ray's crossing weighted by its coverage.
+// nullopt when no ray agrees or none is covered.
+// `hits`, if given, says which rays count as measured hits (fixed, e.g. for a solver that
+// moves the rays: the gate then cannot flip a ray in or out between two evaluations).
+std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                            double angle_rad,
+                                            const std::vector<char>* hits = nullptr);
+// Which rays' ranges agree with their crossing of the upper surface (within the gate).
+std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& rays);
+
+// The angle whose predicted centroid points where the measured one does (fixed-point
+// iteration from the measured centroid's direction). Not found with fewer than `min_hits`.
+PlateModelFit fitPlateModel(const PlateModel& m, const std::vector<PlateRay>& rays, int min_hits);
+
+}  // namespace sweepmap

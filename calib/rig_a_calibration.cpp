@@ -1,0 +1,635 @@
+#include "calib/rig_a_calibration.hpp"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <memory>
+#include <sstream>
+#include <stdexcept>
+#include <tuple>
+
+#include "calib/rotating_geometry.hpp"
+#include "core/angles.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr double kCauchy = 2.3849;  // 95 % efficiency, in sigmas
+constexpr int kParams = 4;          // alpha, x, tilt, mirror
+
+// A ray in the form the residuals need: cos, sin of phi, range [mm], theta.
+struct PreRay {
+  double c, s, r_mm, theta;
+};
+
+PreRay pre(const SweepRay& r) {
+  return {std::cos(r.phi_rad), std::sin(r.phi_rad), 1e3 * r.range_m, r.theta_rad};
+}
+
+// p_O' [mm] of a ray with g = (x [mm], tilt [rad], mirror [rad]) (header's model).
+template <class T>
+void placeInOPrime(const PreRay& ray, const T* g, T* p) {
+  using std::cos;
+  using std::sin;
+  const T th = T(ray.theta) + g[2];
+  const T cth = cos(th);
+  const T lx = g[0] + ray.r_mm * sin(g[1]) * cth;
+  const T ly = ray.r_mm * sin(th);
+  p[0] = ray.c * lx - ray.s * ly;
+  p[1] = ray.s * lx + ray.c * ly;
+  p[2] = ray.r_mm * cos(g[1]) * cth;
+}
+
+// A ray of a room wall: parameters g (3), phi_s (1), wall (lean [rad], distance [mm]).
+struct WallRayCost {
+  PreRay ray;
+  double ca, sa, inv_sigma;
+  template <class T>
+  bool operator()(const T* g, const T* phi, const T* wall, T* e) const {
+    using std::cos;
+    using std::sin;
+    T p[3];
+    placeInOPrime(ray, g, p);
+    const T cp = cos(phi[0]), sp = sin(phi[0]);
+    const T ox = cp * p[0] - sp * p[1], oy = sp * p[0] + cp * p[1];
+    const T cl = cos(wall[0]);
+    e[0] = (ca * cl * ox + sa * cl * oy + sin(wall[0]) * p[2] - wall[1]) * inv_sigma;
+    return true;
+  }
+  static ceres::CostFunction* Create(const PreRay& r, double a, double inv_sigma) {
+    return new ceres::AutoDiffCostFunction<WallRayCost, 1, 3, 1, 2>(
+        new WallRayCost{r, std::cos(a), std::sin(a), inv_sigma});
+  }
+};
+
+// A ray of any other plane, in O': parameters g (3), unit normal (3), distance [mm] (1).
+struct PlaneRayCost {
+  PreRay ray;
+  double inv_sigma;
+  template <class T>
+  bool operator()(const T* g, const T* n, const T* d, T* e) const {
+    T p[3];
+    placeInOPrime(ray, g, p);
+    e[0] = (n[0] * p[0] + n[1] * p[1] + n[2] * p[2] - d[0]) * inv_sigma;
+    return true;
+  }
+  static ceres::CostFunction* Create(const PreRay& r, double inv_sigma) {
+    return new ceres::AutoDiffCostFunction<PlaneRayCost, 1, 3, 3, 1>(
+        new PlaneRayCost{r, inv_sigma});
+  }
+};
+
+// The plate's rays placed with g, in metres (calib/plate_model.hpp's frame O').
+std::vector<PlateRay> placePlateRays(const std::vector<SweepRay>& rays, const double* g) {
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(g[1], g[2]);
+  std::vector<PlateRay> out;
+  out.reserve(rays.size());
+  for (const SweepRay& r : rays) {
+    const Eigen::Matrix3d Rz = rotating::rotZ(r.phi_rad);
+    out.push_back({Rz * Eigen::Vector3d(1e-3 * g[0], 0, 0),
+                   Rz * R_L * rotating::pointInLidar(1.0, r.theta_rad), r.range_m});
+  }
+  return out;
+}
+
+// The plate of one sweep: parameters alpha (1), phi_s (1); numeric derivatives. The rays are
+// placed with g as the walls determined it (`g`, a snapshot): one centroid per sweep cannot
+// tell the offset from alpha (a sideways shift of the lidar turns the plate's centroid by
+// ~0.7 deg/mm), so the plates do not move g; g's uncertainty reaches alpha by propagation.
+struct PlateCost {
+  const std::vector<SweepRay>* rays;
+  const std::vector<char>* hits;
+  const PlateModel* model;
+  const double* g;
+  double inv_sigma;
+  bool operator()(const double* alpha, const double* phi, double* e) const {
+    const auto m = plateCentroidMismatch(*model, placePlateRays(*rays, g), alpha[0] - phi[0], hits);
+    if (!m) return false;
+    e[0] = *m * inv_sigma;
+    return true;
+  }
+};
+
+// The state of the problem: the four parameters (g, alpha) and per sweep its attitude and
+// planes.
+struct SweepState {
+  double phi = 0.0;
+  bool plate = false;
+  std::vector<char> plate_hits;
+  std::vector<int> wall_class;  // per plane: 0..3 a room wall (azimuth class * 90 deg), -1 free
+  std::vector<double> azimuth;  // per room wall [rad]
+  std::vector<std::array<double, 2>> wall;  // lean, distance
+  std::vector<Eigen::Vector3d> normal;      // free planes
+  std::vector<double> distance;
+  std::vector<std::vector<char>> keep;  // per plane per ray: not clutter
+  std::vector<std::vector<PreRay>> rays;
+};
+
+struct State {
+  double g[3];
+  double g_plate[3];  // g as the plates see it (the walls' last solution)
+  double alpha;
+  std::vector<SweepState> sweeps;
+  double sigma_mm = 10.0;
+  double sigma_plate_rad = 3.5e-4;  // 0.02 deg until the plates' scatter is known
+  bool plate_robust = false;        // Cauchy on the plates once their scatter is known
+  bool held[kParams] = {false, false, false, false};  // alpha, x, tilt, mirror
+};
+
+// The least-squares plane through points: unit normal and distance (n . p = d).
+void fitPlane(const std::vector<Eigen::Vector3d>& pts, Eigen::Vector3d* n, double* d) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : pts) mean += p;
+  mean /= double(pts.size());
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (const auto& p : pts) cov += (p - mean) * (p - mean).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  *n = eig.eigenvectors().col(0);
+  if (n->dot(mean) > 0) *n = -*n;  // toward the sensor
+  *d = n->dot(mean);
+}
+
+std::vector<Eigen::Vector3d> placed(const std::vector<PreRay>& rays, const double* g) {
+  std::vector<Eigen::Vector3d> pts(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) placeInOPrime(rays[i], g, pts[i].data());
+  return pts;
+}
+
+// The sweep's attitude from the plate model, its planes fitted and the room walls picked
+// (the largest vertical plane of each azimuth class), its attitude refined from them.
+SweepState initSweep(const RigASweep& s, const RigASolveOptions& o, const State& st) {
+  SweepState ss;
+  const auto pr = placePlateRays(s.plate_rays, st.g);
+  const PlateModelFit fit = fitPlateModel(o.plate, pr, o.min_plate_hits);
+  ss.plate = fit.found;
+  if (fit.found) {
+    ss.phi = st.alpha - fit.angle_rad;
+    ss.plate_hits = plateHits(o.plate, pr);
+  }
+  const size_t n = s.planes.size();
+  ss.wall_class.assign(n, -1);
+  ss.azimuth.assign(n, 0.0);
+  ss.wall.assign(n, {0.0, 0.0});
+  ss.normal.assign(n, Eigen::Vector3d::UnitZ());
+  ss.distance.assign(n, 0.0);
+  std::map<int, size_t> largest;  // class -> plane
+  const double tol = o.wall_azimuth_tolerance_deg * kDegToRad;
+  ss.rays.resize(n);
+  for (size_t k = 0; k < n; ++k) {
+    for (const auto& r : s.planes[k].rays) ss.rays[k].push_back(pre(r));
+    ss.keep.push_back(std::vector<char>(ss.rays[k].size(), 1));
+    fitPlane(placed(ss.rays[k], st.g), &ss.normal[k], &ss.distance[k]);
+    const Eigen::Vector3d n_O = rotating::rotZ(ss.phi) * ss.normal[k];
+    if (std::fabs(n_O.z()) > o.wall_max_normal_z) continue;
+    const double az = std::atan2(n_O.y(), n_O.x());
+    const double q = std::round(az / (M_PI / 2));
+    if (std::fabs(az - q * M_PI / 2) > tol) continue;
+    const int cls = (int(q) % 4 + 4) % 4;
+    if (!largest.count(cls) || s.planes[largest[cls]].rays.size() < s.planes[k].rays.size()) {
+      largest[cls] = k;
+    }
+  }
+  double shift = 0.0;
+  for (const auto& [cls, k] : largest) {
+    const Eigen::Vector3d n_O = rotating::rotZ(ss.phi) * ss.normal[k];
+    shift += wrapAngle(cls * M_PI / 2 - std::atan2(n_O.y(), n_O.x())) / double(largest.size());
+  }
+  ss.phi += shift;
+  for (const auto& [cls, k] : largest) {
+    const Eigen::Vector3d n_O = rotating::rotZ(ss.phi) * ss.normal[k];
+    ss.wall_class[k] = cls;
+    ss.azimuth[k] = cls * M_PI / 2;
+    ss.wall[k] = {std::asin(std::clamp(n_O.z(), -1.0, 1.0)), ss.distance[k]};
+  }
+  return ss;
+}
+
+// Unscaled residual [mm] of ray i of plane k of a sweep at the state.
+double residualMm(const State& st, const SweepState& ss, size_t k, size_t i) {
+  double e = 0.0;
+  if (ss.wall_class[k] >= 0) {
+    WallRayCost c{ss.rays[k][i], std::cos(ss.azimuth[k]), std::sin(ss.azimuth[k]), 1.0};
+    c(st.g, &ss.phi, ss.wall[k].data(), &e);
+  } else {
+    PlaneRayCost c{ss.rays[k][i], 1.0};
+    c(st.g, ss.normal[k].data(), &ss.distance[k], &e);
+  }
+  return e;
+}
+
+std::vector<double> keptResiduals(const State& st) {
+  std::vector<double> e;
+  for (const auto& ss : st.sweeps) {
+    for (size_t k = 0; k < ss.rays.size(); ++k) {
+      for (size_t i = 0; i < ss.rays[k].size(); ++i) {
+        if (ss.keep[k][i]) e.push_back(residualMm(st, ss, k, i));
+      }
+    }
+  }
+  return e;
+}
+
+double robustSigma(std::vector<double> e) {
+  if (e.empty()) return 1.0;
+  for (double& v : e) v = std::fabs(v);
+  std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+  return std::max(1e-3, 1.4826 * e[e.size() / 2]);
+}
+
+// RMS [mm] of the residuals within 3 robust sigmas (what the planes explain; clutter out).
+double inlierRms(const std::vector<double>& e, double sigma) {
+  double ss = 0.0;
+  size_t n = 0;
+  for (const double v : e) {
+    if (std::fabs(v) > 3.0 * sigma) continue;
+    ss += v * v;
+    ++n;
+  }
+  return n ? std::sqrt(ss / double(n)) : 0.0;
+}
+
+struct Built {
+  std::unique_ptr<ceres::Problem> problem;
+  std::unique_ptr<ceres::LossFunction> loss, plate_loss;
+  std::vector<PlateCost*> plate_costs;
+};
+
+// Every kept ray and every plate into one problem over the state's memory.
+Built buildProblem(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
+  Built b;
+  ceres::Problem::Options po;
+  po.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  po.manifold_ownership = ceres::TAKE_OWNERSHIP;
+  b.problem = std::make_unique<ceres::Problem>(po);
+  b.loss = std::make_unique<ceres::CauchyLoss>(kCauchy);
+  b.plate_loss = std::make_unique<ceres::CauchyLoss>(3.0);
+  const double inv = 1.0 / st->sigma_mm;
+  b.problem->AddParameterBlock(st->g, 3);
+  b.problem->AddParameterBlock(&st->alpha, 1);
+  for (size_t s = 0; s < st->sweeps.size(); ++s) {
+    SweepState& ss = st->sweeps[s];
+    for (size_t k = 0; k < ss.rays.size(); ++k) {
+      for (size_t i = 0; i < ss.rays[k].size(); ++i) {
+        if (!ss.keep[k][i]) continue;
+        if (ss.wall_class[k] >= 0) {
+          b.problem->AddResidualBlock(WallRayCost::Create(ss.rays[k][i], ss.azimuth[k], inv),
+                                      b.loss.get(), st->g, &ss.phi, ss.wall[k].data());
+        } else {
+          b.problem->AddResidualBlock(PlaneRayCost::Create(ss.rays[k][i], inv), b.loss.get(), st->g,
+                                      ss.normal[k].data(), &ss.distance[k]);
+        }
+      }
+      if (ss.wall_class[k] < 0 && b.problem->HasParameterBlock(ss.normal[k].data())) {
+        b.problem->SetManifold(ss.normal[k].data(), new ceres::SphereManifold<3>());
+      }
+    }
+    if (ss.plate) {
+      auto* cost = new PlateCost{&sweeps[s].plate_rays, &ss.plate_hits, &o.plate, st->g_plate,
+                                 1.0 / st->sigma_plate_rad};
+      b.problem->AddResidualBlock(
+          new ceres::NumericDiffCostFunction<PlateCost, ceres::CENTRAL, 1, 1, 1>(cost),
+          st->plate_robust ? b.plate_loss.get() : nullptr, &st->alpha, &ss.phi);
+    }
+  }
+  std::vector<int> held_g;
+  for (int c = 0; c < 3; ++c) {
+    if (st->held[c + 1]) held_g.push_back(c);
+  }
+  if (held_g.size() == 3) {
+    b.problem->SetParameterBlockConstant(st->g);
+  } else if (!held_g.empty()) {
+    b.problem->SetManifold(st->g, new ceres::SubsetManifold(3, held_g));
+  }
+  if (st->held[0] && b.problem->HasParameterBlock(&st->alpha)) {
+    b.problem->SetParameterBlockConstant(&st->alpha);
+  }
+  return b;
+}
+
+bool solve(const RigASolveOptions& o, Built* b) {
+  ceres::Solver::Options so;
+  so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  so.max_num_iterations = o.max_iterations;
+  so.function_tolerance = 1e-10;
+  so.parameter_tolerance = 1e-10;
+  so.num_threads = 1;  // the same result whatever the machine
+  ceres::Solver::Summary summary;
+  ceres::Solve(so, b->problem.get(), &summary);
+  return summary.termination_type == ceres::CONVERGENCE;
+}
+
+// Each room wall's kept rays by cell of the wall (along it, up), in O.
+template <class F>
+void forWallCells(const RigASolveOptions& o, const State& st, F&& f) {
+  for (size_t s = 0; s < st.sweeps.size(); ++s) {
+    const SweepState& ss = st.sweeps[s];
+    for (size_t k = 0; k < ss.rays.size(); ++k) {
+      if (ss.wall_class[k] < 0) continue;
+      const auto pts = placed(ss.rays[k], st.g);
+      const double ca = std::cos(ss.azimuth[k] - ss.phi), sa = std::sin(ss.azimuth[k] - ss.phi);
+      for (size_t i = 0; i < pts.size(); ++i) {
+        if (!ss.keep[k][i]) continue;
+        const double u = -sa * pts[i].x() + ca * pts[i].y();  // along the wall
+        f(s, k, i, long(std::floor(1e-3 * u / o.clutter_cell_m)),
+          long(std::floor(1e-3 * pts[i].z() / o.clutter_cell_m)));
+      }
+    }
+  }
+}
+
+double median(std::vector<double> e) {
+  std::nth_element(e.begin(), e.begin() + e.size() / 2, e.end());
+  return e[e.size() / 2];
+}
+
+// Clutter on the room walls (a whiteboard proud of one): the rays of a sweep's wall cell whose
+// median residual is beyond the limit are left out.
+void removeClutter(const RigASolveOptions& o, State* st) {
+  std::map<std::tuple<size_t, size_t, long, long>, std::vector<size_t>> cells;
+  forWallCells(o, *st, [&](size_t s, size_t k, size_t i, long u, long z) {
+    cells[{s, k, u, z}].push_back(i);
+  });
+  for (const auto& [cell, idx] : cells) {
+    if (idx.size() < 15) continue;
+    const size_t s = std::get<0>(cell), k = std::get<1>(cell);
+    SweepState& ss = st->sweeps[s];
+    std::vector<double> e;
+    for (const size_t i : idx) e.push_back(residualMm(*st, ss, k, i));
+    if (std::fabs(median(e)) <= o.clutter_limit_mm) continue;
+    for (const size_t i : idx) ss.keep[k][i] = 0;
+  }
+}
+
+// RMS [mm] of the walls' cell medians pooled over the sweeps (same wall, same place in O).
+double wallCellRms(const RigASolveOptions& o, const State& st) {
+  std::map<std::tuple<int, long, long>, std::vector<double>> cells;
+  forWallCells(o, st, [&](size_t s, size_t k, size_t i, long u, long z) {
+    cells[{st.sweeps[s].wall_class[k], u, z}].push_back(residualMm(st, st.sweeps[s], k, i));
+  });
+  double ss = 0.0;
+  size_t n = 0;
+  for (const auto& [cell, e] : cells) {
+    if (e.size() < 100) continue;
+    const double m = median(e);
+    ss += m * m;
+    ++n;
+  }
+  return n ? std::sqrt(ss / double(n)) : 0.0;
+}
+
+// The plates' mismatches [rad] at the state (unscaled), for their scatter.
+std::vector<double> plateMismatches(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                                    const State& st) {
+  std::vector<double> m;
+  for (size_t s = 0; s < st.sweeps.size(); ++s) {
+    const SweepState& ss = st.sweeps[s];
+    if (!ss.plate) continue;
+    const auto e = plateCentroidMismatch(o.plate, placePlateRays(sweeps[s].plate_rays, st.g),
+                                         st.alpha - ss.phi, &ss.plate_hits);
+    if (e) m.push_back(*e);
+  }
+  return m;
+}
+
+// Covariance of (alpha, x, tilt, mirror) in their own units (rad, mm, rad, rad); NaN when
+// it cannot be computed.
+Eigen::Matrix4d covariance(Built* b, State* st) {
+  Eigen::Matrix4d c = Eigen::Matrix4d::Constant(std::numeric_limits<double>::quiet_NaN());
+  ceres::Covariance::Options co;
+  co.num_threads = 1;
+  co.algorithm_type = ceres::SPARSE_QR;
+  ceres::Covariance cov(co);
+  std::vector<std::pair<const double*, const double*>> pairs = {
+      {st->g, st->g}, {&st->alpha, &st->alpha}, {&st->alpha, st->g}};
+  if (!cov.Compute(pairs, b->problem.get())) return c;
+  double gg[9], aa = 0, ag[3];
+  cov.GetCovarianceBlock(st->g, st->g, gg);
+  cov.GetCovarianceBlock(&st->alpha, &st->alpha, &aa);
+  cov.GetCovarianceBlock(&st->alpha, st->g, ag);
+  c(0, 0) = aa;
+  for (int i = 0; i < 3; ++i) {
+    c(0, i + 1) = c(i + 1, 0) = ag[i];
+    for (int j = 0; j < 3; ++j) c(i + 1, j + 1) = gg[3 * i + j];
+  }
+  return c;
+}
+
+}  // namespace
+
+std::vector<SweepRay> plateCandidateRays(const std::vector<SweepRay>& rays, const RigAValues& v,
+                                         const PlateRegion& region) {
+  const double g[3] = {v.offset_x_mm, v.tilt_deg * kDegToRad, v.mirror_deg * kDegToRad};
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(g[1], g[2]);
+  std::vector<SweepRay> out;
+  for (const SweepRay& r : rays) {
+    const Eigen::Matrix3d Rz = rotating::rotZ(r.phi_rad);
+    if (plateRayRange(Rz * Eigen::Vector3d(1e-3 * g[0], 0, 0),
+                      Rz * R_L * rotating::pointInLidar(1.0, r.theta_rad), region)) {
+      out.push_back(r);
+    }
+  }
+  return out;
+}
+
+namespace {
+
+State initState(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o) {
+  State st;
+  st.g[0] = o.nominal.offset_x_mm;
+  st.g[1] = o.nominal.tilt_deg * kDegToRad;
+  st.g[2] = o.nominal.mirror_deg * kDegToRad;
+  st.alpha = o.nominal.alpha_deg * kDegToRad;
+  std::copy(st.g, st.g + 3, st.g_plate);
+  for (const RigASweep& s : sweeps) st.sweeps.push_back(initSweep(s, o, st));
+  st.held[0] = std::none_of(st.sweeps.begin(), st.sweeps.end(),
+                            [](const SweepState& ss) { return ss.plate; });
+  return st;
+}
+
+// The table of the four, in the rig file's keys and units, from the state and the covariance
+// (alpha, x, tilt, mirror in rad, mm, rad, rad).
+std::vector<CalibParameter> parameterTable(const State& st, const RigASolveOptions& o) {
+  const double d = kRadToDeg;
+  std::vector<CalibParameter> p = {
+      {"plate.alpha_deg", st.alpha * d, 0, "deg", true, o.truth.alpha_deg, o.nominal.alpha_deg, ""},
+      {"geometry.lidar_offset_x_mm", st.g[0], 0, "mm", true, o.truth.offset_x_mm,
+       o.nominal.offset_x_mm, ""},
+      {"geometry.scan_plane_tilt_deg", st.g[1] * d, 0, "deg", true, o.truth.tilt_deg,
+       o.nominal.tilt_deg, ""},
+      {"geometry.mirror_offset_deg", st.g[2] * d, 0, "deg", true, o.truth.mirror_deg,
+       o.nominal.mirror_deg, ""}};
+  return p;
+}
+
+Eigen::Matrix4d inUnits(const Eigen::Matrix4d& c) {
+  const Eigen::Vector4d s(kRadToDeg, 1.0, kRadToDeg, kRadToDeg);
+  return s.asDiagonal() * c * s.asDiagonal();
+}
+
+// Stage 2's weights: the points' robust sigma, the walls' clutter out, the plates' scatter.
+void reweigh(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
+  st->sigma_mm = robustSigma(keptResiduals(*st));
+  removeClutter(o, st);
+  const std::vector<double> m = plateMismatches(sweeps, o, *st);
+  // Their scatter about their mean (alpha takes the mean), robustly; Cauchy from now on.
+  if (m.size() >= 2) {
+    double mean = 0.0;
+    for (const double v : m) mean += v / double(m.size());
+    std::vector<double> centred;
+    for (const double v : m) centred.push_back(v - mean);
+    double ss = 0.0;
+    for (const double v : centred) ss += v * v;
+    const double sd = std::sqrt(ss / double(m.size() - 1));
+    st->sigma_plate_rad = std::max(1e-5, m.size() >= 5 ? std::min(sd, robustSigma(centred)) : sd);
+    st->plate_robust = true;
+  }
+}
+
+// Holds the flagged parameters at the rig's values.
+void holdAtNominal(const std::vector<size_t>& flagged, const RigASolveOptions& o, State* st) {
+  for (const size_t i : flagged) {
+    st->held[i] = true;
+    if (i == 0) st->alpha = o.nominal.alpha_deg * kDegToRad;
+    if (i == 1) st->g[0] = o.nominal.offset_x_mm;
+    if (i == 2) st->g[1] = o.nominal.tilt_deg * kDegToRad;
+    if (i == 3) st->g[2] = o.nominal.mirror_deg * kDegToRad;
+  }
+}
+
+// Warnings for what the model does not explain: residuals above the noise, structured walls,
+// scattered plates.
+void checkResiduals(const RigASolveOptions& o, State* st, RigCalibration* r) {
+  std::ostringstream w;
+  if (r->rms_after > 1.3 * st->sigma_mm) {
+    w << "the residuals after calibration (RMS " << r->rms_after << " mm) exceed their robust "
+      << "sigma (" << st->sigma_mm << " mm) by more than noise does: an error the model lacks";
+    r->warnings.push_back(w.str());
+    w.str("");
+  }
+  const double cell_rms = wallCellRms(o, *st);
+  if (cell_rms > o.systematic_limit_mm) {
+    w << "the walls still disagree with their planes by " << cell_rms
+      << " mm RMS over 0.5 m cells after calibration (noise alone: under " << o.systematic_limit_mm
+      << " mm): an error the model lacks (a bent wall, another rig "
+      << "error); the sigmas are too small by as much";
+    r->warnings.push_back(w.str());
+    w.str("");
+  }
+  if (st->sigma_plate_rad * kRadToDeg > 0.05) {
+    w << "the plate's angle scatters by " << st->sigma_plate_rad * kRadToDeg
+      << " deg from sweep to sweep: the plate model does not fit it (a loose plate, clutter "
+      << "on it, a wrong plate.height_mm or thickness_mm)";
+    r->warnings.push_back(w.str());
+  }
+}
+
+// alpha as the plates give it with the rays placed with g, the sweeps' attitudes held: the
+// mean of phi_s + the plate's angle in O'.
+double alphaFromPlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                       const State& st, const double* g) {
+  double sum = 0.0;
+  int n = 0;
+  for (size_t s = 0; s < st.sweeps.size(); ++s) {
+    if (!st.sweeps[s].plate) continue;
+    const PlateModelFit f =
+        fitPlateModel(o.plate, placePlateRays(sweeps[s].plate_rays, g), o.min_plate_hits);
+    if (!f.found) continue;
+    sum += st.sweeps[s].phi + f.angle_rad;
+    ++n;
+  }
+  return n ? sum / n : st.alpha;
+}
+
+// g's uncertainty into alpha's (raw units): J = d alpha / d g by central differences,
+// C_aa += J C_gg J^T, C_ag = J C_gg.
+void propagateToAlpha(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                      const State& st, Eigen::Matrix4d* c) {
+  const Eigen::Matrix3d cgg = c->bottomRightCorner<3, 3>();
+  if (!cgg.allFinite() || st.held[0]) return;
+  const double steps[3] = {1e-3, 1e-5, 1e-5};  // mm, rad, rad
+  Eigen::RowVector3d J = Eigen::RowVector3d::Zero();
+  for (int i = 0; i < 3; ++i) {
+    if (st.held[i + 1]) continue;
+    double gp[3], gm[3];
+    std::copy(st.g, st.g + 3, gp);
+    std::copy(st.g, st.g + 3, gm);
+    gp[i] += steps[i];
+    gm[i] -= steps[i];
+    J(i) =
+        (alphaFromPlates(sweeps, o, st, gp) - alphaFromPlates(sweeps, o, st, gm)) / (2 * steps[i]);
+  }
+  (*c)(0, 0) += J * cgg * J.transpose();
+  const Eigen::RowVector3d cag = J * cgg;
+  for (int i = 0; i < 3; ++i) (*c)(0, i + 1) = (*c)(i + 1, 0) = cag(i);
+}
+
+}  // namespace
+
+RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o) {
+  const auto t0 = std::chrono::steady_clock::now();
+  size_t planes = 0;
+  for (const auto& s : sweeps) planes += s.planes.size();
+  if (planes == 0) throw std::invalid_argument("rig A calibration: no sweep with planes");
+  RigCalibration r;
+  State st = initState(sweeps, o);
+  const std::vector<double> e0 = keptResiduals(st);
+  st.sigma_mm = robustSigma(e0);
+  r.rms_before = inlierRms(e0, st.sigma_mm);
+  {
+    Built b = buildProblem(sweeps, o, &st);
+    solve(o, &b);
+  }
+  std::copy(st.g, st.g + 3, st.g_plate);
+  reweigh(sweeps, o, &st);
+  Built b = buildProblem(sweeps, o, &st);
+  if (!solve(o, &b)) r.warnings.push_back("the solver stopped before converging");
+  // The plates once more with the final g.
+  std::copy(st.g, st.g + 3, st.g_plate);
+  solve(o, &b);
+  Eigen::Matrix4d raw = covariance(&b, &st);
+  propagateToAlpha(sweeps, o, st, &raw);
+  Eigen::Matrix4d cov = inUnits(raw);
+  r.parameters = parameterTable(st, o);
+  ObservabilityLimits limits{o.max_sigma};
+  std::vector<size_t> flagged = testObservability(cov, limits, &r.parameters);
+  for (size_t i = 0; i < kParams; ++i) {
+    if (st.held[i] && r.parameters[i].observable) flagged.push_back(i);
+  }
+  if (!flagged.empty()) {
+    const std::vector<CalibParameter> first = r.parameters;
+    holdAtNominal(flagged, o, &st);
+    Built b2 = buildProblem(sweeps, o, &st);
+    solve(o, &b2);
+    std::copy(st.g, st.g + 3, st.g_plate);
+    solve(o, &b2);
+    Eigen::Matrix4d raw2 = covariance(&b2, &st);
+    propagateToAlpha(sweeps, o, st, &raw2);
+    cov = inUnits(raw2);
+    r.parameters = parameterTable(st, o);
+    for (size_t i = 0; i < kParams; ++i) {
+      r.parameters[i].sigma = std::sqrt(cov(Eigen::Index(i), Eigen::Index(i)));
+      r.parameters[i].observable = !st.held[i];
+      r.parameters[i].note =
+          first[i].note.empty() && st.held[i] ? "no sweep saw the plate" : first[i].note;
+      if (st.held[i]) r.parameters[i].sigma = std::numeric_limits<double>::quiet_NaN();
+    }
+  }
+  for (const auto& p : r.parameters) {
+    if (!p.observable) {
+      r.warnings.push_back(p.key + " is not observable from these logs (" + p.note +
+                           "): left at the rig's " + std::to_string(p.nominal) + " " + p.unit);
+    }
+  }
+  r.correlation = correlationOf(cov);
+  r.rms_after = inlierRms(keptResiduals(st), st.sigma_mm);
+  checkResiduals(o, &st, &r);
+  r.sweeps_used = int(sweeps.size());
+  r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return r;
+}
+
+}  // namespace sweepmap

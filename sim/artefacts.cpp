@@ -1,0 +1,116 @@
+#include "sim/artefacts.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace sweepmap {
+namespace {
+
+constexpr double kEdgeJumpM = 0.05;
+constexpr double kWalkSpeedMS = 1.0;
+
+// Entry distance of the ray into `box` within (0, limit), if any.
+std::optional<double> rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                             const Eigen::AlignedBox3d& box, double limit) {
+  double t0 = 0.0, t1 = limit;
+  for (int k = 0; k < 3; ++k) {
+    if (d[k] == 0.0) {
+      if (o[k] < box.min()[k] || o[k] > box.max()[k]) return std::nullopt;
+      continue;
+    }
+    double a = (box.min()[k] - o[k]) / d[k], b = (box.max()[k] - o[k]) / d[k];
+    if (a > b) std::swap(a, b);
+    t0 = std::max(t0, a);
+    t1 = std::min(t1, b);
+    if (t0 > t1) return std::nullopt;
+  }
+  if (!(t0 > 0.0)) return std::nullopt;
+  return t0;
+}
+
+}  // namespace
+
+SceneArtefacts::SceneArtefacts(const SimRigConfig& sim, const Scene& scene, uint64_t seed)
+    : sim_(sim), scene_(&scene), rng_(seed ^ 0x9e3779b97f4a7c15ULL) {
+  const SceneConfig& c = scene.config();
+  const double l = c.room_length_m / 2, w = c.room_width_m / 2;
+  if (sim.whiteboard_proud_mm > 0) {
+    whiteboard_ = Eigen::AlignedBox3d(Eigen::Vector3d(-l, 0.5 - 1.0, 0.9),
+                                      Eigen::Vector3d(-l + sim.whiteboard_proud_mm * 1e-3,
+                                                      0.5 + 1.0, std::min(2.1, c.room_height_m)));
+  }
+  if (sim.window_width_m > 0) {
+    window_xz_ = Eigen::AlignedBox2d(Eigen::Vector2d(-1.0 - sim.window_width_m / 2, 0.9),
+                                     Eigen::Vector2d(-1.0 + sim.window_width_m / 2, 2.1));
+  }
+  for (const SceneBox& b : scene.boxes()) {
+    dark_.push_back(b.name.rfind("table", 0) == 0 || b.name == "cabinet");
+  }
+  walk_x0_ = -l + 0.5;
+  walk_x1_ = l - 0.5;
+  const double lanes[] = {-1.6, 2.2, -1.0, 1.6};
+  for (int i = 0; i < sim.people; ++i) {
+    const double y = std::clamp(lanes[i % 4], -w + 0.3, w - 0.3);
+    people_.push_back({y, uniform_(rng_) * 2.0 * (walk_x1_ - walk_x0_) / kWalkSpeedMS});
+  }
+}
+
+Eigen::AlignedBox3d SceneArtefacts::personAt(const Person& p, int64_t utime) const {
+  // To and fro between walk_x0_ and walk_x1_: a triangle wave.
+  const double span = walk_x1_ - walk_x0_;
+  const double s = std::fmod(kWalkSpeedMS * (1e-6 * double(utime) + p.phase_s), 2.0 * span);
+  const double x = walk_x0_ + (s < span ? s : 2.0 * span - s);
+  return Eigen::AlignedBox3d(Eigen::Vector3d(x - 0.25, p.y_m - 0.15, 0.0),
+                             Eigen::Vector3d(x + 0.25, p.y_m + 0.15, 1.75));
+}
+
+std::optional<double> SceneArtefacts::raycastObjects(const Eigen::Vector3d& origin,
+                                                     const Eigen::Vector3d& dir, double limit_m,
+                                                     int64_t utime) const {
+  std::optional<double> best;
+  const auto take = [&](const Eigen::AlignedBox3d& box) {
+    const auto t = rayBox(origin, dir, box, best.value_or(limit_m));
+    if (t) best = t;
+  };
+  if (whiteboard_) take(*whiteboard_);
+  for (const Person& p : people_) take(personAt(p, utime));
+  return best;
+}
+
+bool SceneArtefacts::returns(const Eigen::Vector3d& point, const Eigen::Vector3d& dir,
+                             const Scene::Hit& hit) {
+  const SceneBox& box = scene_->boxes()[hit.box];
+  if (window_xz_ && box.name == "wall_y_min" && hit.axis == 1 &&
+      window_xz_->contains(Eigen::Vector2d(point.x(), point.z()))) {
+    return false;
+  }
+  if (dark_[hit.box] && sim_.dropout_dark_probability > 0 &&
+      uniform_(rng_) < sim_.dropout_dark_probability) {
+    return false;
+  }
+  const double incidence_deg = std::acos(std::min(1.0, std::fabs(dir[hit.axis]))) * 180.0 / M_PI;
+  if (incidence_deg > 70.0 && sim_.dropout_glancing_probability > 0) {
+    const double p = sim_.dropout_glancing_probability * (incidence_deg - 70.0) / 20.0;
+    if (uniform_(rng_) < p) return false;
+  }
+  return true;
+}
+
+void SceneArtefacts::mixEdges(std::vector<double>* ranges) {
+  if (!(sim_.mixed_pixel_probability > 0)) return;
+  const std::vector<double> r = *ranges;
+  for (size_t i = 0; i < r.size(); ++i) {
+    if (r[i] == 0.0) continue;
+    double other = 0.0, jump = kEdgeJumpM;  // the neighbour across the larger edge
+    for (const size_t j : {i - 1, i + 1}) {
+      if (j >= r.size() || r[j] == 0.0 || !(std::fabs(r[j] - r[i]) > jump)) continue;
+      other = r[j];
+      jump = std::fabs(r[j] - r[i]);
+    }
+    if (other == 0.0 || uniform_(rng_) >= sim_.mixed_pixel_probability) continue;
+    (*ranges)[i] = r[i] + uniform_(rng_) * (other - r[i]);
+  }
+}
+
+}  // namespace sweepmap

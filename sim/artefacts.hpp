@@ -1,0 +1,59 @@
+// The real-scene artefacts a calibration must survive, for the simulated rig-A lidar
+// (sim.* keys of SimRigConfig; all 0 in the paper experiment):
+//  - mixed pixels: a ray at a depth edge (its neighbour's range differs by more than 50 mm)
+//    returns, with probability sim.mixed_pixel_probability, a range uniformly between the two;
+//  - dropouts: no return from dark furniture (table, cabinet) with probability
+//    sim.dropout_dark_probability, and at grazing incidence with a probability rising linearly
+//    from 0 at 70 deg to sim.dropout_glancing_probability at 90 deg;
+//  - sim.people people (0.5 x 0.3 x 1.75 m boxes) walking to and fro along X at 1 m/s;
+//  - a window sim.window_width_m wide (1.2 m high, sill 0.9 m, centred at room x = -1 m) in the
+//    -Y wall: glass, no return;
+//  - a whiteboard (2 x 1.2 m, bottom 0.9 m, centred at room y = 0.5 m) sim.whiteboard_proud_mm
+//    proud of the -X wall.
+// Randomness: one std::mt19937_64 of its own (seed mixed), drawn only where an artefact applies,
+// so a rig without artefacts draws nothing and simulates exactly as before them.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "core/rig_components.hpp"
+#include "sim/scene.hpp"
+
+namespace sweepmap {
+
+class SceneArtefacts {
+ public:
+  SceneArtefacts(const SimRigConfig& sim, const Scene& scene, uint64_t seed);
+
+  // Distance to the nearest artefact object (whiteboard, a person at `utime`) along the ray
+  // (room frame, unit direction) within (0, limit_m), if any.
+  std::optional<double> raycastObjects(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                                       double limit_m, int64_t utime) const;
+  // Whether a hit of the scene's box `hit` at `point` (room frame) returns (window, dark,
+  // grazing incidence).
+  bool returns(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, const Scene::Hit& hit);
+  // Mixed pixels over one scan's true ranges (0: no hit), in ray order, in place.
+  void mixEdges(std::vector<double>* ranges);
+
+ private:
+  struct Person {
+    double y_m, phase_s;
+  };
+  Eigen::AlignedBox3d personAt(const Person& p, int64_t utime) const;
+
+  SimRigConfig sim_;
+  const Scene* scene_;
+  std::optional<Eigen::AlignedBox3d> whiteboard_;
+  std::optional<Eigen::AlignedBox2d> window_xz_;  // on the -Y wall
+  std::vector<bool> dark_;                        // per scene box
+  std::vector<Person> people_;
+  double walk_x0_ = 0, walk_x1_ = 0;
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+};
+
+}  // namespace sweepmap

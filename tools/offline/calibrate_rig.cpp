@@ -1,0 +1,260 @@
+// `sweepmap calib rig`'s workflow in named steps: check the inputs, read the logs' sweeps
+// (planes and plate rays), solve, write the file, report; and `calib plan`.
+#include "tools/offline/calibrate_rig.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "calib/rig_a_calibration.hpp"
+#include "core/angles.hpp"
+#include "core/calibration_file.hpp"
+#include "core/event_log.hpp"
+#include "core/exit_codes.hpp"
+#include "core/progress.hpp"
+#include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/log_sweeps.hpp"
+
+namespace sweepmap {
+namespace {
+
+namespace fs = std::filesystem;
+using calib_workflow::Clock;
+using calib_workflow::seconds;
+
+const std::string kWhat = "calib rig";
+
+struct RigAInputs {
+  std::vector<RigASweep> sweeps;
+  std::vector<std::string> rejected;
+  std::vector<std::string> log_errors;
+  RigATruth truth;
+  double read_s = 0.0;
+};
+
+RigAValues valuesOf(const RotatingLidarConfig& rig) {
+  return {rig.plate.alpha_deg, rig.geometry.lidar_offset_x_mm, rig.geometry.scan_plane_tilt_deg,
+          rig.geometry.mirror_offset_deg};
+}
+
+// One sweep's planes and plate rays into in->sweeps, or why not into in->rejected.
+void takeSweep(const RigCalibRequest& o, const RotatingLidarConfig& rig, const std::string& log,
+               const AssembledSweep& s, const std::vector<Scan2D>& scans, RigAInputs* in) {
+  const std::string source = log + " sweep " + std::to_string(s.window.sweep_id);
+  const auto reject = [&](const std::string& why) {
+    in->rejected.push_back(source + ": " + why);
+    if (!o.json) std::cerr << "  " << source << ": rejected: " << why << "\n";
+  };
+  if (s.window.accel_overlap) return reject("motor ramp overlapped the lidar window");
+  std::vector<SweepRay> rays;
+  rays.reserve(s.points_Op.size());
+  forEachSweepRay(scans, s.window.omega_rad_s, [&](const SweepRay& r) { rays.push_back(r); });
+  RigASweep sweep;
+  sweep.source = source;
+  sweep.planes = segmentSweepPlanes(s.points_Op, rays, o.segmentation, source);
+  if (sweep.planes.empty()) return reject("no plane found");
+  sweep.plate_rays = plateCandidateRays(rays, valuesOf(rig), PlateRegion::fromConfig(rig.plate));
+  in->sweeps.push_back(std::move(sweep));
+}
+
+void takeTruth(const LogReadResult& r, RigATruth* t) {
+  if (r.alpha_true_rad) t->alpha_deg = *r.alpha_true_rad * kRadToDeg;
+  if (r.lidar_offset_x_true_m) t->offset_x_mm = *r.lidar_offset_x_true_m * 1e3;
+  if (r.scan_plane_tilt_true_rad) t->tilt_deg = *r.scan_plane_tilt_true_rad * kRadToDeg;
+  if (r.mirror_offset_true_rad) t->mirror_deg = *r.mirror_offset_true_rad * kRadToDeg;
+}
+
+// Every sweep of every log; false (after saying so) if a log cannot be opened.
+bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress& progress,
+              RigAInputs* in) {
+  const auto t0 = Clock::now();
+  for (size_t i = 0; i < o.logs.size(); ++i) {
+    const std::string& log = o.logs[i];
+    progress.stage("reading " + fs::path(log).filename().string());
+    LogSweepOptions opts;
+    opts.on_window_scans = [&](const AssembledSweep& s, const std::vector<Scan2D>& scans) {
+      takeSweep(o, rig, log, s, scans, in);
+    };
+    const auto size = std::max<uint64_t>(1, fs::file_size(log));
+    opts.progress = [&](uint64_t offset, uint64_t) { progress.update(double(offset) / size); };
+    LogReadResult r;
+    try {
+      r = forEachSweep(
+          log, rig, [](const AssembledSweep&, const SweepTruth&) {}, opts);
+    } catch (const LogError& e) {
+      std::cerr << kWhat << ": cannot read log '" << log << "': " << e.what() << "\n";
+      return false;
+    }
+    if (r.log_error) {
+      std::cerr << kWhat << ": " << r.error << " (the sweeps before it are used)\n";
+      in->log_errors.push_back(r.error);
+    }
+    takeTruth(r, &in->truth);
+  }
+  in->read_s = seconds(Clock::now() - t0);
+  return true;
+}
+
+// How the rig file points at `out`: its calibration_file, relative to the rig file's folder.
+std::string pointRigAt(const std::string& rig_path, const std::string& out) {
+  const fs::path rig_dir = fs::absolute(rig_path).parent_path();
+  const fs::path rel = fs::absolute(out).lexically_relative(rig_dir);
+  const bool installed = fs::absolute(rig_path).lexically_normal().string().rfind(
+                             fs::absolute(configDir()).lexically_normal().string(), 0) == 0;
+  std::ostringstream s;
+  if (installed) {
+    const fs::path copy = fs::path(rig_path).filename();
+    s << "to use it: copy the installed rig file here (sweepmap sim --rig " << rig_path
+      << " --print-config > " << copy.string() << " is one way, or cp " << rig_path
+      << " .), set calibration_file: "
+      << fs::absolute(out).lexically_relative(fs::current_path()).string()
+      << " in it, and pass --rig " << copy.string();
+  } else {
+    s << "to use it: set calibration_file: " << rel.string() << " in " << rig_path
+      << " (relative to the rig file's folder)";
+  }
+  return s.str();
+}
+
+// Writes the file (when something is observable), then the report: human on stderr, JSON on
+// stdout.
+int reportAndWrite(const RigCalibRequest& o, const Rig& loaded, const RigAInputs& in,
+                   const RigCalibration& c) {
+  const bool any = std::any_of(c.parameters.begin(), c.parameters.end(),
+                               [](const CalibParameter& p) { return p.observable; });
+  bool written = false;
+  if (any) {
+    RigCalibrationFile f = rigCalibrationFile(c, "sweepmap calib rig", o.logs);
+    f.source["date"] = calib_workflow::utcNow();
+    f.source["rig"] = loaded.path;
+    try {
+      writeRigCalibration(o.out, f);
+      written = true;
+    } catch (const std::exception& e) {
+      std::cerr << kWhat << ": " << e.what() << "\n";
+      return kExitDeviceIo;
+    }
+  }
+  std::cerr << kWhat << " (" << loaded.kindName() << "): " << c.sweeps_used << " sweeps ("
+            << c.rejected.size() << " rejected); reading " << std::fixed << std::setprecision(1)
+            << in.read_s << " s, solving " << c.seconds << " s\n"
+            << rigCalibrationReport(c);
+  std::cerr.unsetf(std::ios::floatfield);
+  if (written) {
+    std::cerr << "  wrote " << o.out << "\n  " << pointRigAt(loaded.path, o.out) << "\n";
+  } else {
+    std::cerr << "  nothing written: no parameter is observable from these logs\n";
+  }
+  if (o.json) {
+    nlohmann::json j = rigCalibrationJson(c);
+    j["rig"] = loaded.path;
+    j["out"] = written ? nlohmann::json(o.out) : nullptr;
+    j["timing_s"] = {{"read", in.read_s}, {"solve", c.seconds}};
+    std::cout << std::setprecision(12) << j.dump(2) << "\n";
+  }
+  return written ? 0 : 1;
+}
+
+int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
+  const RotatingLidarConfig& rig = std::get<RotatingLidarConfig>(loaded.config);
+  for (const auto& log : o.logs) {
+    if (!calib_workflow::logFileExists(log, kWhat)) return kExitUsage;
+  }
+  if (!calib_workflow::outputDirExists(o.out, kWhat)) return kExitUsage;
+  ProgressOptions po;
+  po.enabled = !o.json;
+  Progress progress(kWhat, po);
+  RigAInputs in;
+  if (!readLogs(o, rig, progress, &in)) return kExitBadInput;
+  if (in.sweeps.empty()) {
+    progress.finish();
+    std::cerr << kWhat << ": no usable sweep in the logs (" << in.rejected.size()
+              << " rejected): nothing calibrated\n";
+    if (o.json)
+      std::cout << nlohmann::json{{"sweeps_used", 0}, {"sweeps_rejected", in.rejected}}.dump(2)
+                << "\n";
+    return 1;
+  }
+  RigASolveOptions so;
+  so.nominal = valuesOf(rig);
+  so.truth = in.truth;
+  so.plate = PlateModel::fromConfig(rig.plate);
+  so.region = PlateRegion::fromConfig(rig.plate);
+  so.min_plate_hits = rig.plate.min_points;
+  progress.stage("solving");
+  RigCalibration c;
+  {
+    ProgressTicker ticker(progress);
+    c = solveRigA(in.sweeps, so);
+  }
+  progress.finish();
+  c.rejected = in.rejected;
+  for (const auto& e : in.log_errors) c.warnings.push_back(e);
+  return reportAndWrite(o, loaded, in, c);
+}
+
+}  // namespace
+
+int calibrateRigFromLogs(const RigCalibRequest& o) {
+  Rig rig;
+  try {
+    rig = loadRig(o.rig, o.sets);
+  } catch (const std::exception& e) {
+    std::cerr << kWhat << ": config error: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  if (rig.kind() != RigKind::kRotatingLidar) {
+    std::cerr << kWhat << ": " << rig.path << " is a " << rig.kindName()
+              << " rig: not yet supported (rotating_lidar only)\n";
+    return kExitUsage;
+  }
+  return calibrateRigA(o, rig);
+}
+
+int printCalibrationPlan(const std::string& rig_name, const std::vector<std::string>& sets) {
+  Rig rig;
+  try {
+    rig = loadRig(rig_name, sets);
+  } catch (const std::exception& e) {
+    std::cerr << "calib plan: config error: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  if (rig.kind() != RigKind::kRotatingLidar) {
+    std::cerr << "calib plan: " << rig.path << " is a " << rig.kindName()
+              << " rig: not yet supported (rotating_lidar only)\n";
+    return kExitUsage;
+  }
+  const RigARecording r;
+  const ScanMode mode = scanMode(r.mode);
+  const double minutes = r.sweeps * (mode.period_s + 3.0) / 60.0;
+  std::cout
+      << "What to record for `sweepmap calib rig --rig " << rig_name << "` (rotating_lidar):\n"
+      << "  scene:    a closed rectangular room, 4 to 10 m, its four walls in view over most of "
+         "their height; the rig on its stand square to the walls (its front, X, facing one "
+         "wall) and well inside the room (1 m or more from every wall); the plate clear.\n"
+      << "            Why: the walls' planes fix each sweep's attitude and bend with the offset, "
+         "the tilt and the mirror offset (the plane constraint); the plate angle alpha is "
+         "defined against the walls (Yuan 2021 section 4.2). Clutter on the walls, people "
+         "walking, a window are tolerated; a room with few plain walls is not.\n"
+      << "  sweeps:   " << r.sweeps << ", mode " << r.mode << " (" << mode.period_s
+      << " s each, gamma " << mode.gamma_deg << " deg), rig standing still\n"
+      << "            Why: mode " << r.mode
+      << " gives the densest walls (offset and tilt) "
+         "and the most plate rays per sweep; alpha's sigma falls as 1/sqrt(sweeps) with each "
+         "sweep's plate.\n"
+      << "  duration: about " << std::fixed << std::setprecision(1) << minutes
+      << " min (sweeps, returns and homing)\n"
+      << "  record:   sweepmap record --rig " << rig_name
+      << " --out calib.lcmlog (live), or "
+         "lcm-logger\n"
+      << "  simulate: sweepmap sim --rig " << rig_name << " --set motor.mode=" << r.mode
+      << " --sweeps " << r.sweeps << " --out calib.lcmlog\n"
+      << "  then:     sweepmap calib rig --rig " << rig_name
+      << " --logs calib.lcmlog --out rig_calibration.yaml\n";
+  return 0;
+}
+
+}  // namespace sweepmap
