@@ -7,50 +7,6 @@ namespace sweepmap {
 
 namespace {
 
-int64_t readInt32BE(const uint8_t* d, size_t size, size_t at) {
-  if (at + 4 > size) return -1;
-  const uint32_t u = (uint32_t{d[at]} << 24) | (uint32_t{d[at + 1]} << 16) |
-                     (uint32_t{d[at + 2]} << 8) | d[at + 3];
-  return static_cast<int32_t>(u);
-}
-
-}  // namespace
-
-// lidar_scan_t: hash 8, utime 8, seq 8, five 4-byte fields, nranges and its floats,
-// device_stamp 8, nintensities and its floats, nangles and its floats.
-template <>
-bool plausibleCounts<lidar_scan_t>(const uint8_t* data, size_t size) {
-  const int64_t n = readInt32BE(data, size, 44);
-  if (n < 0 || 48 + 4 * static_cast<uint64_t>(n) > size) return false;
-  const size_t at_intensities = 48 + 4 * static_cast<size_t>(n) + 8;
-  const int64_t ni = readInt32BE(data, size, at_intensities);
-  if (ni < 0 || at_intensities + 4 + 4 * static_cast<uint64_t>(ni) > size) return false;
-  const size_t at_angles = at_intensities + 4 + 4 * static_cast<size_t>(ni);
-  const int64_t na = readInt32BE(data, size, at_angles);
-  return na >= 0 && at_angles + 4 + 4 * static_cast<uint64_t>(na) <= size;
-}
-
-// cloud_chunk_t: hash 8, utime 8, sweep_id 8, four int32, frame string (length incl. NUL),
-// corrected 1, phi_offset 8, sensor_origin 24, then npoints of 3 floats.
-template <>
-bool plausibleCounts<cloud_chunk_t>(const uint8_t* data, size_t size) {
-  const int64_t len = readInt32BE(data, size, 40);
-  if (len < 0 || 44 + static_cast<uint64_t>(len) > size) return false;
-  const size_t at = 44 + static_cast<size_t>(len) + 1 + 8 + 24;
-  const int64_t n = readInt32BE(data, size, at);
-  return n >= 0 && at + 4 + 12 * static_cast<uint64_t>(n) <= size;
-}
-
-// profile_t: hash 8, utime 8, sequence 8, sweep_id 4, encoder_counts 8, three int32 (the last
-// point_count), then 2 + 4 + 4 bytes per point.
-template <>
-bool plausibleCounts<profile_t>(const uint8_t* data, size_t size) {
-  const int64_t n = readInt32BE(data, size, 44);
-  return n >= 0 && 48 + 10 * static_cast<uint64_t>(n) <= size;
-}
-
-namespace {
-
 template <class To, class From>
 void assign(To* to, const From& from) {
   *to = static_cast<To>(from);

@@ -22,6 +22,14 @@ std::string seconds(int64_t us) {
 
 }  // namespace
 
+std::optional<int64_t> StampGuard::peerOffset(const std::string& channel,
+                                              int64_t tolerance_us) const {
+  for (const auto& [name, stream] : streams_) {
+    if (name != channel && stream.tolerance_us == tolerance_us) return stream.offset_us;
+  }
+  return std::nullopt;
+}
+
 std::optional<StampGuard::Policy> StampGuard::policyFor(const std::string& channel) {
   namespace c = channels;
   for (const char* sensor : {c::kLidarScan, c::kImu, c::kWheelTicks, c::kProfile, c::kMotorState,
@@ -39,9 +47,15 @@ bool StampGuard::admit(const std::string& channel, int64_t stamp_us, int64_t arr
   const std::optional<Policy> policy = policyFor(channel);
   if (!policy) return true;
   const int64_t offset = stamp_us - arrival_us;
+  const std::optional<int64_t> peer =
+      streams_.count(channel) ? std::nullopt : peerOffset(channel, policy->tolerance_us);
   auto [it, first] = streams_.try_emplace(channel);
   Stream& s = it->second;
-  if (first || std::llabs(offset - s.offset_us) <= policy->tolerance_us) {
+  if (first) {
+    s.tolerance_us = policy->tolerance_us;
+    s.offset_us = peer.value_or(offset);  // judged against its peers until confirmed
+  }
+  if (std::llabs(offset - s.offset_us) <= policy->tolerance_us) {
     s.offset_us = offset;
     s.pending = 0;
     return true;

@@ -6,7 +6,10 @@
 // (counted, with the offset in the status detail), so no single message stamped a day ahead
 // can move an estimate or freeze a channel. A real jump (a clock stepped by NTP, a log played
 // again) is accepted once `confirmations` messages in a row agree on the new offset; the ones
-// before are refused.
+// before are refused. A stream's first message is judged against the node's other streams
+// of its kind (they share the host clock, or the one shift of a played log), so a message
+// stamped a day ahead cannot anchor a new stream either; only a node's very first message
+// has nothing to be judged against.
 #pragma once
 
 #include <cstdint>
@@ -32,10 +35,15 @@ class StampGuard {
 
  private:
   struct Stream {
-    int64_t offset_us = 0;  // of the last message admitted
-    int pending = 0;        // messages in a row at another offset
+    int64_t tolerance_us = 0;  // its policy's: streams of one kind share an offset
+    int64_t offset_us = 0;     // of the last message admitted
+    int pending = 0;           // messages in a row at another offset
     int64_t pending_offset_us = 0;
   };
+  // The offset of an admitted stream of the same kind as `channel` (the first in name
+  // order: deterministic), if there is one.
+  std::optional<int64_t> peerOffset(const std::string& channel, int64_t tolerance_us) const;
+
   std::map<std::string, Stream> streams_;
 };
 

@@ -60,5 +60,22 @@ TEST(StampGuard, SweepsHaveMinutesOfSlackAndOtherChannelsAreNotChecked) {
   EXPECT_TRUE(g.admit("STATUS_MAPPER", 86400 * kS, 0, &why));
 }
 
+TEST(StampGuard, ANewStreamIsJudgedAgainstTheNodesOtherStreams) {
+  StampGuard g;
+  std::string why;
+  // A played log: every stream shifted by the same 9000 s.
+  const int64_t shift = -9000 * kS;
+  EXPECT_TRUE(g.admit("IMU", 10 * kS + shift, 10 * kS, &why));
+  EXPECT_TRUE(g.admit("IMU", 10 * kS + 5000 + shift, 10 * kS + 5000, &why));
+  // The first WHEEL_TICKS a day ahead of its peers cannot anchor the stream...
+  EXPECT_FALSE(g.admit("WHEEL_TICKS", 10 * kS + 86400 * kS + shift, 10 * kS + 6000, &why));
+  EXPECT_NE(why.find("WHEEL_TICKS"), std::string::npos) << why;
+  // ...and the good ones after it pass at once.
+  EXPECT_TRUE(g.admit("WHEEL_TICKS", 10 * kS + 20000 + shift, 10 * kS + 20000, &why));
+  EXPECT_TRUE(g.admit("WHEEL_TICKS", 10 * kS + 40000 + shift, 10 * kS + 40000, &why));
+  // Sweep-level streams are stamped at a sweep's start: they are not judged by sensors.
+  EXPECT_TRUE(g.admit("SWEEP_CLOUD", 10 * kS + shift - 60 * kS, 10 * kS + 50000, &why));
+}
+
 }  // namespace
 }  // namespace sweepmap
