@@ -128,7 +128,6 @@ int reportAndWrite(const RigCalibRequest& o, const Rig& loaded, const RigAInputs
   bool written = false;
   if (any) {
     RigCalibrationFile f = rigCalibrationFile(c, "sweepmap calib rig", o.logs);
-    f.source["date"] = calib_workflow::utcNow();
     f.source["rig"] = loaded.path;
     try {
       writeRigCalibration(o.out, f);
