@@ -14,6 +14,7 @@
 #include <memory>
 #include <optional>
 
+#include "calib/overlap_alignment.hpp"
 #include "calib/rotating_geometry.hpp"
 
 namespace sweepmap {
@@ -710,6 +711,56 @@ MountingCalibrationResult paperPoints(const std::vector<Scan2D>& scans, const Po
   return res;
 }
 
+// Ours with the fast engine (calib/overlap_alignment.hpp): the same residuals, the mounting
+// angles and, as asked, the time offset and the track drift; the lever arm held.
+MountingCalibrationResult fastPointToPlane(const std::vector<Scan2D>& scans, const PoseTrack& track,
+                                           const LidarMounting& initial,
+                                           const MountingCalibrationOptions& o) {
+  using M = MobileOverlapModel;
+  const std::vector<OverlapRay> rays =
+      overlapRays(scans, initial.nominal_rpy_rad, std::max(1, o.ray_stride));
+  M model(rays, track, initial.t_BL_m);
+  OverlapOptions oo;
+  oo.base = o;
+  oo.threads = o.threads;
+  oo.progress = o.progress;
+  const int P = model.parameterCount();
+  oo.free.assign(size_t(P), false);
+  for (int k : {M::kGamma, M::kBeta, M::kAlpha}) oo.free[size_t(k)] = true;
+  oo.free[M::kTimeOffset] = o.estimate_time_offset;
+  oo.free[M::kDriftX] = oo.free[M::kDriftY] = o.estimate_track_drift;
+  oo.lower = Eigen::VectorXd::Constant(P, -1e300);
+  oo.upper = Eigen::VectorXd::Constant(P, 1e300);
+  oo.lower(M::kTimeOffset) = -o.max_time_offset_s;
+  oo.upper(M::kTimeOffset) = o.max_time_offset_s;
+  Eigen::VectorXd x0 = Eigen::VectorXd::Zero(P);
+  x0(M::kGamma) = initial.gamma_rad;
+  x0(M::kBeta) = initial.beta_rad;
+  x0(M::kAlpha) = initial.alpha_rad;
+  if (o.estimate_time_offset) x0(M::kTimeOffset) = o.initial_time_offset_s;
+  const OverlapResult r = alignOverlap(rays, model, x0, oo);
+  MountingCalibrationResult res;
+  res.method = MountingMethod::kPointToPlane;
+  res.ok = r.ok;
+  res.reason = r.reason;
+  if (!r.ok) return res;
+  res.gamma_rad = r.x(M::kGamma);
+  res.beta_rad = r.x(M::kBeta);
+  res.alpha_rad = r.x(M::kAlpha);
+  res.time_offset_s = o.estimate_time_offset ? r.x(M::kTimeOffset) : 0.0;
+  res.drift_x_m_s = r.x(M::kDriftX);
+  res.drift_y_m_s = r.x(M::kDriftY);
+  res.sigma_gamma_rad = std::sqrt(r.covariance(M::kGamma, M::kGamma));
+  res.sigma_beta_rad = std::sqrt(r.covariance(M::kBeta, M::kBeta));
+  res.sigma_alpha_rad = std::sqrt(r.covariance(M::kAlpha, M::kAlpha));
+  res.sigma_time_offset_s = std::sqrt(r.covariance(M::kTimeOffset, M::kTimeOffset));
+  res.residual_before_m = r.residual_before_m;
+  res.residual_after_m = r.residual_after_m;
+  res.correspondences = r.correspondences;
+  res.iterations = r.rounds;
+  return res;
+}
+
 }  // namespace
 
 MountingCalibrationResult calibrateMounting(const std::vector<Scan2D>& scans,
@@ -730,6 +781,7 @@ MountingCalibrationResult calibrateMounting(const std::vector<Scan2D>& scans,
   }
   if (options.method == MountingMethod::kPaperPoints)
     return paperPoints(scans, track, initial, options);
+  if (!options.reference_solver) return fastPointToPlane(scans, track, initial, options);
   const Prepared prep = prepare(scans, initial, std::max(1, options.ray_stride));
   return pointToPlane(prep, track, initial, options);
 }

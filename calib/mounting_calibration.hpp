@@ -16,6 +16,7 @@
 // Transport-free and PCL/Ceres-free in this header.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -43,6 +44,15 @@ struct MountingCalibrationOptions {
   // -0.53, 0.93, -1.70 mrad without, -0.15, -1.28, -0.69, 0.67, -1.19 with it. Off by
   // default: a random walk is not a constant drift, and more laps average it down instead.
   bool estimate_track_drift = false;
+
+  // kPointToPlane: the reference solver (Ceres, every neighbour within the patch radius, one
+  // thread; 442 s on the 120 s circle) instead of the fast one (calib/overlap_alignment.hpp:
+  // the same residuals from k-nearest neighbours in one k-d tree per half of the scan,
+  // reweighted Gauss-Newton with analytic Jacobians, on every core). Kept to measure the
+  // fast one against (`make bench`) and for the tests that pin its behaviour.
+  bool reference_solver = false;
+  int threads = 0;                       // fast solver: 0 = every core (same result)
+  std::function<void(double)> progress;  // fast solver: fraction done (may be empty)
 
   // Shared by both methods.
   bool opposite_sides_only = true;  // the other pass = the other half of the scan (left/right)
@@ -105,7 +115,10 @@ struct MountingCalibrationResult {
   std::string reason;  // why not ok (too few correspondences, no overlap, ...)
   MountingMethod method = MountingMethod::kPointToPlane;
   double gamma_rad = 0.0, beta_rad = 0.0, alpha_rad = 0.0;
-  double time_offset_s = 0.0;                   // 0 unless estimated
+  double time_offset_s = 0.0;  // 0 unless estimated
+  // The fast solver's 1-sigma uncertainties from its covariance (0: not computed).
+  double sigma_gamma_rad = 0.0, sigma_beta_rad = 0.0, sigma_alpha_rad = 0.0;
+  double sigma_time_offset_s = 0.0;
   double drift_x_m_s = 0.0, drift_y_m_s = 0.0;  // the track's position drift; 0 unless estimated
   // RMS of the method's residuals [m] at the initial mounting and at the estimate.
   double residual_before_m = 0.0, residual_after_m = 0.0;

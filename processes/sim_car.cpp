@@ -37,7 +37,7 @@ truth_mounting_t truthMountingMessage(const MobileLidarConfig& rig, const SceneC
   const Eigen::Isometry3d W = car.T_room_world();
   for (int k = 0; k < 3; ++k) {
     m.nominal_rpy_rad[k] = nominal.nominal_rpy_rad[k];
-    m.t_BL_m[k] = nominal.t_BL_m[k];
+    m.t_BL_m[k] = car.trueT_BL().translation()[k];  // the true centre (lever arm error)
   }
   m.world_in_room[0] = W.translation().x();
   m.world_in_room[1] = W.translation().y();
@@ -46,6 +46,26 @@ truth_mounting_t truthMountingMessage(const MobileLidarConfig& rig, const SceneC
   m.room_size_m[1] = scene.room_width_m;
   m.room_size_m[2] = scene.room_height_m;
   m.scene = scene.name;
+  return m;
+}
+
+truth_mobile_rig_t truthMobileRigMessage(const MobileLidarConfig& rig, const SimMobile& car,
+                                         int64_t utime) {
+  truth_mobile_rig_t m{};
+  m.utime = utime;
+  const SimMobileConfig& c = car.config();
+  m.wheel_radius_left_m = car.nominalWheels().radiusOf(false, c);
+  m.wheel_radius_right_m = car.nominalWheels().radiusOf(true, c);
+  m.wheel_distance_m = car.trueWheelDistance();
+  m.nominal_wheel_radius_m = rig.odometry.wheel_radius_m;
+  m.nominal_wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
+  const LidarMounting nominal = rig.mounting.toMounting();
+  for (int k = 0; k < 3; ++k) {
+    m.t_BL_true_m[k] = car.trueT_BL().translation()[k];
+    m.t_BL_nominal_m[k] = nominal.t_BL_m[k];
+  }
+  m.lidar_time_offset_s = c.lidar_time_offset_ms * 1e-3;
+  m.gyro_bias_z_rad_s = c.gyro_bias_z_rad_s;
   return m;
 }
 
@@ -70,6 +90,8 @@ void SimCarTruthNode::advance(int64_t now_utime, Outbox& out) {
   if (now_utime >= next_mounting_utime_) {
     out.publish(channels::kTruthMounting, now_utime,
                 truthMountingMessage(rig_, scene_, *car_, now_utime));
+    out.publish(channels::kTruthMobileRig, now_utime,
+                truthMobileRigMessage(rig_, *car_, now_utime));
     next_mounting_utime_ = now_utime + 1000000;
   }
   for (const TruthPose& t : truth_.poll(now_utime)) {

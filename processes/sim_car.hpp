@@ -13,6 +13,7 @@
 #include "sim/mobile.hpp"
 #include "sim/scene.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/truth_mobile_rig_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 
 namespace sweepmap {
@@ -28,11 +29,15 @@ std::unique_ptr<SimMobile> makeSimCar(const MobileLidarConfig& rig, const Scene&
 // TRUTH_MOUNTING: the true and nominal mounting, where the world frame lies in the room.
 truth_mounting_t truthMountingMessage(const MobileLidarConfig& rig, const SceneConfig& scene,
                                       const SimMobile& car, int64_t utime);
+// TRUTH_MOBILE_RIG: the true wheels, track, lever arm, clock offset and gyro bias.
+truth_mobile_rig_t truthMobileRigMessage(const MobileLidarConfig& rig, const SimMobile& car,
+                                         int64_t utime);
 // TRUTH_POSE.
 pose2d_t truthPoseMessage(const TruthPose& truth);
 
 // A live process with the simulated car's devices also publishes its ground truth, as
-// `sweepmap sim` logs it: TRUTH_POSE as its time comes, TRUTH_MOUNTING at start and at 1 Hz.
+// `sweepmap sim` logs it: TRUTH_POSE as its time comes, TRUTH_MOUNTING and TRUTH_MOBILE_RIG at
+// start and at 1 Hz.
 class SimCarTruthNode : public Node {
  public:
   SimCarTruthNode(const MobileLidarConfig& rig, const SceneConfig& scene, const SimMobile* car);

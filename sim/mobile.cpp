@@ -64,6 +64,17 @@ void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
         "range noise sigma, fraction of the range");
   s.add(p + "lidar_latency_ms", &lidar_latency_ms, "ms",
         "scan delivered this long after its last ray");
+  s.add(p + "wheel_radius_left_error_fraction", &wheel_radius_left_error_fraction, "",
+        "true left wheel radius = odometry.wheel_radius_m (1 + this)");
+  s.add(p + "wheel_radius_right_error_fraction", &wheel_radius_right_error_fraction, "",
+        "true right wheel radius = odometry.wheel_radius_m (1 + this)");
+  s.add(p + "wheel_distance_error_m", &wheel_distance_error_m, "m",
+        "true track width = odometry.wheel_distance_m + this");
+  s.add(p + "lever_error_x_m", &lever_error_x_m, "m", "true lidar centre = mounting.x_m + this");
+  s.add(p + "lever_error_y_m", &lever_error_y_m, "m", "true lidar centre = mounting.y_m + this");
+  s.add(p + "lever_error_z_m", &lever_error_z_m, "m", "true lidar centre = mounting.z_m + this");
+  s.add(p + "lidar_time_offset_ms", &lidar_time_offset_ms, "ms",
+        "the lidar's stamps run this far ahead of the odometry's clock");
   s.add(p + "gamma_true_rad", &gamma_true_rad, "rad", "true mounting error about body x");
   s.add(p + "beta_true_rad", &beta_true_rad, "rad", "true mounting error about body y");
   s.add(p + "alpha_true_rad", &alpha_true_rad, "rad", "true mounting error about body z");
@@ -103,6 +114,12 @@ void SimMobileConfig::validate(const std::string& source) const {
   require(range_sigma_fraction >= 0 && range_sigma_fraction < 0.5, "range_sigma_fraction",
           "must be in [0, 0.5)");
   require(lidar_latency_ms >= 0, "lidar_latency_ms", "must be >= 0");
+  require(std::abs(wheel_radius_left_error_fraction) < 0.2, "wheel_radius_left_error_fraction",
+          "must be within +-0.2");
+  require(std::abs(wheel_radius_right_error_fraction) < 0.2, "wheel_radius_right_error_fraction",
+          "must be within +-0.2");
+  require(std::abs(wheel_distance_error_m) < 0.1, "wheel_distance_error_m", "must be within +-0.1");
+  require(std::abs(lidar_time_offset_ms) <= 1000, "lidar_time_offset_ms", "must be within +-1000");
   require(truth_rate_hz > 0 && truth_rate_hz <= 10000, "truth_rate_hz", "must be in (0, 10000]");
 }
 
@@ -280,7 +297,8 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
   T_BL_ = Eigen::Isometry3d::Identity();
   T_BL_.linear() = rotationXYZ(c_.gamma_true_rad, c_.beta_true_rad, c_.alpha_true_rad) *
                    rotationXYZ(nominal_rpy_rad.x(), nominal_rpy_rad.y(), nominal_rpy_rad.z());
-  T_BL_.translation() = t_BL_m;
+  T_BL_.translation() =
+      t_BL_m + Eigen::Vector3d(c_.lever_error_x_m, c_.lever_error_y_m, c_.lever_error_z_m);
   rays_ = static_cast<int>(std::lround(c_.sample_rate_hz / c_.scan_rate_hz));
 
   // Slip schedule: exponential gaps after each event's end.
@@ -339,7 +357,7 @@ double SimMobile::turnRateAt(double t) const {
 double SimMobile::wheelTurnedAt(double t, bool right) const {
   const auto ground = [&](double tt) {
     const double dtheta = roomPoseAt(tt).theta_rad - start_room_.theta_rad;
-    return distanceAt(tt) + (right ? 0.5 : -0.5) * wheels_.wheel_distance_m * dtheta;
+    return distanceAt(tt) + (right ? 0.5 : -0.5) * trueWheelDistance() * dtheta;
   };
   double d = ground(t);
   for (const SlipEvent& e : slips_) {
@@ -355,7 +373,10 @@ std::vector<WheelTicks> SimMobile::wheelTicks() {
   std::mt19937_64 rng(seed_ * 8 + 1);
   std::normal_distribution<double> n(0.0, 1.0);
   std::vector<WheelTicks> out;
-  const double per_m = wheels_.ticks_per_revolution / (2.0 * M_PI * wheels_.radius_m);
+  // Ticks per metre of ground: each wheel's true radius.
+  const double per_m[2] = {
+      wheels_.ticks_per_revolution / (2.0 * M_PI * wheels_.radiusOf(false, c_)),
+      wheels_.ticks_per_revolution / (2.0 * M_PI * wheels_.radiusOf(true, c_))};
   double meas[2] = {0, 0}, prev[2] = {0, 0};
   for (int64_t k = 0;; ++k) {
     const double t = static_cast<double>(k) / c_.wheel_ticks_rate_hz;
@@ -366,7 +387,7 @@ std::vector<WheelTicks> SimMobile::wheelTicks() {
       const double noise = 1.0 + c_.encoder_speed_sigma_fraction * n(rng);
       meas[side] += (turned - prev[side]) * noise;
       prev[side] = turned;
-      const int64_t ticks = static_cast<int64_t>(std::floor(meas[side] * per_m + 1e-9));
+      const int64_t ticks = static_cast<int64_t>(std::floor(meas[side] * per_m[side] + 1e-9));
       (side == 0 ? w.left : w.right) = ticks;
     }
     out.push_back(w);
@@ -406,7 +427,9 @@ Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng) const {
   std::normal_distribution<double> n(0.0, 1.0);
   Scan2D scan;
   scan.seq = j;
-  scan.utime = utimeAt(static_cast<double>(j) / c_.scan_rate_hz);
+  // Stamped by the lidar's clock, which runs lidar_time_offset_ms ahead.
+  const int64_t offset_us = std::llround(c_.lidar_time_offset_ms * 1000.0);
+  scan.utime = utimeAt(static_cast<double>(j) / c_.scan_rate_hz) + offset_us;
   scan.angle_min_rad = -M_PI;
   scan.angle_increment_rad = 2.0 * M_PI / rays_;
   scan.time_increment_ns = std::llround(1e9 / c_.sample_rate_hz);
@@ -414,8 +437,8 @@ Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng) const {
   scan.range_max_m = c_.range_max_m;
   scan.ranges_m.resize(static_cast<size_t>(rays_));
   for (int i = 0; i < rays_; ++i) {
-    const double t =
-        1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - start_utime_);
+    const double t = 1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - offset_us -
+                                                start_utime_);
     const Eigen::Isometry3d T_room_L = planar(roomPoseAt(t)) * T_BL_;
     const double ang = scan.rayAngle(static_cast<size_t>(i));
     const Eigen::Vector3d dir =

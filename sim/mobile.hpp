@@ -72,6 +72,14 @@ struct SimMobileConfig {
   double range_sigma_fraction = 0.01;  // sigma of the range noise, fraction of the range
   double lidar_latency_ms = 10.0;      // delivery after the last ray
   // True mounting error (the rig's mounting.* gamma/beta/alpha is what processes believe).
+  // A real build's errors (issue 23): what the rig file's nominal values miss.
+  double wheel_radius_left_error_fraction = 0.008;    // true left radius = nominal (1 + this)
+  double wheel_radius_right_error_fraction = -0.011;  // true right radius
+  double wheel_distance_error_m = 0.004;              // true track = nominal + this
+  double lever_error_x_m = 0.003;  // true lidar centre = mounting.x_m/y_m/z_m + these
+  double lever_error_y_m = -0.002;
+  double lever_error_z_m = 0.004;
+  double lidar_time_offset_ms = 3.0;  // the lidar's stamps run this far ahead of the odometry's
   double gamma_true_rad = 0.0355;
   double beta_true_rad = 0.0126;
   double alpha_true_rad = -0.0058;
@@ -130,6 +138,11 @@ struct WheelGeometry {
   double radius_m = 0.0325;
   double ticks_per_revolution = 2000;
   double wheel_distance_m = 0.2;
+  // The true wheels of a simulated car: the nominal geometry with its build errors.
+  double radiusOf(bool right, const SimMobileConfig& c) const {
+    return radius_m * (1.0 + (right ? c.wheel_radius_right_error_fraction
+                                    : c.wheel_radius_left_error_fraction));
+  }
 };
 
 class SimMobile {
@@ -152,6 +165,8 @@ class SimMobile {
   double wheelTurnedAt(double t, bool right) const;
   Eigen::Isometry3d T_room_world() const;
   Eigen::Isometry3d trueT_BL() const { return T_BL_; }
+  double trueWheelDistance() const { return wheels_.wheel_distance_m + c_.wheel_distance_error_m; }
+  const WheelGeometry& nominalWheels() const { return wheels_; }
 
   // Each device's whole output for the run, in time order.
   std::vector<WheelTicks> wheelTicks();

@@ -29,6 +29,11 @@ class NoiseFreeDrive : public ::testing::Test {
     c.accel_sigma_m_s2 = 0.0;
     c.attitude_sigma_deg = 0.0;
     c.range_sigma_fraction = 0.0;
+    // No build errors either: the track is the truth and the lidar where the rig says.
+    c.wheel_radius_left_error_fraction = c.wheel_radius_right_error_fraction = 0.0;
+    c.wheel_distance_error_m = 0.0;
+    c.lever_error_x_m = c.lever_error_y_m = c.lever_error_z_m = 0.0;
+    c.lidar_time_offset_ms = 0.0;
     return c;
   }
 
@@ -88,6 +93,32 @@ TEST_F(NoiseFreeDrive, PointToPlaneRecoversMountingTo1e6Rad) {
   EXPECT_EQ(again.beta_rad, r.beta_rad);
   EXPECT_EQ(again.alpha_rad, r.alpha_rad);
   EXPECT_EQ(again.correspondences, r.correspondences);
+}
+
+// The fast solver's result does not depend on its number of threads (chunks reduced in a
+// fixed order), and agrees with the reference solver's on the same drive.
+TEST_F(NoiseFreeDrive, FastSolverIsTheSameOnAnyNumberOfThreadsAndAgreesWithTheReference) {
+  SimMobileConfig c = quiet();
+  c.duration_s = 32.0;
+  drive(c);
+  MountingCalibrationOptions o;
+  o.range_noise_fraction = 0.0;
+  o.threads = 1;
+  const MountingCalibrationResult one = calibrateMounting(scans_, track_, initial(), o);
+  o.threads = 3;
+  const MountingCalibrationResult three = calibrateMounting(scans_, track_, initial(), o);
+  ASSERT_TRUE(one.ok) << one.reason;
+  EXPECT_EQ(one.gamma_rad, three.gamma_rad);
+  EXPECT_EQ(one.beta_rad, three.beta_rad);
+  EXPECT_EQ(one.alpha_rad, three.alpha_rad);
+  EXPECT_EQ(one.correspondences, three.correspondences);
+  EXPECT_EQ(one.residual_after_m, three.residual_after_m);
+  o.reference_solver = true;
+  o.threads = 0;
+  const MountingCalibrationResult reference = calibrateMounting(scans_, track_, initial(), o);
+  EXPECT_NEAR(one.gamma_rad, reference.gamma_rad, 2e-6);
+  EXPECT_NEAR(one.beta_rad, reference.beta_rad, 2e-6);
+  EXPECT_NEAR(one.alpha_rad, reference.alpha_rad, 2e-6);
 }
 
 TEST_F(NoiseFreeDrive, PaperPointsFromTheTargetsEdgesRecoverGamma) {

@@ -12,6 +12,7 @@
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/truth_mobile_rig_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
 #include "tests/e2e/test_support.hpp"
@@ -152,9 +153,18 @@ TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
         EXPECT_DOUBLE_EQ(t.gamma_true_rad, 0.0355);
         EXPECT_DOUBLE_EQ(t.beta_true_rad, 0.0126);
         EXPECT_DOUBLE_EQ(t.alpha_true_rad, -0.0058);
-        EXPECT_DOUBLE_EQ(t.t_BL_m[2], 0.30);
+        EXPECT_DOUBLE_EQ(t.t_BL_m[2], 0.30 + 0.004);  // the true centre: h + sim.lever_error_z_m
         EXPECT_DOUBLE_EQ(t.room_size_m[0], 10.0);
         EXPECT_EQ(t.scene, "lab");
+      }
+      if (ev.channel == channels::kTruthMobileRig) {
+        truth_mobile_rig_t t;
+        ASSERT_TRUE(decodeMessage(Message{ev.utime, ev.channel, ev.data}, &t));
+        EXPECT_DOUBLE_EQ(t.wheel_radius_left_m, 0.0325 * 1.008);
+        EXPECT_DOUBLE_EQ(t.wheel_radius_right_m, 0.0325 * (1 - 0.011));
+        EXPECT_DOUBLE_EQ(t.wheel_distance_m, 0.2 + 0.004);
+        EXPECT_DOUBLE_EQ(t.lidar_time_offset_s, 0.003);
+        EXPECT_DOUBLE_EQ(t.gyro_bias_z_rad_s, 0.01);
       }
       if (ev.channel == channels::kLidarScan) {
         lidar_scan_t s;
@@ -166,6 +176,7 @@ TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
     }
     EXPECT_EQ(n[channels::kTruthPose], 6001);
     EXPECT_EQ(n[channels::kTruthMounting], 61);  // start and 1 Hz
+    EXPECT_EQ(n[channels::kTruthMobileRig], 61);
     EXPECT_EQ(n[channels::kWheelTicks], 3001);
     EXPECT_EQ(n[channels::kImu], 12001);
     EXPECT_EQ(n[channels::kLidarScan], 420);

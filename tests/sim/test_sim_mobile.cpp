@@ -31,6 +31,10 @@ SimMobileConfig quiet() {
   c.attitude_sigma_deg = 0.0;
   c.range_sigma_fraction = 0.0;
   c.gamma_true_rad = c.beta_true_rad = c.alpha_true_rad = 0.0;
+  c.wheel_radius_left_error_fraction = c.wheel_radius_right_error_fraction = 0.0;
+  c.wheel_distance_error_m = 0.0;
+  c.lever_error_x_m = c.lever_error_y_m = c.lever_error_z_m = 0.0;
+  c.lidar_time_offset_ms = 0.0;
   return c;
 }
 
@@ -84,6 +88,31 @@ TEST(SimMobile, StraightDriveTicksAreDistanceOverCircumference) {
   EXPECT_NEAR(end.x_m, d, 1e-9);
   EXPECT_NEAR(end.y_m, 0.0, 1e-9);
   EXPECT_NEAR(end.theta_rad, 0.0, 1e-12);
+}
+
+// A real build's errors: each wheel counts its ground distance over its own true radius, the
+// lidar sits at the true lever arm, and its stamps run ahead by the clock offset.
+TEST(SimMobile, BuildErrorsBiasTicksLeverAndStamps) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c = quiet();
+  c.path = "loop";
+  c.duration_s = 15.0;
+  c.wheel_radius_left_error_fraction = 0.01;
+  c.wheel_radius_right_error_fraction = -0.012;
+  c.lever_error_y_m = -0.002;
+  c.lidar_time_offset_ms = 3.0;
+  WheelGeometry w;
+  SimMobile car(c, w, kRpy0, kLidarPos, scene, 1, kStart);
+  const auto ticks = car.wheelTicks();
+  const double d = car.distanceAt(15.0);  // straight: both wheels roll d
+  EXPECT_NEAR(double(ticks.back().left),
+              d / (2 * M_PI * w.radius_m * 1.01) * w.ticks_per_revolution, 1.0);
+  EXPECT_NEAR(double(ticks.back().right),
+              d / (2 * M_PI * w.radius_m * 0.988) * w.ticks_per_revolution, 1.0);
+  EXPECT_NEAR(car.trueT_BL().translation().y(), -0.002, 1e-15);
+  const auto scans = car.scans();
+  ASSERT_FALSE(scans.empty());
+  EXPECT_EQ(scans.front().utime, kStart + 3000);
 }
 
 TEST(SimMobile, SlipMakesOneWheelRunFastOnlyDuringTheEvent) {

@@ -20,6 +20,8 @@
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
 #include "tools/bench/proc_stats.hpp"
+#include "tools/offline/mobile_log.hpp"
+#include "tools/offline/mobile_rig_calibration.hpp"
 #include "tools/offline/replay_mobile.hpp"
 #include "tools/offline/runs.hpp"
 #include "tools/offline/sim_mobile.hpp"
@@ -231,6 +233,87 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
   }
 }
 
+// `calib mounting`'s point-to-plane solver, the fast one and the reference one (the code
+// before issue 23), on the same simulated circle, in the same run: wall and CPU time (all
+// threads) and the error against the truth.
+void benchMounting(const RigBBenchOptions& o, std::ostream& out) {
+  const std::string log_path = o.work + "/rig_b_mounting_circle.lcmlog";
+  const SimulatedLog sim =
+      simulate(o, {"sim.duration_s=" + std::to_string(o.mounting_s)}, log_path, false);
+  const MobileLog log = loadMobileLog(log_path, sim.rig);
+  const LidarMounting initial = sim.rig.mounting.toMounting();
+  const LidarMounting truth = trueMounting(*log.truth_mounting);
+  out << "calib mounting, point to plane, EKF track, " << std::setprecision(0) << o.mounting_s
+      << " s circle (" << log.scans.size() << " scans), the same log:\n";
+  double fast_wall = 0, fast_cpu = 0;
+  for (bool reference : {false, true}) {
+    MountingCalibrationOptions options;
+    options.reference_solver = reference;
+    const double cpu0 = cpuSeconds(RUSAGE_SELF);
+    const auto t0 = Clock::now();
+    const MountingCalibrationResult r = calibrateMounting(log.scans, log.ekf, initial, options);
+    const double wall = secondsSince(t0), cpu = cpuSeconds(RUSAGE_SELF) - cpu0;
+    out << "  " << (reference ? "reference (before)" : "fast") << ": " << std::setprecision(2)
+        << wall << " s wall, " << cpu << " CPU s; error gamma " << std::setprecision(3)
+        << (r.gamma_rad - truth.gamma_rad) * 1e3 << ", beta " << (r.beta_rad - truth.beta_rad) * 1e3
+        << ", alpha " << (r.alpha_rad - truth.alpha_rad) * 1e3 << " mrad, " << r.correspondences
+        << " residuals";
+    if (!reference) {
+      fast_wall = wall;
+      fast_cpu = cpu;
+      out << ", sigma " << r.sigma_gamma_rad * 1e3 << ", " << r.sigma_beta_rad * 1e3 << ", "
+          << r.sigma_alpha_rad * 1e3 << " mrad\n";
+    } else {
+      out << "\n  speed-up: " << std::setprecision(1) << wall / fast_wall << "x wall, "
+          << cpu / fast_cpu << "x CPU\n";
+    }
+  }
+  out << std::setprecision(2);
+}
+
+// Rig B's joint calibration on simulated drives with every build error at its default, one
+// per seed: its time, and each parameter's error against the truth in sigmas.
+void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
+  out << "calib rig (rig B, joint), " << std::setprecision(0) << o.rig_calib_s
+      << " s circle, every build error at its default:\n";
+  for (int seed = 1; seed <= o.rig_calib_seeds; ++seed) {
+    const std::string log_path = o.work + "/rig_b_joint_seed" + std::to_string(seed) + ".lcmlog";
+    SimMobileOptions so;
+    const SimSetup setup =
+        loadSimSetup(o.rig, o.scene, {"sim.duration_s=" + std::to_string(o.rig_calib_s)});
+    so.rig = requireKind<MobileLidarConfig>(setup.rig, "the rig-B bench");
+    so.scene = setup.scene;
+    so.seed = uint64_t(seed);
+    EventLogWriter writer(log_path);
+    simulateMobile(so, [&](const Message& m) { writer.write(m.utime, m.channel, m.data); });
+    writer.close();
+    MobileRigCalibRequest request;
+    request.logs = {log_path};
+    request.rig = o.rig;
+    request.sets = {"sim.duration_s=" + std::to_string(o.rig_calib_s)};
+    request.progress = false;
+    const double cpu0 = cpuSeconds(RUSAGE_SELF);
+    const auto t0 = Clock::now();
+    const calib::RigCalibration r = runMobileRigCalibration(request);
+    out << "  seed " << seed << ": " << std::setprecision(1) << secondsSince(t0) << " s wall, "
+        << cpuSeconds(RUSAGE_SELF) - cpu0 << " CPU s, residual RMS " << std::setprecision(2)
+        << r.rms_before * 1e3 << " -> " << r.rms_after * 1e3 << " mm\n";
+    for (const calib::CalibParameter& p : r.parameters) {
+      out << "    " << std::left << std::setw(32) << p.key << std::right << std::setprecision(6)
+          << std::setw(12) << p.value << " +- " << std::setw(10) << p.sigma << " " << p.unit;
+      if (!p.observable) out << "  (not observable)";
+      if (p.truth) {
+        out << "  error " << std::setw(10) << p.value - *p.truth;
+        if (p.sigma > 0)
+          out << " = " << std::setprecision(2) << (p.value - *p.truth) / p.sigma << " sigma";
+      }
+      out << "\n";
+    }
+    for (const std::string& w : r.warnings) out << "    warning: " << w << "\n";
+  }
+  out << std::setprecision(2);
+}
+
 }  // namespace
 
 int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
@@ -239,6 +322,8 @@ int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
   out << "rig B (" << o.rig << ", " << o.scene << ")\n";
   benchEkfInProcess(o, out);
   benchReplay(o, out);
+  benchMounting(o, out);
+  benchRigCalibration(o, out);
   // Last: it moves this process into a private network namespace.
   benchOdometryProcess(o, out);
   return 0;

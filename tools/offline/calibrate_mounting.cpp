@@ -75,6 +75,7 @@ MethodRuns runMethods(const MountingCalibRequest& o, const MobileLidarConfig& ri
   options.estimate_track_drift = o.track_drift;
   options.method = MountingMethod::kPointToPlane;
   runs.max_time_offset_s = options.max_time_offset_s;
+  options.progress = [&progress](double f) { progress.update(f); };
   const auto t_ours = Clock::now();
   progress.stage("ours (point to plane)");
   runs.ours = calibrateMounting(log.scans, track, initial, options);

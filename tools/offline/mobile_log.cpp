@@ -1,5 +1,7 @@
 #include "tools/offline/mobile_log.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <nlohmann/json.hpp>
 
 #include "processes/channels.hpp"
@@ -50,11 +52,18 @@ MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig) {
     truth_mounting_t t;
     if (!log.truth_mounting && decodeMessage(m, &t)) log.truth_mounting = t;
   });
+  player.handle(channels::kTruthMobileRig, [&](const Message& m) {
+    truth_mobile_rig_t t;
+    if (!log.truth_rig && decodeMessage(m, &t)) log.truth_rig = t;
+  });
   const LogPlayResult played = player.play();
   log.log_error = played.log_error;
   log.error = played.error;
   player.finish();
   log.gated_wheel_readings = odometry.ekf().counters().gated_wheels;
+  log.ekf_gyro_bias_rad_s = odometry.ekf().state()[OdometryEkf::kBias];
+  log.ekf_gyro_bias_sigma_rad_s =
+      std::sqrt(std::max(0.0, odometry.ekf().covariance()(OdometryEkf::kBias, OdometryEkf::kBias)));
   return log;
 }
 

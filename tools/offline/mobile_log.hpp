@@ -12,6 +12,7 @@
 #include "calib/world_assembly.hpp"
 #include "core/scan.hpp"
 #include "rigs/mobile_lidar.hpp"
+#include "sweepmap/truth_mobile_rig_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 
 namespace sweepmap {
@@ -22,6 +23,9 @@ struct MobileLog {
   PoseTrack wheels;                                // WHEEL_ODOMETRY, replayed
   PoseTrack truth;                                 // TRUTH_POSE from the log (simulation only)
   std::optional<truth_mounting_t> truth_mounting;  // TRUTH_MOUNTING (simulation only)
+  std::optional<truth_mobile_rig_t> truth_rig;     // TRUTH_MOBILE_RIG (simulation only)
+  double ekf_gyro_bias_rad_s = 0.0;                // the EKF's gyro bias at the end, and its
+  double ekf_gyro_bias_sigma_rad_s = 0.0;          //   sigma
   int64_t invalid_scans = 0;
   int64_t gated_wheel_readings = 0;
   bool log_error = false;  // truncated or corrupt: everything before the error is kept

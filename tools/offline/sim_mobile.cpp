@@ -19,7 +19,8 @@ namespace {
 // times) and its index in that stream.
 struct Stamped {
   int64_t utime;
-  int order;  // -1 TRUTH_MOUNTING, 0 TRUTH_POSE, 1 WHEEL_TICKS, 2 IMU, 3 LIDAR_SCAN
+  int order;  // -1 TRUTH_MOUNTING (and TRUTH_MOBILE_RIG), 0 TRUTH_POSE, 1 WHEEL_TICKS, 2 IMU, 3
+              // LIDAR_SCAN
   size_t index;
 };
 
@@ -59,6 +60,7 @@ SimMobileResult simulateMobile(const SimMobileOptions& options,
     if (e.order == -1) {
       out.publish(channels::kTruthMounting, e.utime,
                   truthMountingMessage(rig, options.scene, car, e.utime));
+      out.publish(channels::kTruthMobileRig, e.utime, truthMobileRigMessage(rig, car, e.utime));
     } else if (e.order == 0) {
       out.publish(channels::kTruthPose, e.utime, truthPoseMessage(truth[e.index]));
     } else if (e.order == 1) {

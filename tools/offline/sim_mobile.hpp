@@ -29,9 +29,9 @@ struct SimMobileResult {
 };
 
 // Every message goes to `sink` in time order (event time; LIDAR_SCAN when delivered, its
-// utime field the first ray's time). Ties: TRUTH_MOUNTING (start, 1 Hz), TRUTH_POSE,
-// WHEEL_TICKS, IMU, LIDAR_SCAN.
-// Throws ConfigError for a configuration it cannot simulate.
+// utime field the first ray's time). Ties: TRUTH_MOUNTING and TRUTH_MOBILE_RIG (start, 1 Hz),
+// TRUTH_POSE, WHEEL_TICKS, IMU, LIDAR_SCAN. Throws ConfigError for a configuration it cannot
+// simulate.
 SimMobileResult simulateMobile(const SimMobileOptions& options,
                                const std::function<void(const Message&)>& sink);
 
