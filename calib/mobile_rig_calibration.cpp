@@ -125,9 +125,9 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
 }
 
 RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd& x,
-                             const MobileWheelParameters& w, const OverlapResult& r,
-                             const std::vector<bool>& free, const MobileOdometryRun& odo,
-                             double rms_before) {
+                      const MobileWheelParameters& w, const OverlapResult& r,
+                      const std::vector<bool>& free, const MobileOdometryRun& odo,
+                      double rms_before) {
   RigCalibration out;
   const LidarMounting& n = in.nominal;
   struct Row {
@@ -162,11 +162,11 @@ RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd
     index.push_back(row.index);
   }
   CalibParameter bias{"odometry.gyro_bias_rad_s",
-                             odo.gyro_bias_rad_s,
-                             odo.gyro_bias_sigma_rad_s,
-                             "rad/s",
-                             true,
-                             std::nullopt};
+                      odo.gyro_bias_rad_s,
+                      odo.gyro_bias_sigma_rad_s,
+                      "rad/s",
+                      true,
+                      std::nullopt};
   const auto t = in.truth.find(bias.key);
   if (t != in.truth.end()) bias.truth = t->second;
   out.parameters.push_back(bias);

@@ -294,11 +294,11 @@ void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
     request.progress = false;
     const double cpu0 = cpuSeconds(RUSAGE_SELF);
     const auto t0 = Clock::now();
-    const calib::RigCalibration r = runMobileRigCalibration(request);
+    const RigCalibration r = runMobileRigCalibration(request);
     out << "  seed " << seed << ": " << std::setprecision(1) << secondsSince(t0) << " s wall, "
         << cpuSeconds(RUSAGE_SELF) - cpu0 << " CPU s, residual RMS " << std::setprecision(2)
         << r.rms_before * 1e3 << " -> " << r.rms_after * 1e3 << " mm\n";
-    for (const calib::CalibParameter& p : r.parameters) {
+    for (const CalibParameter& p : r.parameters) {
       out << "    " << std::left << std::setw(32) << p.key << std::right << std::setprecision(6)
           << std::setw(12) << p.value << " +- " << std::setw(10) << p.sigma << " " << p.unit;
       if (!p.observable) out << "  (not observable)";
