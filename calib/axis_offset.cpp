@@ -394,6 +394,34 @@ void flagUnobservable(const Observability& obs, AxisOffsetResult* r) {
   }
 }
 
+// r->covariance and the sigmas from the computed blocks: rows M, N [mm], tilt, zero [deg].
+void fillCovariance(const ceres::Covariance& covariance, double variance, const Problem& p,
+                    AxisOffsetResult* r) {
+  struct Block {
+    const double* x;
+    int row, size;
+    double scale;
+  };
+  std::vector<Block> blocks = {{p.mn, 0, 2, 1.0}};
+  if (r->tilt_estimated) blocks.push_back({&p.tilt, 2, 1, kRadToDeg});
+  if (r->zero_estimated) blocks.push_back({&p.zero, 3, 1, kRadToDeg});
+  for (const Block& a : blocks) {
+    for (const Block& b : blocks) {
+      double c[4];
+      if (!covariance.GetCovarianceBlock(a.x, b.x, c)) continue;
+      for (int i = 0; i < a.size; ++i) {
+        for (int j = 0; j < b.size; ++j)
+          r->covariance(a.row + i, b.row + j) = c[i * b.size + j] * variance * a.scale * b.scale;
+      }
+    }
+  }
+  const Eigen::Vector4d v = r->covariance.diagonal();
+  r->sigma_m_mm = std::sqrt(v(0));
+  r->sigma_n_mm = std::sqrt(v(1));
+  if (r->tilt_estimated) r->sigma_tilt_deg = std::sqrt(v(2));
+  if (r->zero_estimated) r->sigma_zero_deg = std::sqrt(v(3));
+}
+
 // Standard deviations: (J^T J)^-1 of the estimated parameters from ceres::Covariance, scaled
 // by the residuals' variance; NaN (with a warning) where it is singular.
 void standardDeviations(size_t plane_count, Problem* p, AxisOffsetResult* r) {
@@ -411,23 +439,19 @@ void standardDeviations(size_t plane_count, Problem* p, AxisOffsetResult* r) {
   co.algorithm_type = ceres::SPARSE_QR;
   co.null_space_rank = 0;  // a rank-deficient Jacobian fails Compute()
   ceres::Covariance covariance(co);
-  std::vector<std::pair<const double*, const double*>> pairs = {{p->mn, p->mn}};
-  if (r->tilt_estimated) pairs.push_back({&p->tilt, &p->tilt});
-  if (r->zero_estimated) pairs.push_back({&p->zero, &p->zero});
+  // Every block of the upper triangle: the sigmas and the correlations (calib rig).
+  std::vector<const double*> blocks = {p->mn};
+  if (r->tilt_estimated) blocks.push_back(&p->tilt);
+  if (r->zero_estimated) blocks.push_back(&p->zero);
+  std::vector<std::pair<const double*, const double*>> pairs;
+  for (size_t a = 0; a < blocks.size(); ++a) {
+    for (size_t b = a; b < blocks.size(); ++b) pairs.push_back({blocks[a], blocks[b]});
+  }
   if (!covariance.Compute(pairs, p->problem.get())) {
     r->warnings.push_back("the covariance is singular: no standard deviations");
     return;
   }
-  double c_mn[4], c1 = 0.0;
-  covariance.GetCovarianceBlock(p->mn, p->mn, c_mn);
-  r->sigma_m_mm = std::sqrt(c_mn[0] * variance);
-  r->sigma_n_mm = std::sqrt(c_mn[3] * variance);
-  if (r->tilt_estimated && covariance.GetCovarianceBlock(&p->tilt, &p->tilt, &c1)) {
-    r->sigma_tilt_deg = std::sqrt(c1 * variance) * kRadToDeg;
-  }
-  if (r->zero_estimated && covariance.GetCovarianceBlock(&p->zero, &p->zero, &c1)) {
-    r->sigma_zero_deg = std::sqrt(c1 * variance) * kRadToDeg;
-  }
+  fillCovariance(covariance, variance, *p, r);
 }
 
 // Warnings for parameters whose standard deviation exceeds the options' limits; M or N that

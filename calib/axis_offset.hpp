@@ -16,6 +16,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -108,6 +109,9 @@ struct AxisOffsetResult {
   // variance); NaN where a parameter was not estimated or the covariance is singular.
   double sigma_m_mm = 0.0, sigma_n_mm = 0.0, sigma_tilt_deg = 0.0, sigma_zero_deg = 0.0;
   bool tilt_estimated = false, zero_estimated = false;
+  // Covariance of (M [mm], N [mm], laser tilt [deg], encoder zero [deg]), scaled like the
+  // sigmas; NaN in the rows and columns of a parameter not estimated.
+  Eigen::Matrix4d covariance = Eigen::Matrix4d::Constant(std::numeric_limits<double>::quiet_NaN());
   bool observable = true;  // M and N both determined by the planes
   std::vector<std::string> warnings;
   std::vector<FittedPlane> planes;

@@ -134,19 +134,21 @@ RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd
     const char* key;
     const char* unit;
     double value;
-    int index;  // into x (-1: not in the joint solve)
+    int index;       // into x (-1: not in the joint solve)
+    double nominal;  // the rig file's (the start)
   };
+  const MobileWheelParameters& w0 = in.wheels;
   const Row rows[] = {
-      {"mounting.gamma_rad", "rad", x(M::kGamma), M::kGamma},
-      {"mounting.beta_rad", "rad", x(M::kBeta), M::kBeta},
-      {"mounting.alpha_rad", "rad", x(M::kAlpha), M::kAlpha},
-      {"mounting.x_m", "m", n.t_BL_m.x() + x(M::kLeverX), M::kLeverX},
-      {"mounting.y_m", "m", n.t_BL_m.y() + x(M::kLeverY), M::kLeverY},
-      {"mounting.z_m", "m", n.t_BL_m.z() + x(M::kLeverZ), M::kLeverZ},
-      {"odometry.wheel_radius_m", "m", w.radius_left_m, kRadiusLeft},
-      {"odometry.wheel_radius_right_m", "m", w.radius_right_m, kRadiusRight},
-      {"odometry.wheel_distance_m", "m", w.wheel_distance_m, kTrack},
-      {"lidar.time_offset_s", "s", -x(M::kTimeOffset), M::kTimeOffset},
+      {"mounting.gamma_rad", "rad", x(M::kGamma), M::kGamma, n.gamma_rad},
+      {"mounting.beta_rad", "rad", x(M::kBeta), M::kBeta, n.beta_rad},
+      {"mounting.alpha_rad", "rad", x(M::kAlpha), M::kAlpha, n.alpha_rad},
+      {"mounting.x_m", "m", n.t_BL_m.x() + x(M::kLeverX), M::kLeverX, n.t_BL_m.x()},
+      {"mounting.y_m", "m", n.t_BL_m.y() + x(M::kLeverY), M::kLeverY, n.t_BL_m.y()},
+      {"mounting.z_m", "m", n.t_BL_m.z() + x(M::kLeverZ), M::kLeverZ, n.t_BL_m.z()},
+      {"odometry.wheel_radius_m", "m", w.radius_left_m, kRadiusLeft, w0.radius_left_m},
+      {"odometry.wheel_radius_right_m", "m", w.radius_right_m, kRadiusRight, w0.radius_right_m},
+      {"odometry.wheel_distance_m", "m", w.wheel_distance_m, kTrack, w0.wheel_distance_m},
+      {"lidar.time_offset_s", "s", -x(M::kTimeOffset), M::kTimeOffset, 0.0},
   };
   std::vector<int> index;
   for (const Row& row : rows) {
@@ -154,7 +156,9 @@ RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd
     p.key = row.key;
     p.unit = row.unit;
     p.value = row.value;
+    p.nominal = row.nominal;
     p.observable = free[size_t(row.index)];
+    if (!p.observable) p.note = "its sigma exceeds its bound on this drive";
     p.sigma = p.observable ? std::sqrt(std::max(0.0, r.covariance(row.index, row.index))) : 0.0;
     const auto t = in.truth.find(p.key);
     if (t != in.truth.end()) p.truth = t->second;

@@ -30,7 +30,7 @@ constexpr const char* kTruthSweep = "TRUTH_SWEEP";  // truth_sweep_t, simulation
 constexpr const char* kTruthPose =
     "TRUTH_POSE";  // pose2d_t, true body pose (rig B simulation only)
 constexpr const char* kTruthMounting =
-    "TRUTH_MOUNTING";                        // truth_mounting_t (rig B simulation only)
+    "TRUTH_MOUNTING";  // truth_mounting_t (rig B simulation only)
 constexpr const char* kTruthMobileRig =
     "TRUTH_MOBILE_RIG";  // truth_mobile_rig_t (rig B simulation only): wheels, lever, clocks
 constexpr const char* kProfile = "PROFILE";  // profile_t, raw (rig C): one profile + encoder

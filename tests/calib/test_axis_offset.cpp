@@ -184,6 +184,22 @@ TEST(AxisOffsetOurs, EncoderZeroIsNotObservableFromPlanes) {
   EXPECT_LT(std::fabs(r.geometry.m_mm - 123.0), 0.1);
 }
 
+// calib rig's correlations: the covariance's diagonal is the sigmas squared, it is symmetric,
+// and a parameter not estimated has NaN in its row (the encoder zero here).
+TEST(AxisOffsetOurs, CovarianceMatchesTheSigmas) {
+  const RotatingProfileConfig rig = rigC();
+  AxisOffsetOptions o = startFromNominal(rig);
+  o.estimate_encoder_zero = true;
+  const AxisOffsetResult r = solveAxisOffset(simulatedPlates(rig, 1, 5000), o);
+  ASSERT_TRUE(r.tilt_estimated);
+  EXPECT_NEAR(std::sqrt(r.covariance(0, 0)), r.sigma_m_mm, 1e-12);
+  EXPECT_NEAR(std::sqrt(r.covariance(1, 1)), r.sigma_n_mm, 1e-12);
+  EXPECT_NEAR(std::sqrt(r.covariance(2, 2)), r.sigma_tilt_deg, 1e-12);
+  EXPECT_NEAR(r.covariance(0, 2), r.covariance(2, 0), 1e-12 * std::fabs(r.covariance(0, 2)));
+  EXPECT_GT(std::fabs(r.covariance(0, 2)), 0.0);  // M and the tilt trade off
+  EXPECT_TRUE(std::isnan(r.covariance(3, 3)));
+}
+
 TEST(AxisOffsetOurs, RejectsTooFewPoints) {
   EXPECT_THROW(solveAxisOffset({}, AxisOffsetOptions{}), std::invalid_argument);
   PlanePoints few{"log sweep 0", {{0, -300, 0}, {1, -300, 0}}};

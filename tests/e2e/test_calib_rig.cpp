@@ -3,7 +3,8 @@
 // offset, plate installation error and thickness, offset 16 mm against the rig's 13.9) and the
 // scene's artefacts (mixed pixels, dropouts, people, a window, a whiteboard); every parameter
 // within 3 sigma of the truth, the file written and applied by the rig file's
-// calibration_file; other kinds refused with exit 2; `calib plan` prints its sim command.
+// calibration_file; `calib plan` prints its sim command. Rig C (rotating_profile) on the plan's
+// plate poses, rig B (mobile_lidar) on a short circle.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,6 +14,7 @@
 
 #include "core/calibration_file.hpp"
 #include "rigs/rotating_lidar.hpp"
+#include "rigs/rotating_profile.hpp"
 #include "tests/e2e/test_support.hpp"
 
 namespace sweepmap {
@@ -70,13 +72,85 @@ TEST(CalibRig, EveryParameterOfARealisticBuildWithinThreeSigmaAndApplied) {
               j["parameters"]["geometry.scan_plane_tilt_deg"]["value"].get<double>(), 1e-9);
 }
 
-TEST(CalibRig, OtherKindsAreNotYetSupported) {
-  const fs::path dir = scratchDir("calib_rig_kinds");
-  EXPECT_EQ(runSplit({"calib", "rig", "--rig", "rig_b", "--logs", realisticLog(), "--out",
-                      (dir / "c.yaml").string()},
-                     dir / "out.txt", dir / "err.txt"),
-            2);
-  EXPECT_NE(readAll(dir / "err.txt").find("not yet supported"), std::string::npos);
+// Rig C: the plan's plate poses (3, non-parallel), every build error at its default (M, N a
+// few mm off the rig file's, laser tilt 0.2 deg, encoder zero 0.5 deg).
+std::string plateLog(const std::string& seed) {
+  return cachedSimLog("calib_rig_c_plates_seed" + seed,
+                      {"--rig", "rig_c", "--set", "sim.scene=plate", "--seed", seed});
+}
+
+TEST(CalibRig, RigCEveryObservableParameterWithinThreeSigmaAndApplied) {
+  const fs::path dir = scratchDir("calib_rig_c");
+  const std::string log = plateLog("5");
+  const std::vector<std::string> base = {"calib", "rig", "--rig", "rig_c", "--logs", log, "--out"};
+  auto args = base;
+  args.insert(args.end(), {(dir / "a.yaml").string(), "--json"});
+  ASSERT_EQ(runSplit(args, dir / "out.json", dir / "err.txt"), 0) << readAll(dir / "err.txt");
+  const auto j = nlohmann::json::parse(readAll(dir / "out.json"));
+  for (const char* key :
+       {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg"}) {
+    SCOPED_TRACE(key);
+    const auto& p = j["parameters"][key];
+    ASSERT_TRUE(p["observable"].get<bool>()) << p;
+    const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
+    EXPECT_GT(sigma, 0.0);
+    EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
+    if (std::string(key) != "geometry.laser_tilt_deg") EXPECT_LE(std::fabs(value - truth), 0.1);
+  }
+  // Plate poses cannot fix the encoder zero: reported, left at the rig file's value.
+  const auto& zero = j["parameters"]["geometry.encoder_zero_deg"];
+  EXPECT_FALSE(zero["observable"].get<bool>()) << zero;
+  EXPECT_EQ(zero["value"].get<double>(), zero["nominal"].get<double>());
+  EXPECT_NEAR(zero["truth"].get<double>(), 0.5, 1e-9);
+  EXPECT_EQ(j["correlation"]["matrix"].size(), 4u);
+
+  // The same logs give the same bytes.
+  auto again = base;
+  again.push_back((dir / "b.yaml").string());
+  ASSERT_EQ(runSplit(again, dir / "out2.txt", dir / "err2.txt"), 0) << readAll(dir / "err2.txt");
+  EXPECT_EQ(readAll(dir / "a.yaml"), readAll(dir / "b.yaml"));
+  EXPECT_NE(readAll(dir / "err2.txt").find("geometry.calibration_file"), std::string::npos);
+
+  // The rig file's geometry.calibration_file applies it, and replay uses it.
+  std::string rig_text = readAll(sourcePath("config/rig_c.yaml"));
+  rig_text.replace(rig_text.find("calibration_file: \"\""), 20, "calibration_file: a.yaml");
+  std::ofstream(dir / "my_rig.yaml") << rig_text;
+  const RotatingProfileConfig rig = loadRotatingProfileConfig((dir / "my_rig.yaml").string());
+  EXPECT_NEAR(rig.geometry.offset_m_mm, j["parameters"]["geometry.offset_m_mm"]["value"], 1e-6);
+  EXPECT_NEAR(rig.geometry.offset_n_mm, j["parameters"]["geometry.offset_n_mm"]["value"], 1e-6);
+  EXPECT_NEAR(rig.geometry.laser_tilt_deg, j["parameters"]["geometry.laser_tilt_deg"]["value"],
+              1e-6);
+  EXPECT_EQ(runSplit({"replay", log, "--rig", (dir / "my_rig.yaml").string(), "--out",
+                      (dir / "replay").string()},
+                     dir / "replay_out.txt", dir / "replay_err.txt"),
+            0)
+      << readAll(dir / "replay_err.txt");
+  const auto summary = nlohmann::json::parse(readAll(dir / "replay" / "summary.json"));
+  EXPECT_NEAR(summary["geometry"]["m_mm"].get<double>(), rig.geometry.offset_m_mm, 1e-9);
+  EXPECT_NEAR(summary["geometry"]["n_mm"].get<double>(), rig.geometry.offset_n_mm, 1e-9);
+}
+
+// Rig B: the command runs the joint calibration on the cached 120 s circle and reports each
+// parameter (its accuracy is tested in tests/offline/test_mobile_rig_calibration.cpp).
+TEST(CalibRig, RigBRunsAndReportsEveryParameter) {
+  const fs::path dir = scratchDir("calib_rig_b");
+  const std::string log =
+      cachedSimLog("calib_rig_b_circle30", {"--rig", "rig_b", "--set", "sim.duration_s=30"});
+  ASSERT_EQ(runSplit({"calib", "rig", "--rig", "rig_b", "--logs", log, "--out",
+                      (dir / "mounting.yaml").string(), "--json"},
+                     dir / "out.json", dir / "err.txt"),
+            0)
+      << readAll(dir / "err.txt");
+  const auto j = nlohmann::json::parse(readAll(dir / "out.json"));
+  for (const char* key : {"mounting.gamma_rad", "mounting.beta_rad", "mounting.alpha_rad",
+                          "odometry.wheel_radius_m", "lidar.time_offset_s"}) {
+    ASSERT_TRUE(j["parameters"].contains(key)) << key;
+    EXPECT_TRUE(j["parameters"][key].contains("truth")) << key;
+  }
+  EXPECT_TRUE(j["parameters"]["mounting.gamma_rad"]["observable"].get<bool>());
+  const MountingCalibration m = loadMountingCalibration((dir / "mounting.yaml").string());
+  EXPECT_NEAR(m.gamma_rad, j["parameters"]["mounting.gamma_rad"]["value"], 1e-9);
+  EXPECT_NE(readAll(dir / "err.txt").find("mounting.calibration_file"), std::string::npos);
 }
 
 TEST(CalibRig, PlanPrintsTheRecordingAndItsSimCommand) {
@@ -86,6 +160,14 @@ TEST(CalibRig, PlanPrintsTheRecordingAndItsSimCommand) {
   EXPECT_NE(plan.find("sweepmap sim --rig rig_a --set motor.mode=7 --sweeps 10"), std::string::npos)
       << plan;
   EXPECT_NE(plan.find("Why"), std::string::npos);
+  ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_c"}, dir / "c.txt", dir / "err.txt"), 0);
+  EXPECT_NE(readAll(dir / "c.txt").find("sweepmap sim --rig rig_c --set sim.scene=plate"),
+            std::string::npos)
+      << readAll(dir / "c.txt");
+  ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_b"}, dir / "b.txt", dir / "err.txt"), 0);
+  EXPECT_NE(readAll(dir / "b.txt").find("sweepmap sim --rig rig_b --set sim.path=circle"),
+            std::string::npos)
+      << readAll(dir / "b.txt");
 }
 
 }  // namespace

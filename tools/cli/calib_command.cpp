@@ -283,8 +283,8 @@ CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
   auto* rig = calib->add_subcommand(
       "rig",
       "calibrate every parameter of the rig that its logs make observable, jointly, into one "
-      "calibration file the rig file's calibration_file points to (rotating_lidar; other kinds: "
-      "not yet supported)");
+      "calibration file the rig file points to (calibration_file, geometry.calibration_file or "
+      "mounting.calibration_file by kind)");
   rig->footer(
       "rotating_lidar (rig A): the plate angle alpha (plate.alpha_deg), the lidar-to-axis "
       "offset (geometry.lidar_offset_x_mm), the scan plane's tilt against the axis "
@@ -297,17 +297,30 @@ CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
       "the covariance; a parameter the logs do not determine is reported, left at the rig's "
       "value and not written. Warns when the residuals show an error the model lacks. Record "
       "what `sweepmap calib plan --rig RIG` says.\n\n"
-      "Writes OUT atomically (parameters: rig-file keys; source: sigmas, residuals, logs) and "
+      "rotating_profile (rig C): M, N (geometry.offset_m_mm, offset_n_mm), the laser plane's tilt "
+      "(geometry.laser_tilt_deg) and the encoder zero (geometry.encoder_zero_deg) by the solver "
+      "of `calib axis-offset` (Ceres over the four and every plate pose's plane; each turntable "
+      "sweep is one pose). Plate poses cannot fix the encoder zero (a turn of the whole cloud "
+      "about the axis): it is reported not observable and kept. OUT has the format of `calib "
+      "axis-offset` (geometry.calibration_file applies it).\n\n"
+      "mobile_lidar (rig B): the mounting angles, the lever arm, the wheel radii and track, the "
+      "lidar-odometry time offset (one least squares over the drive's two passes, the odometry "
+      "re-run with the wheels it asks for) and the gyro bias (the odometry EKF's). OUT holds the "
+      "mounting angles (mounting.calibration_file applies it); the other calibrated keys are "
+      "listed to set in the rig file by hand. One drive: the first log.\n\n"
+      "Writes OUT atomically (rig A: parameters: rig-file keys; source: sigmas, residuals, logs) "
+      "and "
       "prints the calibration_file line for the rig file, relative to its folder. The rig's "
       "plate.beta_method should be model so the assembler finds the plate as the calibration "
       "did. Human report and progress on stderr; --json prints {\"parameters\": {KEY: {value, "
       "sigma, unit, observable, nominal, truth (simulated logs)}}, \"warnings\": [...], "
       "correlation, residuals} on stdout.\n\n"
       "Exit status: 0 calibrated; 1 nothing calibrated (no usable sweep, nothing observable, a "
-      "log that cannot be read); 2 bad option or rig (or a kind not yet supported), a missing "
+      "log that cannot be read); 2 bad option or rig, a missing "
       "log, or an output folder that does not exist; 4 OUT cannot be written.\n"
       "Example: sweepmap calib rig --rig rig_a --logs calib.lcmlog --out rig_calibration.yaml");
-  rig->add_option("--logs", r->logs, "LCM logs of the room (sweepmap sim, lcm-logger)")
+  rig->add_option("--logs", r->logs,
+                  "LCM logs of the calibration recording (sweepmap sim, lcm-logger)")
       ->required()
       ->expected(1, -1);
   rig->add_option("--rig", r->rig, "rig file or name the logs were recorded with")->required();
@@ -329,9 +342,9 @@ struct PlanRequest {
 CLI::App* addPlan(CLI::App* calib, std::shared_ptr<PlanRequest> p) {
   auto* plan = calib->add_subcommand(
       "plan",
-      "print what to record for `calib rig` (scene, sweeps, mode, duration) and why, "
+      "print what to record for `calib rig` (scene, sweeps or path, duration) and why, "
       "with the `sweepmap sim` command that makes that recording");
-  plan->footer("Exit status: 0 printed; 2 bad option or rig, or a kind not yet supported.");
+  plan->footer("Exit status: 0 printed; 2 bad option or rig.");
   plan->add_option("--rig", p->rig, "rig file or name")->required();
   plan->add_option("--set", p->sets, "override a rig config key: key=value (repeatable)");
   return plan;

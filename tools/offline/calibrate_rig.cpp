@@ -16,6 +16,7 @@
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
 #include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/calibrate_rig_kinds.hpp"
 #include "tools/offline/log_sweeps.hpp"
 
 namespace sweepmap {
@@ -98,8 +99,17 @@ bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress
   return true;
 }
 
+// The rig file's key that applies the file `calib rig` writes for the kind.
+std::string calibrationFileKey(RigKind kind) {
+  if (kind == RigKind::kRotatingProfile) return "geometry.calibration_file";
+  if (kind == RigKind::kMobileLidar) return "mounting.calibration_file";
+  return "calibration_file";
+}
+
 // How the rig file points at `out`: its calibration_file, relative to the rig file's folder.
-std::string pointRigAt(const std::string& rig_path, const std::string& out) {
+// `key` is the rig kind's calibration_file key.
+std::string pointRigAt(const std::string& rig_path, const std::string& key,
+                       const std::string& out) {
   const fs::path rig_dir = fs::absolute(rig_path).parent_path();
   const fs::path rel = fs::absolute(out).lexically_relative(rig_dir);
   const bool installed = fs::absolute(rig_path).lexically_normal().string().rfind(
@@ -108,53 +118,14 @@ std::string pointRigAt(const std::string& rig_path, const std::string& out) {
   if (installed) {
     const fs::path copy = fs::path(rig_path).filename();
     s << "to use it: copy the installed rig file here (sweepmap sim --rig " << rig_path
-      << " --print-config > " << copy.string() << " is one way, or cp " << rig_path
-      << " .), set calibration_file: "
-      << fs::absolute(out).lexically_relative(fs::current_path()).string()
+      << " --print-config > " << copy.string() << " is one way, or cp " << rig_path << " .), set "
+      << key << ": " << fs::absolute(out).lexically_relative(fs::current_path()).string()
       << " in it, and pass --rig " << copy.string();
   } else {
-    s << "to use it: set calibration_file: " << rel.string() << " in " << rig_path
+    s << "to use it: set " << key << ": " << rel.string() << " in " << rig_path
       << " (relative to the rig file's folder)";
   }
   return s.str();
-}
-
-// Writes the file (when something is observable), then the report: human on stderr, JSON on
-// stdout.
-int reportAndWrite(const RigCalibRequest& o, const Rig& loaded, const RigAInputs& in,
-                   const RigCalibration& c) {
-  const bool any = std::any_of(c.parameters.begin(), c.parameters.end(),
-                               [](const CalibParameter& p) { return p.observable; });
-  bool written = false;
-  if (any) {
-    RigCalibrationFile f = rigCalibrationFile(c, "sweepmap calib rig", o.logs);
-    f.source["rig"] = loaded.path;
-    try {
-      writeRigCalibration(o.out, f);
-      written = true;
-    } catch (const std::exception& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
-      return kExitDeviceIo;
-    }
-  }
-  std::cerr << kWhat << " (" << loaded.kindName() << "): " << c.sweeps_used << " sweeps ("
-            << c.rejected.size() << " rejected); reading " << std::fixed << std::setprecision(1)
-            << in.read_s << " s, solving " << c.seconds << " s\n"
-            << rigCalibrationReport(c);
-  std::cerr.unsetf(std::ios::floatfield);
-  if (written) {
-    std::cerr << "  wrote " << o.out << "\n  " << pointRigAt(loaded.path, o.out) << "\n";
-  } else {
-    std::cerr << "  nothing written: no parameter is observable from these logs\n";
-  }
-  if (o.json) {
-    nlohmann::json j = rigCalibrationJson(c);
-    j["rig"] = loaded.path;
-    j["out"] = written ? nlohmann::json(o.out) : nullptr;
-    j["timing_s"] = {{"read", in.read_s}, {"solve", c.seconds}};
-    std::cout << std::setprecision(12) << j.dump(2) << "\n";
-  }
-  return written ? 0 : 1;
 }
 
 int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
@@ -192,10 +163,54 @@ int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
   progress.finish();
   c.rejected = in.rejected;
   for (const auto& e : in.log_errors) c.warnings.push_back(e);
-  return reportAndWrite(o, loaded, in, c);
+  return reportRigCalibration(o, loaded, in.read_s, c, [&] {
+    RigCalibrationFile f = rigCalibrationFile(c, "sweepmap calib rig", o.logs);
+    f.source["rig"] = loaded.path;
+    writeRigCalibration(o.out, f);
+  });
 }
 
 }  // namespace
+
+int reportRigCalibration(const RigCalibRequest& o, const Rig& loaded, double read_s,
+                         const RigCalibration& c, const std::function<void()>& write) {
+  const bool any = std::any_of(c.parameters.begin(), c.parameters.end(),
+                               [](const CalibParameter& p) { return p.observable; });
+  bool written = false;
+  if (any) {
+    try {
+      write();
+      written = true;
+    } catch (const std::exception& e) {
+      std::cerr << kWhat << ": " << e.what() << "\n";
+      return kExitDeviceIo;
+    }
+  }
+  std::cerr << kWhat << " (" << loaded.kindName() << "): ";
+  if (loaded.kind() == RigKind::kMobileLidar) {
+    std::cerr << o.logs.size() << " drive(s); ";
+  } else {
+    std::cerr << c.sweeps_used << " sweeps (" << c.rejected.size() << " rejected); ";
+  }
+  std::cerr << "reading " << std::fixed << std::setprecision(1) << read_s << " s, solving "
+            << c.seconds << " s\n"
+            << rigCalibrationReport(c);
+  std::cerr.unsetf(std::ios::floatfield);
+  if (written) {
+    std::cerr << "  wrote " << o.out << "\n  "
+              << pointRigAt(loaded.path, calibrationFileKey(loaded.kind()), o.out) << "\n";
+  } else {
+    std::cerr << "  nothing written: no parameter is observable from these logs\n";
+  }
+  if (o.json) {
+    nlohmann::json j = rigCalibrationJson(c);
+    j["rig"] = loaded.path;
+    j["out"] = written ? nlohmann::json(o.out) : nullptr;
+    j["timing_s"] = {{"read", read_s}, {"solve", c.seconds}};
+    std::cout << std::setprecision(12) << j.dump(2) << "\n";
+  }
+  return written ? 0 : 1;
+}
 
 int calibrateRigFromLogs(const RigCalibRequest& o) {
   Rig rig;
@@ -205,11 +220,8 @@ int calibrateRigFromLogs(const RigCalibRequest& o) {
     std::cerr << kWhat << ": config error: " << e.what() << "\n";
     return kExitUsage;
   }
-  if (rig.kind() != RigKind::kRotatingLidar) {
-    std::cerr << kWhat << ": " << rig.path << " is a " << rig.kindName()
-              << " rig: not yet supported (rotating_lidar only)\n";
-    return kExitUsage;
-  }
+  if (rig.kind() == RigKind::kRotatingProfile) return calibrateProfileRig(o, rig);
+  if (rig.kind() == RigKind::kMobileLidar) return calibrateMobileLidarRig(o, rig);
   return calibrateRigA(o, rig);
 }
 
@@ -221,11 +233,8 @@ int printCalibrationPlan(const std::string& rig_name, const std::vector<std::str
     std::cerr << "calib plan: config error: " << e.what() << "\n";
     return kExitUsage;
   }
-  if (rig.kind() != RigKind::kRotatingLidar) {
-    std::cerr << "calib plan: " << rig.path << " is a " << rig.kindName()
-              << " rig: not yet supported (rotating_lidar only)\n";
-    return kExitUsage;
-  }
+  if (rig.kind() == RigKind::kRotatingProfile) return printProfileRigPlan(rig_name, rig);
+  if (rig.kind() == RigKind::kMobileLidar) return printMobileLidarRigPlan(rig_name, rig);
   const RigARecording r;
   const ScanMode mode = scanMode(r.mode);
   const double minutes = r.sweeps * (mode.period_s + 3.0) / 60.0;

@@ -1,7 +1,8 @@
 // `sweepmap calib rig` and `sweepmap calib plan` as library calls: every parameter of a rig
 // that its logs make observable, in one command, written as one calibration file that the rig
 // file's `calibration_file` points to (core/calibration_file.hpp RigCalibrationFile). Rig A
-// (rotating_lidar): calib/rig_a_calibration.hpp. Other kinds: not yet supported (exit 2).
+// (rotating_lidar): calib/rig_a_calibration.hpp; rig B (mobile_lidar) and rig C
+// (rotating_profile): tools/offline/calibrate_rig_kinds.hpp.
 #pragma once
 
 #include <string>
@@ -22,13 +23,12 @@ struct RigCalibRequest {
 
 // Human report and progress on stderr; with `json` the result on stdout. Returns the exit
 // status: 0 calibrated (file written); 1 nothing calibrated (no usable sweep, nothing
-// observable, a corrupt log); 2 bad rig (or a kind not yet supported), a missing log or output
-// folder; 4 OUT cannot be written.
+// observable, a corrupt log); 2 bad rig, a missing log or output folder; 4 OUT cannot be
+// written.
 int calibrateRigFromLogs(const RigCalibRequest& request);
 
 // What to record for `rig`'s calibration and why, with the `sweepmap sim` command that makes
-// that recording in simulation, on stdout. Returns the exit status (2: bad rig or a kind not
-// yet supported).
+// that recording in simulation, on stdout. Returns the exit status (2: bad rig).
 int printCalibrationPlan(const std::string& rig, const std::vector<std::string>& sets);
 
 // The recommended recording of rig A, for the plan and the tests.

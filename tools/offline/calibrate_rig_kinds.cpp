@@ -1,0 +1,308 @@
+// `calib rig` and `calib plan` for rigs B and C: see tools/offline/calibrate_rig_kinds.hpp.
+#include "tools/offline/calibrate_rig_kinds.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <sstream>
+
+#include "calib/axis_offset.hpp"
+#include "core/calibration_file.hpp"
+#include "core/config.hpp"
+#include "core/event_log.hpp"
+#include "core/exit_codes.hpp"
+#include "core/progress.hpp"
+#include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/mobile_rig_calibration.hpp"
+#include "tools/offline/profile_log.hpp"
+
+namespace sweepmap {
+namespace {
+
+using calib_workflow::Clock;
+using calib_workflow::seconds;
+
+const std::string kWhat = "calib rig";
+constexpr double kRadToDeg = 180.0 / M_PI;
+// The plan's recording of rig C and what the solver uses of it.
+constexpr int kPlatePoses = 3;  // Zhao 2021's m = 3 non-parallel poses
+constexpr int kMaxPointsPerSweep = 20000;
+constexpr int kMinPointsPerSweep = 100;
+
+std::string num(double v) {
+  std::ostringstream s;
+  s << std::setprecision(6) << v;
+  return s.str();
+}
+
+bool checkPaths(const RigCalibRequest& o) {
+  for (const auto& log : o.logs) {
+    if (!calib_workflow::logFileExists(log, kWhat)) return false;
+  }
+  return calib_workflow::outputDirExists(o.out, kWhat);
+}
+
+// ---- rig C -------------------------------------------------------------------------------
+
+struct ProfileInputs {
+  std::vector<PlanePoints> planes;  // subsampled, one per plate pose
+  std::vector<std::string> rejected;
+  std::optional<ProfileLogTruth> truth;
+  double read_s = 0.0;
+};
+
+// Every sweep of every log as a plate pose; false after saying why a log cannot be read.
+bool readPlatePoses(const RigCalibRequest& o, ProfileInputs* in) {
+  const auto t0 = Clock::now();
+  for (const auto& log : o.logs) {
+    ProfileLog l;
+    try {
+      l = readProfileLog(log);
+    } catch (const ProfileLogError& e) {
+      std::cerr << kWhat << ": " << e.what() << "\n";
+      return false;
+    }
+    if (l.truth && !in->truth) in->truth = l.truth;
+    for (auto& sweep : l.sweeps) {
+      if (static_cast<int>(sweep.samples.size()) < kMinPointsPerSweep) {
+        in->rejected.push_back(sweep.source + ": " + std::to_string(sweep.samples.size()) +
+                               " points (< " + std::to_string(kMinPointsPerSweep) + ")");
+        continue;
+      }
+      in->planes.push_back(subsample(sweep, kMaxPointsPerSweep));
+    }
+  }
+  in->read_s = seconds(Clock::now() - t0);
+  return true;
+}
+
+// Why a parameter the solver did not determine is left nominal.
+std::string profileNote(size_t i, const AxisOffsetResult& r) {
+  if (i < 2) return "the plate poses do not determine M and N (see the warnings)";
+  if (i == 3 && !r.zero_estimated) {
+    return "plate poses cannot fix it: a turn of the whole cloud about the axis leaves every "
+           "plate a plane; it turns the map, never its shape";
+  }
+  return "sigma above the limit, or not determined by these poses (see the warnings)";
+}
+
+RigCalibration profileResult(const RotatingProfileConfig& rig, const ProfileInputs& in,
+                             const AxisOffsetResult& r, double max_sigma_deg) {
+  const ProfileGeometryConfig& g = rig.geometry;
+  const char* keys[] = {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg",
+                        "geometry.encoder_zero_deg"};
+  const double values[] = {r.geometry.m_mm, r.geometry.n_mm, r.geometry.laser_tilt_rad * kRadToDeg,
+                           r.geometry.encoder_zero_rad * kRadToDeg};
+  const double nominal[] = {g.offset_m_mm, g.offset_n_mm, g.laser_tilt_deg, g.encoder_zero_deg};
+  const double sigma[] = {r.sigma_m_mm, r.sigma_n_mm, r.sigma_tilt_deg, r.sigma_zero_deg};
+  const bool determined[] = {r.observable, r.observable,
+                             r.tilt_estimated && sigma[2] <= max_sigma_deg,
+                             r.zero_estimated && sigma[3] <= max_sigma_deg};
+  RigCalibration c;
+  for (size_t i = 0; i < 4; ++i) {
+    CalibParameter p;
+    p.key = keys[i];
+    p.unit = i < 2 ? "mm" : "deg";
+    p.nominal = nominal[i];
+    p.observable = determined[i] && std::isfinite(sigma[i]);
+    p.value = p.observable ? values[i] : nominal[i];
+    p.sigma = p.observable ? sigma[i] : std::numeric_limits<double>::quiet_NaN();
+    if (!p.observable) p.note = profileNote(i, r);
+    if (in.truth) {
+      const ProfileGeometry& t = in.truth->geometry;
+      const double truth[] = {t.m_mm, t.n_mm, t.laser_tilt_rad * kRadToDeg,
+                              t.encoder_zero_rad * kRadToDeg};
+      p.truth = truth[i];
+    }
+    c.parameters.push_back(p);
+  }
+  c.correlation = correlationOf(r.covariance);
+  c.rms_before = r.rms_before_mm;
+  c.rms_after = r.rms_after_mm;
+  c.warnings = r.warnings;
+  if (!r.converged) c.warnings.push_back("the least squares did not converge");
+  c.sweeps_used = static_cast<int>(in.planes.size());
+  c.rejected = in.rejected;
+  c.seconds = r.seconds;
+  return c;
+}
+
+// The format of `calib axis-offset` (geometry.calibration_file applies all four values); no
+// date, so the same logs give the same bytes.
+void writeProfileFile(const RigCalibRequest& o, const RigCalibration& c) {
+  AxisOffsetCalibration f;
+  f.m_mm = c.parameters[0].value;
+  f.n_mm = c.parameters[1].value;
+  f.laser_tilt_deg = c.parameters[2].value;
+  f.encoder_zero_deg = c.parameters[3].value;
+  f.source["tool"] = "sweepmap calib rig";
+  f.source["planes"] = std::to_string(c.sweeps_used);
+  for (const CalibParameter& p : c.parameters) {
+    const std::string name = p.key.substr(p.key.find('.') + 1);
+    f.source["sigma_" + name] = p.observable ? num(p.sigma) : "not observable (nominal kept)";
+  }
+  f.source["rms_after_mm"] = num(c.rms_after);
+  f.logs = o.logs;
+  writeAxisOffsetCalibration(o.out, f);
+}
+
+// ---- rig B -------------------------------------------------------------------------------
+
+const CalibParameter* findParameter(const RigCalibration& c, const std::string& key) {
+  for (const auto& p : c.parameters) {
+    if (p.key == key) return &p;
+  }
+  return nullptr;
+}
+
+// The mounting angles in the format mounting.calibration_file applies (each at the rig file's
+// value when not observable).
+void writeMountingFile(const RigCalibRequest& o, const RigCalibration& c) {
+  MountingCalibration f;
+  double* angles[] = {&f.gamma_rad, &f.beta_rad, &f.alpha_rad};
+  const char* keys[] = {"mounting.gamma_rad", "mounting.beta_rad", "mounting.alpha_rad"};
+  for (size_t i = 0; i < 3; ++i) {
+    const CalibParameter* p = findParameter(c, keys[i]);
+    if (!p) throw std::runtime_error(std::string("no result for ") + keys[i]);
+    *angles[i] = p->value;
+    f.source[std::string("sigma_") + (keys[i] + 9)] =
+        p->observable ? num(p->sigma) : "not observable (rig file's value kept)";
+  }
+  f.source["tool"] = "sweepmap calib rig";
+  f.logs = o.logs;
+  writeMountingCalibration(o.out, f);
+}
+
+// The rig file has no calibration file for the other keys: a warning lists them to set.
+void addHandSetKeys(RigCalibration* c) {
+  std::string keys;
+  for (const auto& p : c->parameters) {
+    const bool angle = p.key.rfind("mounting.", 0) == 0 && p.key.find("_rad") != std::string::npos;
+    if (!p.observable || angle) continue;
+    if (p.key == "odometry.gyro_bias_rad_s") continue;  // the EKF estimates it while driving
+    keys += (keys.empty() ? "" : ", ") + p.key + ": " + num(p.value);
+  }
+  if (!keys.empty()) {
+    c->warnings.push_back(
+        "the calibration file holds the mounting angles only; set these in the "
+        "rig file by hand: " +
+        keys);
+  }
+}
+
+}  // namespace
+
+int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
+  const RotatingProfileConfig& rig = std::get<RotatingProfileConfig>(loaded.config);
+  if (!checkPaths(o)) return kExitUsage;
+  ProgressOptions po;
+  po.enabled = !o.json;
+  Progress progress(kWhat, po);
+  progress.stage("reading the plate poses");
+  ProfileInputs in;
+  if (!readPlatePoses(o, &in)) return kExitBadInput;
+  if (in.planes.empty()) {
+    progress.finish();
+    std::cerr << kWhat << ": no sweep with " << kMinPointsPerSweep
+              << " or more points in the logs: nothing calibrated\n";
+    return 1;
+  }
+  AxisOffsetOptions options;
+  options.initial = rig.geometry.toGeometry();
+  options.estimate_tilt = true;
+  options.estimate_encoder_zero = true;  // reported unobservable when the poses cannot fix it
+  progress.stage("solving");
+  AxisOffsetResult r;
+  {
+    ProgressTicker ticker(progress);
+    r = solveAxisOffset(in.planes, options);
+  }
+  progress.finish();
+  const RigCalibration c = profileResult(rig, in, r, options.max_sigma_deg);
+  return reportRigCalibration(o, loaded, in.read_s, c, [&] { writeProfileFile(o, c); });
+}
+
+int calibrateMobileLidarRig(const RigCalibRequest& o, const Rig& loaded) {
+  if (!checkPaths(o)) return kExitUsage;
+  MobileRigCalibRequest request;
+  request.logs = o.logs;
+  request.rig = loaded.path;
+  request.sets = o.sets;
+  request.progress = !o.json;
+  const auto t0 = Clock::now();
+  RigCalibration c;
+  try {
+    c = runMobileRigCalibration(request);
+  } catch (const ConfigError& e) {
+    std::cerr << kWhat << ": config error: " << e.what() << "\n";
+    return kExitUsage;
+  } catch (const std::exception& e) {
+    std::cerr << kWhat << ": cannot read log '" << o.logs.at(0) << "': " << e.what() << "\n";
+    return kExitBadInput;
+  }
+  c.seconds = seconds(Clock::now() - t0);  // reading, odometry re-runs and the solve
+  c.rms_before *= 1e3;                     // m -> mm
+  c.rms_after *= 1e3;
+  c.residual_unit = "mm";
+  if (o.logs.size() > 1) c.warnings.push_back("only the first log is used (one drive)");
+  addHandSetKeys(&c);
+  return reportRigCalibration(o, loaded, 0.0, c, [&] { writeMountingFile(o, c); });
+}
+
+int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
+  const RotatingProfileConfig& rig = std::get<RotatingProfileConfig>(loaded.config);
+  const TurntableConfig& t = rig.turntable;
+  const double sweep_s = std::fabs(t.sweep_end_deg - t.sweep_start_deg) / t.speed_deg_s;
+  std::cout
+      << "What to record for `sweepmap calib rig --rig " << rig_name << "` (rotating_profile):\n"
+      << "  scene:    a flat plate (machined aluminium, 250 mm square or larger) under the "
+         "sensor at its working distance, in "
+      << kPlatePoses
+      << " or more poses, each tilted about 30 deg from level towards a different direction "
+         "(0, 120, 240 deg) and at a different height; one turntable sweep per pose.\n"
+      << "            Why: the plate's points lie on one plane only with the right M, N and "
+         "laser-plane tilt (Zhao 2021 section 3); parallel poses let the tilt and M trade off, "
+         "so the poses must not be parallel. The encoder zero is not determined by any plate "
+         "poses (turning the whole cloud about the axis leaves every plate a plane): it is "
+         "reported unobservable and kept; it turns the map, not its shape.\n"
+      << "  sweeps:   " << kPlatePoses << " (one per pose), " << t.sweep_start_deg << " to "
+      << t.sweep_end_deg << " deg at " << t.speed_deg_s << " deg/s\n"
+      << "  duration: about " << std::fixed << std::setprecision(0)
+      << kPlatePoses * (sweep_s + 30.0) << " s (sweeps and moving the plate between them)\n"
+      << "  record:   lcm-logger calib.lcmlog while the rig sweeps each pose\n"
+      << "  simulate: sweepmap sim --rig " << rig_name
+      << " --set sim.scene=plate --set sim.plate_count=" << kPlatePoses << " --out calib.lcmlog\n"
+      << "  then:     sweepmap calib rig --rig " << rig_name
+      << " --logs calib.lcmlog --out rig_calibration.yaml\n"
+      << "            and set geometry.calibration_file: rig_calibration.yaml in the rig file\n";
+  return 0;
+}
+
+int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
+  std::cout
+      << "What to record for `sweepmap calib rig --rig " << rig_name << "` (mobile_lidar):\n"
+      << "  scene:    a room with plain walls within the lidar's range on every side (the "
+         "lab), the car free to drive a circle in it.\n"
+      << "  path:     a circle of 0.83 m radius at 0.2 m/s (Miao 2022's calibration drive), "
+         "the lidar seeing the same walls from opposite sides of the circle.\n"
+      << "            Why: the two passes over the same surfaces disagree by the mounting "
+         "angles; gamma and beta are determined by the circle. Honestly: the circle does not "
+         "determine the wheels (radii, track), the lever arm's x and z: they are reported "
+         "unobservable and the rig file's values kept; the yaw angle alpha, the lever arm's y, "
+         "the time offset and the gyro bias come out, but on the simulated circle with every "
+         "build error their errors exceed 3 sigma (alpha 3.5 mrad off at sigma 0.3 mrad): "
+         "trust gamma and beta from this drive, measure the rest another way.\n"
+      << "  duration: 60 s (about 2.3 turns)\n"
+      << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
+      << "  simulate: sweepmap sim --rig " << rig_name
+      << " --set sim.path=circle --set sim.duration_s=60 --out calib.lcmlog\n"
+      << "  then:     sweepmap calib rig --rig " << rig_name
+      << " --logs calib.lcmlog --out mounting_calibration.yaml\n"
+      << "            and set mounting.calibration_file: mounting_calibration.yaml in the rig "
+         "file; the other calibrated keys are listed to set by hand\n";
+  return 0;
+}
+
+}  // namespace sweepmap
