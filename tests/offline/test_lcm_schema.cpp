@@ -27,6 +27,7 @@
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
 #include "sweepmap/switch_event_t.hpp"
+#include "sweepmap/truth_mobile_rig_t.hpp"
 #include "sweepmap/truth_mounting_t.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
 #include "sweepmap/truth_rig_errors_t.hpp"
@@ -50,7 +51,7 @@ void expectFingerprint(const char* name) {
 }
 
 TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
-  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 21u);
+  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 22u);
   expectFingerprint<cloud_chunk_t>("cloud_chunk_t");
   expectFingerprint<imu_t>("imu_t");
   expectFingerprint<lidar_scan_t>("lidar_scan_t");
@@ -63,6 +64,7 @@ TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
   expectFingerprint<scan_window_t>("scan_window_t");
   expectFingerprint<sweep_status_t>("sweep_status_t");
   expectFingerprint<switch_event_t>("switch_event_t");
+  expectFingerprint<truth_mobile_rig_t>("truth_mobile_rig_t");
   expectFingerprint<truth_mounting_t>("truth_mounting_t");
   expectFingerprint<truth_profile_rig_t>("truth_profile_rig_t");
   expectFingerprint<truth_rig_errors_t>("truth_rig_errors_t");
