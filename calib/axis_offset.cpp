@@ -300,6 +300,9 @@ struct Observability {
   std::vector<std::string> names;
   Eigen::VectorXd singular_values;  // ascending
   Eigen::MatrixXd directions;       // columns: the matching right singular vectors
+  // R22^T R22 unscaled: J^T J of the rig's parameters (in `names`' order) with the planes
+  // eliminated; its inverse is their covariance per unit residual variance.
+  Eigen::MatrixXd information;
 };
 
 Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
@@ -324,6 +327,7 @@ Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
                             .template triangularView<Eigen::Upper>()
                             .toDenseMatrix()
                             .bottomRightCorner(k, k);
+  const Eigen::MatrixXd information = r22.transpose() * r22;
   for (Eigen::Index c = 0; c < k; ++c) {
     // Scale by the full column's norm: how much of what the data say about the parameter
     // is left once the planes have taken their share.
@@ -331,7 +335,8 @@ Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
     if (norm > 0) r22.col(c) /= norm;
   }
   const Eigen::JacobiSVD<Eigen::MatrixXd> svd(r22, Eigen::ComputeFullV);
-  Observability o{rig_names, svd.singularValues().reverse(), svd.matrixV().rowwise().reverse()};
+  Observability o{rig_names, svd.singularValues().reverse(), svd.matrixV().rowwise().reverse(),
+                  information};
   return o;
 }
 
@@ -394,25 +399,24 @@ void flagUnobservable(const Observability& obs, AxisOffsetResult* r) {
   }
 }
 
-// r->covariance and the sigmas from the computed blocks: rows M, N [mm], tilt, zero [deg].
-void fillCovariance(const ceres::Covariance& covariance, double variance, const Problem& p,
-                    AxisOffsetResult* r) {
-  struct Block {
-    const double* x;
-    int row, size;
-    double scale;
+// r->covariance and the sigmas: rows M, N [mm], tilt, zero [deg].
+void fillCovariance(const Observability& obs, double variance, AxisOffsetResult* r) {
+  const Eigen::FullPivLU<Eigen::MatrixXd> lu(obs.information);
+  if (!lu.isInvertible()) {
+    r->warnings.push_back("the covariance is singular: no standard deviations");
+    return;
+  }
+  const Eigen::MatrixXd unit = lu.inverse();
+  // Rows of r->covariance: M, N, laser tilt [deg], encoder zero [deg].
+  const auto row = [](const std::string& name) {
+    return name == "M" ? 0 : name == "N" ? 1 : name == "laser_tilt" ? 2 : 3;
   };
-  std::vector<Block> blocks = {{p.mn, 0, 2, 1.0}};
-  if (r->tilt_estimated) blocks.push_back({&p.tilt, 2, 1, kRadToDeg});
-  if (r->zero_estimated) blocks.push_back({&p.zero, 3, 1, kRadToDeg});
-  for (const Block& a : blocks) {
-    for (const Block& b : blocks) {
-      double c[4];
-      if (!covariance.GetCovarianceBlock(a.x, b.x, c)) continue;
-      for (int i = 0; i < a.size; ++i) {
-        for (int j = 0; j < b.size; ++j)
-          r->covariance(a.row + i, b.row + j) = c[i * b.size + j] * variance * a.scale * b.scale;
-      }
+  const auto scale = [](const std::string& name) { return name.size() > 1 ? kRadToDeg : 1.0; };
+  for (size_t a = 0; a < obs.names.size(); ++a) {
+    for (size_t b = 0; b < obs.names.size(); ++b) {
+      r->covariance(row(obs.names[a]), row(obs.names[b])) = unit(Eigen::Index(a), Eigen::Index(b)) *
+                                                            variance * scale(obs.names[a]) *
+                                                            scale(obs.names[b]);
     }
   }
   const Eigen::Vector4d v = r->covariance.diagonal();
@@ -422,36 +426,19 @@ void fillCovariance(const ceres::Covariance& covariance, double variance, const 
   if (r->zero_estimated) r->sigma_zero_deg = std::sqrt(v(3));
 }
 
-// Standard deviations: (J^T J)^-1 of the estimated parameters from ceres::Covariance, scaled
-// by the residuals' variance; NaN (with a warning) where it is singular.
-void standardDeviations(size_t plane_count, Problem* p, AxisOffsetResult* r) {
+// Standard deviations: the inverse of J^T J of the estimated parameters with the planes
+// eliminated (from analyse()'s QR, in a fixed column order), scaled by the residuals'
+// variance; NaN (with a warning) where it is singular. Not ceres::Covariance: it orders the
+// parameter blocks by their addresses, so its last digits changed from run to run.
+void standardDeviations(size_t plane_count, const Problem& p, const Observability& obs,
+                        AxisOffsetResult* r) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   r->sigma_m_mm = r->sigma_n_mm = r->sigma_tilt_deg = r->sigma_zero_deg = nan;
   if (!r->observable) return;
-  const double dof = static_cast<double>(p->residuals) -
+  const double dof = static_cast<double>(p.residuals) -
                      (2 + r->tilt_estimated + r->zero_estimated) - 3.0 * plane_count;
-  const double variance = r->rms_after_mm * r->rms_after_mm * p->residuals / std::max(1.0, dof);
-  ceres::Covariance::Options co;
-  co.num_threads = 1;
-  // SPARSE_QR rather than DENSE_SVD: the same values (to the printed digits) without the SVD
-  // of the dense 58 000 x 15 Jacobian, which took ~40 % of the whole solve; the rank was
-  // checked before, and a rank-deficient Jacobian still fails Compute().
-  co.algorithm_type = ceres::SPARSE_QR;
-  co.null_space_rank = 0;  // a rank-deficient Jacobian fails Compute()
-  ceres::Covariance covariance(co);
-  // Every block of the upper triangle: the sigmas and the correlations (calib rig).
-  std::vector<const double*> blocks = {p->mn};
-  if (r->tilt_estimated) blocks.push_back(&p->tilt);
-  if (r->zero_estimated) blocks.push_back(&p->zero);
-  std::vector<std::pair<const double*, const double*>> pairs;
-  for (size_t a = 0; a < blocks.size(); ++a) {
-    for (size_t b = a; b < blocks.size(); ++b) pairs.push_back({blocks[a], blocks[b]});
-  }
-  if (!covariance.Compute(pairs, p->problem.get())) {
-    r->warnings.push_back("the covariance is singular: no standard deviations");
-    return;
-  }
-  fillCovariance(covariance, variance, *p, r);
+  const double variance = r->rms_after_mm * r->rms_after_mm * p.residuals / std::max(1.0, dof);
+  fillCovariance(obs, variance, r);
 }
 
 // Warnings for parameters whose standard deviation exceeds the options' limits; M or N that
@@ -519,7 +506,7 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
   r.geometry = {p.mn[0], p.mn[1], p.tilt, p.zero};
   r.rms_after_mm = rmsOf(&p);
   r.residuals = p.residuals;
-  standardDeviations(planes.size(), &p, &r);
+  standardDeviations(planes.size(), p, obs, &r);
   flagWeak(o, &r);
   reportPlanes(planes, p, o, &r);
   r.seconds = secondsSince(t0);

@@ -271,6 +271,7 @@ void standardDeviations(const LidarAxisOffsetOptions& o, size_t plane_count, Pro
   ceres::Covariance::Options co;
   co.num_threads = 1;
   co.algorithm_type = ceres::SPARSE_QR;  // 3 parameters per plane: block-sparse
+  co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;  // deterministic (axis_offset.cpp)
   ceres::Covariance covariance(co);
   const std::vector<std::pair<const double*, const double*>> pairs = {{p->t, p->t}};
   if (!covariance.Compute(pairs, p->problem.get())) {
@@ -435,6 +436,9 @@ LidarAxisOffsetResult solveLidarAxisOffset(const std::vector<LidarPlaneRays>& pl
                                             : 2.3849 * std::max(1e-6, robustSigma(residualsOf(p)));
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::SPARSE_SCHUR;  // planes eliminated, the offset left
+  // Eigen's sparse Cholesky: SuiteSparse's runs OpenMP threads, whose sums may change from
+  // run to run; the same logs must give the same bytes.
+  so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = 1e-12;
   so.parameter_tolerance = 1e-12;

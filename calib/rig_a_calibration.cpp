@@ -313,6 +313,9 @@ Built buildProblem(const std::vector<RigASweep>& sweeps, const RigASolveOptions&
 bool solve(const RigASolveOptions& o, Built* b) {
   ceres::Solver::Options so;
   so.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  // Eigen's sparse Cholesky: SuiteSparse's runs OpenMP threads, whose sums may change from
+  // run to run; the same logs must give the same bytes.
+  so.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
   so.max_num_iterations = o.max_iterations;
   so.function_tolerance = 1e-10;
   so.parameter_tolerance = 1e-10;
@@ -402,6 +405,7 @@ Eigen::Matrix4d covariance(Built* b, State* st) {
   ceres::Covariance::Options co;
   co.num_threads = 1;
   co.algorithm_type = ceres::SPARSE_QR;
+  co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;  // deterministic (axis_offset.cpp)
   ceres::Covariance cov(co);
   std::vector<std::pair<const double*, const double*>> pairs = {
       {st->g, st->g}, {&st->alpha, &st->alpha}, {&st->alpha, st->g}};

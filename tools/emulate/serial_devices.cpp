@@ -138,6 +138,7 @@ void X4Device::advance(int64_t now_us, std::string* out) {
       // The zero packet: one sample, where the turn starts.
       const auto& s = q.front();
       *out += ydlidar::encodePacket(true, x4RawAngle(s), x4RawAngle(s), {s.distance_mm});
+      last_full_ = false;
       sent(s);
       turn_travel_deg_ = 0.0;
       q.pop_front();
@@ -152,8 +153,13 @@ void X4Device::advance(int64_t now_us, std::string* out) {
     // Now and then a packet whose LSA lies just below its FSA, as a real X4 sends
     // (tests/data/real/README.md): the host keeps the previous packet's step.
     std::uniform_real_distribution<double> u(0.0, 1.0);
-    if (n > 1 && first > 2.0 && first < 270.0 && u(rng_) < kAnomalyShare) last = first - 1.171875;
+    // Only after a full packet: the host then reuses a step measured over 39 intervals, as
+    // after the real capture's; after a zero or short packet it would have no usable step.
+    if (last_full_ && n > 1 && first > 2.0 && first < 270.0 && u(rng_) < kAnomalyShare) {
+      last = first - 1.171875;
+    }
     *out += ydlidar::encodePacket(false, first, last, d);
+    last_full_ = n == 40;
     for (size_t i = 0; i < n; ++i) {
       sent(q.front());
       q.pop_front();

@@ -76,6 +76,7 @@ class X4Device : public EmulatedLidar {
   double turn_travel_deg_ = 0.0;  // since the last zero packet
   size_t target_ = 0;             // the packet being filled: its length, 0 = not chosen yet
   std::mt19937_64 rng_;
+  bool last_full_ = false;  // the last packet sent had 40 samples
 };
 
 class RplidarDevice : public EmulatedLidar {
