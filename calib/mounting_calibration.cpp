@@ -265,30 +265,11 @@ void configureSolver(ceres::Solver::Options* so, int max_iterations) {
   so->minimizer_progress_to_stdout = false;
 }
 
-// Least-squares plane (PCA) of `pts`: false if they are not planar (smallest eigenvalue
-// above `max_ratio` times the middle one, or above `max_variance`). The normal's sign is fixed
-// (largest component positive) so results do not depend on the eigen solver's choice.
+// Least-squares plane (PCA) of `pts` (calib/overlap_alignment.hpp's fitPcaPlane).
 bool fitPlane(const std::vector<Eigen::Vector3d>& pts, double max_ratio, double max_variance,
               Eigen::Vector3d* mean, Eigen::Vector3d* normal) {
-  if (pts.size() < 3) return false;
-  Eigen::Vector3d m = Eigen::Vector3d::Zero();
-  for (const auto& p : pts) m += p;
-  m /= double(pts.size());
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (const auto& p : pts) cov += (p - m) * (p - m).transpose();
-  cov /= double(pts.size());
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  const Eigen::Vector3d ev = es.eigenvalues();  // ascending
-  if (!(ev(0) <= max_ratio * ev(1)) || !(ev(0) <= max_variance)) return false;
-  Eigen::Vector3d n = es.eigenvectors().col(0);
-  int big = 0;
-  for (int i = 1; i < 3; ++i) {
-    if (std::abs(n(i)) > std::abs(n(big))) big = i;
-  }
-  if (n(big) < 0) n = -n;
-  *mean = m;
-  *normal = n;
-  return true;
+  return fitPcaPlane(pts.data(), static_cast<int>(pts.size()), max_ratio, max_variance, mean,
+                     normal);
 }
 
 // One outer iteration of either method: the rays, their poses and the world cloud

@@ -43,32 +43,6 @@ int threadCount(int requested) {
   return std::max(1, int(std::thread::hardware_concurrency()));
 }
 
-// Least-squares plane (PCA): false if not flat (as calib/mounting_calibration.cpp's fitPlane:
-// the smallest eigenvalue within max_ratio of the middle one and below max_variance). The
-// normal's largest component is positive.
-bool fitPlane(const Eigen::Vector3d* pts, int count, double max_ratio, double max_variance,
-              Eigen::Vector3d* mean, Eigen::Vector3d* normal) {
-  if (count < 3) return false;
-  Eigen::Vector3d m = Eigen::Vector3d::Zero();
-  for (int i = 0; i < count; ++i) m += pts[i];
-  m /= double(count);
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
-  for (int i = 0; i < count; ++i) cov += (pts[i] - m) * (pts[i] - m).transpose();
-  cov /= double(count);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
-  const Eigen::Vector3d ev = es.eigenvalues();
-  if (!(ev(0) <= max_ratio * ev(1)) || !(ev(0) <= max_variance)) return false;
-  Eigen::Vector3d n = es.eigenvectors().col(0);
-  int big = 0;
-  for (int i = 1; i < 3; ++i) {
-    if (std::abs(n(i)) > std::abs(n(big))) big = i;
-  }
-  if (n(big) < 0) n = -n;
-  *mean = m;
-  *normal = n;
-  return true;
-}
-
 // The world cloud of one round: every covered ray's point, and a k-d tree per half.
 struct Cloud {
   std::vector<Eigen::Vector3d> p, dir;
@@ -182,14 +156,14 @@ bool localPlane(const OverlapRay& ra, const Cloud& c, const Eigen::Vector3d& pa,
   Eigen::Vector3d patch[64], mean;
   const int n_patch = voxelsNear(c, ra.left ? 0 : 1, pa, o.plane_radius_m, patch);
   if (n_patch < o.min_neighbours ||
-      !fitPlane(patch, n_patch, o.max_planarity_ratio, max_var, &mean, n)) {
+      !fitPcaPlane(patch, n_patch, o.max_planarity_ratio, max_var, &mean, n)) {
     return false;
   }
   if (!o.check_own_plane) return true;
   Eigen::Vector3d own_n;
   const int n_own = voxelsNear(c, ra.left ? 1 : 0, pa, o.plane_radius_m, patch);
   return n_own >= o.min_neighbours &&
-         fitPlane(patch, n_own, o.max_planarity_ratio, max_var, &mean, &own_n) &&
+         fitPcaPlane(patch, n_own, o.max_planarity_ratio, max_var, &mean, &own_n) &&
          std::abs(own_n.dot(*n)) >= std::cos(o.max_normal_angle_rad);
 }
 
@@ -427,6 +401,29 @@ Eigen::MatrixXd covariance(const Normal& H, double chi2_dof, int P, const Overla
 }
 
 }  // namespace
+
+bool fitPcaPlane(const Eigen::Vector3d* pts, int count, double max_ratio, double max_variance,
+                 Eigen::Vector3d* mean, Eigen::Vector3d* normal) {
+  if (count < 3) return false;
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (int i = 0; i < count; ++i) m += pts[i];
+  m /= double(count);
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+  for (int i = 0; i < count; ++i) cov += (pts[i] - m) * (pts[i] - m).transpose();
+  cov /= double(count);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
+  const Eigen::Vector3d ev = es.eigenvalues();
+  if (!(ev(0) <= max_ratio * ev(1)) || !(ev(0) <= max_variance)) return false;
+  Eigen::Vector3d n = es.eigenvectors().col(0);
+  int big = 0;
+  for (int i = 1; i < 3; ++i) {
+    if (std::abs(n(i)) > std::abs(n(big))) big = i;
+  }
+  if (n(big) < 0) n = -n;
+  *mean = m;
+  *normal = n;
+  return true;
+}
 
 std::vector<OverlapRay> overlapRays(const std::vector<Scan2D>& scans, const Eigen::Vector3d& rpy,
                                     int stride) {

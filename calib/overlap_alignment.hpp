@@ -135,4 +135,10 @@ class MobileOverlapModel : public OverlapModel {
   std::vector<double> dpose_;  // per ray, per sensitivity: d(x, y, th)/d x_k
 };
 
+// Least-squares plane (PCA) of pts[0..count): false if they are not flat (the smallest
+// eigenvalue above max_ratio times the middle one, or above max_variance). The normal's
+// largest component is positive, so results do not depend on the eigen solver's choice.
+bool fitPcaPlane(const Eigen::Vector3d* pts, int count, double max_ratio, double max_variance,
+                 Eigen::Vector3d* mean, Eigen::Vector3d* normal);
+
 }  // namespace sweepmap
