@@ -15,7 +15,7 @@
 
 namespace sweepmap {
 
-// The embedded .lcm files: {file name, text} (core/embed_lcm.cmake).
+// The embedded .lcm files: {file name, text} (cmake/embed_text_files.cmake).
 const std::vector<std::pair<std::string, std::string>>& lcmTypeSources();
 
 struct LcmMember {
