@@ -22,7 +22,11 @@
 namespace sweepmap {
 namespace test {
 
-// Waits `s` seconds: for subscribers to be ready, or the last messages to arrive.
+// The UDP port of kDefaultLcmUrl (processes/channels.hpp).
+constexpr uint16_t kDefaultLcmPort = 7667;
+
+// Waits `s` seconds: for the last messages to arrive (Launcher::startSubscriber waits for a
+// subscriber to be ready).
 void sleepS(double s);
 
 // ---- Network namespaces ------------------------------------------------------------------

@@ -38,7 +38,7 @@ namespace {
 const std::string kRig = sourcePath("config/rig_a.yaml");
 const std::string kScene = sourcePath("config/scene_conference_room.yaml");
 const std::string kUrl = kDefaultLcmUrl;
-constexpr uint16_t kPort = 7667;  // kDefaultLcmUrl's
+constexpr uint16_t kPort = kDefaultLcmPort;
 constexpr int64_t kDayUs = 86'400'000'000;
 
 using hostile::Bytes;
