@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <functional>
 
 #include "core/event_log.hpp"
 #include "core/lcm_schema.hpp"
@@ -79,20 +80,29 @@ class StalledClient {
   bool connected_ = false;
 };
 
-// Waits until something listens on the port (the view is up).
-bool waitForPort(int port, double timeout_s) {
+// Waits (polling every 0.1 s) until `done`; false after timeout_s.
+bool waitUntil(const std::function<bool()>& done, double timeout_s) {
   for (double t = 0; t < timeout_s; t += 0.1) {
-    const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-    sockaddr_in a{};
-    a.sin_family = AF_INET;
-    a.sin_port = htons(port);
-    a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
-    const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0;
-    ::close(fd);
-    if (ok) return true;
+    if (done()) return true;
     sleepS(0.1);
   }
   return false;
+}
+
+// Waits until something listens on the port (the view is up).
+bool waitForPort(int port, double timeout_s) {
+  return waitUntil(
+      [port] {
+        const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+        sockaddr_in a{};
+        a.sin_family = AF_INET;
+        a.sin_port = htons(port);
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        const bool ok = ::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof(a)) == 0;
+        ::close(fd);
+        return ok;
+      },
+      timeout_s);
 }
 
 // The browser under test is the parameter ("chromium" or "firefox": tests/js/browser.js).
@@ -163,6 +173,30 @@ std::array<double, 3> publishedQuantile(const Chunks& chunks, double q) {
     out[a] = n ? axes[a][std::min(n - 1, static_cast<size_t>(q * n))] : NAN;
   }
   return out;
+}
+
+// The drawn extent (1 % and 99 % quantiles per axis: the surfaces, not the range noise's
+// tail) lies on the room's bounding surfaces, within a voxel; and it is the published
+// points' extent: between their 0.5 % and 2 % quantiles (a page drops a share of the older
+// sweeps' points when over its budget, which moves a quantile by rank, not by metres).
+void expectRoomExtent(const nlohmann::json& extent, const Chunks& published) {
+  const auto room = roomInFrameO();
+  const auto low_in = publishedQuantile(published, 0.02),
+             low_out = publishedQuantile(published, 0.005);
+  const auto high_in = publishedQuantile(published, 0.98);
+  const auto high_out = publishedQuantile(published, 0.995);
+  for (int a = 0; a < 3; ++a) {
+    for (int side = 0; side < 2; ++side) {
+      const double drawn = extent[a][side].get<double>();
+      const auto [nearest, farthest] = room[a][side];
+      const std::string where = "axis " + std::to_string(a) + (side ? " max" : " min");
+      EXPECT_GE(drawn, std::min(nearest, farthest) - kVoxelM) << where;
+      EXPECT_LE(drawn, std::max(nearest, farthest) + kVoxelM) << where;
+      const double inner = side ? high_in[a] : low_in[a], outer = side ? high_out[a] : low_out[a];
+      EXPECT_GE(drawn, std::min(inner, outer)) << where;
+      EXPECT_LE(drawn, std::max(inner, outer)) << where;
+    }
+  }
 }
 
 std::vector<uint8_t> fromHex(const std::string& hex) {
@@ -246,6 +280,12 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
                                             "ws://127.0.0.1:8080/", "80"};
   foxglove_args.insert(foxglove_args.end(), topics.begin(), topics.end());
   const pid_t foxglove = procs.start("foxglove", foxglove_args);
+  // The sweeps start once the page is connected: a browser that starts slowly (Firefox and its
+  // display take seconds) would otherwise get the sweeps made so far as one snapshot larger
+  // than its 2 MiB queue, and lose part of it.
+  ASSERT_TRUE(
+      waitUntil([&] { return procs.said(node).find("page connected") != std::string::npos; }, 60))
+      << procs.said(node);
   sleepS(0.7);
   const pid_t motor =
       procs.start("motor", proc("motor", {"--sim", "--sweeps", "4", "--seed", "4"}));
@@ -266,34 +306,14 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   EXPECT_EQ(page["points_drawn"], page["check"]["server"]);
   EXPECT_GT(page["points_drawn"].get<int64_t>(), 0);
   EXPECT_GT(page["non_blank"].get<double>(), 0.02) << "the screenshot is (nearly) blank";
-  // The drawn extent (1 % and 99 % quantiles per axis: the surfaces, not the range noise's
-  // tail) lies on the room's bounding surfaces, within a voxel; and it is the published
-  // points' extent: between their 0.5 % and 2 % quantiles (a page drops a share of the older
-  // sweeps' points when over its budget, which moves a quantile by rank, not by metres).
-  const auto room = roomInFrameO();
   const Chunks published = chunksOf(log);
-  const auto low_in = publishedQuantile(published, 0.02),
-             low_out = publishedQuantile(published, 0.005);
-  const auto high_in = publishedQuantile(published, 0.98);
-  const auto high_out = publishedQuantile(published, 0.995);
-  for (int a = 0; a < 3; ++a) {
-    for (int side = 0; side < 2; ++side) {
-      const double drawn = page["extent"][a][side].get<double>();
-      const auto [nearest, farthest] = room[a][side];
-      const std::string where = "axis " + std::to_string(a) + (side ? " max" : " min");
-      EXPECT_GE(drawn, std::min(nearest, farthest) - kVoxelM) << where;
-      EXPECT_LE(drawn, std::max(nearest, farthest) + kVoxelM) << where;
-      const double inner = side ? high_in[a] : low_in[a], outer = side ? high_out[a] : low_out[a];
-      EXPECT_GE(drawn, std::min(inner, outer)) << where;
-      EXPECT_LE(drawn, std::max(inner, outer)) << where;
-    }
-  }
+  expectRoomExtent(page["extent"], published);
   const nlohmann::json& status = page["status"];
   // The stalled client's frames were dropped and counted; the page lost none.
   EXPECT_GT(status["view"]["frames_dropped_all"].get<int64_t>(), 0) << status["view"];
   EXPECT_EQ(status["you"]["frames_dropped"], 0) << status["you"];
   // The view took every chunk the assembler published: its intake was not held up.
-  EXPECT_EQ(status["board"]["view_model"]["chunks"].get<size_t>(), chunksOf(log).size());
+  EXPECT_EQ(status["board"]["view_model"]["chunks"].get<size_t>(), published.size());
   EXPECT_EQ(status["board"]["mapper"]["sweeps"], 4);
   const nlohmann::json fox = lastJson(procs.said(foxglove));
   expectFoxglove(fox, topics);
