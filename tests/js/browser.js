@@ -5,7 +5,8 @@
 //
 // Firefox runs with a window on its own Xvfb display, not headless: headless Firefox on Linux
 // has no WebGL (https://bugzilla.mozilla.org/show_bug.cgi?id=1375585), so the page could not
-// draw; under Xvfb it draws with Mesa's llvmpipe, a software renderer like Chromium's SwiftShader.
+// draw; under Xvfb it draws with Mesa's llvmpipe, a software renderer like Chromium's SwiftShader,
+// on one thread (LP_NUM_THREADS), so that the browser leaves a core to the processes under test.
 'use strict';
 const { spawn } = require('child_process');
 const fs = require('fs');
@@ -62,7 +63,7 @@ async function launchFirefox(profile, display) {
     headless: false,
     userDataDir: profile,
     args: [`--width=${kWidth}`, `--height=${kHeight}`],
-    env: { ...process.env, DISPLAY: display, MOZ_ENABLE_WAYLAND: '0' },
+    env: { ...process.env, DISPLAY: display, MOZ_ENABLE_WAYLAND: '0', LP_NUM_THREADS: '1' },
     extraPrefsFirefox: {
       'webgl.force-enabled': true,  // llvmpipe is on Firefox's list of GL drivers it avoids
       'network.proxy.type': 0,
