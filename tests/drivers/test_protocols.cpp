@@ -360,7 +360,8 @@ TEST(X4Session, ScanRateFarFromTheRigsStopsTheDriverAHostStallDoesNot) {
   EXPECT_EQ(feedX4Turns(7.0, 40), "");
   EXPECT_EQ(feedX4Turns(7.0, 40, 10, 13), "");
   const std::string e = feedX4Turns(12.0, 40);
-  EXPECT_NE(e.find("scan rate: the rig file says 7 Hz, the YDLIDAR-X4 turns at 12"), std::string::npos)
+  EXPECT_NE(e.find("scan rate: the rig file says 7 Hz, the YDLIDAR-X4 turns at 12"),
+            std::string::npos)
       << e;
 }
 
