@@ -179,6 +179,10 @@ TEST(EmulatorsVsReal, X4StreamStatisticsAreCompatible) {
   // Hz), not at the index mark; the later ones are.
   EXPECT_GT(std::abs(emu.ring_deg[0] - X4Device::kIndexMarkDeg), 5.0);
   EXPECT_NEAR(emu.ring_deg[1], X4Device::kIndexMarkDeg, 1.0);
+  // The first turn ends where the motor first passes the mark, part of a turn, as on a real X4
+  // (scan3: its first zero packet at 227.5°, the next at 348.0° 236 samples later).
+  EXPECT_NEAR(double(emu.turn_samples.at(0)),
+              5000.0 / 8.2 * (X4Device::kIndexMarkDeg - emu.ring_deg[0]) / 360.0, 3.0);
   for (const char* file : {"scan1.data", "scan2.data", "scan3.data"}) {
     const auto real = externalCapture(file);
     if (!real) continue;

@@ -68,7 +68,6 @@ void X4Device::receive(const uint8_t* data, size_t size, int64_t now_us, std::st
       feed_.skipTo(now_us);
       scanning_ = true;
       last_sent_motor_ = -1.0;
-      turn_travel_deg_ = 0.0;
       target_ = 0;
     } else if (cmd == ydlidar::kCmdInfo) {
       *out += ydlidar::encodeInfo(ydlidar::kModelX4, 1, 5, 1, "2019031200000042");
@@ -78,21 +77,15 @@ void X4Device::receive(const uint8_t* data, size_t size, int64_t now_us, std::st
   }
 }
 
-void X4Device::sent(const SampleFeed::Sample& s) {
-  if (last_sent_motor_ >= 0.0) {
-    turn_travel_deg_ += std::remainder(s.motor_deg - last_sent_motor_, 360.0);
-  }
-  last_sent_motor_ = s.motor_deg;
-}
-
 // Whether `s`, coming after a sample at motor angle `prev_motor` (< 0: none since A5 60),
-// starts a turn: the first sample after A5 60 does, then the one whose motor angle passes the
-// index mark, once the turn is more than 3/4 round.
+// starts a turn: the first sample after A5 60 does, then each one whose motor angle passes the
+// index mark. As on a real X4, the first turn is a part of one (tests/data/real/README.md:
+// scan3's first zero packet at 227.5°, the next at 348.0° 236 samples later).
 bool X4Device::ringStart(const SampleFeed::Sample& s, double prev_motor) const {
   if (prev_motor < 0.0) return true;
   const double step = std::fmod(s.motor_deg - prev_motor + 360.0, 360.0);
   const double to_mark = std::fmod(kIndexMarkDeg - prev_motor + 360.0, 360.0);
-  return turn_travel_deg_ > 270.0 && to_mark > 0.0 && to_mark <= step && step < 180.0;
+  return to_mark > 0.0 && to_mark <= step;
 }
 
 // How many of the measured samples at the front of `q` the next packet takes (0: wait): up to
@@ -127,8 +120,7 @@ void X4Device::advance(int64_t now_us, std::string* out) {
       const auto& s = q.front();
       *out += ydlidar::encodePacket(true, s.motor_deg, s.motor_deg, {s.distance_mm});
       last_full_ = false;
-      sent(s);
-      turn_travel_deg_ = 0.0;
+      last_sent_motor_ = s.motor_deg;
       q.pop_front();
       continue;
     }
@@ -148,10 +140,8 @@ void X4Device::advance(int64_t now_us, std::string* out) {
     }
     *out += ydlidar::encodePacket(false, first, last, d);
     last_full_ = n == 40;
-    for (size_t i = 0; i < n; ++i) {
-      sent(q.front());
-      q.pop_front();
-    }
+    last_sent_motor_ = q[n - 1].motor_deg;
+    q.erase(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(n));
     target_ = 0;
   }
 }

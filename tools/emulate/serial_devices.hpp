@@ -70,13 +70,11 @@ class X4Device : public EmulatedLidar {
 
  private:
   bool ringStart(const SampleFeed::Sample& s, double prev_motor) const;
-  void sent(const SampleFeed::Sample& s);
   size_t packetLength(const std::deque<SampleFeed::Sample>& q, int64_t now_us);
   SampleFeed feed_;
   std::string command_;
   bool scanning_ = false;
   double last_sent_motor_ = -1.0;  // the last sample sent: its motor angle; < 0: none yet
-  double turn_travel_deg_ = 0.0;   // of the motor since the last zero packet
   size_t target_ = 0;              // the packet being filled: its length, 0 = not chosen yet
   std::mt19937_64 rng_;
   bool last_full_ = false;  // the last packet sent had 40 samples
