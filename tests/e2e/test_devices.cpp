@@ -106,19 +106,45 @@ Match compare(const std::vector<lidar_scan_t>& got, const std::vector<lidar_scan
   return m;
 }
 
+struct TruthRay {
+  int64_t utime;
+  double angle;
+  float range;
+};
+
+// The truth ray where a driver scan starts: among the rays at its first angle (each nearest to
+// it among its neighbours) within a turn and a half of its time, the one whose next rays hold
+// the scan's ranges (to 1 mm), then the nearest in time. Not by time alone: a host that reads a
+// backlog late dates a turn late by more than half a turn. rays.size() when none.
+size_t startRay(const lidar_scan_t& g, const std::vector<TruthRay>& rays, double period_s) {
+  const auto off = [&](size_t k) {
+    return std::fabs(std::remainder(rays[k].angle - g.angles_rad[0], 2.0 * M_PI));
+  };
+  size_t best = rays.size();
+  int best_held = -1;
+  int64_t best_dt = 0;
+  for (size_t k = 1; k + 1 < rays.size(); ++k) {
+    const int64_t dt = std::llabs(rays[k].utime - g.utime);
+    if (dt > period_s * 1.5e6 || off(k) > off(k - 1) || off(k) > off(k + 1)) continue;
+    if (off(k) > 2.0 * M_PI / 180.0 || k + static_cast<size_t>(g.nranges) > rays.size()) continue;
+    int held = 0;
+    for (int i = 0; i < std::min(g.nranges, 50); ++i) {
+      held += std::fabs(g.ranges_m[i] - rays[k + static_cast<size_t>(i)].range) < 0.001f;
+    }
+    if (held > best_held || (held == best_held && dt < best_dt)) {
+      best = k, best_held = held, best_dt = dt;
+    }
+  }
+  return best;
+}
+
 // A serial lidar's scans (one turn each, every sample at its own angle) against the truth's
 // samples in time order (the emulator sends each truth ray as one sample): a scan's first ray
-// is the truth ray at its angle nearest in time (within half a turn), and its ray i the truth
-// ray i places after that one, so a scan that lost or gained a sample shows as angle errors.
-// Time errors are the first rays'.
+// is the truth ray startRay finds, and its ray i the truth ray i places after that one, so a
+// scan that lost or gained a sample shows as angle errors. Time errors are the first rays'.
 Match compareSamples(const std::vector<lidar_scan_t>& got, const std::vector<lidar_scan_t>& truth,
                      double period_s, double angle_tolerance_rad) {
-  struct Ray {
-    int64_t utime;
-    double angle;
-    float range;
-  };
-  std::vector<Ray> rays;
+  std::vector<TruthRay> rays;
   for (const lidar_scan_t& t : truth) {
     for (int i = 0; i < t.nranges; ++i) {
       // Where the ray looked: its own angle where the truth has one (the X4's beam looks off
@@ -132,20 +158,14 @@ Match compareSamples(const std::vector<lidar_scan_t>& got, const std::vector<lid
   for (const lidar_scan_t& g : got) {
     ++m.scans;
     if (g.nranges == 0 || g.nangles != g.nranges) continue;
-    size_t best = rays.size();
-    double best_d = 1e9;
-    for (size_t k = 0; k < rays.size(); ++k) {
-      if (std::llabs(rays[k].utime - g.utime) > period_s * 0.5e6) continue;
-      const double d = std::fabs(std::remainder(rays[k].angle - g.angles_rad[0], 2.0 * M_PI));
-      if (d < best_d) best_d = d, best = k;
-    }
-    if (best + static_cast<size_t>(g.nranges) > rays.size()) continue;
+    const size_t best = startRay(g, rays, period_s);
+    if (best == rays.size()) continue;
     ++m.matched;
     const double dt = std::fabs(double(rays[best].utime - g.utime));
     m.time_errors_us.push_back(dt);
     m.worst_time_us = std::max(m.worst_time_us, dt);
     for (int i = 0; i < g.nranges; ++i) {
-      const Ray& r = rays[best + static_cast<size_t>(i)];
+      const TruthRay& r = rays[best + static_cast<size_t>(i)];
       const double da = std::remainder(double(g.angles_rad[i]) - r.angle, 2.0 * M_PI);
       m.worst_angle_rad = std::max(m.worst_angle_rad, std::fabs(da));
       m.rays_off_angle += std::fabs(da) > angle_tolerance_rad;
