@@ -24,12 +24,13 @@ LidarModel scip(const std::string& name, ScipGeometry pp, uint32_t no_return, bo
   return m;
 }
 
-LidarModel serial(const std::string& name, DeviceProtocol protocol, double min_m, double max_m,
-                  double rate_hz, double rate_min_hz, double rate_max_hz, double sample_hz,
-                  const std::string& source) {
+LidarModel serial(const std::string& name, DeviceProtocol protocol, int model_code, double min_m,
+                  double max_m, double rate_hz, double rate_min_hz, double rate_max_hz,
+                  double sample_hz, const std::string& source) {
   LidarModel m;
   m.name = name;
   m.protocol = protocol;
+  m.model_code = model_code;
   m.range_min_m = min_m;
   m.range_max_m = max_m;
   m.scan_rate_hz = rate_hz;
@@ -68,13 +69,13 @@ std::vector<LidarModel> makeCatalogue() {
       scip("URG-04LX-UG01", urg04, 0, false, 0.02, 5.6,
            "PP of a real URG-04LX-UG01 (firmware 3.4.03, RecklessTedsFunland/rtf_urg); Hokuyo "
            "URG-04LX-UG01 specification: 0.02-5.6 m, 240 deg, 100 ms/scan"),
-      serial("YDLIDAR-X4", DeviceProtocol::kYdlidarX4, 0.12, 10.0, 7.0, 6.0, 12.0, 5000.0,
+      serial("YDLIDAR-X4", DeviceProtocol::kYdlidarX4, 6, 0.12, 10.0, 7.0, 6.0, 12.0, 5000.0,
              "YDLIDAR X4 datasheet: 0.12-10 m, 5000 samples/s, 6-12 Hz (7 Hz typical); Miao "
-             "2022"),
-      serial("RPLIDAR-A1", DeviceProtocol::kRplidar, 0.15, 12.0, 5.5, 1.0, 10.0, 2000.0,
+             "2022; model code 6: X4 development manual, device information"),
+      serial("RPLIDAR-A1", DeviceProtocol::kRplidar, 1, 0.15, 12.0, 5.5, 1.0, 10.0, 2000.0,
              "Slamtec RPLIDAR A1 datasheet: 0.15-12 m, 5.5 Hz typical (1-10 Hz), 2000 "
              "samples/s in the standard scan"),
-      serial("RPLIDAR-A2", DeviceProtocol::kRplidar, 0.15, 16.0, 10.0, 5.0, 15.0, 4000.0,
+      serial("RPLIDAR-A2", DeviceProtocol::kRplidar, 2, 0.15, 16.0, 10.0, 5.0, 15.0, 4000.0,
              "Slamtec RPLIDAR A2 datasheet: 0.15-16 m (A2M16; A2M8 12 m), 10 Hz typical "
              "(5-15 Hz), 4000 samples/s in the standard scan"),
   };

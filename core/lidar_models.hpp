@@ -45,7 +45,10 @@ struct LidarModel {
   double scan_rate_hz = 0.0;                    // standard (SCIP: SCAN / 60)
   double scan_rate_min_hz = 0.0, scan_rate_max_hz = 0.0;
   double sample_rate_hz = 0.0;  // serial: samples per second in the standard scan
-  std::string source;           // where the numbers come from
+  // Serial: what the device reports of itself. X4: the model code of its device info (6);
+  // RPLIDAR: the family, the high nibble of GET_INFO's model byte (1 = A1, 2 = A2).
+  int model_code = -1;
+  std::string source;  // where the numbers come from
 };
 
 const std::vector<LidarModel>& lidarModels();

@@ -23,12 +23,27 @@ std::string fmt(double v, int precision = 3) {
 
 std::string at(int64_t offset) { return "byte " + std::to_string(offset) + ": "; }
 
+// The rig's lidar.model from the catalogue (core/lidar_models.hpp). Throws
+// std::invalid_argument when it is not a model of `protocol`, or when the rig's lidar keys do
+// not fit it (a rig file is checked on load; a LidarConfig made in code is checked here).
+LidarModel catalogueModel(const LidarConfig& expected, DeviceProtocol protocol) {
+  const LidarModel* m = findLidarModel(expected.model);
+  if (m == nullptr || m->protocol != protocol) {
+    throw std::invalid_argument("lidar.model '" + expected.model + "' is not a " +
+                                protocolName(protocol) + " lidar (" + lidarModelNames() + ")");
+  }
+  if (protocol != DeviceProtocol::kScip) checkLidarFitsModel(expected, *m);
+  return *m;
+}
+
 // ---- SCIP 2.0 (Hokuyo) ----------------------------------------------------------------
 
 class ScipSession : public LidarSession {
  public:
   ScipSession(const LidarConfig& expected, const SessionOptions& options)
-      : expected_(expected), options_(options), model_(scipModel(expected.model)) {
+      : expected_(expected),
+        options_(options),
+        model_(catalogueModel(expected, DeviceProtocol::kScip)) {
     // Until the device's PP is seen (a raw file from the middle of a stream): the model's.
     params_.model = model_.name + " (lidar.model)";
     params_.dmin_mm = model_.pp.dmin_mm;
@@ -142,15 +157,6 @@ class ScipSession : public LidarSession {
       }
     }
     throw StreamError("no reply to SCIP " + line.substr(0, line.size() - 1) + " within 1 s");
-  }
-
-  static LidarModel scipModel(const std::string& name) {
-    const LidarModel* m = findLidarModel(name);
-    if (m == nullptr || m->protocol != DeviceProtocol::kScip) {
-      throw std::invalid_argument("lidar.model '" + name + "' is not a SCIP lidar (" +
-                                  lidarModelNames() + ")");
-    }
-    return *m;
   }
 
   // The device must be the lidar.model of the rig file: its name in PP's MODL (or VV's PROD),
@@ -401,19 +407,6 @@ class LineClock {
   int64_t arrival_ = -1, end_offset_ = 0;
 };
 
-// What a model's datasheet says it measures [m].
-struct RangeSpec {
-  double min_m, max_m;
-};
-
-void checkRange(const LidarConfig& expected, const std::string& model, RangeSpec spec) {
-  if (expected.range_min_m < spec.min_m - 1e-9 || expected.range_max_m > spec.max_m + 1e-9) {
-    throw IdentityMismatch("range limits: the rig file says " + fmt(expected.range_min_m) + ".." +
-                           fmt(expected.range_max_m) + " m, the " + model + " measures " +
-                           fmt(spec.min_m) + ".." + fmt(spec.max_m) + " m");
-  }
-}
-
 // A motor far from the rig's rate means another device or setting. One turn's rate is timed
 // by the arrival of its bytes, and a host that stalls, then reads a backlog at once, makes one
 // turn look fast: so the rate must be off for kOffTurns turns in a row, after the first few.
@@ -478,6 +471,7 @@ class X4Session : public LidarSession {
  public:
   X4Session(const LidarConfig& expected, const SessionOptions& options)
       : expected_(expected),
+        model_(catalogueModel(expected, DeviceProtocol::kYdlidarX4)),
         line_(options.time, options.baud > 0 ? options.baud : kX4DefaultBaud),
         turns_(expected) {}
 
@@ -498,13 +492,12 @@ class X4Session : public LidarSession {
     identity_ = "YDLIDAR model " + std::to_string(info.model) + " serial " + info.serial +
                 " firmware " + std::to_string(info.firmware_major) + "." +
                 std::to_string(info.firmware_minor);
-    if (info.model != ydlidar::kModelX4) {
-      throw IdentityMismatch("model: the rig file's device is an X4 (model code " +
-                             std::to_string(ydlidar::kModelX4) + "), the device reports model " +
-                             std::to_string(info.model));
+    if (info.model != model_.model_code) {
+      throw IdentityMismatch("model: the rig file's lidar.model " + model_.name +
+                             " has model code " + std::to_string(model_.model_code) +
+                             ", the device reports model " + std::to_string(info.model));
     }
     identity_ = "X4 serial " + info.serial;
-    checkRange(expected_, "X4", {0.12, 10.0});
     int status = 0, code = 0;
     stream.write(std::string("\xA5\x91", 2));
     awaitEvent(stream, now, decoder_, &pending_, "X4 health", [&](const ydlidar::Event& e) {
@@ -547,10 +540,11 @@ class X4Session : public LidarSession {
 
  private:
   // Each packet's samples into turns. A packet leaves the device when its last sample has been
-  // measured, and the X4 measures at a steady rate: sample i of n at sent - (n - 1 - i) dt.
+  // measured, and the X4 measures at its model's steady rate: sample i of n at
+  // sent - (n - 1 - i) dt.
   void handle(const std::vector<ydlidar::Event>& events, std::vector<Scan2D>* scans,
               std::vector<std::string>* errors) {
-    const double dt_us = expected_.rayPeriodS() * 1e6;
+    const double dt_us = 1e6 / model_.sample_rate_hz;
     for (const ydlidar::Event& e : events) {
       if (const auto* d = std::get_if<DecodeError>(&e)) {
         errors->push_back(at(d->offset) + d->what);
@@ -571,10 +565,11 @@ class X4Session : public LidarSession {
         }
       }
     }
-    rate_check_.update(expected_, "X4", turns_.turnRateHz(), turns_.counters().turns);
+    rate_check_.update(expected_, model_.name, turns_.turnRateHz(), turns_.counters().turns);
   }
 
   LidarConfig expected_;
+  LidarModel model_;
   LineClock line_;
   RevolutionAssembler turns_;
   ydlidar::Decoder decoder_;
@@ -587,6 +582,7 @@ class RplidarSession : public LidarSession {
  public:
   RplidarSession(const LidarConfig& expected, const SessionOptions& options)
       : expected_(expected),
+        model_(catalogueModel(expected, DeviceProtocol::kRplidar)),
         line_(options.time, options.baud > 0 ? options.baud : kRplidarDefaultBaud),
         turns_(expected) {}
 
@@ -609,14 +605,12 @@ class RplidarSession : public LidarSession {
     identity_ = "RPLIDAR " + name + " (model " + std::to_string(info.model) + ") serial " +
                 info.serial + " firmware " + std::to_string(info.firmware_major) + "." +
                 std::to_string(info.firmware_minor);
-    if (family < 1 || family > 2) {
-      throw IdentityMismatch(
-          "model: the rig file's driver is for an RPLIDAR A1/A2 (standard "
-          "scan), the device reports model " +
-          std::to_string(info.model));
+    if (family != model_.model_code) {
+      throw IdentityMismatch("model: the rig file's lidar.model " + model_.name + " is family " +
+                             std::to_string(model_.model_code) + ", the device (" + identity_ +
+                             ") reports model " + std::to_string(info.model) + ", family " +
+                             std::to_string(family));
     }
-    checkRange(expected_, "RPLIDAR " + name,
-               family == 1 ? RangeSpec{0.15, 12.0} : RangeSpec{0.15, 16.0});
     int status = 0, code = 0;
     stream.write(rplidar::request(rplidar::kCmdHealth));
     awaitEvent(stream, now, decoder_, &pending_, "RPLIDAR health", [&](const rplidar::Event& e) {
@@ -679,10 +673,11 @@ class RplidarSession : public LidarSession {
         }
       }
     }
-    rate_check_.update(expected_, "RPLIDAR", turns_.turnRateHz(), turns_.counters().turns);
+    rate_check_.update(expected_, model_.name, turns_.turnRateHz(), turns_.counters().turns);
   }
 
   LidarConfig expected_;
+  LidarModel model_;
   LineClock line_;
   RevolutionAssembler turns_;
   rplidar::Decoder decoder_;

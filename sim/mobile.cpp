@@ -423,7 +423,7 @@ std::vector<ImuSample> SimMobile::imu() {
   return out;
 }
 
-Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng) const {
+Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& beam) const {
   std::normal_distribution<double> n(0.0, 1.0);
   Scan2D scan;
   scan.seq = j;
@@ -436,21 +436,33 @@ Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng) const {
   scan.range_min_m = c_.range_min_m;
   scan.range_max_m = c_.range_max_m;
   scan.ranges_m.resize(static_cast<size_t>(rays_));
+  if (beam) scan.angles_rad.resize(static_cast<size_t>(rays_));
   for (int i = 0; i < rays_; ++i) {
     const double t = 1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - offset_us -
                                                 start_utime_);
     const Eigen::Isometry3d T_room_L = planar(roomPoseAt(t)) * T_BL_;
-    const double ang = scan.rayAngle(static_cast<size_t>(i));
-    const Eigen::Vector3d dir =
-        T_room_L.linear() * Eigen::Vector3d(0.0, std::sin(ang), std::cos(ang));
-    const auto hit = scene_->raycast(T_room_L.translation(), dir, c_.range_max_m);
+    const auto range_at = [&](double ang) {
+      const Eigen::Vector3d dir =
+          T_room_L.linear() * Eigen::Vector3d(0.0, std::sin(ang), std::cos(ang));
+      return scene_->raycast(T_room_L.translation(), dir, c_.range_max_m).value_or(0.0);
+    };
+    const double motor = scan.angle_min_rad + scan.angle_increment_rad * i;
+    BeamHit hit{motor, 0.0};
+    if (beam) {
+      hit = castBeam(motor, beam, range_at);
+    } else {
+      hit.range_m = range_at(motor);
+    }
     const double noise = n(*rng);
     double r = 0.0;
-    if (hit) {
-      r = *hit * (1.0 + c_.range_sigma_fraction * noise);
+    if (hit.range_m > 0.0) {
+      r = hit.range_m * (1.0 + c_.range_sigma_fraction * noise);
       if (r < c_.range_min_m || r > c_.range_max_m) r = 0.0;
     }
     scan.ranges_m[static_cast<size_t>(i)] = static_cast<float>(r);
+    if (beam)
+      scan.angles_rad[static_cast<size_t>(i)] =
+          static_cast<float>(wrapAngle(r > 0.0 ? hit.bearing_rad : motor));
   }
   return scan;
 }

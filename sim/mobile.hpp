@@ -32,6 +32,7 @@
 #include "core/scan.hpp"
 #include "devices/odometry_devices.hpp"
 #include "odometry/wheel_odometry.hpp"
+#include "sim/beam.hpp"
 #include "sim/scene.hpp"
 
 namespace sweepmap {
@@ -176,8 +177,10 @@ class SimMobile {
   const std::vector<SlipEvent>& slips() const { return slips_; }
   int64_t scanDeliveryUtime(const Scan2D& scan) const;
   // One scan (index j; j < 0: before the start, the car at rest) with the given noise
-  // generator.
-  Scan2D makeScan(int64_t j, std::mt19937_64* rng) const;
+  // generator. Its rays are the motor's angles on the grid; with a beam offset each ray looks
+  // where castBeam says (Scan2D::angles_rad: where each looked; a return outside the range
+  // limits after the noise becomes no return, along the motor angle).
+  Scan2D makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& beam = nullptr) const;
   // The index of the last scan begun at or before `utime` (negative before the start).
   int64_t scanIndexAt(int64_t utime) const {
     return static_cast<int64_t>(

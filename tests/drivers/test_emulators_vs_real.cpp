@@ -15,6 +15,7 @@
 
 #include "drivers/protocols/hi219.hpp"
 #include "drivers/protocols/ydlidar.hpp"
+#include "sim/beam.hpp"
 #include "tools/emulate/odometry_emulators.hpp"
 #include "tools/emulate/serial_devices.hpp"
 
@@ -66,11 +67,41 @@ X4Stats x4Stats(const std::string& bytes) {
   return s;
 }
 
-// A room of 4 x 3 m seen from (0.7, -0.4) m by a 360° lidar turning at 8.2 Hz, 5000 samples per
-// second (the real X4 streams: about 608 samples per turn); scans handed out as they begin.
-ScanSource roomSource() {
+// The range a ray along `bearing` meets in a room of 4 x 3 m seen from (0.7, -0.4) m, with a
+// pillar of 0.3 x 0.3 m at (1.35, -1.05) .. (1.65, -0.75) when `pillar` (two depth edges of
+// about 0.6 m against 1.3 m and more).
+double roomRange(double bearing, bool pillar) {
+  const double c = std::cos(bearing), d = std::sin(bearing);
+  const double rx = c > 0 ? (2.0 - 0.7) / c : (-2.0 - 0.7) / c;
+  const double ry = d > 0 ? (1.5 + 0.4) / d : (-1.5 + 0.4) / d;
+  double r = std::min(rx, ry);
+  if (pillar) {
+    // Slabs: the ray's entry into the pillar's x and y ranges.
+    const double lo[2] = {1.35 - 0.7, -1.05 + 0.4}, hi[2] = {1.65 - 0.7, -0.75 + 0.4};
+    const double dir[2] = {c, d};
+    double t_in = 0.0, t_out = 1e9;
+    for (int k = 0; k < 2; ++k) {
+      if (std::fabs(dir[k]) < 1e-12) {
+        if (lo[k] > 0.0 || hi[k] < 0.0) t_in = 1e9;
+        continue;
+      }
+      const double a = lo[k] / dir[k], b = hi[k] / dir[k];
+      t_in = std::max(t_in, std::min(a, b));
+      t_out = std::min(t_out, std::max(a, b));
+    }
+    if (t_in <= t_out && t_in > 0.0) r = std::min(r, t_in);
+  }
+  return r;
+}
+
+// That room seen by a 360° lidar turning at 8.2 Hz, 5000 samples per second (the real X4
+// streams: about 608 samples per turn); scans handed out as they begin, their rays on the
+// motor's grid, each cast along the beam `beam` (empty: along the motor angle, no
+// Scan2D::angles_rad). Every scan handed out is appended to *given when not null.
+ScanSource roomSource(bool pillar = false, const BeamOffset& beam = nullptr,
+                      std::vector<Scan2D>* given = nullptr) {
   auto next = std::make_shared<int64_t>(0);
-  return [next](int64_t now_us) {
+  return [next, pillar, beam, given](int64_t now_us) {
     std::vector<Scan2D> out;
     constexpr double kRate = 8.2, kSamples = 5000.0 / kRate;
     for (;; ++*next) {
@@ -86,12 +117,14 @@ ScanSource roomSource() {
       s.range_min_m = 0.12;
       s.range_max_m = 10.0;
       for (int i = 0; i < n; ++i) {
-        const double a = s.angle_min_rad + s.angle_increment_rad * i;
-        const double c = std::cos(a), d = std::sin(a);
-        const double rx = c > 0 ? (2.0 - 0.7) / c : (-2.0 - 0.7) / c;
-        const double ry = d > 0 ? (1.5 + 0.4) / d : (-1.5 + 0.4) / d;
-        s.ranges_m.push_back(static_cast<float>(std::min(rx, ry)));
+        const double motor = s.angle_min_rad + s.angle_increment_rad * i;
+        const auto range_at = [&](double b) { return roomRange(b, pillar); };
+        const BeamHit hit =
+            beam ? castBeam(motor, beam, range_at) : BeamHit{motor, range_at(motor)};
+        s.ranges_m.push_back(static_cast<float>(hit.range_m));
+        if (beam) s.angles_rad.push_back(static_cast<float>(hit.bearing_rad));
       }
+      if (given) given->push_back(s);
       out.push_back(std::move(s));
     }
     return out;
@@ -99,8 +132,8 @@ ScanSource roomSource() {
 }
 
 // 20 s of an emulated X4 after A5 60 at t = 0.25 s.
-std::string emulatedX4Stream() {
-  X4Device x4(roomSource());
+std::string emulatedX4Stream(ScanSource source = roomSource()) {
+  X4Device x4(std::move(source));
   std::string out;
   const std::string start("\xA5\x60", 2);
   x4.receive(reinterpret_cast<const uint8_t*>(start.data()), start.size(), 250000, &out);
@@ -146,6 +179,10 @@ TEST(EmulatorsVsReal, X4StreamStatisticsAreCompatible) {
   // Hz), not at the index mark; the later ones are.
   EXPECT_GT(std::abs(emu.ring_deg[0] - X4Device::kIndexMarkDeg), 5.0);
   EXPECT_NEAR(emu.ring_deg[1], X4Device::kIndexMarkDeg, 1.0);
+  // The first turn ends where the motor first passes the mark, part of a turn, as on a real X4
+  // (scan3: its first zero packet at 227.5°, the next at 348.0° 236 samples later).
+  EXPECT_NEAR(double(emu.turn_samples.at(0)),
+              5000.0 / 8.2 * (X4Device::kIndexMarkDeg - emu.ring_deg[0]) / 360.0, 3.0);
   for (const char* file : {"scan1.data", "scan2.data", "scan3.data"}) {
     const auto real = externalCapture(file);
     if (!real) continue;
@@ -155,6 +192,100 @@ TEST(EmulatorsVsReal, X4StreamStatisticsAreCompatible) {
               << " deg after the first; turn spread " << r.turnSpread() << "\n";
     expectCompatible(emu, r, file);
   }
+}
+
+// FSA and LSA of a sample packet at stream offset `at` [1/64 deg].
+std::pair<int, int> fsaLsa(const std::string& bytes, int64_t at) {
+  const auto u16 = [&](int64_t k) {
+    return int(uint8_t(bytes[size_t(k)])) | int(uint8_t(bytes[size_t(k + 1)])) << 8;
+  };
+  return {u16(at + 4) >> 1, u16(at + 6) >> 1};
+}
+
+// A real X4's motor turns evenly and it reports the motor's angles, so within a turn FSA and
+// LSA never run backwards, whatever the ranges do: LSA >= FSA in every packet but across the
+// 360 -> 0 wrap and the deliberate anomalies (LSA 75/64 deg below FSA, after a full packet),
+// and each packet's FSA one step past the previous packet's last sample. A pillar puts depth
+// edges in view, where AngCorrect jumps by about 0.9 deg.
+TEST(EmulatorsVsReal, X4MotorAnglesRunEvenlyPastDepthEdges) {
+  const std::string bytes = emulatedX4Stream(roomSource(true));
+  ydlidar::Decoder decoder;
+  std::vector<ydlidar::Event> events;
+  decoder.feed(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), &events);
+  const double step = 360.0 * 64.0 / int(5000.0 / 8.2);  // the motor's step [1/64 deg]
+  int anomalies = 0, checked = 0, prev_last = -1;
+  size_t prev_size = 0;
+  for (const auto& e : events) {
+    const auto* p = std::get_if<ydlidar::Packet>(&e);
+    if (!p) continue;
+    const auto [fsa, lsa] = fsaLsa(bytes, p->offset);
+    const size_t n = p->samples.size();
+    if (prev_last >= 0) {
+      // One motor step after the previous packet's last sample (mod 360 deg; 1/64 deg steps).
+      const int gap = ((fsa - prev_last) % (360 * 64) + 360 * 64) % (360 * 64);
+      EXPECT_NEAR(gap, step, 2) << "packet at byte " << p->offset;
+      ++checked;
+    }
+    const bool wrap = fsa > 270 * 64 && lsa < 90 * 64;
+    if (n > 1 && lsa < fsa && !wrap) {
+      EXPECT_EQ(fsa - lsa, 75) << "packet at byte " << p->offset;  // a deliberate anomaly
+      EXPECT_EQ(prev_size, 40u) << "packet at byte " << p->offset;
+      ++anomalies;
+      prev_last = static_cast<int>(std::lround(fsa + step * double(n - 1))) % (360 * 64);
+    } else {
+      const int span = ((lsa - fsa) % (360 * 64) + 360 * 64) % (360 * 64);  // across 0 too
+      EXPECT_NEAR(span, step * double(n - 1), 2) << "packet at byte " << p->offset;
+      prev_last = lsa;
+    }
+    prev_size = n;
+  }
+  EXPECT_GT(checked, 2000);
+  EXPECT_EQ(anomalies, decoder.counters().anomalies);
+  EXPECT_LE(anomalies, 10);
+}
+
+// The whole chain: each ray cast where the X4's beam looks (motor + AngCorrect of the range it
+// meets, sim/beam.hpp), the device reporting its motor angles, the host's decoder correcting
+// them: every sample where its ray looked, past the pillar's depth edges too, and with the
+// range it met.
+TEST(EmulatorsVsReal, X4SamplesLandWhereTheirRaysLooked) {
+  std::vector<Scan2D> given;
+  const std::string bytes = emulatedX4Stream(roomSource(true, X4Device::beamOffsetRad, &given));
+  struct Truth {
+    double bearing_deg, range_mm;
+  };
+  std::vector<Truth> truth;  // the rays measured after A5 60 (0.25 s), in order
+  size_t shadowed = 0;
+  for (const Scan2D& s : given) {
+    for (size_t i = 0; i < s.ranges_m.size(); ++i) {
+      if (s.rayUtime(i) < 250000) continue;
+      truth.push_back({s.rayAngle(i) * 180.0 / M_PI, s.ranges_m[i] * 1000.0});
+      shadowed += s.ranges_m[i] == 0.0f;
+    }
+  }
+  ydlidar::Decoder decoder;
+  std::vector<ydlidar::Event> events;
+  decoder.feed(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), &events);
+  size_t k = 0, edges = 0;
+  double worst_deg = 0.0;
+  for (const auto& e : events) {
+    const auto* p = std::get_if<ydlidar::Packet>(&e);
+    if (!p) continue;
+    for (const ydlidar::Sample& s : p->samples) {
+      ASSERT_LT(k, truth.size());
+      const Truth& t = truth[k++];
+      EXPECT_NEAR(s.distance_mm, t.range_mm, 0.13) << "sample " << k;
+      const double err = std::fabs(std::remainder(s.angle_deg - t.bearing_deg, 360.0));
+      worst_deg = std::max(worst_deg, err);
+      // A sample whose neighbour met a surface 0.3 m nearer or farther: a depth edge.
+      if (k >= 2 && std::fabs(truth[k - 1].range_mm - truth[k - 2].range_mm) > 300.0) ++edges;
+    }
+  }
+  std::cout << "emulated X4: " << k << " samples, worst angle error " << worst_deg << " deg, "
+            << edges << " at depth edges, " << shadowed << " rays without a return\n";
+  EXPECT_GT(k, 90000u);
+  EXPECT_GT(edges, 100u);      // the pillar's edges were seen, every turn
+  EXPECT_LT(worst_deg, 0.05);  // FSA/LSA in 1/64 deg, ranges in 1/4 mm
 }
 
 // The emulated HI219 set to the old item set: the items, sizes and units of the manual's frame

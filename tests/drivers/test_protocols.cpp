@@ -318,6 +318,7 @@ TEST(Ydlidar, BadCheckCodeDropsThatPacketOnly) {
 // Returns the error the session throws, or "" after `turns` turns.
 std::string feedX4Turns(double rate_hz, int turns, int burst_from = -1, int burst_to = -1) {
   LidarConfig x4;
+  x4.model = "YDLIDAR-X4";
   x4.beam_count = 714;
   x4.angle_min_deg = -180.0;
   x4.angle_increment_deg = 360.0 / 714;
@@ -359,7 +360,8 @@ TEST(X4Session, ScanRateFarFromTheRigsStopsTheDriverAHostStallDoesNot) {
   EXPECT_EQ(feedX4Turns(7.0, 40), "");
   EXPECT_EQ(feedX4Turns(7.0, 40, 10, 13), "");
   const std::string e = feedX4Turns(12.0, 40);
-  EXPECT_NE(e.find("scan rate: the rig file says 7 Hz, the X4 turns at 12"), std::string::npos)
+  EXPECT_NE(e.find("scan rate: the rig file says 7 Hz, the YDLIDAR-X4 turns at 12"),
+            std::string::npos)
       << e;
 }
 
@@ -368,6 +370,7 @@ TEST(X4Session, ScanRateFarFromTheRigsStopsTheDriverAHostStallDoesNot) {
 // packet lost to a bad check code loses its two turns, never makes a scan of both.
 TEST(X4Session, OneScanPerTurnFromZeroPacketToZeroPacket) {
   LidarConfig x4;
+  x4.model = "YDLIDAR-X4";
   x4.beam_count = 714;
   x4.steps_per_revolution = 714;
   x4.range_min_m = 0.12;
@@ -414,6 +417,7 @@ TEST(X4Session, OneScanPerTurnFromZeroPacketToZeroPacket) {
 // RPLIDAR: a turn from one sample with S = 1 to the next, with the samples' qualities.
 TEST(RplidarSession, OneScanPerTurnFromStartFlagToStartFlag) {
   LidarConfig a1;
+  a1.model = "RPLIDAR-A1";
   a1.steps_per_revolution = 360;
   a1.range_min_m = 0.15;
   a1.range_max_m = 12.0;

@@ -535,6 +535,7 @@ std::vector<std::vector<RawX4Sample>> rawX4Turns(const std::string& b) {
 // The X4 of rig B as the rig file describes it (config/rig_b.yaml).
 LidarConfig x4Rig() {
   LidarConfig c;
+  c.model = "YDLIDAR-X4";
   c.beam_count = 714;
   c.angle_min_deg = -180.0;
   c.angle_increment_deg = 360.0 / 714;
@@ -638,6 +639,7 @@ std::vector<std::vector<RawRpSample>> rawRplidarTurns(const std::string& b) {
 // it at its own angle.
 TEST(RealCapturesRplidarExternal, OneScanPerTurnWithEverySample) {
   LidarConfig a1;
+  a1.model = "RPLIDAR-A1";
   a1.steps_per_revolution = 360;
   a1.range_min_m = 0.15;
   a1.range_max_m = 12.0;

@@ -2,7 +2,9 @@
 // (tools/emulate/scip_device.hpp) of each catalogue model (core/lidar_models.hpp), over an
 // in-memory link on a virtual clock: the field of view a rig file asks for is what the driver
 // requests and what its scans hold, at the model's angles; the URG-04LX's steps and error
-// codes; a device that is not the rig's model is refused naming both.
+// codes; a device that is not the rig's model is refused naming both. The serial lidars' sessions
+// take their model from the catalogue too (range and rate limits, the identity the device
+// reports).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,7 +13,9 @@
 #include "core/lidar_models.hpp"
 #include "drivers/lidar_sessions.hpp"
 #include "drivers/protocols/scip.hpp"
+#include "drivers/protocols/ydlidar.hpp"
 #include "tools/emulate/scip_device.hpp"
+#include "tools/emulate/serial_devices.hpp"
 
 namespace sweepmap {
 namespace {
@@ -238,6 +242,109 @@ TEST(ScipModels, ADeviceThatIsNotTheRigsModelIsRefused) {
   // Same name, other steps (a UTM-30LX where a UST-20LX is expected): MODL differs first.
   const LidarConfig utm = fullFieldOf(*findLidarModel("UTM-30LX"));
   EXPECT_THROW(drive(utm, "UST-20LX", 0.1), IdentityMismatch);
+}
+
+// ---- Serial lidars -------------------------------------------------------------------------
+
+// A 360° lidar's turns at `rate_hz` with `samples` rays each, all at 1 m.
+ScanSource turnSource(double rate_hz, int samples) {
+  auto next = std::make_shared<int64_t>(0);
+  return [=](int64_t now_us) {
+    std::vector<Scan2D> out;
+    for (;; ++*next) {
+      const auto start = static_cast<int64_t>(std::llround(double(*next) / rate_hz * 1e6));
+      if (start > now_us) break;
+      Scan2D s;
+      s.utime = start;
+      s.angle_min_rad = -M_PI;
+      s.angle_increment_rad = 2.0 * M_PI / samples;
+      s.time_increment_ns = static_cast<int64_t>(std::llround(1e9 / rate_hz / samples));
+      s.ranges_m.assign(static_cast<size_t>(samples), 1.0f);
+      out.push_back(std::move(s));
+    }
+    return out;
+  };
+}
+
+// Starts `protocol`'s session for `rig` against `device`, then reads `seconds`: its scans.
+std::vector<Scan2D> driveSerial(EmulatedLidar* device, DeviceProtocol protocol,
+                                const LidarConfig& rig, double seconds) {
+  int64_t now_us = 0;
+  EmulatorLink link(device, &now_us);
+  auto session = makeLidarSession(protocol, rig, SessionOptions{ScanTime::kStream, 0});
+  session->start(link, [&] { return now_us; });
+  std::vector<Scan2D> scans;
+  std::vector<std::string> errors;
+  const int64_t end = now_us + static_cast<int64_t>(seconds * 1e6);
+  uint8_t buffer[4096];
+  while (now_us < end) {
+    const size_t n = link.read(buffer, sizeof buffer, 5);
+    session->onBytes(buffer, n, -1, &scans, &errors);
+  }
+  return scans;
+}
+
+// The X4 and RPLIDAR sessions take the rig's lidar.model from the catalogue: a model of another
+// protocol, range limits beyond the model's (the X4's 0.12-10 m, the A1's 0.15-12 m, the A2's
+// 0.15-16 m) or a rate outside its motor's are refused when the session is made.
+TEST(SerialModels, SessionsTakeTheirLimitsFromTheCatalogue) {
+  const SessionOptions o{ScanTime::kStream, 0};
+  const LidarConfig x4 = fullFieldOf(*findLidarModel("YDLIDAR-X4"));
+  EXPECT_NO_THROW(makeLidarSession(DeviceProtocol::kYdlidarX4, x4, o));
+  EXPECT_THROW(makeLidarSession(DeviceProtocol::kRplidar, x4, o), std::invalid_argument);
+  EXPECT_THROW(makeLidarSession(DeviceProtocol::kYdlidarX4, LidarConfig{}, o),
+               std::invalid_argument);  // the default UST-10LX
+  LidarConfig far = x4;
+  far.range_max_m = 12.0;
+  try {
+    makeLidarSession(DeviceProtocol::kYdlidarX4, far, o);
+    FAIL() << "an X4 asked for 12 m";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("YDLIDAR-X4's 0.12..10 m"), std::string::npos) << e.what();
+  }
+  LidarConfig near = x4;
+  near.range_min_m = 0.1;
+  EXPECT_THROW(makeLidarSession(DeviceProtocol::kYdlidarX4, near, o), std::invalid_argument);
+  LidarConfig fast = x4;
+  fast.scan_rate_hz = 13.0;  // the X4's motor: 6-12 Hz
+  EXPECT_THROW(makeLidarSession(DeviceProtocol::kYdlidarX4, fast, o), std::invalid_argument);
+  LidarConfig a1 = fullFieldOf(*findLidarModel("RPLIDAR-A1"));
+  a1.range_max_m = 16.0;
+  EXPECT_THROW(makeLidarSession(DeviceProtocol::kRplidar, a1, o), std::invalid_argument);
+  LidarConfig a2 = fullFieldOf(*findLidarModel("RPLIDAR-A2"));
+  EXPECT_DOUBLE_EQ(a2.range_max_m, 16.0);
+  EXPECT_NO_THROW(makeLidarSession(DeviceProtocol::kRplidar, a2, o));
+}
+
+// The catalogue's identities are what the protocol documents say the devices report.
+TEST(SerialModels, CatalogueIdentitiesAreTheProtocols) {
+  EXPECT_EQ(findLidarModel("YDLIDAR-X4")->model_code, ydlidar::kModelX4);
+  EXPECT_EQ(findLidarModel("RPLIDAR-A1")->model_code, 0x18 >> 4);  // A1M8 reports 0x18
+  EXPECT_EQ(findLidarModel("RPLIDAR-A2")->model_code, 2);
+}
+
+// The emulated A1 (model 0x18) streams for a rig file that says RPLIDAR-A1 and is refused,
+// naming both, for one that says RPLIDAR-A2; the emulated X4 streams for YDLIDAR-X4.
+TEST(SerialModels, ADeviceThatIsNotTheRigsModelIsRefused) {
+  LidarConfig a1 = fullFieldOf(*findLidarModel("RPLIDAR-A1"));
+  a1.scan_rate_hz = 5.5;
+  RplidarDevice device(turnSource(5.5, 360));
+  EXPECT_GE(driveSerial(&device, DeviceProtocol::kRplidar, a1, 1.0).size(), 3u);
+  const LidarConfig a2 = fullFieldOf(*findLidarModel("RPLIDAR-A2"));
+  RplidarDevice other(turnSource(5.5, 360));
+  try {
+    driveSerial(&other, DeviceProtocol::kRplidar, a2, 0.1);
+    FAIL() << "no identity mismatch";
+  } catch (const IdentityMismatch& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("RPLIDAR-A2"), std::string::npos) << what;
+    EXPECT_NE(what.find("model 24, family 1"), std::string::npos) << what;
+  }
+  X4Device x4(turnSource(7.0, 714));
+  EXPECT_GE(
+      driveSerial(&x4, DeviceProtocol::kYdlidarX4, fullFieldOf(*findLidarModel("YDLIDAR-X4")), 1.0)
+          .size(),
+      3u);
 }
 
 // A Hokuyo on a serial or USB port (the URG-04LX's): scip:///dev/PORT, 19200 baud unless given.

@@ -106,43 +106,66 @@ Match compare(const std::vector<lidar_scan_t>& got, const std::vector<lidar_scan
   return m;
 }
 
+struct TruthRay {
+  int64_t utime;
+  double angle;
+  float range;
+};
+
+// The truth ray where a driver scan starts: among the rays at its first angle (each nearest to
+// it among its neighbours) within a turn and a half of its time, the one whose next rays hold
+// the scan's ranges (to 1 mm), then the nearest in time. Not by time alone: a host that reads a
+// backlog late dates a turn late by more than half a turn. rays.size() when none.
+size_t startRay(const lidar_scan_t& g, const std::vector<TruthRay>& rays, double period_s) {
+  const auto off = [&](size_t k) {
+    return std::fabs(std::remainder(rays[k].angle - g.angles_rad[0], 2.0 * M_PI));
+  };
+  size_t best = rays.size();
+  int best_held = -1;
+  int64_t best_dt = 0;
+  for (size_t k = 1; k + 1 < rays.size(); ++k) {
+    const int64_t dt = std::llabs(rays[k].utime - g.utime);
+    if (dt > period_s * 1.5e6 || off(k) > off(k - 1) || off(k) > off(k + 1)) continue;
+    if (off(k) > 2.0 * M_PI / 180.0 || k + static_cast<size_t>(g.nranges) > rays.size()) continue;
+    int held = 0;
+    for (int i = 0; i < std::min(g.nranges, 50); ++i) {
+      held += std::fabs(g.ranges_m[i] - rays[k + static_cast<size_t>(i)].range) < 0.001f;
+    }
+    if (held > best_held || (held == best_held && dt < best_dt)) {
+      best = k, best_held = held, best_dt = dt;
+    }
+  }
+  return best;
+}
+
 // A serial lidar's scans (one turn each, every sample at its own angle) against the truth's
 // samples in time order (the emulator sends each truth ray as one sample): a scan's first ray
-// is the truth ray at its angle nearest in time (within half a turn), and its ray i the truth
-// ray i places after that one, so a scan that lost or gained a sample shows as angle errors.
-// Time errors are the first rays'.
+// is the truth ray startRay finds, and its ray i the truth ray i places after that one, so a
+// scan that lost or gained a sample shows as angle errors. Time errors are the first rays'.
 Match compareSamples(const std::vector<lidar_scan_t>& got, const std::vector<lidar_scan_t>& truth,
                      double period_s, double angle_tolerance_rad) {
-  struct Ray {
-    int64_t utime;
-    double angle;
-    float range;
-  };
-  std::vector<Ray> rays;
+  std::vector<TruthRay> rays;
   for (const lidar_scan_t& t : truth) {
     for (int i = 0; i < t.nranges; ++i) {
-      rays.push_back({t.utime + int64_t{t.time_increment_ns} * i / 1000,
-                      t.angle_min_rad + i * t.angle_increment_rad, t.ranges_m[i]});
+      // Where the ray looked: its own angle where the truth has one (the X4's beam looks off
+      // its motor angle), else the grid's.
+      const double angle =
+          t.nangles == t.nranges ? t.angles_rad[i] : t.angle_min_rad + i * t.angle_increment_rad;
+      rays.push_back({t.utime + int64_t{t.time_increment_ns} * i / 1000, angle, t.ranges_m[i]});
     }
   }
   Match m;
   for (const lidar_scan_t& g : got) {
     ++m.scans;
     if (g.nranges == 0 || g.nangles != g.nranges) continue;
-    size_t best = rays.size();
-    double best_d = 1e9;
-    for (size_t k = 0; k < rays.size(); ++k) {
-      if (std::llabs(rays[k].utime - g.utime) > period_s * 0.5e6) continue;
-      const double d = std::fabs(std::remainder(rays[k].angle - g.angles_rad[0], 2.0 * M_PI));
-      if (d < best_d) best_d = d, best = k;
-    }
-    if (best + static_cast<size_t>(g.nranges) > rays.size()) continue;
+    const size_t best = startRay(g, rays, period_s);
+    if (best == rays.size()) continue;
     ++m.matched;
     const double dt = std::fabs(double(rays[best].utime - g.utime));
     m.time_errors_us.push_back(dt);
     m.worst_time_us = std::max(m.worst_time_us, dt);
     for (int i = 0; i < g.nranges; ++i) {
-      const Ray& r = rays[best + static_cast<size_t>(i)];
+      const TruthRay& r = rays[best + static_cast<size_t>(i)];
       const double da = std::remainder(double(g.angles_rad[i]) - r.angle, 2.0 * M_PI);
       m.worst_angle_rad = std::max(m.worst_angle_rad, std::fabs(da));
       m.rays_off_angle += std::fabs(da) > angle_tolerance_rad;
@@ -371,8 +394,9 @@ TEST(DecodeRigBDevices, Hi219AndWheelBoardBytes) {
 struct SerialCase {
   std::string model, scheme;
   std::vector<std::string> sets;  // the rig's lidar section for this device
-  // angle_tolerance_rad: X4: the emulator's interpolation tolerance (0.1°) and the 1/64° steps
-  // of FSA and LSA.
+  // angle_tolerance_rad: X4: the 1/64° steps of FSA and LSA, and the host's AngCorrect of the
+  // noisy range against that of the range the beam met (rig B's 1 % range noise: 0.05° per
+  // sigma at 0.3 m, so a few 4-sigma samples a run land up to 0.2° off, as on the device).
   double period_s, range_resolution_m, angle_tolerance_rad;
 };
 
@@ -404,11 +428,12 @@ TEST_P(SerialDevicesTest, PtyStreamsAndComesBackAfterHangUp) {
             << " deg over " << m.rays_compared << " rays\n";
   EXPECT_GE(m.matched, m.scans * 9 / 10);
   EXPECT_LE(m.worst_range_m, c.range_resolution_m);
-  // At least 99.9 % of the samples at their own angle, the figure for real streams:
-  // the emulator derives raw (motor) angles from true bearings, so near an edge two samples
-  // can make a packet whose LSA lies below its FSA, and the host's SDK rule then reuses the
-  // previous packet's step (7.6 deg off for one sample in a CI run). A real X4's motor
-  // angles never run backwards.
+  // At least 99.9 % of the samples at their own angle, the figure for real streams
+  // (the emulated X4 reports evenly stepped motor angles and casts each ray where its beam
+  // looks, motor + AngCorrect: 4 to 6 of about 37000 off in 5 runs when this was written, all
+  // short ranges with a 4-sigma range error).
+  std::cout << c.model << ": " << m.rays_off_angle << " of " << m.rays_compared
+            << " samples off their angle\n";
   EXPECT_LE(m.rays_off_angle * 1000, m.rays_compared) << m.rays_off_angle << " samples off";
   EXPECT_GT(m.rays_compared, 1000u);
   const auto counters = lidarCounters(log_, nullptr);

@@ -106,7 +106,7 @@ void connectFeeds(const EmulateOptions& o, const std::vector<std::string>& model
   f.scip_model = world.lidarModel();
   for (const std::string& m : models) {
     if (!isLidarModel(m)) continue;
-    ScanSource inner = world.source();
+    ScanSource inner = world.source(beamOffsetOf(emulatedModel(m)));
     f.scans = [&o, &f, inner](int64_t now_us) {
       std::vector<Scan2D> scans = inner(now_us);
       if (!f.truth) return scans;

@@ -22,6 +22,11 @@ int64_t EmulatedClock::counterAt(int64_t power_on_us, int64_t t_us) const {
   return ((ticks % (int64_t{1} << 24)) + (int64_t{1} << 24)) % (int64_t{1} << 24);
 }
 
+BeamOffset beamOffsetOf(EmulatedModel model) {
+  if (model == EmulatedModel::kX4) return X4Device::beamOffsetRad;
+  return nullptr;
+}
+
 std::unique_ptr<EmulatedLidar> makeEmulatedLidar(EmulatedModel model, ScanSource source,
                                                  const EmulatedClock& clock, int64_t power_on_us,
                                                  const std::string& scip_model) {

@@ -5,6 +5,7 @@
 #include <memory>
 #include <string>
 
+#include "sim/beam.hpp"
 #include "tools/emulate/emulated_lidar.hpp"
 
 namespace sweepmap {
@@ -27,6 +28,10 @@ struct EmulatedClock {
   double drift_ppm = 0.0;
   int64_t counterAt(int64_t power_on_us, int64_t t_us) const;
 };
+
+// Where the model's beam looks off its motor angle (sim/beam.hpp): the X4's AngCorrect; empty
+// for the others, which measure along their motor angle.
+BeamOffset beamOffsetOf(EmulatedModel model);
 
 // kUst10lx serves SCIP as `scip_model` (a SCIP model of core/lidar_models.hpp: the world rig's
 // lidar.model, so `--set lidar.model=URG-04LX-UG01` emulates a URG-04LX-UG01).

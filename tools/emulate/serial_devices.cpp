@@ -13,11 +13,6 @@ double wrap360(double deg) {
   return d < 0 ? d + 360.0 : d;
 }
 
-// The X4's mirror (raw) angle of a sample: the true direction less AngCorrect(d).
-double x4RawAngle(const SampleFeed::Sample& s) {
-  return s.distance_mm > 0 ? s.angle_deg - ydlidar::angleCorrectionDeg(s.distance_mm) : s.angle_deg;
-}
-
 }  // namespace
 
 std::deque<SampleFeed::Sample>& SampleFeed::pending(int64_t now_us) {
@@ -26,10 +21,12 @@ std::deque<SampleFeed::Sample>& SampleFeed::pending(int64_t now_us) {
   if (samples_.empty() || horizon <= now_us + 1000) {
     for (const Scan2D& scan : source_(now_us)) {
       for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
-        const double a = wrap360(scan.rayAngle(i) * 180.0 / M_PI);
-        const bool start = last_angle_ >= 0.0 && a < last_angle_ - 180.0;
-        last_angle_ = a;
-        samples_.push_back({scan.rayUtime(i), a, scan.ranges_m[i] * 1000.0, start});
+        const double motor =
+            wrap360((scan.angle_min_rad + scan.angle_increment_rad * double(i)) * 180.0 / M_PI);
+        const bool start = last_motor_ >= 0.0 && motor < last_motor_ - 180.0;
+        last_motor_ = motor;
+        samples_.push_back({scan.rayUtime(i), wrap360(scan.rayAngle(i) * 180.0 / M_PI), motor,
+                            scan.ranges_m[i] * 1000.0, start});
       }
     }
   }
@@ -42,6 +39,10 @@ void SampleFeed::skipTo(int64_t now_us) {
 }
 
 // ---- X4 ----------------------------------------------------------------------------------
+
+double X4Device::beamOffsetRad(double range_m) {
+  return ydlidar::angleCorrectionDeg(range_m * 1000.0) * M_PI / 180.0;
+}
 
 void X4Device::reset(int64_t now_us) {
   scanning_ = false;
@@ -66,8 +67,7 @@ void X4Device::receive(const uint8_t* data, size_t size, int64_t now_us, std::st
       *out += ydlidar::encodeDescriptor(5, 1, ydlidar::kTypeScan);
       feed_.skipTo(now_us);
       scanning_ = true;
-      last_sent_deg_ = last_sent_raw_ = -1.0;
-      turn_travel_deg_ = 0.0;
+      last_sent_motor_ = -1.0;
       target_ = 0;
     } else if (cmd == ydlidar::kCmdInfo) {
       *out += ydlidar::encodeInfo(ydlidar::kModelX4, 1, 5, 1, "2019031200000042");
@@ -77,46 +77,27 @@ void X4Device::receive(const uint8_t* data, size_t size, int64_t now_us, std::st
   }
 }
 
-// Whether `s`, coming after a sample at raw angle `prev_raw` (< 0: none since A5 60), starts a
-// turn: the first sample after A5 60 does, then the one whose raw (mirror) angle passes the
-// index mark, once the turn is more than 3/4 round (near objects make raw angles jitter).
-void X4Device::sent(const SampleFeed::Sample& s) {
-  if (last_sent_deg_ >= 0.0) {
-    turn_travel_deg_ += std::remainder(s.angle_deg - last_sent_deg_, 360.0);
-  }
-  last_sent_deg_ = s.angle_deg;
-  last_sent_raw_ = std::fmod(x4RawAngle(s) + 360.0, 360.0);
+// Whether `s`, coming after a sample at motor angle `prev_motor` (< 0: none since A5 60),
+// starts a turn: the first sample after A5 60 does, then each one whose motor angle passes the
+// index mark. As on a real X4, the first turn is a part of one (tests/data/real/README.md:
+// scan3's first zero packet at 227.5°, the next at 348.0° 236 samples later).
+bool X4Device::ringStart(const SampleFeed::Sample& s, double prev_motor) const {
+  if (prev_motor < 0.0) return true;
+  const double step = std::fmod(s.motor_deg - prev_motor + 360.0, 360.0);
+  const double to_mark = std::fmod(kIndexMarkDeg - prev_motor + 360.0, 360.0);
+  return to_mark > 0.0 && to_mark <= step;
 }
 
-bool X4Device::ringStart(const SampleFeed::Sample& s, double prev_raw) const {
-  if (prev_raw < 0.0) return true;
-  const double raw = std::fmod(x4RawAngle(s) + 360.0, 360.0);
-  const double step = std::fmod(raw - prev_raw + 360.0, 360.0);
-  const double to_mark = std::fmod(kIndexMarkDeg - prev_raw + 360.0, 360.0);
-  return turn_travel_deg_ > 270.0 && to_mark > 0.0 && to_mark <= step && step < 180.0;
-}
-
-// How many of the measured samples at the front of `q` the next packet takes (0: wait).
+// How many of the measured samples at the front of `q` the next packet takes (0: wait): up to
+// its chosen length, while its samples are measured and no turn starts.
 size_t X4Device::packetLength(const std::deque<SampleFeed::Sample>& q, int64_t now_us) {
-  const auto raw = [](const SampleFeed::Sample& s) { return x4RawAngle(s); };
   if (target_ == 0) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     target_ = u(rng_) < kShortPacketShare ? std::uniform_int_distribution<size_t>(1, 39)(rng_) : 40;
   }
-  // Grow while its samples are measured, no turn starts, and a linear interpolation of the
-  // raw angles stays within 0.01° of each one.
   size_t n = 1;
-  while (n < q.size() && n < target_ && q[n].utime <= now_us) {
-    if (ringStart(q[n], std::fmod(raw(q[n - 1]) + 360.0, 360.0))) break;
-    double span = raw(q[n]) - raw(q[0]);
-    span -= 360.0 * std::round(span / 360.0);
-    bool linear = true;
-    for (size_t i = 1; i < n && linear; ++i) {
-      double d = raw(q[i]) - raw(q[0]);
-      d -= 360.0 * std::round(d / 360.0);
-      linear = std::fabs(d - span * double(i) / double(n)) <= kLinearToleranceDeg;
-    }
-    if (!linear) break;
+  while (n < q.size() && n < target_ && q[n].utime <= now_us &&
+         !ringStart(q[n], q[n - 1].motor_deg)) {
     ++n;
   }
   // Wait while the packet can still grow: its next sample not measured yet (the source hands
@@ -134,13 +115,12 @@ void X4Device::advance(int64_t now_us, std::string* out) {
   }
   for (;;) {
     if (q.empty() || q.front().utime > now_us) return;
-    if (ringStart(q.front(), last_sent_raw_)) {
+    if (ringStart(q.front(), last_sent_motor_)) {
       // The zero packet: one sample, where the turn starts.
       const auto& s = q.front();
-      *out += ydlidar::encodePacket(true, x4RawAngle(s), x4RawAngle(s), {s.distance_mm});
+      *out += ydlidar::encodePacket(true, s.motor_deg, s.motor_deg, {s.distance_mm});
       last_full_ = false;
-      sent(s);
-      turn_travel_deg_ = 0.0;
+      last_sent_motor_ = s.motor_deg;
       q.pop_front();
       continue;
     }
@@ -148,8 +128,8 @@ void X4Device::advance(int64_t now_us, std::string* out) {
     if (n == 0) return;
     std::vector<double> d(n);
     for (size_t i = 0; i < n; ++i) d[i] = q[i].distance_mm;
-    const double first = x4RawAngle(q[0]);
-    double last = x4RawAngle(q[n - 1]);
+    const double first = q[0].motor_deg;
+    double last = q[n - 1].motor_deg;
     // Now and then a packet whose LSA lies just below its FSA, as a real X4 sends
     // (tests/data/real/README.md): the host keeps the previous packet's step.
     std::uniform_real_distribution<double> u(0.0, 1.0);
@@ -160,10 +140,8 @@ void X4Device::advance(int64_t now_us, std::string* out) {
     }
     *out += ydlidar::encodePacket(false, first, last, d);
     last_full_ = n == 40;
-    for (size_t i = 0; i < n; ++i) {
-      sent(q.front());
-      q.pop_front();
-    }
+    last_sent_motor_ = q[n - 1].motor_deg;
+    q.erase(q.begin(), q.begin() + static_cast<std::ptrdiff_t>(n));
     target_ = 0;
   }
 }

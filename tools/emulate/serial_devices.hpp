@@ -7,11 +7,14 @@
 // X4: identity model 6 (X4), firmware 1.5, hardware 1. Packets of 40 samples, some cut short
 // (1 to 39, at random), sent when their last sample has been measured; the zero packet (CT bit
 // 0, one sample) where the turn starts: the first sample after A5 60 wherever it is, then
-// where the device passes its index mark (348°), as a real X4 does; now and then a packet
-// whose LSA lies below its FSA, off the 360 -> 0 wrap. The X4 reports mirror (raw) angles: raw
-// = true - AngCorrect(d); the host interpolates raw angles linearly inside a packet, so a
-// packet is closed early where that interpolation would be off by more than
-// kLinearToleranceDeg for one of its samples.
+// where the motor passes its index mark (348°), as a real X4 does; now and then a packet
+// whose LSA lies below its FSA, off the 360 -> 0 wrap. As the hardware does, the X4 reports
+// its motor angles (FSA, LSA: evenly stepped, as the motor turns evenly and samples at a
+// steady rate: the scans' grid of rays), and the host adds AngCorrect(d) to each sample
+// (X4 development manual); the triangulation geometry makes the beam look off the motor angle
+// by just that, so the source must cast each ray along motor + AngCorrect(range)
+// (beamOffsetRad, castBeam in sim/beam.hpp; Scan2D::angles_rad), and the host then puts
+// every sample where it was measured.
 // RPLIDAR A1: identity model 0x18 (A1M8), firmware 1.29, hardware 7; 5-byte samples, S = 1
 // on the first sample of each turn (at the 0° mark), quality 47 for a return, 0 for none;
 // RESET prints the A1's start-up banner. Neither device answers while it is scanning except
@@ -33,9 +36,10 @@ class SampleFeed {
   explicit SampleFeed(ScanSource source) : source_(std::move(source)) {}
   struct Sample {
     int64_t utime;
-    double angle_deg;  // device angle, [0, 360)
+    double angle_deg;  // device angle where the ray looked, [0, 360)
+    double motor_deg;  // the motor's angle then, [0, 360): the scan's grid
     double distance_mm;
-    bool turn_start;  // the first sample at or past the 0° mark
+    bool turn_start;  // the first sample whose motor angle is at or past the 0° mark
   };
   // Samples measured by now_us, oldest first, each once.
   std::deque<Sample>& pending(int64_t now_us);
@@ -45,7 +49,7 @@ class SampleFeed {
  private:
   ScanSource source_;
   std::deque<Sample> samples_;
-  double last_angle_ = -1.0;
+  double last_motor_ = -1.0;
 };
 
 class X4Device : public EmulatedLidar {
@@ -56,25 +60,22 @@ class X4Device : public EmulatedLidar {
   static constexpr double kIndexMarkDeg = 348.0;
   static constexpr double kShortPacketShare = 0.09;
   static constexpr double kAnomalyShare = 1.0 / 2000.0;
-  // A packet ends early where the host's linear interpolation of its raw angles would miss a
-  // sample's by more than this (the X4's own resolution is 0.5°).
-  static constexpr double kLinearToleranceDeg = 0.1;
+  // Where the X4's beam looks off its motor angle [rad] for the range measured along it [m]
+  // (the X4 development manual's AngCorrect; 0 without a return).
+  static double beamOffsetRad(double range_m);
   explicit X4Device(ScanSource source, uint64_t seed = 22) : feed_(std::move(source)), rng_(seed) {}
   void receive(const uint8_t* data, size_t size, int64_t now_us, std::string* out) override;
   void advance(int64_t now_us, std::string* out) override;
   void reset(int64_t now_us) override;
 
  private:
-  bool ringStart(const SampleFeed::Sample& s, double prev_raw) const;
-  void sent(const SampleFeed::Sample& s);
+  bool ringStart(const SampleFeed::Sample& s, double prev_motor) const;
   size_t packetLength(const std::deque<SampleFeed::Sample>& q, int64_t now_us);
   SampleFeed feed_;
   std::string command_;
   bool scanning_ = false;
-  double last_sent_deg_ = -1.0;   // the last sample sent: its angle; < 0: none yet
-  double last_sent_raw_ = -1.0;   // and its raw (mirror) angle
-  double turn_travel_deg_ = 0.0;  // since the last zero packet
-  size_t target_ = 0;             // the packet being filled: its length, 0 = not chosen yet
+  double last_sent_motor_ = -1.0;  // the last sample sent: its motor angle; < 0: none yet
+  size_t target_ = 0;              // the packet being filled: its length, 0 = not chosen yet
   std::mt19937_64 rng_;
   bool last_full_ = false;  // the last packet sent had 40 samples
 };

@@ -79,7 +79,11 @@ class RotatingWorld : public EmulatorWorld {
     }
   }
 
-  ScanSource source() override {
+  ScanSource source(const BeamOffset& beam) override {
+    if (beam) {
+      throw std::runtime_error(
+          "a lidar whose beam looks off its motor angle (the X4) needs a mobile_lidar rig");
+    }
     return [this](int64_t now_us) {
       std::lock_guard<std::mutex> lock(mutex_);
       std::vector<Scan2D> scans = lidar_->poll(now_us);
@@ -159,8 +163,8 @@ class MobileWorld : public EmulatorWorld {
     return {locked_truth_.get()};
   }
 
-  ScanSource source() override {
-    return [this](int64_t now_us) {
+  ScanSource source(const BeamOffset& beam) override {
+    return [this, beam](int64_t now_us) {
       std::lock_guard<std::mutex> lock(mutex_);
       std::vector<Scan2D> out;
       if (!started_) {
@@ -172,7 +176,7 @@ class MobileWorld : public EmulatorWorld {
       }
       for (;;) {
         if (!pending_) {
-          pending_ = car_->makeScan(next_, next_ < 0 ? &lead_rng_ : &rng_);
+          pending_ = car_->makeScan(next_, next_ < 0 ? &lead_rng_ : &rng_, beam);
           ++next_;
         }
         // As the scan begins: a sample-streaming device sends each ray at its own time.

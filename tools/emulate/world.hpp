@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "processes/node.hpp"
+#include "sim/beam.hpp"
 #include "tools/emulate/emulated_lidar.hpp"
 #include "tools/emulate/odometry_emulators.hpp"
 
@@ -38,8 +39,11 @@ struct EmulatorWorldOptions {
 class EmulatorWorld {
  public:
   virtual ~EmulatorWorld() = default;
-  // Scans completed (delivered) by now_us, each once. Safe to call from any thread.
-  virtual ScanSource source() = 0;
+  // Scans completed (delivered) by now_us, each once, their rays on the motor's grid of
+  // angles; with a beam offset (the device's: beamOffsetOf, tools/emulate/devices.hpp) each
+  // ray looks where that beam does (Scan2D::angles_rad). Safe to call from any thread. Throws
+  // std::runtime_error for a beam offset in a world without it (rotating_lidar rigs).
+  virtual ScanSource source(const BeamOffset& beam) = 0;
   // mobile_lidar worlds: the car's IMU samples and encoder readings by now_us, each once.
   // Throws std::runtime_error for a world without them.
   virtual ImuSource imuSource();
