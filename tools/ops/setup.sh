@@ -37,6 +37,7 @@ packages=(
   libwebsocketpp-dev libasio-dev  # sweepmap view: HTTP and WebSocket server (header-only)
   libjs-three                     # sweepmap view: three.js, served from /usr/share/javascript
   chromium                        # browser tests of the view and off-screen 3D renderings
+  cloudcompare pcl-tools xvfb     # other programs open our PLYs (tests/e2e/other_tools.sh)
 )
 # The on-board tree for arm64: only packages that are Multi-Arch: same (co-installable with
 # their amd64 twins) or host tools. liblcm1, liblcm-dev and libyaml-cpp-dev are not
