@@ -85,7 +85,7 @@ pclviewer() {
   timeout 60 xvfb-run -a bash "$here/other_tools.sh" --watch-viewer "$pcd" "$log" || rc=$?
   [ "$rc" -eq 0 ] || fail "pcl_viewer under xvfb-run exited $rc on $pcd (log: $dir/$log)"
   grep -q "\[done, .* : $want points\]" "$log" ||
-    fail "pcl_viewer did not load $want points from $pcd: $(grep -a done "$log" || true)"
+    fail "pcl_viewer did not load $want points from $pcd: $(grep -a "done" "$log" || true)"
 }
 
 for i in 0 1 2; do
