@@ -9,23 +9,16 @@
 // fits the camera and saves a 768x480 screenshot. Prints one JSON object: what the page shows.
 'use strict';
 const path = require('path');
-const { launch, openPage, until } = require(path.join(__dirname, '../../tests/js/browser.js'));
+const js = path.join(__dirname, '../../tests/js');
+const { launch, openPage } = require(path.join(js, 'browser.js'));
+const { untilAllSent } = require(path.join(js, 'view_page.js'));
 
 async function waitFor(page, when) {
   const [what, value] = when.split('=');
   const n = Number(value);
   if (what === 'seconds') return new Promise((r) => setTimeout(r, n * 1000));
   if (what !== 'sweeps') throw new Error(`WHEN: '${when}' is neither sweeps=N nor seconds=S`);
-  return until(page, (k) => {
-    const v = window.sweepmapView, s = v.status;
-    if (!s || v.sweeps() < k || !s.board || !s.board.mapper || s.board.mapper.sweeps < k) return false;
-    if (s.you.queued_frames !== 0 || window.__lastSeq === v.statusSeq) return false;
-    window.__lastSeq = v.statusSeq;
-    const sent = `${s.you.points} ${s.board.view_model.chunks}`;
-    const quiet = window.__lastSent === sent;
-    window.__lastSent = sent;
-    return quiet;
-  }, 600, `${n} sweeps drawn and mapped`, n);
+  return untilAllSent(page, 600, `${n} sweeps drawn and mapped`, n);
 }
 
 async function main() {
