@@ -133,7 +133,7 @@ bench: build
 
 # The view's figures in headless chromium beside a live rig-A run of 3 mode-7 sweeps (2 M
 # points on screen): frame rate, latency from a sweep's end to its drawing, server CPU per
-# client (tools/bench/bench_view.sh; about 2 minutes, root).
+# client (tools/bench/bench_view.sh; 4-6 minutes, root).
 bench-view: build
 	bash tools/bench/bench_view.sh $(BUILD)/bin $(BUILD)/bench/view
 
