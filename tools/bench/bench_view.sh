@@ -3,15 +3,16 @@
 #   tools/bench/bench_view.sh BIN_DIR [WORK_DIR] [SWEEPS]
 # 1. Live: `sweepmap demo` runs rig A's processes in its private network namespace for SWEEPS
 #    (3) mode-7 sweeps (about 680 k points each); a `sweepmap view` in that namespace serves
-#    them to headless Debian chromium (tests/js/view_bench_live.js), connected from the start.
+#    them to headless Debian chromium (tests/js/view_bench_page.js), connected from the start.
 #    Prints what the view received of the SWEEP_CLOUD chunks the recorder logged, and the
 #    latency from a sweep's end (its chunks reaching the view as the assembler publishes them)
 #    to the page's first frame that draws them: median, 90 %, max over every chunk.
 # 2. The recorded log: `sweepmap view LOG --point-budget 2100000` at the log's end holds every
 #    point of the sweeps (about 2.05 M; the default budget, 2 M, would halve the oldest sweep)
-#    (tests/js/view_bench.js): the frame rate with all of them (10 s, camera fitted); then the server's CPU per connected client
-#    (tests/js/view_clients.js, 4 WebSocket readers): CPU-seconds to send one client the whole
-#    state, and the share of a core each costs while connected (status frames, 10 s).
+#    (tests/js/view_bench_page.js --log): the frame rate with all of them (10 s, camera
+#    fitted); then the server's CPU per connected client (tests/js/view_clients.js, 4
+#    WebSocket readers): CPU-seconds to send one client the whole state, and the share of a
+#    core each costs while connected (status frames, 10 s).
 # Needs root (the namespace), node with tests/js/node_modules and chromium (tools/ops/setup.sh).
 # Prints figures, asserts nothing; run on an idle machine (chromium draws with SwiftShader,
 # a software renderer, so the frame rate is the CPU's).
@@ -51,7 +52,7 @@ ns="/proc/$demo/ns/net"
 nsenter --net="$ns" "$bin/sweepmap" view --rig rig_a --lcm-url "$url" --port 8080 >"$work/view_live.txt" 2>&1 &
 view=$!
 pids+=("$view")
-nsenter --net="$ns" node "$js/view_bench_live.js" http://127.0.0.1:8080/ "$work/done" 2 \
+nsenter --net="$ns" node "$js/view_bench_page.js" http://127.0.0.1:8080/ "$work/done" 2 \
   >"$work/live.json" 2>"$work/live.txt" &
 page=$!
 pids+=("$page")
@@ -71,7 +72,7 @@ unshare --net bash -c '
     >"$2/view_log.txt" 2>&1 &
   view=$!
   for _ in $(seq 100); do (exec 3<>/dev/tcp/127.0.0.1/8080) 2>/dev/null && break; sleep 0.1; done
-  node "$3/view_bench.js" http://127.0.0.1:8080/ 10 >"$2/log.json" 2>"$2/log.txt" || true
+  node "$3/view_bench_page.js" http://127.0.0.1:8080/ --log 10 >"$2/log.json" 2>"$2/log.txt" || true
   node "$3/view_clients.js" ws://127.0.0.1:8080/ws 4 10 "$view" >"$2/clients.json" 2>&1 || true
   kill "$view"; wait "$view" 2>/dev/null || true
 ' bench_view "$bin" "$work" "$js"

@@ -18,7 +18,7 @@ async function waitFor(page, when) {
   const n = Number(value);
   if (what === 'seconds') return new Promise((r) => setTimeout(r, n * 1000));
   if (what !== 'sweeps') throw new Error(`WHEN: '${when}' is neither sweeps=N nor seconds=S`);
-  return untilAllSent(page, 600, `${n} sweeps drawn and mapped`, n);
+  return untilAllSent(page, 600, `${n} sweeps drawn and mapped`, { sweeps: n });
 }
 
 async function main() {

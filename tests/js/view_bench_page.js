@@ -1,13 +1,15 @@
-// Figures of `sweepmap view` beside a live run, in headless chromium (tools/bench/bench_view.sh):
-//   node view_bench_live.js URL DONE_FILE SECONDS
-// Connects before the run publishes, records the latency of every cloud chunk from the view's
-// receipt (the assembler's publication at a sweep's end, on the same host) to the page's first
-// frame that draws it; once DONE_FILE exists (the run has ended) and the server has sent
-// everything, fits the camera and counts the frames drawn in SECONDS. Prints one JSON object:
-// points, sweeps and voxels on screen, frames per second, latency quantiles, the renderer.
+// Figures of `sweepmap view` in headless chromium (tools/bench/bench_view.sh):
+//   node view_bench_page.js URL DONE_FILE SECONDS   beside a live run
+//   node view_bench_page.js URL --log SECONDS       a log view, at the log's end
+// Live, it connects before the run publishes and records the latency of every cloud chunk from
+// the view's receipt (the assembler's publication at a sweep's end, on the same host) to the
+// page's first frame that draws it, until DONE_FILE exists (the run has ended). A log view is
+// paused and moved to the log's end. Then, once the server has sent everything, it fits the
+// camera and counts the frames drawn in SECONDS. Prints one JSON object: points, sweeps and
+// voxels on screen, what the view received, frames per second, latency quantiles, the renderer.
 'use strict';
 const { launch, openPage } = require('./browser.js');
-const { untilAllSent, waitForFile } = require('./view_page.js');
+const { poll, sleep, untilAllSent, waitForFile } = require('./view_page.js');
 
 function quantiles(values) {
   const v = values.slice().sort((a, b) => a - b);
@@ -22,12 +24,21 @@ async function main() {
   const out = { errors };
   try {
     const page = await openPage(browser, url, errors);
-    await waitForFile(doneFile, 900);
-    await untilAllSent(page, 300, 'everything sent');
+    const log = doneFile === '--log';
+    if (log) {
+      await poll(page, () => !!window.sweepmapView.time, null, 30, 'the log\'s time');
+      await page.evaluate(() => {
+        window.sweepmapView.pause();
+        window.sweepmapView.seek(window.sweepmapView.time.end);
+      });
+    } else {
+      await waitForFile(doneFile, 900);
+    }
+    await untilAllSent(page, 600, 'everything sent', { logEnd: log });
     await page.evaluate(() => window.sweepmapView.setCamera('fit'));
     const f0 = await page.evaluate(() => window.sweepmapView.frames);
     const t0 = Date.now();
-    await new Promise((r) => setTimeout(r, Number(secondsArg) * 1000));
+    await sleep(Number(secondsArg) * 1000);
     const f1 = await page.evaluate(() => window.sweepmapView.frames);
     out.fps = +((f1 - f0) / ((Date.now() - t0) / 1000)).toFixed(2);
     Object.assign(out, await page.evaluate(() => {
