@@ -42,7 +42,7 @@ SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt
 FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
 
 .PHONY: all setup setup-pi build demo test test-unit test-sanitize fuzz pi pi-build package \
-        format format-check bench docs clean
+        format format-check bench bench-view docs clean
 
 all: build
 
@@ -130,6 +130,12 @@ docs: setup $(BUILD)/Makefile
 bench: build
 	$(BUILD)/bin/sweepmap bench --work $(BUILD)/bench
 	$(BUILD)/bin/bench_net
+
+# The view's figures in headless chromium beside a live rig-A run of 3 mode-7 sweeps (2 M
+# points on screen): frame rate, latency from a sweep's end to its drawing, server CPU per
+# client (tools/bench/bench_view.sh; 4-6 minutes, root).
+bench-view: build
+	bash tools/bench/bench_view.sh $(BUILD)/bin $(BUILD)/bench/view
 
 clean:
 	rm -rf $(BUILD) $(SANITIZE_BUILD) $(PI_BUILD) out

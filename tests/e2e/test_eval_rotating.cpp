@@ -209,7 +209,7 @@ TEST(EvalRotating, SmallPaperExperiment) {
        {"fig8_top_view_mode1.png", "fig9_phi_error.png", "fig10_phi_error_stats.png",
         "fig11_map_error_mode1.png", "figA2_wall_deviations_mode7.png",
         "fig_alpha_calibration_cost.png", "fig_alpha_calibration_alpha.png",
-        "fig1_naive_top_view.png", "fig1_shape_deviations.png"}) {
+        "fig1_naive_top_view.png", "fig1_shape_deviations.png", "cloud_3d.png", "map_3d.png"}) {
     EXPECT_TRUE(isPng(dir / png)) << png;
   }
   expectFiguresExistAndReferenced(dir, report);

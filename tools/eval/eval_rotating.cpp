@@ -93,6 +93,7 @@ PaperRun startPaperRun(const PaperExperimentOptions& o) {
   e.calib_sweeps = o.calib_sweeps;
   e.naive = o.naive;
   e.rig = run.rig;
+  run.in.mapper = run.rig.mapper;
   return run;
 }
 
@@ -232,6 +233,7 @@ EvalRotatingResult evalRotatingLogs(const EvalRotatingOptions& o) {
   in.inputs.logs = o.logs;
   in.inputs.rig = o.rig_path;
   in.inputs.overrides = o.overrides;
+  in.mapper = o.rig.mapper;
   for (size_t i = 0; i < o.logs.size(); ++i) {
     progressLine(
         s, "log " + std::to_string(i + 1) + "/" + std::to_string(o.logs.size()) + ": " + o.logs[i]);

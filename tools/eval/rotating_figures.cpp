@@ -5,8 +5,10 @@
 #include <map>
 
 #include "core/angles.hpp"
+#include "mapping/occupancy_map.hpp"
 #include "mapping/plot.hpp"
 #include "tools/eval/common.hpp"
+#include "tools/offline/views_3d.hpp"
 
 namespace sweepmap::eval {
 namespace {
@@ -414,12 +416,39 @@ void shapeDeviationsFigure(const ReportInput& in, Figures* fig) {
            [&](const std::string& png) { plotSeries(png, hs, fo); });
 }
 
+// --- 3D pictures: one sweep of the densest mode and its map, as the replay draws them ------
+
+void views3dFigures(const ReportInput& in, Figures* fig) {
+  const auto densest = std::max_element(in.modes.begin(), in.modes.end(), [](auto& a, auto& b) {
+    return a.second.first_sweep_O.size() < b.second.first_sweep_O.size();
+  });
+  if (densest == in.modes.end() || densest->second.first_sweep_O.empty()) return;
+  const int mode = densest->first;
+  const std::vector<Eigen::Vector3f>& cloud = densest->second.first_sweep_O;
+  const std::string what = "rig A eval, mode " + std::to_string(mode) + ", first sweep";
+  const ZBand band = wallBand(cloud);  // the room's ceiling would hide it from above
+  fig->add("cloud_3d.png",
+           "The first mode-" + std::to_string(mode) +
+               " sweep (C_O) in perspective, shaded by height, the ceiling left out: walls "
+               "should stand straight and meet at the corners, the floor lie flat.",
+           [&](const std::string& png) { drawCloud3d(png, what, "O", cloud, band); });
+  fig->add("map_3d.png",
+           "The same sweep's occupied voxels, as the mapper inserts it (rays from the axis), "
+           "in perspective.",
+           [&](const std::string& png) {
+             OccupancyMap map(in.mapper);
+             map.insertCloud(cloud, Eigen::Vector3f::Zero());  // rig A: the lidar on the axis
+             drawMap3d(png, what, map.occupiedCentres(), in.mapper.resolution_m, band);
+           });
+}
+
 }  // namespace
 
 void drawFigures(const ReportInput& in, const EvalSettings& s, bool has_truth, Figures* fig) {
   for (const auto& [mode, g] : in.modes) {
     if (!g.top_O.empty()) topViewFigure(mode, g, s, fig);
   }
+  views3dFigures(in, fig);
   if (has_truth) {
     phiErrorFigure(in, fig);
     phiErrorCorrectedFigure(in, fig);

@@ -124,7 +124,10 @@ void addToGroup(const AssembledSweep& sw, const SweepRecord& r, const EvalSettin
   if (top_views) {
     appendTopView(sw.points_Op, s, &g->top_Op);
     appendTopView(sw.points, s, &g->top_O);
-    if (g->sweeps.empty()) g->first_sweep_top_points = g->top_Op.size();
+    if (g->sweeps.empty()) {
+      g->first_sweep_top_points = g->top_Op.size();
+      g->first_sweep_O = sw.points;
+    }
   }
 }
 

@@ -70,6 +70,7 @@ struct Group {
   DeviationStats deviations;
   std::vector<Eigen::Vector3f> top_Op, top_O;  // Fig. 8, subsampled
   size_t first_sweep_top_points = 0;           // top_Op points of the first sweep
+  std::vector<Eigen::Vector3f> first_sweep_O;  // its whole C_O: the 3D pictures
 };
 
 struct LogStatus {

@@ -46,6 +46,7 @@ struct ReportInput {
   double alpha_eval_deg = 0.0, alpha_eval_centroid_deg = 0.0;
   std::optional<double> alpha_true_rad;
   std::map<std::string, double> timings_s;  // seconds by step
+  MapperConfig mapper;                      // the rig's: the 3D map picture's voxels
 };
 
 // Draws the figures, then writes report.json and report.md into `out`.

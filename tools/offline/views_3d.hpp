@@ -19,6 +19,14 @@ void drawViews3d(const std::filesystem::path& out, const std::string& tool, cons
                  const std::string& frame, const std::vector<Eigen::Vector3f>& cloud,
                  const std::vector<Eigen::Vector3f>& map_voxels, double voxel_m, bool room);
 
+struct ZBand;
+// Each picture alone, for a report that lists its figures (tools/eval): throws when it cannot
+// be drawn. Points above `band.max` (a valid band: the ceiling) are left out.
+void drawCloud3d(const std::string& png, const std::string& what, const std::string& frame,
+                 const std::vector<Eigen::Vector3f>& cloud, const ZBand& band);
+void drawMap3d(const std::string& png, const std::string& what,
+               const std::vector<Eigen::Vector3f>& map_voxels, double voxel_m, const ZBand& band);
+
 // The z band of a building's walls: above the floor and below the ceiling (the 2nd and 98th
 // percentiles of z, moved `margin_m` inwards), so a top view shows walls, not the floor and
 // ceiling that cover them. Unset when the cloud is too flat for such a band.

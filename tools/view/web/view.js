@@ -343,11 +343,12 @@ $('play').addEventListener('click', () => send({ type: state.time && state.time.
 $('speed').addEventListener('change', () => send({ type: 'speed', value: Number($('speed').value) }));
 
 // ---- Controls ----------------------------------------------------------------------------
+// The drawn points only: a sweep's buffers hold zeros (or thinned points) past its count.
 function bounds() {
   const box = new THREE.Box3();
+  const p = new THREE.Vector3();
   for (const s of state.sweeps.values()) {
-    s.geometry.computeBoundingBox();
-    if (s.count > 0) box.union(s.geometry.boundingBox);
+    for (let k = 0; k < s.count; k++) box.expandByPoint(p.fromArray(s.positions, 3 * k));
   }
   return box;
 }
