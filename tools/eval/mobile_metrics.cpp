@@ -56,6 +56,14 @@ double planeDistance(const WallPlaneFit& a, const std::vector<Eigen::Vector3f>& 
                 std::abs(signedDistance(b, inlierCentroid(cloud_a, a.inlier_indices))));
 }
 
+// The mean signed distance from `plane` of the inliers of `fit` (indices into `points`).
+double meanOffset(const WallPlaneFit& plane, const std::vector<Eigen::Vector3f>& points,
+                  const WallPlaneFit& fit) {
+  double sum = 0.0;
+  for (int i : fit.inlier_indices) sum += signedDistance(plane, points[size_t(i)].cast<double>());
+  return sum / double(fit.inlier_indices.size());
+}
+
 // --- the room ------------------------------------------------------------------------------
 
 RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud) {
@@ -193,7 +201,17 @@ void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts,
     // The late pass's plane through its points near the early plane, then its own inliers.
     const auto late = refitWalls(late_pts, refit, po.distance_threshold_m);
     if (late.empty() || late[0].inliers < 100) continue;
-    LoopClosure::Plane p{e, late[0], planeDistance(e, early_pts, late[0], late_pts)};
+    // The two passes' copies apart along the early wall's horizontal normal (a wall is
+    // vertical): each pass's inliers averaged. A RANSAC plane through a far wall's sparse points
+    // can tilt by a degree; the distance of one pass's plane from the other's centroid then
+    // grows with the height between the centroids, not with the ghost (29 mm on the lab's wall
+    // 5 m off, where the passes' own offsets agree to a few millimetres).
+    WallPlaneFit vertical = e;
+    vertical.normal.z() = 0.0;
+    vertical.normal.normalize();
+    const double distance_m =
+        std::abs(meanOffset(vertical, late_pts, late[0]) - meanOffset(vertical, early_pts, e));
+    LoopClosure::Plane p{e, late[0], distance_m};
     lc->planes.push_back(p);
     lc->ghost_m = std::max(lc->ghost_m.value_or(0.0), p.distance_m);
   }
@@ -286,12 +304,7 @@ HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track,
     // inliers averaged, so a far, sparse wall's noisy tilt does not reach the other copy
     // over a lever of metres (as the distance of one half's plane from the other's
     // centroid did: 16 mm on the lab's far wall, 10 m from the circle, after calibration).
-    const auto meanOffset = [&](const std::vector<Eigen::Vector3f>& half, const WallPlaneFit& fit) {
-      double sum = 0.0;
-      for (int i : fit.inlier_indices) sum += signedDistance(w, half[size_t(i)].cast<double>());
-      return sum / double(fit.inlier_indices.size());
-    };
-    const double d = std::abs(meanOffset(g.left, *l) - meanOffset(g.right, *r));
+    const double d = std::abs(meanOffset(w, g.left, *l) - meanOffset(w, g.right, *r));
     g.walls.wall_distance_m.push_back(d);
     g.walls.max_m = std::max(g.walls.max_m.value_or(0.0), d);
   }
