@@ -12,6 +12,7 @@
 #include <stdexcept>
 #include <tuple>
 
+#include "calib/parameter_information.hpp"
 #include "calib/rotating_geometry.hpp"
 #include "core/angles.hpp"
 
@@ -398,26 +399,53 @@ std::vector<double> plateMismatches(const std::vector<RigASweep>& sweeps, const 
   return m;
 }
 
-// Covariance of (alpha, x, tilt, mirror) in their own units (rad, mm, rad, rad); NaN when
-// it cannot be computed.
+// The problem's variable blocks: the nuisance (per sweep its attitude and planes) and the
+// parameters (g, alpha), in the state's order.
+void variableBlocks(Built* b, State* st, std::vector<double*>* nuisance,
+                    std::vector<double*>* parameters) {
+  const auto variable = [&](double* p) {
+    return b->problem->HasParameterBlock(p) && !b->problem->IsParameterBlockConstant(p);
+  };
+  const auto add = [&](std::vector<double*>* to, double* p) {
+    if (variable(p)) to->push_back(p);
+  };
+  for (SweepState& ss : st->sweeps) {
+    add(nuisance, &ss.phi);
+    for (size_t k = 0; k < ss.rays.size(); ++k) {
+      if (ss.wall_class[k] >= 0) {
+        add(nuisance, ss.wall[k].data());
+      } else {
+        add(nuisance, ss.normal[k].data());
+        add(nuisance, &ss.distance[k]);
+      }
+    }
+  }
+  add(parameters, st->g);
+  add(parameters, &st->alpha);
+}
+
+// Covariance of (alpha, x, tilt, mirror) in their own units (rad, mm, rad, rad), 0 for a held
+// one (calib/parameter_information.hpp: a fixed order, the same bytes every run); NaN when it
+// cannot be computed.
 Eigen::Matrix4d covariance(Built* b, State* st) {
   Eigen::Matrix4d c = Eigen::Matrix4d::Constant(std::numeric_limits<double>::quiet_NaN());
-  ceres::Covariance::Options co;
-  co.num_threads = 1;
-  co.algorithm_type = ceres::SPARSE_QR;
-  co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;  // deterministic (axis_offset.cpp)
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> pairs = {
-      {st->g, st->g}, {&st->alpha, &st->alpha}, {&st->alpha, st->g}};
-  if (!cov.Compute(pairs, b->problem.get())) return c;
-  double gg[9], aa = 0, ag[3];
-  cov.GetCovarianceBlock(st->g, st->g, gg);
-  cov.GetCovarianceBlock(&st->alpha, &st->alpha, &aa);
-  cov.GetCovarianceBlock(&st->alpha, st->g, ag);
-  c(0, 0) = aa;
+  std::vector<double*> nuisance, parameters;
+  variableBlocks(b, st, &nuisance, &parameters);
+  // The parameters' tangent coordinates: g's free components in order, then alpha.
+  const bool g_free = !parameters.empty() && parameters.front() == st->g;
+  std::vector<int> index;
   for (int i = 0; i < 3; ++i) {
-    c(0, i + 1) = c(i + 1, 0) = ag[i];
-    for (int j = 0; j < 3; ++j) c(i + 1, j + 1) = gg[3 * i + j];
+    if (g_free && !st->held[i + 1]) index.push_back(i + 1);
+  }
+  if (!parameters.empty() && parameters.back() == &st->alpha) index.push_back(0);
+  const ParameterInformation info = eliminatedInformation(b->problem.get(), nuisance, parameters);
+  if (!info.ok || info.information.rows() != Eigen::Index(index.size())) return c;
+  const Eigen::MatrixXd t = covarianceFromInformation(info.information);
+  if (!t.allFinite()) return c;
+  c.setZero();
+  for (size_t i = 0; i < index.size(); ++i) {
+    for (size_t j = 0; j < index.size(); ++j)
+      c(index[i], index[j]) = t(Eigen::Index(i), Eigen::Index(j));
   }
   return c;
 }
