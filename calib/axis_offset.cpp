@@ -9,6 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "calib/parameter_information.hpp"
+
 namespace sweepmap {
 
 namespace {
@@ -291,53 +293,37 @@ double rmsOf(Problem* p) {
   return std::sqrt(2.0 * cost / std::max<size_t>(1, p->residuals));
 }
 
-// How well the planes determine the rig's estimated parameters (names[i]): the Jacobian
-// (columns: every plane's tangent parameters, then the rig's) is QR-factorised, so the last
-// block of R is the rig's information with the planes eliminated (R22^T R22), without forming
-// J^T J. Its columns are scaled to unit length; a singular value near 0 is a direction of the
-// rig's parameters that no plane constrains.
+// How well the planes determine the rig's estimated parameters (names[i]): their information
+// with the planes eliminated (calib/parameter_information.hpp, in a fixed order), scaled by
+// their Jacobian columns' norms; a singular value near 0 is a direction of the rig's
+// parameters that no plane constrains.
 struct Observability {
   std::vector<std::string> names;
   Eigen::VectorXd singular_values;  // ascending
   Eigen::MatrixXd directions;       // columns: the matching right singular vectors
-  // R22^T R22 unscaled: J^T J of the rig's parameters (in `names`' order) with the planes
-  // eliminated; its inverse is their covariance per unit residual variance.
+  // J^T J of the rig's parameters (in `names`' order) with the planes eliminated; its inverse
+  // is their covariance per unit residual variance.
   Eigen::MatrixXd information;
 };
 
 Observability analyse(Problem* p, const std::vector<double*>& rig_blocks,
                       const std::vector<std::string>& rig_names) {
-  ceres::Problem::EvaluateOptions eo;
+  std::vector<double*> planes;
   for (size_t k = 0; k < p->normals.size(); ++k) {
-    eo.parameter_blocks.push_back(p->normals[k].data());
-    eo.parameter_blocks.push_back(&p->distances[k]);
+    planes.push_back(p->normals[k].data());
+    planes.push_back(&p->distances[k]);
   }
-  eo.parameter_blocks.insert(eo.parameter_blocks.end(), rig_blocks.begin(), rig_blocks.end());
-  ceres::CRSMatrix crs;
-  p->problem->Evaluate(eo, nullptr, nullptr, nullptr, &crs);
-  Eigen::MatrixXd j = Eigen::MatrixXd::Zero(crs.num_rows, crs.num_cols);
-  for (int r = 0; r < crs.num_rows; ++r) {
-    for (int a = crs.rows[r]; a < crs.rows[r + 1]; ++a) j(r, crs.cols[a]) = crs.values[a];
-  }
+  const ParameterInformation info = eliminatedInformation(p->problem.get(), planes, rig_blocks);
   const auto k = static_cast<Eigen::Index>(rig_names.size());
-  const Eigen::Index rest = crs.num_cols - k;
-  const Eigen::HouseholderQR<Eigen::MatrixXd> qr(j);
-  Eigen::MatrixXd r22 = qr.matrixQR()
-                            .topRows(crs.num_cols)
-                            .template triangularView<Eigen::Upper>()
-                            .toDenseMatrix()
-                            .bottomRightCorner(k, k);
-  const Eigen::MatrixXd information = r22.transpose() * r22;
-  for (Eigen::Index c = 0; c < k; ++c) {
-    // Scale by the full column's norm: how much of what the data say about the parameter
-    // is left once the planes have taken their share.
-    const double norm = j.col(rest + c).norm();
-    if (norm > 0) r22.col(c) /= norm;
+  if (!info.ok) {
+    return {rig_names, Eigen::VectorXd::Zero(k), Eigen::MatrixXd::Identity(k, k),
+            Eigen::MatrixXd::Zero(k, k)};
   }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(r22, Eigen::ComputeFullV);
-  Observability o{rig_names, svd.singularValues().reverse(), svd.matrixV().rowwise().reverse(),
-                  information};
-  return o;
+  // The scaled information is R22^T R22 of the scaled Jacobian: its eigenvalues are the
+  // squares of R22's singular values (ascending), its eigenvectors their directions.
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaledInformation(info));
+  return {rig_names, eig.eigenvalues().cwiseMax(0.0).cwiseSqrt(), eig.eigenvectors(),
+          info.information};
 }
 
 // Solves with the optional parameters asked for; one the planes cannot determine is held at
@@ -401,12 +387,11 @@ void flagUnobservable(const Observability& obs, AxisOffsetResult* r) {
 
 // r->covariance and the sigmas: rows M, N [mm], tilt, zero [deg].
 void fillCovariance(const Observability& obs, double variance, AxisOffsetResult* r) {
-  const Eigen::FullPivLU<Eigen::MatrixXd> lu(obs.information);
-  if (!lu.isInvertible()) {
+  const Eigen::MatrixXd unit = covarianceFromInformation(obs.information);
+  if (!unit.allFinite()) {
     r->warnings.push_back("the covariance is singular: no standard deviations");
     return;
   }
-  const Eigen::MatrixXd unit = lu.inverse();
   // Rows of r->covariance: M, N, laser tilt [deg], encoder zero [deg].
   const auto row = [](const std::string& name) {
     return name == "M" ? 0 : name == "N" ? 1 : name == "laser_tilt" ? 2 : 3;
@@ -427,9 +412,8 @@ void fillCovariance(const Observability& obs, double variance, AxisOffsetResult*
 }
 
 // Standard deviations: the inverse of J^T J of the estimated parameters with the planes
-// eliminated (from analyse()'s QR, in a fixed column order), scaled by the residuals'
-// variance; NaN (with a warning) where it is singular. Not ceres::Covariance: it orders the
-// parameter blocks by their addresses, so its last digits changed from run to run.
+// eliminated (analyse(), calib/parameter_information.hpp), scaled by the residuals' variance;
+// NaN (with a warning) where it is singular.
 void standardDeviations(size_t plane_count, const Problem& p, const Observability& obs,
                         AxisOffsetResult* r) {
   const double nan = std::numeric_limits<double>::quiet_NaN();

@@ -105,8 +105,8 @@ struct FittedPlane {
 
 struct AxisOffsetResult {
   ProfileGeometry geometry;
-  // Standard deviations from the covariance (ceres::Covariance, scaled by the residuals'
-  // variance); NaN where a parameter was not estimated or the covariance is singular.
+  // Standard deviations from the covariance (calib/parameter_information.hpp, scaled by the
+  // residuals' variance); NaN where a parameter was not estimated or the covariance is singular.
   double sigma_m_mm = 0.0, sigma_n_mm = 0.0, sigma_tilt_deg = 0.0, sigma_zero_deg = 0.0;
   bool tilt_estimated = false, zero_estimated = false;
   // Covariance of (M [mm], N [mm], laser tilt [deg], encoder zero [deg]), scaled like the

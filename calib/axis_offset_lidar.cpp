@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "calib/parameter_information.hpp"
 #include "calib/rotating_geometry.hpp"
 #include "calib/walls.hpp"
 
@@ -257,8 +258,9 @@ void flagUnobservable(const TObservability& obs, const LidarAxisOffsetOptions& o
   r->observable = false;
 }
 
-// Standard deviations of x (and y) from ceres::Covariance, scaled by the weighted residuals'
-// variance.
+// Standard deviations of x (and y): the inverse of J^T J of the offset with the planes
+// eliminated (calib/parameter_information.hpp, in a fixed order), scaled by the weighted
+// residuals' variance.
 void standardDeviations(const LidarAxisOffsetOptions& o, size_t plane_count, Problem* p,
                         LidarAxisOffsetResult* r) {
   if (!r->observable) return;
@@ -268,21 +270,21 @@ void standardDeviations(const LidarAxisOffsetOptions& o, size_t plane_count, Pro
   const double dof = static_cast<double>(p->residuals) - (o.estimate_y ? 2.0 : 1.0) -
                      3.0 * static_cast<double>(plane_count);
   const double variance = 2.0 * cost / std::max(1.0, dof);
-  ceres::Covariance::Options co;
-  co.num_threads = 1;
-  co.algorithm_type = ceres::SPARSE_QR;  // 3 parameters per plane: block-sparse
-  co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;  // deterministic (axis_offset.cpp)
-  ceres::Covariance covariance(co);
-  const std::vector<std::pair<const double*, const double*>> pairs = {{p->t, p->t}};
-  if (!covariance.Compute(pairs, p->problem.get())) {
+  std::vector<double*> planes;
+  for (size_t k = 0; k < p->normals.size(); ++k) {
+    planes.push_back(p->normals[k].data());
+    planes.push_back(&p->distances[k]);
+  }
+  // The offset's tangent coordinates: x, then y when it is estimated (z is held).
+  const Eigen::MatrixXd c = covarianceFromInformation(
+      eliminatedInformation(p->problem.get(), planes, {p->t}).information);
+  if (c.size() == 0 || !c.allFinite()) {
     r->warnings.push_back("the covariance is singular: no standard deviations");
     r->observable = false;
     return;
   }
-  double c[9];
-  covariance.GetCovarianceBlock(p->t, p->t, c);
-  r->sigma_x_mm = std::sqrt(c[0] * variance);
-  if (o.estimate_y) r->sigma_y_mm = std::sqrt(c[4] * variance);
+  r->sigma_x_mm = std::sqrt(c(0, 0) * variance);
+  if (o.estimate_y) r->sigma_y_mm = std::sqrt(c(1, 1) * variance);
   if (r->sigma_x_mm > o.max_sigma_mm) {
     std::ostringstream w;
     w << "the offset is poorly determined by these planes: sigma " << r->sigma_x_mm << " mm > "

@@ -19,7 +19,7 @@
 // near (points near two planes, at edges, dropped), then one least-squares problem in Ceres
 // over the offset and every plane (unit normal on the sphere + distance) with Cauchy-weighted
 // point-to-plane residuals (iteratively reweighted: edges and clutter lose their pull), the
-// offset's standard deviation from ceres::Covariance and a check of which components the
+// offset's standard deviation (calib/parameter_information.hpp) and a check of which components the
 // planes determine (the Jacobian with the planes eliminated, plane by plane).
 // Ceres and PCL stay in the .cpp file.
 #pragma once

@@ -40,20 +40,24 @@ double plateCoverage(const PlateModel& m, const Eigen::Vector3d& o, const Eigen:
     return Eigen::Vector2d(c * p.x() + s * p.y(), -s * p.x() + c * p.y());
   };
   const Eigen::Vector2d a = uv(*top);
-  // Inside the triangle: beyond the hypotenuse, inside both legs (|v| <= half - (u - base)).
-  const double legs = half - (a.x() - m.base_distance_m);
-  const double w_top = logistic(k * (a.x() - m.base_distance_m)) * logistic(k * (legs - a.y())) *
-                       logistic(k * (legs + a.y()));
-  if (!(m.thickness_m > 0.0)) return w_top;
-  // The hypotenuse's face: the ray is still inside the edge at the upper surface and beyond it
-  // at the lower one.
-  const auto bottom = crossing(o, d, m.height_m - m.thickness_m);
-  if (!bottom) return w_top;
-  const Eigen::Vector2d b = uv(*bottom);
-  const double w_face = logistic(k * (m.base_distance_m - a.x())) *
-                        logistic(k * (b.x() - m.base_distance_m)) *
-                        logistic(k * (half - std::fabs(0.5 * (a.y() + b.y()))));
-  return w_top + (1.0 - w_top) * w_face;
+  // Where the ray meets the solid: its upper surface, or, when it passes inside the
+  // hypotenuse there and beyond it at the lower surface, the hypotenuse's face (the rays go
+  // outward, so one edge decides both: the lower crossing beyond the hypotenuse). One smooth
+  // edge for the two: a sum of a top and a face term had a notch of 1 / slope (0.5 mm) where
+  // they meet, which the real plate has not, and turned alpha by ~0.02 deg.
+  Eigen::Vector2d b = a;
+  if (m.thickness_m > 0.0) {
+    const auto bottom = crossing(o, d, m.height_m - m.thickness_m);
+    if (bottom) b = uv(*bottom);
+  }
+  Eigen::Vector2d hit = a;
+  if (a.x() < m.base_distance_m && b.x() > a.x()) {
+    hit = a + std::min(1.0, (m.base_distance_m - a.x()) / (b.x() - a.x())) * (b - a);
+  }
+  // Inside both legs (|v| <= half - (u - base)) where it meets the solid.
+  const double legs = half - (hit.x() - m.base_distance_m);
+  return logistic(k * (b.x() - m.base_distance_m)) * logistic(k * (legs - hit.y())) *
+         logistic(k * (legs + hit.y()));
 }
 
 std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& rays) {

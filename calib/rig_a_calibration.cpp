@@ -8,10 +8,12 @@
 #include <cmath>
 #include <map>
 #include <memory>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <tuple>
 
+#include "calib/parameter_information.hpp"
 #include "calib/rotating_geometry.hpp"
 #include "core/angles.hpp"
 
@@ -350,38 +352,73 @@ double median(std::vector<double> e) {
 }
 
 // Clutter on the room walls (a whiteboard proud of one): the rays of a sweep's wall cell whose
-// median residual is beyond the limit are left out.
+// median residual is beyond the limit are left out, and so are its neighbours' (8 around, on
+// the same wall in the same sweep): clutter has extent, and a cell it covers in part keeps a
+// median under the limit while its covered rays, a couple of noise sigmas proud, still pull
+// the wall (a 20 mm whiteboard moved the offset by tenths of a millimetre that way).
 void removeClutter(const RigASolveOptions& o, State* st) {
-  std::map<std::tuple<size_t, size_t, long, long>, std::vector<size_t>> cells;
+  using Cell = std::tuple<size_t, size_t, long, long>;
+  std::map<Cell, std::vector<size_t>> cells;
   forWallCells(o, *st, [&](size_t s, size_t k, size_t i, long u, long z) {
     cells[{s, k, u, z}].push_back(i);
   });
+  std::set<Cell> clutter;
   for (const auto& [cell, idx] : cells) {
     if (idx.size() < 15) continue;
     const size_t s = std::get<0>(cell), k = std::get<1>(cell);
-    SweepState& ss = st->sweeps[s];
     std::vector<double> e;
-    for (const size_t i : idx) e.push_back(residualMm(*st, ss, k, i));
-    if (std::fabs(median(e)) <= o.clutter_limit_mm) continue;
-    for (const size_t i : idx) ss.keep[k][i] = 0;
+    for (const size_t i : idx) e.push_back(residualMm(*st, st->sweeps[s], k, i));
+    if (std::fabs(median(e)) > o.clutter_limit_mm) clutter.insert(cell);
+  }
+  for (const auto& [cell, idx] : cells) {
+    const auto [s, k, u, z] = cell;
+    bool near = false;
+    for (long du = -1; du <= 1 && !near; ++du) {
+      for (long dz = -1; dz <= 1 && !near; ++dz) near = clutter.count({s, k, u + du, z + dz}) > 0;
+    }
+    if (!near) continue;
+    for (const size_t i : idx) st->sweeps[s].keep[k][i] = 0;
   }
 }
 
-// RMS [mm] of the walls' cell medians pooled over the sweeps (same wall, same place in O).
-double wallCellRms(const RigASolveOptions& o, const State& st) {
+// The walls' residuals by cell of 0.5 m pooled over the sweeps (same wall, same place in O;
+// cells of 100 rays or more): what the walls show beyond the noise.
+struct WallCells {
+  double median_rms_mm = 0.0;  // RMS of the cells' medians
+  // Variance [mm^2] of the cells' medians beyond what the noise gives a median of their rays
+  // (pi/2 sigma^2 / rays): structure of the walls the model does not have (clutter left,
+  // a bend, another error), shared by the rays of a cell.
+  double between_mm2 = 0.0;
+  double rays_per_cell = 0.0;  // mean
+  // The variance factor of an estimate from rays that share their cell's error (the design
+  // effect of clustered samples, 1 + (m - 1) rho, rho the share of the cells' variance in the
+  // rays' variance): the rays of a cell count as fewer than they are.
+  double design_effect = 1.0;
+};
+
+WallCells wallCells(const RigASolveOptions& o, const State& st) {
   std::map<std::tuple<int, long, long>, std::vector<double>> cells;
   forWallCells(o, st, [&](size_t s, size_t k, size_t i, long u, long z) {
     cells[{st.sweeps[s].wall_class[k], u, z}].push_back(residualMm(st, st.sweeps[s], k, i));
   });
-  double ss = 0.0;
+  double ss = 0.0, noise = 0.0, rays = 0.0;
   size_t n = 0;
+  const double var = st.sigma_mm * st.sigma_mm;
   for (const auto& [cell, e] : cells) {
     if (e.size() < 100) continue;
     const double m = median(e);
     ss += m * m;
+    noise += 0.5 * M_PI * var / double(e.size());
+    rays += double(e.size());
     ++n;
   }
-  return n ? std::sqrt(ss / double(n)) : 0.0;
+  WallCells w;
+  if (n == 0) return w;
+  w.median_rms_mm = std::sqrt(ss / double(n));
+  w.between_mm2 = std::max(0.0, (ss - noise) / double(n));
+  w.rays_per_cell = rays / double(n);
+  w.design_effect = 1.0 + (w.rays_per_cell - 1.0) * w.between_mm2 / (w.between_mm2 + var);
+  return w;
 }
 
 // The plates' mismatches [rad] at the state (unscaled), for their scatter.
@@ -398,26 +435,53 @@ std::vector<double> plateMismatches(const std::vector<RigASweep>& sweeps, const 
   return m;
 }
 
-// Covariance of (alpha, x, tilt, mirror) in their own units (rad, mm, rad, rad); NaN when
-// it cannot be computed.
+// The problem's variable blocks: the nuisance (per sweep its attitude and planes) and the
+// parameters (g, alpha), in the state's order.
+void variableBlocks(Built* b, State* st, std::vector<double*>* nuisance,
+                    std::vector<double*>* parameters) {
+  const auto variable = [&](double* p) {
+    return b->problem->HasParameterBlock(p) && !b->problem->IsParameterBlockConstant(p);
+  };
+  const auto add = [&](std::vector<double*>* to, double* p) {
+    if (variable(p)) to->push_back(p);
+  };
+  for (SweepState& ss : st->sweeps) {
+    add(nuisance, &ss.phi);
+    for (size_t k = 0; k < ss.rays.size(); ++k) {
+      if (ss.wall_class[k] >= 0) {
+        add(nuisance, ss.wall[k].data());
+      } else {
+        add(nuisance, ss.normal[k].data());
+        add(nuisance, &ss.distance[k]);
+      }
+    }
+  }
+  add(parameters, st->g);
+  add(parameters, &st->alpha);
+}
+
+// Covariance of (alpha, x, tilt, mirror) in their own units (rad, mm, rad, rad), 0 for a held
+// one (calib/parameter_information.hpp: a fixed order, the same bytes every run); NaN when it
+// cannot be computed.
 Eigen::Matrix4d covariance(Built* b, State* st) {
   Eigen::Matrix4d c = Eigen::Matrix4d::Constant(std::numeric_limits<double>::quiet_NaN());
-  ceres::Covariance::Options co;
-  co.num_threads = 1;
-  co.algorithm_type = ceres::SPARSE_QR;
-  co.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;  // deterministic (axis_offset.cpp)
-  ceres::Covariance cov(co);
-  std::vector<std::pair<const double*, const double*>> pairs = {
-      {st->g, st->g}, {&st->alpha, &st->alpha}, {&st->alpha, st->g}};
-  if (!cov.Compute(pairs, b->problem.get())) return c;
-  double gg[9], aa = 0, ag[3];
-  cov.GetCovarianceBlock(st->g, st->g, gg);
-  cov.GetCovarianceBlock(&st->alpha, &st->alpha, &aa);
-  cov.GetCovarianceBlock(&st->alpha, st->g, ag);
-  c(0, 0) = aa;
+  std::vector<double*> nuisance, parameters;
+  variableBlocks(b, st, &nuisance, &parameters);
+  // The parameters' tangent coordinates: g's free components in order, then alpha.
+  const bool g_free = !parameters.empty() && parameters.front() == st->g;
+  std::vector<int> index;
   for (int i = 0; i < 3; ++i) {
-    c(0, i + 1) = c(i + 1, 0) = ag[i];
-    for (int j = 0; j < 3; ++j) c(i + 1, j + 1) = gg[3 * i + j];
+    if (g_free && !st->held[i + 1]) index.push_back(i + 1);
+  }
+  if (!parameters.empty() && parameters.back() == &st->alpha) index.push_back(0);
+  const ParameterInformation info = eliminatedInformation(b->problem.get(), nuisance, parameters);
+  if (!info.ok || info.information.rows() != Eigen::Index(index.size())) return c;
+  const Eigen::MatrixXd t = covarianceFromInformation(info.information);
+  if (!t.allFinite()) return c;
+  c.setZero();
+  for (size_t i = 0; i < index.size(); ++i) {
+    for (size_t j = 0; j < index.size(); ++j)
+      c(index[i], index[j]) = t(Eigen::Index(i), Eigen::Index(j));
   }
   return c;
 }
@@ -514,12 +578,13 @@ void checkResiduals(const RigASolveOptions& o, State* st, RigCalibration* r) {
     r->warnings.push_back(w.str());
     w.str("");
   }
-  const double cell_rms = wallCellRms(o, *st);
-  if (cell_rms > o.systematic_limit_mm) {
-    w << "the walls still disagree with their planes by " << cell_rms
+  const WallCells cells = wallCells(o, *st);
+  if (cells.median_rms_mm > o.systematic_limit_mm) {
+    w << "the walls still disagree with their planes by " << cells.median_rms_mm
       << " mm RMS over 0.5 m cells after calibration (noise alone: under " << o.systematic_limit_mm
       << " mm): an error the model lacks (a bent wall, another rig "
-      << "error); the sigmas are too small by as much";
+      << "error); the sigmas are grown by " << std::sqrt(cells.design_effect)
+      << "x for it, but an error the model lacks also moves the values";
     r->warnings.push_back(w.str());
     w.str("");
   }
@@ -571,6 +636,18 @@ void propagateToAlpha(const std::vector<RigASweep>& sweeps, const RigASolveOptio
   for (int i = 0; i < 3; ++i) (*c)(0, i + 1) = (*c)(i + 1, 0) = cag(i);
 }
 
+// The covariance of the four in the rig file's units at the solution: the problem's, grown
+// by the walls' design effect (rays that share their cell's unmodelled error are not
+// independent), with g's uncertainty propagated into alpha's.
+Eigen::Matrix4d parameterCovariance(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                                    Built* b, State* st) {
+  Eigen::Matrix4d raw = covariance(b, st);
+  const WallCells cells = wallCells(o, *st);
+  raw *= cells.design_effect;
+  propagateToAlpha(sweeps, o, *st, &raw);
+  return inUnits(raw);
+}
+
 }  // namespace
 
 RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o) {
@@ -594,9 +671,7 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
   // The plates once more with the final g.
   std::copy(st.g, st.g + 3, st.g_plate);
   solve(o, &b);
-  Eigen::Matrix4d raw = covariance(&b, &st);
-  propagateToAlpha(sweeps, o, st, &raw);
-  Eigen::Matrix4d cov = inUnits(raw);
+  Eigen::Matrix4d cov = parameterCovariance(sweeps, o, &b, &st);
   r.parameters = parameterTable(st, o);
   ObservabilityLimits limits{o.max_sigma};
   std::vector<size_t> flagged = testObservability(cov, limits, &r.parameters);
@@ -610,9 +685,7 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
     solve(o, &b2);
     std::copy(st.g, st.g + 3, st.g_plate);
     solve(o, &b2);
-    Eigen::Matrix4d raw2 = covariance(&b2, &st);
-    propagateToAlpha(sweeps, o, st, &raw2);
-    cov = inUnits(raw2);
+    cov = parameterCovariance(sweeps, o, &b2, &st);
     r.parameters = parameterTable(st, o);
     for (size_t i = 0; i < kParams; ++i) {
       r.parameters[i].sigma = std::sqrt(cov(Eigen::Index(i), Eigen::Index(i)));

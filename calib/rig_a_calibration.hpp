@@ -19,7 +19,8 @@
 // Point residuals are in units of their robust sigma with a Cauchy loss; the plate's in units
 // of their scatter over the sweeps. Clutter proud of a wall (a whiteboard) is removed after a
 // first solve: cells of 0.5 m on the wall whose median residual exceeds the limit.
-// The covariance of the four (ceres::Covariance, sparse QR) gives sigma and correlation; an
+// The covariance of the four (calib/parameter_information.hpp: J^T J with the sweeps' attitudes
+// and planes eliminated, in a fixed order) gives sigma and correlation; an
 // unobservable parameter (calib/rig_calibration.hpp's test) is held at the rig's value and the
 // problem solved again.
 #pragma once
