@@ -31,7 +31,8 @@ const pointMaterial = new THREE.PointsMaterial({ size: 2, sizeAttenuation: false
 // ---- State --------------------------------------------------------------------------------
 const state = {
   mode: null, connected: false, sweeps: new Map(), colour: 'height',
-  zRange: [Infinity, -Infinity], iRange: [Infinity, -Infinity], hasIntensity: false, voxelRes: 0.05, voxelCount: 0, lastCheck: null,
+  zRange: [Infinity, -Infinity], voxelRes: 0.05, voxelCount: 0, lastCheck: null,
+  iRange: [Infinity, -Infinity], hasIntensity: false,
   status: null, frames: 0, fps: 0, latencies: [], pendingLatency: [], time: null,
   messages: 0, dragging: false, statusSeq: 0,
 };
