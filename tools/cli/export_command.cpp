@@ -72,7 +72,7 @@ void addLas(CLI::App* parent, std::map<CLI::App*, Runner>* runners) {
       "SWEEP_CLOUD point, its chunk's time as adjusted standard GPS time), in the order given. "
       "Intensity: the lidar's reading (device units) rounded and clipped to 0..65535, from a "
       "chunk's intensities or a PLY's intensity or scalar_intensity property; 0 where the "
-      "lidar measures none (rig C's profiler)");
+      "lidar measures none (rig B's X4, rig C's profiler)");
   cmd->footer(
       "Exit status: 0 exported; 1 an input is not a readable PLY or log, a log held corrupt "
       "bytes (skipped; the file is written), or there is no point; 2 bad option or a missing "
