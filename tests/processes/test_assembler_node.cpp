@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "net/lcm_datagram.hpp"
 #include "processes/assembler_node.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
@@ -110,6 +111,20 @@ TEST_F(AssemblerNodeTest, ChunksCarryEachPointsIntensity) {
     }
     EXPECT_EQ(got, want);
   }
+}
+
+// The largest chunk a rig allows (assembler.chunk_points <= 4000, rigs/rotating_lidar.cpp), with
+// its intensities, is still one LCM datagram on SWEEP_CLOUD.
+TEST(CloudChunk, TheLargestChunkWithIntensitiesIsOneDatagram) {
+  AssembledSweep sweep;
+  sweep.points.assign(4000, Eigen::Vector3f(1.0f, 2.0f, 3.0f));
+  sweep.intensities.assign(4000, 100.0f);
+  const auto chunks = toChunks(sweep, 4000);
+  ASSERT_EQ(chunks.size(), 1u);
+  ASSERT_EQ(chunks[0].nintensities, 4000);
+  const size_t bytes =
+      encodeMessage(chunks[0]).size() + std::string(channels::kSweepCloud).size() + 1;
+  EXPECT_LE(bytes, net::kLcmShortMessageMaxBytes);
 }
 
 TEST(CloudChunk, IntensitiesNeitherNoneNorOnePerPointAreInvalid) {
