@@ -343,6 +343,20 @@ const LcmStruct* LcmSchema::byFingerprint(int64_t fingerprint) const {
   return it == by_fingerprint_.end() ? nullptr : &structs_[it->second];
 }
 
+const LcmStruct* LcmSchema::typeOf(const uint8_t* data, size_t size) const {
+  if (size < 8) return nullptr;
+  int64_t fingerprint = 0;
+  for (int k = 0; k < 8; ++k) fingerprint = (fingerprint << 8) | data[k];
+  return byFingerprint(fingerprint);
+}
+
+std::string lcmTypeSource(const LcmStruct& s) {
+  for (const auto& [file, text] : lcmTypeSources()) {
+    if (file == s.name + ".lcm") return text;
+  }
+  return "";
+}
+
 namespace {
 
 void decodeStruct(const LcmSchema& schema, const LcmStruct& s, Reader& r, LcmValue* out, int depth);

@@ -15,8 +15,13 @@
 
 namespace sweepmap {
 
-// The embedded .lcm files: {file name, text} (core/embed_lcm.cmake).
+// The embedded .lcm files: {file name, text} (cmake/embed_text_files.cmake).
 const std::vector<std::pair<std::string, std::string>>& lcmTypeSources();
+
+struct LcmStruct;
+// The text of the embedded .lcm file that defines `s` (NAME.lcm), or "" when none does: the
+// schema that MCAP files and Foxglove clients get for a raw LCM channel.
+std::string lcmTypeSource(const LcmStruct& s);
 
 struct LcmMember {
   std::string type;  // int8_t ... double, string, boolean, byte, or a struct name
@@ -70,6 +75,9 @@ class LcmSchema {
   const LcmStruct* find(
       const std::string& name) const;  // "lidar_scan_t" or "sweepmap.lidar_scan_t"
   const LcmStruct* byFingerprint(int64_t fingerprint) const;
+  // The type a whole message declares by its fingerprint (its first 8 bytes, big-endian), or
+  // nullptr when it is shorter or the type unknown; reads nothing past the fingerprint.
+  const LcmStruct* typeOf(const uint8_t* data, size_t size) const;
   const std::vector<LcmStruct>& structs() const { return structs_; }
 
   // Decodes a whole message (fingerprint first). Throws LcmSchemaError naming the field

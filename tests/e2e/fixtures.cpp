@@ -6,7 +6,9 @@
 #include <cerrno>
 #include <chrono>
 #include <cstring>
+#include <fstream>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "processes/channels.hpp"
@@ -64,6 +66,39 @@ std::vector<std::string> ProcessCommand::operator()(const std::string& name,
   args.insert(args.begin(), binPath("sweepmap-" + name));
   args.insert(args.end(), shared_.begin(), shared_.end());
   return args;
+}
+
+namespace {
+
+// The sockets bound to UDP `port` in this process's network namespace (/proc/net/udp: one line
+// per socket, local address as hex "ADDR:PORT").
+size_t udpSocketsOn(uint16_t port) {
+  std::ifstream table("/proc/net/udp");
+  std::string line;
+  std::getline(table, line);  // the header
+  size_t n = 0;
+  while (std::getline(table, line)) {
+    std::istringstream fields(line);
+    std::string slot, local;
+    fields >> slot >> local;
+    const size_t colon = local.find(':');
+    if (colon != std::string::npos && std::stoul(local.substr(colon + 1), nullptr, 16) == port) ++n;
+  }
+  return n;
+}
+
+}  // namespace
+
+pid_t Launcher::startSubscriber(const std::string& name, const std::vector<std::string>& argv,
+                                uint16_t port, double timeout_s) {
+  const size_t before = udpSocketsOn(port);
+  const pid_t pid = start(name, argv);
+  for (double t = 0; t < timeout_s && udpSocketsOn(port) <= before && running(pid); t += 0.05) {
+    sleepS(0.05);
+  }
+  EXPECT_GT(udpSocketsOn(port), before) << name << " bound no socket on UDP port " << port
+                                        << " within " << timeout_s << " s: " << said(pid);
+  return pid;
 }
 
 std::vector<std::string> loggerCommand(const std::string& url, const std::string& file,

@@ -15,26 +15,21 @@
 // gives from the same log without the attack. With a shared key, forged (unsigned) copies of
 // the sensors' messages never reach a node; the units `sweepmap systemd` writes hear only the
 // deployment's hosts and refuse a key file others may read.
-#include <arpa/inet.h>
 #include <gtest/gtest.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <fstream>
-#include <random>
 #include <sstream>
 
 #include "core/event_log.hpp"
 #include "processes/channels.hpp"
 #include "processes/node.hpp"
-#include "sweepmap/map_save_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/process_status_t.hpp"
-#include "sweepmap/sweep_status_t.hpp"
 #include "tests/e2e/fixtures.hpp"
+#include "tools/bench/hostile_traffic.hpp"
 
 namespace sweepmap {
 namespace test {
@@ -43,119 +38,35 @@ namespace {
 const std::string kRig = sourcePath("config/rig_a.yaml");
 const std::string kScene = sourcePath("config/scene_conference_room.yaml");
 const std::string kUrl = kDefaultLcmUrl;
-constexpr uint16_t kPort = 7667;  // kDefaultLcmUrl's
+constexpr uint16_t kPort = kDefaultLcmPort;
 constexpr int64_t kDayUs = 86'400'000'000;
 
-using Bytes = std::vector<uint8_t>;
+using hostile::Bytes;
 
 // Sends datagrams to LCM's group on `port` from a socket of their own, as another host on the
 // LAN would.
 void sendDatagrams(const std::vector<Bytes>& datagrams, uint16_t port = kPort) {
-  const int fd = ::socket(AF_INET, SOCK_DGRAM, 0);
-  ASSERT_GE(fd, 0);
-  sockaddr_in to{};
-  to.sin_family = AF_INET;
-  to.sin_port = htons(port);
-  inet_pton(AF_INET, "239.255.76.67", &to.sin_addr);
-  for (size_t i = 0; i < datagrams.size(); ++i) {
-    const Bytes& d = datagrams[i];
-    ::sendto(fd, d.data(), d.size(), 0, reinterpret_cast<sockaddr*>(&to), sizeof to);
-    if (i % 100 == 99) sleepS(0.002);  // a flood, not a socket-buffer overflow test
-  }
-  ::close(fd);
-}
-
-void putU32(Bytes& b, uint32_t v) {
-  for (int s = 24; s >= 0; s -= 8) b.push_back(static_cast<uint8_t>(v >> s));
-}
-void setU32(Bytes& b, size_t at, uint32_t v) {
-  for (int i = 0; i < 4; ++i) b[at + i] = static_cast<uint8_t>(v >> (24 - 8 * i));
-}
-
-// Fragment 0 of an LC03 message on `channel` with offset 0xFFFFFFFF, 131 bytes: liblcm 1.3.1's
-// 32-bit check wraps and its memcpy lands 4 GiB before the buffer.
-Bytes offsetWrap(const std::string& channel) {
-  Bytes b;
-  putU32(b, 0x4c433033);
-  putU32(b, 1);
-  putU32(b, 100000);
-  putU32(b, 0xFFFFFFFFu);
-  b.insert(b.end(), {0, 0, 0, 2});
-  b.insert(b.end(), channel.begin(), channel.end());
-  b.push_back(0);
-  b.resize(131, 0x41);
-  return b;
-}
-
-// An LC02 whose channel has no NUL: liblcm reads past the datagram.
-Bytes unterminated(const std::string& channel) {
-  Bytes b;
-  putU32(b, 0x4c433032);
-  putU32(b, 2);
-  b.insert(b.end(), channel.begin(), channel.end());
-  return b;
-}
-
-// A well-formed LC02 datagram carrying `payload` on `channel`: what liblcm would send.
-Bytes lc02(const std::string& channel, const Bytes& payload) {
-  Bytes b;
-  putU32(b, 0x4c433032);
-  putU32(b, 3);
-  b.insert(b.end(), channel.begin(), channel.end());
-  b.push_back(0);
-  b.insert(b.end(), payload.begin(), payload.end());
-  return b;
-}
-
-template <class T>
-Bytes encoded(const T& m) {
-  return encodeMessage(m);
+  const size_t sent = hostile::MulticastSender("239.255.76.67", port).send(datagrams);
+  EXPECT_EQ(sent, datagrams.size()) << "DEBUG";
 }
 
 // The datagrams that crash liblcm 1.3.1 on each of `channels`, and `flood` mutations of them.
 std::vector<Bytes> crashDatagrams(const std::vector<std::string>& channels, int flood) {
-  std::vector<Bytes> d;
-  for (const auto& channel : channels) {
-    d.push_back(offsetWrap(channel));
-    d.push_back(unterminated(channel));
-  }
-  std::mt19937 rng(21);
-  for (int i = 0; i < flood; ++i) {
-    Bytes b = i % 2 ? offsetWrap(channels[i % channels.size()])
-                    : unterminated(channels[i % channels.size()]);
-    for (int e = 0; e < 3; ++e) b[rng() % std::min<size_t>(b.size(), 24)] = rng();
-    d.push_back(std::move(b));
-  }
-  return d;
+  return hostile::malformedDatagrams(channels, flood, 21);
 }
 
 // Messages whose decoding overflows in lcm-gen's code (a string length of INT32_MIN), status
-// messages with absurd counter counts (2^26 took `sweepmap status` to 2.2 GB, 2^31-1 killed it)
-// or a detail that is not UTF-8. Each is a well-formed datagram: only the message is hostile.
+// messages with absurd counter counts or a detail that is not UTF-8. Each is a well-formed
+// datagram: only the message is hostile.
 std::vector<Bytes> hostileMessages() {
-  std::vector<Bytes> d;
-  map_save_t save{};
-  save.utime = 1;
-  Bytes b = encoded(save);  // fingerprint, utime, then the path's length at byte 16
-  setU32(b, 16, 0x80000000u);
-  d.push_back(lc02(channels::kMapSave, b));
-  sweep_status_t sweep{};
-  b = encoded(sweep);  // the reason (""): length, NUL, then chunk_count
-  setU32(b, b.size() - 9, 0x80000000u);
-  d.push_back(lc02(channels::kSweepStatus, b));
-  process_status_t status{};
-  status.process = "intruder";
-  b = encoded(status);  // the process's length at byte 16
-  setU32(b, 16, 0x80000000u);
-  d.push_back(lc02("STATUS_INTRUDER", b));
-  for (uint32_t n : {1u << 26, 0x7FFFFFFFu}) {
-    b = encoded(status);  // ncounters = 0 is the last field
-    setU32(b, b.size() - 4, n);
-    d.push_back(lc02("STATUS_INTRUDER", b));
-  }
-  status.detail = "bad \xff\xfe\xc3 text";
-  d.push_back(lc02("STATUS_INTRUDER", encoded(status)));
-  return d;
+  return hostile::datagramsOf(
+      {{channels::kMapSave, hostile::mapSaveWithMinLength()},
+       {channels::kSweepStatus, hostile::sweepStatusWithMinLength()},
+       {"STATUS_INTRUDER", hostile::statusWithMinLength()},
+       {"STATUS_INTRUDER", hostile::statusWithHugeCount("intruder", 1u << 26)},
+       {"STATUS_INTRUDER", hostile::statusWithHugeCount("intruder", 0x7FFFFFFFu)},
+       {"STATUS_INTRUDER", hostile::statusWithBadUtf8("intruder")}},
+      1);
 }
 
 // MAP_SAVE requests a mapper must refuse (or honour at most once a second and for 16 names).
@@ -164,13 +75,9 @@ std::vector<Bytes> hostileSaves() {
   std::vector<std::string> names = {"../escape.bt", "/tmp/abs.bt", "-rf", "evil\nname.bt",
                                     "sim.lcmlog",   "notes.txt",   ".bt", std::string(300, 'a')};
   for (int i = 0; i < 30; ++i) names.push_back("flood" + std::to_string(i) + ".bt");
-  for (const auto& name : names) {
-    map_save_t m{};
-    m.utime = 1;
-    m.path = name;
-    d.push_back(lc02(channels::kMapSave, encoded(m)));
-  }
-  return d;
+  std::vector<hostile::Forged> saves;
+  for (const auto& name : names) saves.push_back({channels::kMapSave, hostile::mapSave(name, 1)});
+  return hostile::datagramsOf(saves, 100);
 }
 
 // The first message of `channel` in `log`, stamped a day ahead.
@@ -183,7 +90,7 @@ Bytes dayAhead(const std::string& log, const std::string& channel) {
     for (size_t k = 8; k < 16; ++k) stamp = (stamp << 8) | e.data[k];
     stamp += kDayUs;
     for (size_t k = 0; k < 8; ++k) e.data[15 - k] = static_cast<uint8_t>(stamp >> (8 * k));
-    return lc02(channel, e.data);
+    return hostile::datagramsOf({{channel, e.data}}, 200).front();
   }
   ADD_FAILURE() << "no " << channel << " in " << log;
   return {};
@@ -235,15 +142,20 @@ class HostileTest : public PrivateNetworkTest {
     EXPECT_EQ(sweepmap(all, dir / "sim.txt"), 0) << readFile(dir / "sim.txt");
     return log;
   }
+  // `sweepmap record` of every channel on `url` (whose port is `port`), subscribed.
   pid_t startRecorder(const fs::path& dir, const std::string& url = kUrl,
-                      const std::string& name = "recorder") {
-    return procs.start(name, {binPath("sweepmap"), "record", "--preset", "all", "--out",
-                              (dir / name).string(), "--lcm-url", url});
+                      const std::string& name = "recorder", uint16_t port = kPort) {
+    return procs.startSubscriber(name,
+                                 {binPath("sweepmap"), "record", "--preset", "all", "--out",
+                                  (dir / name).string(), "--lcm-url", url},
+                                 port);
   }
   // `sweepmap status --once --json` listening while the attacks are sent.
   pid_t startStatus() {
-    return procs.start("status", {binPath("sweepmap"), "status", "--once", "--json", "--window",
-                                  "3", "--stale-s", "30", "--lcm-url", kUrl});
+    return procs.startSubscriber("status",
+                                 {binPath("sweepmap"), "status", "--once", "--json", "--window",
+                                  "3", "--stale-s", "30", "--lcm-url", kUrl},
+                                 kPort);
   }
 };
 
@@ -256,13 +168,11 @@ TEST_F(HostileTest, RigAProcessesTakeEveryAttackAndTheRunStillEqualsReplay) {
       dir, {"--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "2", "--seed", "8"});
   const ProcessCommand proc{{"--rig", kRig, "--set", "motor.mode=1", "--lcm-url", kUrl}};
   const pid_t recorder = startRecorder(dir);
-  const pid_t assembler = procs.start("assembler", proc("assembler"));
-  const pid_t mapper =
-      procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}));
+  const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kPort);
+  const pid_t mapper = procs.startSubscriber(
+      "mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), kPort);
   std::ofstream(dir / "notes.txt") << "not the mapper's\n";
-  sleepS(0.7);
   const pid_t status = startStatus();
-  sleepS(0.5);
   const std::vector<std::string> subscribed = {"LIDAR_SCAN",   "SCAN_WINDOW", "SWEEP_CLOUD",
                                                "SWEEP_STATUS", "MAP_SAVE",    "STATUS_ASSEMBLER"};
   ASSERT_NO_FATAL_FAILURE(sendDatagrams(crashDatagrams(subscribed, 2000)));
@@ -335,11 +245,10 @@ TEST_F(HostileTest, RigBOdometryAndAssemblerTakeEveryAttackAndTheDriveStillEqual
                    "sim.duration_s=6", "--seed", "5"});
   const ProcessCommand proc{{"--rig", rig_b, "--lcm-url", kUrl}};
   const pid_t recorder = startRecorder(dir);
-  const pid_t odometry = procs.start("odometry", proc("odometry", {"--from-lcm"}));
-  const pid_t assembler = procs.start("assembler", proc("assembler"));
-  const pid_t mapper =
-      procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}));
-  sleepS(0.7);
+  const pid_t odometry = procs.startSubscriber("odometry", proc("odometry", {"--from-lcm"}), kPort);
+  const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kPort);
+  const pid_t mapper = procs.startSubscriber(
+      "mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), kPort);
   const std::vector<std::string> subscribed = {"IMU",           "WHEEL_TICKS", "LIDAR_SCAN",
                                                "ODOMETRY_POSE", "SWEEP_CLOUD", "MAP_SAVE"};
   ASSERT_NO_FATAL_FAILURE(sendDatagrams(crashDatagrams(subscribed, 400)));
@@ -397,10 +306,10 @@ TEST_F(HostileTest, RigCProcessesTakeEveryAttackAndTheScanStillEqualsReplay) {
   const ProcessCommand proc{{"--rig", "rig_c", "--lcm-url", kUrl}};
   const std::string profiler_url = "udpm://239.255.76.67:7668?ttl=0";
   const pid_t recorder = startRecorder(dir);
-  const pid_t profiler_recorder = startRecorder(dir, profiler_url, "profiler_recorder");
-  const pid_t assembler = procs.start("assembler", proc("assembler"));
-  const pid_t mapper =
-      procs.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}));
+  const pid_t profiler_recorder = startRecorder(dir, profiler_url, "profiler_recorder", 7668);
+  const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kPort);
+  const pid_t mapper = procs.startSubscriber(
+      "mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), kPort);
   const pid_t profiler =
       procs.start("profiler", {binPath("sweepmap-profiler"), "--rig", "rig_c", "--sim", "--sweeps",
                                "1", "--lcm-url", profiler_url});
@@ -447,7 +356,7 @@ TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
   const pid_t recorder =
       procs.start("recorder", {binPath("sweepmap"), "record", "--preset", "all", "--out",
                                (dir / "rec").string(), "--lcm-url", kUrl, "--key-file", key});
-  const pid_t assembler = procs.start("assembler", proc("assembler"));
+  const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kPort);
   const pid_t lidar =
       procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}));
   sleepS(0.7);

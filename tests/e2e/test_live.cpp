@@ -34,18 +34,20 @@ class LiveTest : public PrivateNetworkTest {
   void playIntoLive(const fs::path& dir, const ProcessCommand& command, const std::string& log,
                     double timeout_s, const std::string& channels, const Stages& upstream = {}) {
     procs.setDir(dir);
-    const pid_t logger =
-        procs.start("logger", loggerCommand(kUrl, (dir / "recorded.lcmlog").string(), channels));
+    const pid_t logger = procs.startSubscriber(
+        "logger", loggerCommand(kUrl, (dir / "recorded.lcmlog").string(), channels),
+        kDefaultLcmPort);
     std::vector<Stop> stops;
     for (const auto& [name, args] : upstream) {
-      stops.push_back({procs.start(name, command(name, args)), 10.0});
+      stops.push_back({procs.startSubscriber(name, command(name, args), kDefaultLcmPort), 10.0});
     }
-    stops.push_back({procs.start("assembler", command("assembler")), 10.0});
     stops.push_back(
-        {procs.start("mapper", command("mapper", {"--save", (dir / "live_map.bt").string()})),
-         60.0});
+        {procs.startSubscriber("assembler", command("assembler"), kDefaultLcmPort), 10.0});
+    stops.push_back({procs.startSubscriber(
+                         "mapper", command("mapper", {"--save", (dir / "live_map.bt").string()}),
+                         kDefaultLcmPort),
+                     60.0});
     stops.push_back({logger, 10.0});
-    sleepS(0.7);
     ASSERT_EQ(procs.play(kUrl, log, timeout_s), 0) << procs.said("logplayer");
     procs.stopInOrder(stops, 0.8);
   }
@@ -63,11 +65,10 @@ TEST_F(LiveTest, LiveCloudsEqualOfflineReplayOfTheirLog) {
   const auto dir = scratchDir("live_vs_offline");
   procs.setDir(dir);
   const std::string log = (dir / "live.lcmlog").string();
-  const pid_t logger = procs.start("logger", loggerCommand(kUrl, log));
-  const pid_t assembler = procs.start("assembler", proc("assembler"));
-  const pid_t lidar =
-      procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}));
-  sleepS(0.7);
+  const pid_t logger = procs.startSubscriber("logger", loggerCommand(kUrl, log), kDefaultLcmPort);
+  const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kDefaultLcmPort);
+  const pid_t lidar = procs.startSubscriber(
+      "lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}), kDefaultLcmPort);
   const pid_t motor =
       procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}));
   ASSERT_EQ(procs.wait(motor, 90.0), 0) << procs.said(motor);

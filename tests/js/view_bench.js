@@ -1,4 +1,4 @@
-// Figures of `sweepmap view` in headless chromium (docs/how-to/view.md): node view_bench.js URL
+// Figures of `sweepmap view` in a browser (docs/how-to/view.md; SWEEPMAP_BROWSER: browser.js): node view_bench.js URL
 // SECONDS [SCREENSHOT.png]. For a log view: pauses, moves to the log's end, waits until every
 // point is drawn, then counts the frames drawn in SECONDS. Prints one JSON object: points and
 // voxels drawn, frames per second, the page's WebGL renderer; a half-size screenshot if asked.

@@ -1,7 +1,8 @@
 // Live view check (run by tests/e2e/test_view.cpp inside the live run's network namespace):
 // node view_live.js URL SWEEPS TIMEOUT_S SCREENSHOT.png
-// Loads the page, waits until it has drawn SWEEPS sweeps, the mapper has inserted them and the
-// server has sent everything (its queue empty, no cloud sent between two status frames), then
+// Loads the page (says "page connected" once it is: the test starts the sweeps then), waits
+// until it has drawn SWEEPS sweeps, the mapper has inserted them and the server has sent
+// everything (its queue empty, no cloud sent between two status frames), then
 // prints one JSON object of what the page shows: console errors, the points drawn against the
 // points the server says it sent, the extent of the drawn points, the voxels, the non-blank
 // fraction of the canvas, the server's status, and the colours of a sample of points by
@@ -19,6 +20,7 @@ async function main() {
   try {
     page = await openPage(browser, url, errors);
     out.connected = true;
+    process.stdout.write('page connected\n');
     await until(page, (n) => {
       const v = window.sweepmapView, s = v.status;
       if (!s || v.sweeps() < n || !s.board || !s.board.mapper || s.board.mapper.sweeps < n) return false;

@@ -7,8 +7,12 @@
 'use strict';
 const { launch, openPage, until } = require('./browser.js');
 
+// Only status frames the page gets after the time frame at UTIME count: one from before (its
+// counters taken before the server played back to UTIME, e.g. before a seek back's reset) can
+// repeat the previous seek's figures and look quiet.
 async function seek(page, utime) {
   await page.evaluate((u) => {
+    window.__lastSent = undefined;
     const t = window.sweepmapView.time;
     const slider = document.getElementById('time');
     slider.value = String(Math.round(1000 * (u - t.start) / Math.max(1, t.end - t.start)));
@@ -16,7 +20,10 @@ async function seek(page, utime) {
   }, utime);
   await until(page, (u) => {
     const v = window.sweepmapView, t = v.time, s = v.status;
-    if (!t || t.playing || Math.abs(t.utime - u) > (t.end - t.start) / 1000 || !s) return false;
+    if (!t || t.playing || Math.abs(t.utime - u) > (t.end - t.start) / 1000 || !s) {
+      window.__lastSent = undefined;
+      return false;
+    }
     if (s.you.queued_frames !== 0) return false;
     if (window.__lastSeq === v.statusSeq) return false;  // the same status frame
     window.__lastSeq = v.statusSeq;

@@ -16,6 +16,7 @@
 #include "net/lcm_datagram.hpp"
 #include "sweepmap/map_save_t.hpp"
 #include "sweepmap/process_status_t.hpp"
+#include "sweepmap/sweep_status_t.hpp"
 
 namespace sweepmap::hostile {
 
@@ -23,6 +24,10 @@ namespace {
 
 void putU32(Bytes& b, uint32_t v) {
   for (int s = 24; s >= 0; s -= 8) b.push_back(static_cast<uint8_t>(v >> s));
+}
+
+void setU32(Bytes& b, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) b[at + i] = static_cast<uint8_t>(v >> (24 - 8 * i));
 }
 
 void putU64(Bytes& b, uint64_t v) {
@@ -109,14 +114,28 @@ Bytes mapSaveWithMinLength() {
   return b;
 }
 
-Bytes statusWithHugeCount(const std::string& process) {
+Bytes statusWithHugeCount(const std::string& process, uint32_t count) {
   Bytes b;
   putU64(b, static_cast<uint64_t>(process_status_t::getHash()));
   putU64(b, 1);
   putString(b, process);
   b.push_back(process_status_t::OK);
   putString(b, "");
-  putU32(b, 1u << 26);  // ncounters, and no counter follows
+  putU32(b, count);  // ncounters, and no counter follows
+  return b;
+}
+
+Bytes statusWithMinLength() {
+  process_status_t s{};
+  s.utime = 1;
+  Bytes b = encode(s);
+  setU32(b, 16, 0x80000000u);  // after the fingerprint and utime: the process's length
+  return b;
+}
+
+Bytes sweepStatusWithMinLength() {
+  Bytes b = encode(sweep_status_t{});
+  setU32(b, b.size() - 9, 0x80000000u);  // the reason (""): length, NUL, then chunk_count
   return b;
 }
 

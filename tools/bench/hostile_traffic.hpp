@@ -35,8 +35,13 @@ std::vector<Bytes> malformedDatagrams(const std::vector<std::string>& channels, 
 
 // A map_save_t whose path length is INT32_MIN (22 bytes: lcm-gen's `len - 1` overflows).
 Bytes mapSaveWithMinLength();
-// A process_status_t claiming 2^26 counters with none present (2.2 GB for a trusting decoder).
-Bytes statusWithHugeCount(const std::string& process);
+// A process_status_t claiming `count` counters with none present (2^26 took a trusting
+// decoder to 2.2 GB, 2^31-1 killed it).
+Bytes statusWithHugeCount(const std::string& process, uint32_t count = 1u << 26);
+// A process_status_t whose process name's length is INT32_MIN.
+Bytes statusWithMinLength();
+// A sweep_status_t whose reason's length is INT32_MIN.
+Bytes sweepStatusWithMinLength();
 // A process_status_t whose detail is not UTF-8.
 Bytes statusWithBadUtf8(const std::string& process);
 // A map_save_t asking the mapper to save `path`.

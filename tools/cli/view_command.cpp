@@ -21,7 +21,9 @@ Runner addViewCommand(CLI::App& app) {
       "shares. Clouds go to the page in binary, within --point-budget points (older sweeps "
       "thinned first); each page has a bounded queue (newest wins, drops counted in the view's "
       "status), so a slow page slows nothing else. The same port speaks the Foxglove WebSocket "
-      "protocol (foxglove.websocket.v1) at ws://HOST:PORT/ for Foxglove and Lichtblick. "
+      "protocol (foxglove.websocket.v1) at ws://HOST:PORT/ for Foxglove and Lichtblick: with "
+      "--rig the topics of `sweepmap export mcap` in Foxglove's JSON schemas, and every LCM "
+      "channel raw as /lcm/CHANNEL (encoding lcm, its type's .lcm text as the schema). "
       "Read-only: it only receives LCM and writes no file. Runs until Ctrl-C. Exit status: 0 "
       "after Ctrl-C; 1 when LOG cannot be read; 2 for a bad option, rig, URL or address (a "
       "port in use), or a missing LOG");
@@ -31,7 +33,8 @@ Runner addViewCommand(CLI::App& app) {
   cmd->add_option("--lcm-url", o->lcm_url, "LCM URL the processes publish on (live)")
       ->capture_default_str();
   cmd->add_option("--rig", o->rig,
-                  "rig file or name: the voxels take its mapper's resolution (default 0.05 m)");
+                  "rig file or name: the voxels take its mapper's resolution (default 0.05 m), "
+                  "Foxglove's converted topics its frames");
   cmd->add_option("--set", o->rig_sets, "override a rig config key: key=value (repeatable)");
   cmd->add_option("--port", o->server.port, "HTTP and WebSocket port (0: any free port)")
       ->capture_default_str();

@@ -58,10 +58,8 @@ class Channels {
     const auto it = raw_.find(channel);
     if (it != raw_.end()) return it->second;
     uint16_t schema = 0;
-    if (data.size() >= 8) {
-      int64_t fp = 0;
-      for (int i = 0; i < 8; ++i) fp = (fp << 8) | data[i];  // big-endian, as LCM writes it
-      if (const LcmStruct* s = LcmSchema::builtIn().byFingerprint(fp)) schema = lcmSchema(*s);
+    if (const LcmStruct* s = LcmSchema::builtIn().typeOf(data.data(), data.size())) {
+      schema = lcmSchema(*s);
     }
     return raw_[channel] = w_->addChannel(schema, channel, "lcm");
   }
@@ -81,9 +79,8 @@ class Channels {
     const std::string name = s.package + "." + s.name;
     uint16_t& id = schemas_[name];
     if (id != 0) return id;
-    for (const auto& [file, text] : lcmTypeSources()) {
-      if (file == s.name + ".lcm") id = w_->addSchema(name, "lcm", text);
-    }
+    const std::string text = lcmTypeSource(s);
+    if (!text.empty()) id = w_->addSchema(name, "lcm", text);
     return id;
   }
 

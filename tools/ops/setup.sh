@@ -37,6 +37,8 @@ packages=(
   libwebsocketpp-dev libasio-dev  # sweepmap view: HTTP and WebSocket server (header-only)
   libjs-three                     # sweepmap view: three.js, served from /usr/share/javascript
   chromium                        # browser tests of the view and off-screen 3D renderings
+  firefox-esr xvfb                # the view's browser tests in Firefox too (WebDriver BiDi; its
+                                  # headless mode has no WebGL on Linux: a window on Xvfb)
 )
 # The on-board tree for arm64: only packages that are Multi-Arch: same (co-installable with
 # their amd64 twins) or host tools. liblcm1, liblcm-dev and libyaml-cpp-dev are not

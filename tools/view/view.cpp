@@ -12,6 +12,7 @@
 
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
+#include "core/lcm_schema.hpp"
 #include "net/udpm_receiver.hpp"
 #include "processes/live_runner.hpp"
 #include "rigs/rig_file.hpp"
@@ -80,16 +81,23 @@ class ViewApp {
   std::string boardJson();
   void add(const Message& m, int64_t now_utime);
   void feed(const Message& m, int64_t now_utime);
+  void forwardRaw(const Message& m, int64_t now_utime);
   void receiveLive();
   void playLog();
   void feedUntil(int64_t t, size_t* next);
   ViewFrame timeFrame();
 
   ViewOptions options_;
-  std::optional<Rig> rig_;  // Foxglove's frames; none: no Foxglove channels
+  std::optional<Rig> rig_;  // Foxglove's frames; none: only the raw LCM channels
   std::mutex model_mutex_;
   std::unique_ptr<viz::FoxgloveConverter> foxglove_;
   std::map<std::string, uint32_t> foxglove_ids_;  // topic -> channel id
+  struct RawChannel {
+    uint32_t id;
+    const LcmStruct* type;
+  };
+  std::map<std::string, RawChannel> raw_channels_;  // LCM channel -> its Foxglove channel
+  uint32_t next_channel_id_ = 1;
   int64_t last_map_utime_ = 0;
   std::unique_ptr<ViewModel> model_;
   std::unique_ptr<ViewServer> server_;
@@ -158,9 +166,11 @@ void ViewApp::add(const Message& m, int64_t now_utime) {
   feed(m, now_utime);
 }
 
-// One message into the view and, converted, to the Foxglove clients (the model's lock held).
+// One message into the view and, raw and converted, to the Foxglove clients (the model's lock
+// held).
 void ViewApp::feed(const Message& m, int64_t now_utime) {
   model_->add(m, now_utime);
+  forwardRaw(m, now_utime);
   if (!foxglove_) return;
   std::vector<viz::FoxgloveMessage> out =
       foxglove_->convert(m.channel, m.data.data(), m.data.size(), now_utime * 1000);
@@ -175,6 +185,31 @@ void ViewApp::feed(const Message& m, int64_t now_utime) {
   }
 }
 
+// Every LCM channel as it is, on /lcm/CHANNEL (encoding "lcm"; the schema is its type's .lcm
+// text), advertised with its first valid message. A message that is not valid for the channel's
+// type (damaged, or of another type) is not forwarded: a client decodes the bytes it gets by
+// the advertised schema.
+void ViewApp::forwardRaw(const Message& m, int64_t now_utime) {
+  const LcmSchema& schema = LcmSchema::builtIn();
+  const LcmStruct* type = schema.typeOf(m.data.data(), m.data.size());
+  if (!type || !schema.validate(m.data.data(), m.data.size()).empty()) return;
+  auto it = raw_channels_.find(m.channel);
+  if (it == raw_channels_.end()) {
+    FoxgloveChannel c;
+    c.id = next_channel_id_++;
+    c.topic = "/lcm/" + m.channel;
+    c.encoding = "lcm";
+    c.schema_name = type->package + "." + type->name;
+    c.schema = lcmTypeSource(*type);
+    c.schema_encoding = "lcm";
+    server_->addFoxgloveChannels({c});
+    it = raw_channels_.emplace(m.channel, RawChannel{c.id, type}).first;
+  }
+  if (it->second.type != type) return;
+  server_->broadcastFoxglove(it->second.id, static_cast<uint64_t>(now_utime) * 1000,
+                             std::string(m.data.begin(), m.data.end()));
+}
+
 // A seek back: the view and the Foxglove conversion start again (with the model's lock held).
 void ViewApp::resetModel() {
   model_->reset();
@@ -185,7 +220,8 @@ void ViewApp::resetModel() {
 // The converted topics (viz/foxglove_messages.hpp), each with its published JSON schema.
 void ViewApp::startFoxglove() {
   if (!rig_) {
-    std::cout << "sweepmap view: no --rig: no Foxglove channels (they need the rig's frames)\n";
+    std::cout << "sweepmap view: no --rig: only the raw LCM channels for Foxglove (the "
+                 "converted topics need the rig's frames)\n";
     return;
   }
   foxglove_ = std::make_unique<viz::FoxgloveConverter>(*rig_);
@@ -194,7 +230,7 @@ void ViewApp::startFoxglove() {
     const viz::FoxgloveSchema* schema = viz::foxgloveSchema(schema_name);
     if (!schema) continue;
     FoxgloveChannel c;
-    c.id = static_cast<uint32_t>(channels.size() + 1);
+    c.id = next_channel_id_++;
     c.topic = topic;
     c.encoding = "json";
     c.schema_name = schema_name;
@@ -203,7 +239,7 @@ void ViewApp::startFoxglove() {
     foxglove_ids_[topic] = c.id;
     channels.push_back(c);
   }
-  server_->setFoxgloveChannels(channels);
+  server_->addFoxgloveChannels(channels);
 }
 
 // udpm:// through sweepmap's own receiver (one malformed datagram must not end the view);

@@ -67,6 +67,23 @@ std::string messageData(uint32_t subscription, uint64_t log_time_ns, const std::
   return out + payload;
 }
 
+// The protocol's advertise message for `channels`.
+ViewFrame advertise(const std::vector<FoxgloveChannel>& channels) {
+  nlohmann::json list = nlohmann::json::array();
+  for (const FoxgloveChannel& c : channels) {
+    list.push_back({{"id", c.id},
+                    {"topic", c.topic},
+                    {"encoding", c.encoding},
+                    {"schemaName", c.schema_name},
+                    {"schema", c.schema},
+                    {"schemaEncoding", c.schema_encoding}});
+  }
+  ViewFrame f;  // kControl: never dropped
+  f.data = std::make_shared<const std::string>(
+      nlohmann::json({{"op", "advertise"}, {"channels", list}}).dump());
+  return f;
+}
+
 }  // namespace
 
 struct ViewServer::Impl {
@@ -98,7 +115,6 @@ struct ViewServer::Impl {
   void pump(Handle h, Session& s);
   void tick();
   std::string statusFrame(const std::string& board, const ClientCounters& you) const;
-  std::string advertise() const;
 };
 
 void ViewServer::Impl::serveHttp(Handle h) {
@@ -167,9 +183,7 @@ void ViewServer::Impl::open(Handle h) {
                         {"sessionId", std::to_string(counters.connections)}})
             .dump());
     s.queue->push(info);
-    ViewFrame adv;
-    adv.data = std::make_shared<const std::string>(advertise());
-    s.queue->push(adv);
+    s.queue->push(advertise(channels));
   } else {
     callbacks.on_view_open([&](const std::vector<ViewFrame>& frames) {
       std::lock_guard<std::mutex> lock(mutex);
@@ -234,19 +248,6 @@ void ViewServer::Impl::foxgloveCommand(Handle h, const std::string& text) {
   } else {
     ++counters.commands_refused;
   }
-}
-
-std::string ViewServer::Impl::advertise() const {
-  nlohmann::json list = nlohmann::json::array();
-  for (const FoxgloveChannel& c : channels) {
-    list.push_back({{"id", c.id},
-                    {"topic", c.topic},
-                    {"encoding", c.encoding},
-                    {"schemaName", c.schema_name},
-                    {"schema", c.schema},
-                    {"schemaEncoding", c.schema_encoding}});
-  }
-  return nlohmann::json({{"op", "advertise"}, {"channels", list}}).dump();
 }
 
 void ViewServer::Impl::schedulePump() {
@@ -387,9 +388,16 @@ void ViewServer::broadcast(const ViewFrame& frame) {
   impl_->schedulePump();
 }
 
-void ViewServer::setFoxgloveChannels(const std::vector<FoxgloveChannel>& channels) {
-  std::lock_guard<std::mutex> lock(impl_->mutex);
-  impl_->channels = channels;
+void ViewServer::addFoxgloveChannels(const std::vector<FoxgloveChannel>& channels) {
+  {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
+    impl_->channels.insert(impl_->channels.end(), channels.begin(), channels.end());
+    const ViewFrame adv = advertise(channels);
+    for (auto& [h, s] : impl_->sessions) {
+      if (s.foxglove) s.queue->push(adv);
+    }
+  }
+  impl_->schedulePump();
 }
 
 void ViewServer::broadcastFoxglove(uint32_t channel_id, uint64_t log_time_ns,

@@ -5,7 +5,7 @@
 //  - WebSocket /ws: the view's own protocol (view_model.hpp frames); what a page sends can only
 //    move a log's playback (on_view_command), never the rig;
 //  - WebSocket / with the subprotocol foxglove.websocket.v1: the Foxglove protocol (channels
-//    advertised by setFoxgloveChannels, messages by broadcastFoxglove).
+//    advertised by addFoxgloveChannels, messages by broadcastFoxglove).
 // Every connection has its own bounded queue (client_queue.hpp); the asio thread hands a
 // connection at most send_window_bytes more whenever its socket has taken what it had, so a
 // stalled client holds memory up to its bound and slows nothing else.
@@ -31,13 +31,14 @@ struct ViewServerOptions {
                                         // (at most a quarter of the queue bound)
 };
 
-// A Foxglove channel as advertised (the protocol's advertise message).
+// A Foxglove channel as advertised (the protocol's advertise message): a converted topic
+// ("json", a JSON schema) or a raw LCM channel ("lcm", the type's .lcm text).
 struct FoxgloveChannel {
   uint32_t id = 0;
   std::string topic;
-  std::string encoding;  // "json"
+  std::string encoding;  // "json" or "lcm"
   std::string schema_name;
-  std::string schema;  // the JSON schema text
+  std::string schema;
   std::string schema_encoding = "jsonschema";
 };
 
@@ -73,7 +74,9 @@ class ViewServer {
   void stop();
   // Thread-safe: a frame for every page.
   void broadcast(const ViewFrame& frame);
-  void setFoxgloveChannels(const std::vector<FoxgloveChannel>& channels);
+  // Thread-safe: more channels, advertised to the Foxglove clients connected now (and with
+  // the others to every client that connects later).
+  void addFoxgloveChannels(const std::vector<FoxgloveChannel>& channels);
   // Thread-safe: a message on a channel for every Foxglove client subscribed to it.
   void broadcastFoxglove(uint32_t channel_id, uint64_t log_time_ns, const std::string& payload);
   ViewServerCounters counters() const;
