@@ -25,8 +25,13 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
   // checking either estimate against the plate's shape.
   std::vector<PlateRay> plate_rays;
   size_t total = 0;
-  for (const auto& s : scans) total += s.ranges_m.size();
+  bool intensities = true;  // every scan of the window has them
+  for (const auto& s : scans) {
+    total += s.ranges_m.size();
+    intensities = intensities && s.intensities.size() == s.ranges_m.size();
+  }
   out.points_Op.reserve(total);
+  if (intensities) out.intensities.reserve(total);
   // R_L^O' (identity unless the rig's scan plane is tilted or its mirror offset).
   const bool rotated =
       rig.geometry.scan_plane_tilt_deg != 0.0 || rig.geometry.mirror_offset_deg != 0.0;
@@ -37,6 +42,7 @@ AssembledSweep assembleSweep(const std::vector<Scan2D>& scans, const SweepWindow
     if (rotated) p_L = R_L * p_L;
     const Eigen::Vector3d p_Op = rotating::lidarToOPrime(p_L, ray.phi_rad, offset_x_m);
     out.points_Op.push_back(p_Op.cast<float>());
+    if (intensities) out.intensities.push_back(ray.intensity);
     const Eigen::Vector3d origin =
         rotating::lidarToOPrime(Eigen::Vector3d::Zero(), ray.phi_rad, offset_x_m);
     const Eigen::Vector3d dir = (p_Op - origin) / ray.range_m;

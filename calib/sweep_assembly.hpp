@@ -29,7 +29,10 @@ struct AssembledSweep {
   int64_t first_ray_utime = 0;             // phi_motor = 0 here: the instant frame O' is defined
   std::vector<Eigen::Vector3f> points_Op;  // C_O'
   std::vector<Eigen::Vector3f> points;     // C_O when corrected, else C_O'
-  std::vector<PlateRay> plate_rays;        // rays meeting the plate plane in the region
+  // Empty when a scan of the window has no intensities (a lidar that measures none), else
+  // one per point of points_Op and points, in their order: the ray's intensity (device units).
+  std::vector<float> intensities;
+  std::vector<PlateRay> plate_rays;  // rays meeting the plate plane in the region
   PlateEstimate plate;
   PlateCheck plate_check;  // the estimate against the plate's shape
   double alpha_rad = 0.0;
@@ -48,6 +51,7 @@ struct SweepRay {
   double phi_rad = 0.0;
   double range_m = 0.0;
   double theta_rad = 0.0;
+  float intensity = 0.0f;  // the device's reading; 0 when its scan has no intensities
 };
 
 // Calls f(ray) for every valid ray of `scans` (a window's scans in time order, the first
@@ -64,7 +68,9 @@ void forEachSweepRay(const std::vector<Scan2D>& scans, double omega_rad_s, F&& f
       const double r = scan.ranges_m[i];
       if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none
       // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
-      f(SweepRay{phi0 + omega_rad_s * t_ray_s * static_cast<double>(i), r, scan.rayAngle(i)});
+      const float intensity = i < scan.intensities.size() ? scan.intensities[i] : 0.0f;
+      f(SweepRay{phi0 + omega_rad_s * t_ray_s * static_cast<double>(i), r, scan.rayAngle(i),
+                 intensity});
     }
   }
 }

@@ -38,9 +38,12 @@ Eigen::Isometry3d planarToIsometry(const Pose2& p) {
 }
 
 std::vector<Eigen::Vector3f> scanToWorld(const Scan2D& scan, const PoseTrack& track,
-                                         const Eigen::Isometry3d& T_BL, int* uncovered) {
+                                         const Eigen::Isometry3d& T_BL, int* uncovered,
+                                         std::vector<float>* intensities) {
   std::vector<Eigen::Vector3f> out;
   out.reserve(scan.ranges_m.size());
+  const bool with_intensity = scan.intensities.size() == scan.ranges_m.size();
+  if (intensities) intensities->clear();
   int missing = 0;
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const double r = scan.ranges_m[i];
@@ -52,6 +55,7 @@ std::vector<Eigen::Vector3f> scanToWorld(const Scan2D& scan, const PoseTrack& tr
     }
     const Eigen::Vector3d p_L = rotating::pointInLidar(r, scan.rayAngle(i));
     out.push_back((planarToIsometry(*pose) * (T_BL * p_L)).cast<float>());
+    if (intensities && with_intensity) intensities->push_back(scan.intensities[i]);
   }
   if (uncovered) *uncovered = missing;
   return out;

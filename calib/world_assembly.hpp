@@ -34,8 +34,11 @@ class PoseTrack {
 Eigen::Isometry3d planarToIsometry(const Pose2& pose);
 
 // Transforms the valid rays of `scan` into the world, each with the pose at its own time.
-// Rays whose time the track does not cover are skipped and counted in `*uncovered`.
+// Rays whose time the track does not cover are skipped and counted in `*uncovered`. With
+// `intensities`, it is set to each returned point's intensity when the scan has one per ray,
+// else emptied (a lidar that measures none).
 std::vector<Eigen::Vector3f> scanToWorld(const Scan2D& scan, const PoseTrack& track,
-                                         const Eigen::Isometry3d& T_BL, int* uncovered = nullptr);
+                                         const Eigen::Isometry3d& T_BL, int* uncovered = nullptr,
+                                         std::vector<float>* intensities = nullptr);
 
 }  // namespace sweepmap

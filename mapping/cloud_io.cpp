@@ -61,23 +61,35 @@ void writePcdBinary(const std::string& path, const std::vector<Eigen::Vector3f>&
 
 // Written here: PCL's PLY writer adds a `camera` element (or, without it, a range grid and a
 // header full of obj_info lines) that CloudCompare asks about on import. This is the plain
-// form every tool reads: one vertex element of three float32, little-endian.
-void writePlyBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points) {
+// form every tool reads: one vertex element of three float32 (and a float32 intensity when
+// given: CloudCompare makes it a scalar field), little-endian.
+void writePlyBinary(const std::string& path, const std::vector<Eigen::Vector3f>& points,
+                    const std::vector<float>& intensities) {
+  const bool with_intensity = !intensities.empty();
+  if (with_intensity && intensities.size() != points.size()) {
+    throw std::runtime_error("cannot save " + path +
+                             " (PLY): " + std::to_string(intensities.size()) + " intensities for " +
+                             std::to_string(points.size()) + " points");
+  }
+  const size_t stride = with_intensity ? 16 : 12;
   std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment sweepmap\nelement vertex " +
                       std::to_string(points.size()) +
-                      "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+                      "\nproperty float x\nproperty float y\nproperty float z\n" +
+                      (with_intensity ? "property float intensity\n" : "") + "end_header\n";
   const size_t header = bytes.size();
-  bytes.resize(header + points.size() * 12);
+  bytes.resize(header + points.size() * stride);
   static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "PLY body written as in memory");
   for (size_t i = 0; i < points.size(); ++i) {
-    std::memcpy(&bytes[header + 12 * i], points[i].data(), 12);
+    std::memcpy(&bytes[header + stride * i], points[i].data(), 12);
+    if (with_intensity) std::memcpy(&bytes[header + stride * i + 12], &intensities[i], 4);
   }
   writeFileAtomic(path, bytes);
 }
 
-void writePcdAndPly(const std::string& stem, const std::vector<Eigen::Vector3f>& points) {
+void writePcdAndPly(const std::string& stem, const std::vector<Eigen::Vector3f>& points,
+                    const std::vector<float>& intensities) {
   writePcdBinary(stem + ".pcd", points);
-  writePlyBinary(stem + ".ply", points);
+  writePlyBinary(stem + ".ply", points, intensities);
 }
 
 std::vector<Eigen::Vector3f> readPcd(const std::string& path) {

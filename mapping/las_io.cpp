@@ -185,6 +185,11 @@ const PlyProperty* findProperty(const std::vector<PlyProperty>& props,
 
 }  // namespace
 
+uint16_t lasIntensity(double device_units) {
+  if (!(device_units > 0.0)) return 0;  // also NaN
+  return static_cast<uint16_t>(std::lround(std::min(device_units, 65535.0)));
+}
+
 std::vector<LasPoint> readPlyVertices(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error(path + ": cannot open");
@@ -208,8 +213,7 @@ std::vector<LasPoint> readPlyVertices(const std::string& path) {
     p.y = plyValue(&record[xyz[1]->offset], xyz[1]->type);
     p.z = plyValue(&record[xyz[2]->offset], xyz[2]->type);
     if (intensity) {
-      p.intensity = static_cast<uint16_t>(
-          std::clamp(plyValue(&record[intensity->offset], intensity->type), 0.0, 65535.0));
+      p.intensity = lasIntensity(plyValue(&record[intensity->offset], intensity->type));
     }
     if (time) p.gps_time = plyValue(&record[time->offset], time->type);
     points.push_back(p);

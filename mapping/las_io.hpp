@@ -42,8 +42,14 @@ LasSummary writeLas14(const std::string& path, const std::vector<LasPoint>& poin
 // count since 2017-01-01), minus 1e9 as LAS's "adjusted standard GPS time".
 double adjustedGpsTime(double unix_s);
 
+// A lidar's intensity (lidar_scan_t's device units, e.g. the UST's reflectance) as LAS's
+// 16-bit intensity: rounded to the nearest count and clipped to 0..65535, so a reading keeps
+// its value up to 65535 (a UST's or the simulated lidar's readings of a room stay below that);
+// negative or NaN gives 0. LAS 1.4 leaves the scale to the writer; this one is the identity.
+uint16_t lasIntensity(double device_units);
+
 // The vertices of a binary little-endian PLY: x, y, z (float or double), and, when present,
-// intensity ("intensity" or "scalar_intensity") and GPS time ("gps_time" or
+// intensity ("intensity" or "scalar_intensity", through lasIntensity) and GPS time ("gps_time" or
 // "scalar_gps_time"). Throws std::runtime_error naming the file and what is wrong.
 std::vector<LasPoint> readPlyVertices(const std::string& path);
 

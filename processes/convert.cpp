@@ -107,6 +107,11 @@ std::vector<cloud_chunk_t> toChunks(const AssembledSweep& sweep, int chunk_point
       const auto& p = sweep.points[i];
       m.xyz_m[i - begin] = {p.x(), p.y(), p.z()};
     }
+    if (sweep.intensities.size() == n) {  // else the lidar measures none: 0 intensities
+      m.intensities.assign(sweep.intensities.begin() + static_cast<std::ptrdiff_t>(begin),
+                           sweep.intensities.begin() + static_cast<std::ptrdiff_t>(end));
+    }
+    m.nintensities = static_cast<int32_t>(m.intensities.size());
     chunks.push_back(std::move(m));
   }
   return chunks;
@@ -142,6 +147,10 @@ std::string validateChunk(const cloud_chunk_t& m) {
     if (p.size() != 3 || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
       return "non-finite point";
     }
+  }
+  if (m.nintensities != 0 && m.nintensities != m.npoints) {
+    return "nintensities " + std::to_string(m.nintensities) + " is neither 0 nor npoints " +
+           std::to_string(m.npoints);
   }
   return {};
 }

@@ -29,10 +29,12 @@ SweepWindow fromLcm(const scan_window_t& msg);
 // Empty when valid, else the reason.
 std::string validateWindow(const scan_window_t& msg);
 
-// Splits a sweep into self-describing chunks of at most `chunk_points` points.
+// Splits a sweep into self-describing chunks of at most `chunk_points` points, each point
+// with its intensity when the sweep has one per point.
 std::vector<cloud_chunk_t> toChunks(const AssembledSweep& sweep, int chunk_points);
 sweep_status_t toStatus(const AssembledSweep& sweep, int chunk_count);
-// Empty when valid, else the reason.
+// Empty when valid, else the reason (a bad chunk index, more points than the sweep, a
+// non-finite point or sensor origin, intensities neither 0 nor one per point).
 std::string validateChunk(const cloud_chunk_t& msg);
 
 truth_shaft_t toLcm(const ShaftSegment& segment, int64_t utime);

@@ -55,6 +55,7 @@ void ProfileAssemblerNode::handle(const Message& msg, Outbox& out) {
   c.npoints = static_cast<int32_t>(points.size());
   c.xyz_m.reserve(points.size());
   for (const auto& p : points) c.xyz_m.push_back({p.x(), p.y(), p.z()});
+  c.nintensities = 0;  // the profiler measures no intensity
   out.publish(channels::kSweepCloud, msg.utime, c);
 }
 

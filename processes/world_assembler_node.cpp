@@ -66,7 +66,9 @@ void WorldAssemblerNode::assembleReady(int64_t now_utime, bool flush, Outbox& ou
 
 void WorldAssemblerNode::publishScan(int64_t now_utime, const Scan2D& scan, Outbox& out) {
   int uncovered = 0;
-  const std::vector<Eigen::Vector3f> pts = scanToWorld(scan, track_, T_BL_, &uncovered);
+  std::vector<float> intensities;
+  const std::vector<Eigen::Vector3f> pts =
+      scanToWorld(scan, track_, T_BL_, &uncovered, &intensities);
   if (uncovered > 0) count("rays_without_pose", uncovered);
   const auto mid = track_.at(scan.rayUtime(scan.ranges_m.size() / 2));
   if (!mid) {
@@ -88,9 +90,11 @@ void WorldAssemblerNode::publishScan(int64_t now_utime, const Scan2D& scan, Outb
   c.npoints = static_cast<int32_t>(pts.size());
   c.xyz_m.reserve(pts.size());
   for (const auto& p : pts) c.xyz_m.push_back({p.x(), p.y(), p.z()});
+  c.nintensities = static_cast<int32_t>(intensities.size());
+  c.intensities = intensities;
   out.publish(channels::kSweepCloud, now_utime, c);
   count("scans");
-  if (observer_) observer_(scan.utime, pts, origin);
+  if (observer_) observer_(scan.utime, pts, intensities, origin);
 }
 
 void WorldAssemblerNode::finish(int64_t now_utime, Outbox& out) {

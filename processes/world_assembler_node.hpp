@@ -21,9 +21,11 @@ class WorldAssemblerNode : public Node {
   std::vector<std::string> subscriptions() const override;
   void finish(int64_t now_utime, Outbox& out) override;
 
-  // Offline tools: every assembled scan's world points and sensor origin.
-  using Observer = std::function<void(int64_t utime, const std::vector<Eigen::Vector3f>& points,
-                                      const Eigen::Vector3d& origin)>;
+  // Offline tools: every assembled scan's world points, their intensities (empty when the
+  // lidar measures none, else one per point) and the sensor origin.
+  using Observer =
+      std::function<void(int64_t utime, const std::vector<Eigen::Vector3f>& points,
+                         const std::vector<float>& intensities, const Eigen::Vector3d& origin)>;
   void setObserver(Observer o) { observer_ = std::move(o); }
 
  protected:

@@ -81,8 +81,9 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   require(rig.plate.region_thickness_mm > 0, "plate.region_thickness_mm", "must be > 0");
   require(rig.plate.min_points > 0, "plate.min_points", "must be > 0");
   require(rig.plate.range_gate_mm > 0, "plate.range_gate_mm", "must be > 0");
-  require(rig.assembler.chunk_points > 0 && rig.assembler.chunk_points <= 5000,
-          "assembler.chunk_points", "must be 1..5000 (one UDP datagram)");
+  // 4000 points of 16 bytes (x, y, z, intensity) and the header: 64.1 kB of LCM's 65499.
+  require(rig.assembler.chunk_points > 0 && rig.assembler.chunk_points <= 4000,
+          "assembler.chunk_points", "must be 1..4000 (one UDP datagram)");
   require(rig.assembler.max_pending_scans > 0, "assembler.max_pending_scans", "must be > 0");
   require(rig.mapper.resolution_m >= 0.005, "mapper.resolution_m", "must be >= 0.005");
   require(rig.mapper.max_range_m > 0 && rig.mapper.max_range_m <= 100, "mapper.max_range_m",

@@ -4,15 +4,18 @@
 #include <cmath>
 #include <limits>
 
+#include "sim/reflectance.hpp"
+
 namespace sweepmap {
 namespace {
 
 constexpr double kEdgeJumpM = 0.05;
 constexpr double kWalkSpeedMS = 1.0;
 
-// Entry distance of the ray into `box` within (0, limit), if any.
+// Entry distance of the ray into `box` within (0, limit), if any, and the axis of the face
+// it enters through.
 std::optional<double> rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                             const Eigen::AlignedBox3d& box, double limit) {
+                             const Eigen::AlignedBox3d& box, double limit, int* axis) {
   double t0 = 0.0, t1 = limit;
   for (int k = 0; k < 3; ++k) {
     if (d[k] == 0.0) {
@@ -21,6 +24,7 @@ std::optional<double> rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
     }
     double a = (box.min()[k] - o[k]) / d[k], b = (box.max()[k] - o[k]) / d[k];
     if (a > b) std::swap(a, b);
+    if (a > t0) *axis = k;
     t0 = std::max(t0, a);
     t1 = std::min(t1, b);
     if (t0 > t1) return std::nullopt;
@@ -67,14 +71,17 @@ Eigen::AlignedBox3d SceneArtefacts::personAt(const Person& p, int64_t utime) con
 
 std::optional<double> SceneArtefacts::raycastObjects(const Eigen::Vector3d& origin,
                                                      const Eigen::Vector3d& dir, double limit_m,
-                                                     int64_t utime) const {
+                                                     int64_t utime, ObjectHit* what) const {
   std::optional<double> best;
-  const auto take = [&](const Eigen::AlignedBox3d& box) {
-    const auto t = rayBox(origin, dir, box, best.value_or(limit_m));
-    if (t) best = t;
+  const auto take = [&](const Eigen::AlignedBox3d& box, double reflectivity) {
+    int axis = 0;
+    const auto t = rayBox(origin, dir, box, best.value_or(limit_m), &axis);
+    if (!t) return;
+    best = t;
+    if (what) *what = {axis, reflectivity};
   };
-  if (whiteboard_) take(*whiteboard_);
-  for (const Person& p : people_) take(personAt(p, utime));
+  if (whiteboard_) take(*whiteboard_, kWhiteboardReflectivity);
+  for (const Person& p : people_) take(personAt(p, utime), kPersonReflectivity);
   return best;
 }
 

@@ -31,8 +31,15 @@ class SceneArtefacts {
 
   // Distance to the nearest artefact object (whiteboard, a person at `utime`) along the ray
   // (room frame, unit direction) within (0, limit_m), if any.
+  // With `what`, set on a hit: the axis (0..2) of the face's normal and the object's diffuse
+  // reflectivity (sim/reflectance.hpp).
+  struct ObjectHit {
+    int axis = 0;
+    double reflectivity = 0.0;
+  };
   std::optional<double> raycastObjects(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
-                                       double limit_m, int64_t utime) const;
+                                       double limit_m, int64_t utime,
+                                       ObjectHit* what = nullptr) const;
   // Whether a hit of the scene's box `hit` at `point` (room frame) returns (window, dark,
   // grazing incidence).
   bool returns(const Eigen::Vector3d& point, const Eigen::Vector3d& dir, const Scene::Hit& hit);

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "core/angles.hpp"
+#include "sim/reflectance.hpp"
 
 namespace sweepmap {
 namespace {
@@ -63,6 +64,7 @@ SimLidar::SimLidar(const LidarConfig& lidar, const SimRigConfig& sim, const Plat
   if (!(plate_thickness_m_ >= 0.0)) {
     throw std::invalid_argument("SimLidar: sim.plate_thickness_mm must be >= 0");
   }
+  for (const SceneBox& b : scene.boxes()) reflectivity_.push_back(surfaceReflectivity(b.name));
   const double tilt = sim.scan_plane_tilt_deg * kDegToRad;
   for (int i = 0; i < lidar.beam_count; ++i) {
     const double theta =
@@ -106,20 +108,24 @@ Scan2D SimLidar::makeScan(int64_t index, int64_t utime) {
 
   // Nothing beyond this can come back inside range_max, whatever the noise.
   const double cast_range_m = lidar_.range_max_m + 6.0 * noise_sigma_m_;
-  std::vector<double> hits = trueRanges(utime, cast_range_m);
+  std::vector<float> intensity;
+  std::vector<double> hits = trueRanges(utime, cast_range_m, &intensity);
   artefacts_.mixEdges(&hits);
+  scan.intensities.resize(scan.ranges_m.size());
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const double noisy_m = hits[i] + noise_sigma_m_ * standard_normal_(rng_);
     const bool valid =
         hits[i] != 0.0 && noisy_m >= lidar_.range_min_m && noisy_m <= lidar_.range_max_m;
     scan.ranges_m[i] = valid ? float(noisy_m) : 0.0f;
+    scan.intensities[i] = valid ? intensity[i] : 0.0f;
   }
   return scan;
 }
 
-std::vector<double> SimLidar::trueRanges(int64_t utime, double cast_range_m) {
+std::vector<double> SimLidar::trueRanges(int64_t utime, double cast_range_m,
+                                         std::vector<float>* intensity) {
   std::vector<double> hits(size_t(lidar_.beam_count), 0.0);
-  const Eigen::Matrix3d R_room_rig = T_room_rig_.linear();
+  intensity->assign(hits.size(), 0.0f);
   Scan2D timing;
   timing.utime = utime;
   timing.time_increment_ns = time_increment_ns_;
@@ -137,22 +143,43 @@ std::vector<double> SimLidar::trueRanges(int64_t utime, double cast_range_m) {
     const Eigen::Vector3d origin_o(cos_phi * offset_m_, sin_phi * offset_m_, 0.0);
     const Eigen::Vector3d dir_o(cos_phi * dir_x_[i] - sin_phi * sin_theta_[i],
                                 sin_phi * dir_x_[i] + cos_phi * sin_theta_[i], cos_theta_[i]);
-    const Eigen::Vector3d origin_room = T_room_rig_ * origin_o;
-    const Eigen::Vector3d dir_room = R_room_rig * dir_o;
-    Scene::Hit what;
-    std::optional<double> hit = scene_->raycast(origin_room, dir_room, cast_range_m, &what);
-    if (hit && !artefacts_.returns(origin_room + *hit * dir_room, dir_room, what)) hit = 0.0;
-    const double limit_m = hit && *hit > 0.0 ? *hit : cast_range_m;
-    if (const auto obj = artefacts_.raycastObjects(origin_room, dir_room, limit_m, ray_utime)) {
-      hit = obj;
-    }
-    if (const auto plate = hitPlate(origin_o, dir_o);
-        plate && (!hit || *hit == 0.0 || *plate < *hit)) {
-      hit = plate;
-    }
-    hits[i] = hit.value_or(0.0);
+    const RayHit hit = castRay(origin_o, dir_o, cast_range_m, ray_utime);
+    hits[i] = hit.range_m;
+    (*intensity)[i] = simulatedIntensity(hit.reflectivity, hit.cos_incidence, hit.range_m);
   }
   return hits;
+}
+
+SimLidar::RayHit SimLidar::castRay(const Eigen::Vector3d& origin_o, const Eigen::Vector3d& dir_o,
+                                   double cast_range_m, int64_t ray_utime) {
+  const Eigen::Vector3d origin_room = T_room_rig_ * origin_o;
+  const Eigen::Vector3d dir_room = T_room_rig_.linear() * dir_o;
+  RayHit out;
+  Scene::Hit what;
+  std::optional<double> hit = scene_->raycast(origin_room, dir_room, cast_range_m, &what);
+  if (hit && !artefacts_.returns(origin_room + *hit * dir_room, dir_room, what)) hit = 0.0;
+  if (hit && *hit > 0.0) {
+    out.reflectivity = reflectivity_[what.box];
+    out.cos_incidence = dir_room[what.axis];
+  }
+  const double limit_m = hit && *hit > 0.0 ? *hit : cast_range_m;
+  SceneArtefacts::ObjectHit object;
+  if (const auto obj =
+          artefacts_.raycastObjects(origin_room, dir_room, limit_m, ray_utime, &object)) {
+    hit = obj;
+    out.reflectivity = object.reflectivity;
+    out.cos_incidence = dir_room[object.axis];
+  }
+  if (const auto plate = hitPlate(origin_o, dir_o);
+      plate && (!hit || *hit == 0.0 || *plate < *hit)) {
+    hit = plate;
+    out.reflectivity = kPlateReflectivity;
+    // Its upper surface (normal Z of frame O), else the face of its hypotenuse.
+    const bool on_top = std::fabs(origin_o.z() + *plate * dir_o.z() - plate_z_m_) < 1e-9;
+    out.cos_incidence = on_top ? dir_o.z() : plate_along_.dot(dir_o.head<2>());
+  }
+  out.range_m = hit.value_or(0.0);
+  return out;
 }
 
 std::optional<double> SimLidar::hitPlate(const Eigen::Vector3d& origin_o,

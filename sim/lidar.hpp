@@ -12,6 +12,8 @@
 // at Scan2D::rayUtime(i); the scan is delivered sim.lidar_latency_ms after its last ray.
 // Range noise N(0, sim.range_noise_sigma_mm) from one std::mt19937_64(seed), one draw per
 // ray in order; a noisy range outside [range_min_m, range_max_m], or no hit, reads 0.
+// Intensity (SCIP ME's reflectance): sim/reflectance.hpp's model of the surface hit, from the
+// true range and the incidence; 0 where the range reads 0. Deterministic, no random draw.
 //
 // A real build (sim.*, 0 in the paper's model): the ray leaves along
 // Ry(tilt) (0, sin(theta + mirror), cos(theta + mirror)) in frame L (tilt =
@@ -55,8 +57,17 @@ class SimLidar : public LidarDevice {
  private:
   int64_t scanUtime(int64_t index) const;
   Scan2D makeScan(int64_t index, int64_t utime);
-  // The true range of every ray of a scan starting at `utime` (0: no return).
-  std::vector<double> trueRanges(int64_t utime, double cast_range_m);
+  // The true range of every ray of a scan starting at `utime` (0: no return), and each ray's
+  // intensity (sim/reflectance.hpp; 0: no return).
+  std::vector<double> trueRanges(int64_t utime, double cast_range_m, std::vector<float>* intensity);
+  // One ray (frame O) against the scene, its artefacts and the plate: the nearest return.
+  struct RayHit {
+    double range_m = 0.0;  // 0: no return
+    double reflectivity = 0.0;
+    double cos_incidence = 0.0;  // the ray's direction against the surface's normal
+  };
+  RayHit castRay(const Eigen::Vector3d& origin_o, const Eigen::Vector3d& dir_o, double cast_range_m,
+                 int64_t ray_utime);
   // Distance along the ray (frame O) to the plate, if it hits.
   std::optional<double> hitPlate(const Eigen::Vector3d& origin_o,
                                  const Eigen::Vector3d& dir_o) const;
@@ -78,6 +89,7 @@ class SimLidar : public LidarDevice {
   // with theta' = theta + mirror offset.
   std::vector<double> dir_x_, sin_theta_, cos_theta_;
   SceneArtefacts artefacts_;
+  std::vector<double> reflectivity_;  // of each scene box (sim/reflectance.hpp)
   std::mt19937_64 rng_;
   std::normal_distribution<double> standard_normal_;
   int64_t first_scan_utime_;

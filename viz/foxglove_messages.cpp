@@ -240,10 +240,14 @@ void FoxgloveConverter::State::staticFrames(int64_t utime, int64_t t_ns,
 
 void FoxgloveConverter::State::cloud(const cloud_chunk_t& c, int64_t t_ns,
                                      std::vector<FoxgloveMessage>* out) {
+  // validateChunk: nintensities is 0 or npoints.
+  const bool with_intensity = c.nintensities > 0 && c.intensities.size() == c.xyz_m.size();
   std::vector<float> values;
-  values.reserve(c.xyz_m.size() * 3);
-  for (const auto& p : c.xyz_m) {
+  values.reserve(c.xyz_m.size() * (with_intensity ? 4 : 3));
+  for (size_t i = 0; i < c.xyz_m.size(); ++i) {
+    const auto& p = c.xyz_m[i];
     values.insert(values.end(), {p[0], p[1], p[2]});
+    if (with_intensity) values.push_back(c.intensities[i]);
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
     voxels.emplace(static_cast<int>(std::floor(p[0] / resolution_m)),
                    static_cast<int>(std::floor(p[1] / resolution_m)),
@@ -256,8 +260,13 @@ void FoxgloveConverter::State::cloud(const cloud_chunk_t& c, int64_t t_ns,
     last_phi_offset = c.phi_offset_rad;
     out->push_back(frameTransform("O", "O'", rotationZ(finite(c.phi_offset_rad)), c.utime, t_ns));
   }
-  out->push_back(message("/sweep_cloud", kPointCloud,
-                         pointCloudJson(c.utime, c.frame, {"x", "y", "z"}, values), t_ns));
+  out->push_back(
+      message("/sweep_cloud", kPointCloud,
+              pointCloudJson(c.utime, c.frame,
+                             with_intensity ? std::vector<std::string>{"x", "y", "z", "intensity"}
+                                            : std::vector<std::string>{"x", "y", "z"},
+                             values),
+              t_ns));
 }
 
 void FoxgloveConverter::State::map(int64_t t_ns, bool force, std::vector<FoxgloveMessage>* out) {

@@ -5,7 +5,8 @@
 //
 // Topics (derived; the raw LCM channels keep their own names elsewhere):
 //   /sweep_cloud   foxglove.PointCloud      each SWEEP_CLOUD chunk, float32 x, y, z [m] in the
-//                                           chunk's frame (cloud_chunk_t carries no intensity)
+//                                           chunk's frame, and float32 intensity (the lidar's
+//                                           device units) when the chunk carries intensities
 //   /map           foxglove.PointCloud      centres of the voxels (the rig's mapper resolution)
 //                                           that a cloud point fell in, so far; at most once per
 //                                           second of log time, after SWEEP_STATUS / MAP_STATS,

@@ -77,6 +77,24 @@ TEST_F(SweepAssemblyTest, SkipsNoReturnAndOutOfLimitRays) {
   EXPECT_EQ(s.points_Op.size(), 2u);
 }
 
+// Each point keeps its own ray's intensity, skipped rays and all, through the correction;
+// one scan of the window without intensities leaves the sweep without them.
+TEST_F(SweepAssemblyTest, EachPointCarriesItsRaysIntensity) {
+  Scan2D a = scan(0, 2.0f), b = scan(4, 2.0f);
+  a.intensities = {10.0f, 11.0f, 12.0f, 13.0f, 14.0f};
+  b.intensities = {20.0f, 21.0f, 22.0f, 23.0f, 24.0f};
+  a.ranges_m[1] = 0.0f;   // no return: its point and its intensity go
+  b.ranges_m[4] = 12.0f;  // beyond range_max
+  const AssembledSweep s = assembleSweep({a, b}, window_, rig_);
+  ASSERT_EQ(s.points.size(), 8u);
+  EXPECT_EQ(s.intensities, (std::vector<float>{10, 12, 13, 14, 20, 21, 22, 23}));
+  AssembledSweep corrected = s;
+  uncorrectSweep("test", &corrected);
+  EXPECT_EQ(corrected.intensities.size(), corrected.points.size());
+  b.intensities.clear();  // a lidar (or a scan) without intensity
+  EXPECT_TRUE(assembleSweep({a, b}, window_, rig_).intensities.empty());
+}
+
 TEST_F(SweepAssemblyTest, NoPlateMeansUncorrectedWithReason) {
   const AssembledSweep s = assembleSweep({scan(0, 2.0f)}, window_, rig_);
   EXPECT_FALSE(s.corrected);

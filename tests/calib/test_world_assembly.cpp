@@ -77,6 +77,28 @@ TEST(WorldAssembly, DeskewsWithEachRaysPose) {
   EXPECT_NEAR(scanToWorld(s, frozen, m.T_BL()).back().x(), 5.0 - 0.06, 1e-4);
 }
 
+// The intensity of each returned point is its own ray's; a scan without intensities gives
+// none.
+TEST(WorldAssembly, PointsKeepTheirRaysIntensity) {
+  PoseTrack track;
+  track.add(0, {0, 0, 0});
+  track.add(5000, {0, 0, 0});
+  Scan2D s;
+  s.time_increment_ns = 1000000;
+  s.range_min_m = 0.02;
+  s.range_max_m = 10;
+  s.angle_increment_rad = 0.01;
+  s.ranges_m = {1.0f, 0.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};  // ray 1: no return
+  s.intensities = {100, 101, 102, 103, 104, 105, 106, 107};       // rays 6, 7: no pose
+  std::vector<float> intensities = {-1};
+  const auto pts = scanToWorld(s, track, Eigen::Isometry3d::Identity(), nullptr, &intensities);
+  ASSERT_EQ(pts.size(), 5u);
+  EXPECT_EQ(intensities, (std::vector<float>{100, 102, 103, 104, 105}));
+  s.intensities.clear();
+  scanToWorld(s, track, Eigen::Isometry3d::Identity(), nullptr, &intensities);
+  EXPECT_TRUE(intensities.empty());
+}
+
 TEST(WorldAssembly, RaysOutsideTheTrackAreSkippedAndCounted) {
   PoseTrack track;
   track.add(0, {0, 0, 0});

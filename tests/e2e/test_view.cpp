@@ -253,6 +253,29 @@ void expectFoxglove(const nlohmann::json& fox, const std::vector<std::string>& t
   }
 }
 
+// The page's colour mode `mode` (tests/js/view_live.js's sample: [value, hue] per point): the
+// hue falls as the value rises (view.js's ramp: blue for the lowest, red for the highest), and
+// the sample spans more than one colour.
+void expectHueFollows(const nlohmann::json& samples, const std::string& mode) {
+  std::vector<std::pair<double, double>> v;
+  for (const auto& p : samples) {
+    ASSERT_TRUE(p[0].is_number()) << mode << ": a point without its value: " << p;
+    v.emplace_back(p[0].get<double>(), p[1].get<double>());
+  }
+  ASSERT_GT(v.size(), 50u) << mode;
+  std::sort(v.begin(), v.end());
+  size_t bluer = 0;  // points drawn bluer than a lower value
+  std::string first;
+  for (size_t i = 1; i < v.size(); ++i) {
+    if (v[i].second <= v[i - 1].second + 1e-3) continue;
+    if (bluer++ == 0) {
+      first = std::to_string(v[i].first) + " drawn bluer than " + std::to_string(v[i - 1].first);
+    }
+  }
+  EXPECT_EQ(bluer, 0u) << mode << " of " << v.size() << " points, e.g. " << first;
+  EXPECT_GT(v.front().second - v.back().second, 0.2) << mode << ": one colour for all";
+}
+
 // Rig A's processes in mode 2 (4 sweeps, ~5 MB of clouds and voxels) with the view, a page,
 // a stalled client and a Foxglove client: the page draws every point the server says it sent
 // it and shows the room, while the stalled client's frames are dropped and counted, the view
@@ -327,6 +350,15 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
       return chunk.second == first;
     })) << "the first /lcm/SWEEP_CLOUD message is no chunk the assembler published";
   }
+  // Colour by intensity (the simulated UST measures it) and back by height.
+  ASSERT_TRUE(page.contains("colour")) << page.dump();
+  const nlohmann::json& colour = page["colour"];
+  EXPECT_EQ(colour["initial"], "height");
+  EXPECT_TRUE(colour["available"].get<bool>()) << "the intensity option stayed disabled";
+  EXPECT_TRUE(colour["intensity_set"].get<bool>());
+  EXPECT_TRUE(colour["height_set"].get<bool>());
+  expectHueFollows(colour["intensity"], "intensity");
+  expectHueFollows(colour["height"], "height");
 }
 
 // A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps,

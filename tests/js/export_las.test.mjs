@@ -3,7 +3,11 @@
 // the bounds and a sample of points equal those of the PLY files the LAS was made from (read
 // here by their header). loaders.gl does not return the GPS time or the header's version
 // fields, so those are read here from the bytes, at the offsets of ASPRS LAS 1.4 R15.
-// Usage: node export_las.test.mjs LAS PLY...
+// Intensity: each sampled point's LAS intensity, as the reader decodes it, is its PLY vertex's
+// float intensity rounded and clipped to 0..65535 (mapping/las_io.hpp's lasIntensity), or 0 where
+// the PLY has none; EXPECT_INTENSITY=all requires every PLY to carry it (and not all zero), none
+// that no PLY does.
+// Usage: [EXPECT_INTENSITY=all|none] node export_las.test.mjs LAS PLY...
 import fs from "fs";
 import path from "path";
 
@@ -20,7 +24,8 @@ async function lazRsLoader() {
   return (await import(path.join(lasDir, "dist/index.js"))).LAZRsLoader;
 }
 
-// x, y, z of a binary little-endian PLY with float x y z first in its vertex element.
+// x, y, z of a binary little-endian PLY with float x y z first in its vertex element, and its
+// float intensity property (null without).
 function readPly(file) {
   const b = fs.readFileSync(file);
   const end = b.indexOf("end_header\n") + "end_header\n".length;
@@ -34,15 +39,34 @@ function readPly(file) {
   for (let i = 0; i < count; ++i) {
     for (let k = 0; k < 3; ++k) out[3 * i + k] = b.readFloatLE(end + i * stride + 4 * k);
   }
-  return out;
+  const at = props.findIndex((p) => p[2] === "intensity");
+  let intensity = null;
+  if (at >= 0) {
+    check(props[at][1] === "float", file + ": float intensity");
+    const offset = props.slice(0, at).reduce((s, p) => s + ({ float: 4, double: 8, uchar: 1, ushort: 2 })[p[1]], 0);
+    intensity = new Float64Array(count);
+    for (let i = 0; i < count; ++i) intensity[i] = b.readFloatLE(end + i * stride + offset);
+  }
+  return { xyz: out, intensity };
+}
+
+// lasIntensity (mapping/las_io.cpp): rounded (halves away from zero), clipped to 0..65535.
+function lasIntensity(v) {
+  return v > 0 ? Math.round(Math.min(v, 65535)) : 0;
 }
 
 async function main() {
   const [lasFile, ...plyFiles] = process.argv.slice(2);
-  const plys = plyFiles.map(readPly);
+  const read = plyFiles.map(readPly);
+  const plys = read.map((r) => r.xyz);
   const ply = new Float64Array(plys.reduce((n, p) => n + p.length, 0));
   plys.reduce((at, p) => (ply.set(p, at), at + p.length), 0);
   const n = ply.length / 3;
+  const plyIntensity = new Float64Array(n);  // 0 where a PLY has none
+  read.reduce((at, r) => (r.intensity && plyIntensity.set(r.intensity, at), at + r.xyz.length / 3), 0);
+  const expect = process.env.EXPECT_INTENSITY;
+  if (expect === "all") check(read.every((r) => r.intensity) && plyIntensity.some((v) => v > 0), "every PLY has intensities");
+  if (expect === "none") check(read.every((r) => !r.intensity), "no PLY has intensities");
 
   const buf = fs.readFileSync(lasFile);
   const { parse } = await import("@loaders.gl/core");
@@ -68,16 +92,22 @@ async function main() {
   for (let k = 0; k < 3; ++k) {
     check(Math.abs(bmin[k] - lo[k]) <= tolerance && Math.abs(bmax[k] - hi[k]) <= tolerance, `bounds axis ${k}`);
   }
-  // A sample of points, in order.
+  // A sample of points, in order, with their intensities.
+  const lasIntensities = las.attributes.intensity.value;
+  check(lasIntensities.length === n, "an intensity per point");
   const step = Math.max(1, Math.floor(n / 500));
-  let sampled = 0;
+  let sampled = 0, nonzero = 0;
   for (let i = 0; i < n; i += step, ++sampled) {
     for (let k = 0; k < 3; ++k) {
       check(Math.abs(pos[3 * i + k] - ply[3 * i + k]) <= tolerance, `point ${i} axis ${k}: ${pos[3 * i + k]} vs ${ply[3 * i + k]}`);
     }
+    const want = lasIntensity(Math.fround(plyIntensity[i]));
+    check(lasIntensities[i] === want, `point ${i} intensity ${lasIntensities[i]} vs PLY ${plyIntensity[i]} (${want})`);
+    nonzero += lasIntensities[i] > 0;
   }
+  if (expect === "all") check(nonzero > 0, "some sampled intensity above 0");
   const gps = n > 0 ? dv.getFloat64(dv.getUint32(96, true) + 22, true) : 0;
-  console.log(JSON.stringify({ las: lasFile, bytes: buf.length, points: n, sampled, first_gps_time: gps, bounds: [lo, hi] }));
+  console.log(JSON.stringify({ las: lasFile, bytes: buf.length, points: n, sampled, sampled_with_intensity: nonzero, first_gps_time: gps, bounds: [lo, hi] }));
 }
 
 main().catch((e) => {

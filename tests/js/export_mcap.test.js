@@ -3,7 +3,11 @@
 // (every record in order, CRCs checked) see the same messages; every LCM channel of the logs is
 // there raw with its count; every derived topic has its Foxglove schema, its count follows from
 // the logs' LCM counts, and each of its messages validates against that JSON schema.
-// Usage: node export_mcap.test.js MCAP LOG... (the logs the file was exported from)
+// /sweep_cloud's points carry a float32 intensity field on every message when EXPECT_INTENSITY=all
+// (a lidar that measures it), on none when EXPECT_INTENSITY=none, and its values are finite
+// and >= 0.
+// Usage: [EXPECT_INTENSITY=all|none] node export_mcap.test.js MCAP LOG... (the logs the file
+// was exported from)
 "use strict";
 const fs = require("fs");
 const { execFileSync } = require("child_process");
@@ -51,6 +55,19 @@ function expectedDerived(lcm) {
   };
 }
 
+// Whether a foxglove.PointCloud message has an intensity field; checks its layout and values.
+function cloudIntensity(msg, topic) {
+  const field = msg.fields.find((f) => f.name === "intensity");
+  if (!field) return false;
+  check(field.type === 7 && msg.point_stride === 16 && field.offset === 12, `${topic}: intensity field layout`);
+  const data = Buffer.from(msg.data, "base64");
+  for (let at = 12; at < data.length; at += 16) {
+    const v = data.readFloatLE(at);
+    check(Number.isFinite(v) && v >= 0, `${topic}: intensity ${v}`);
+  }
+  return true;
+}
+
 async function main() {
   const [mcapPath, ...logs] = process.argv.slice(2);
   const buf = fs.readFileSync(mcapPath);
@@ -66,8 +83,10 @@ async function main() {
   check(Number(stats.chunkCount) === reader.chunkIndexes.length && stats.chunkCount > 0, "chunks");
 
   const counts = new Map();
+  let withIntensity = 0;
   for (const m of messages) {
     const channel = reader.channelsById.get(m.channelId);
+    if (channel.topic === "/sweep_cloud") withIntensity += cloudIntensity(JSON.parse(Buffer.from(m.data)), channel.topic);
     counts.set(channel.topic, (counts.get(channel.topic) || 0) + 1);
     check(stats.channelMessageCounts.get(m.channelId) > 0n, "channel count");
     if (channel.messageEncoding === "json") {
@@ -84,6 +103,9 @@ async function main() {
   const scans = (counts.get("/lidar_scan") || 0) + (counts.get("/lidar_points") || 0);
   check(scans === want.lidar, `lidar scans ${scans} != ${want.lidar}`);
   check((counts.get("/tf") || 0) > 0, "/tf holds the rig's frames");
+  const expect = process.env.EXPECT_INTENSITY;
+  if (expect === "all") check(withIntensity === want["/sweep_cloud"] && withIntensity > 0, `intensity on ${withIntensity} of ${want["/sweep_cloud"]} clouds`);
+  if (expect === "none") check(withIntensity === 0, `intensity on ${withIntensity} clouds of a lidar without`);
   if (want["/sweep_cloud"] > 0) check(counts.get("/map") > 0, "a /map from the clouds");
 
   const schemaOf = { "/sweep_cloud": "foxglove.PointCloud", "/map": "foxglove.PointCloud",
@@ -96,7 +118,7 @@ async function main() {
     if (channel.messageEncoding === "lcm") check(!schema || schema.encoding === "lcm", channel.topic);
   }
   console.log(JSON.stringify({ bytes: buf.length, messages: messages.length,
-    chunks: reader.chunkIndexes.length, topics: Object.fromEntries(counts) }));
+    chunks: reader.chunkIndexes.length, clouds_with_intensity: withIntensity, topics: Object.fromEntries(counts) }));
 }
 
 main().catch((e) => { console.error(e.stack || String(e)); process.exit(1); });

@@ -5,7 +5,8 @@
 // everything (its queue empty, no cloud sent between two status frames), then
 // prints one JSON object of what the page shows: console errors, the points drawn against the
 // points the server says it sent, the extent of the drawn points, the voxels, the non-blank
-// fraction of the canvas, and the server's status. The C++ test judges it.
+// fraction of the canvas, the server's status, and the colours of a sample of points by
+// intensity and by height. The C++ test judges it.
 'use strict';
 const { launch, openPage, nonBlankFraction, until } = require('./browser.js');
 
@@ -43,6 +44,17 @@ async function main() {
     }));
     out.non_blank = await nonBlankFraction(page);
     if (screenshot) await page.screenshot({ path: screenshot });
+    // The colour selector: intensity offered (rig A's lidar measures it), then each mode's
+    // colours for a sample of points (the C++ test checks the hue follows that mode's value).
+    out.colour = await page.evaluate(() => {
+      const v = window.sweepmapView;
+      const r = { available: v.intensityAvailable, initial: v.colour };
+      r.intensity_set = v.setColour('intensity');
+      r.intensity = v.colourSample(100).map((p) => [p.intensity, p.hue]);
+      r.height_set = v.setColour('height');
+      r.height = v.colourSample(100).map((p) => [p.z, p.hue]);
+      return r;
+    });
   } catch (e) {
     out.failure = e.message;
     if (page) {

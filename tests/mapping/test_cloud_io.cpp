@@ -103,6 +103,38 @@ TEST(CloudIo, PclsPlyReaderReadsOurPlyBack) {
   }
 }
 
+// With intensities the PLY gains a float `intensity` property after z: PCL's reader (pcl_viewer)
+// gets the points and intensities back, sweepmap's LAS input reader too (rounded to LAS's
+// uint16, mapping/las_io.hpp), and a wrong count is refused.
+TEST(CloudIo, PlyCarriesIntensityThatPclAndTheLasReaderRead) {
+  const auto dir = freshTestDir();
+  const auto points = samplePoints();
+  std::vector<float> intensity;
+  for (size_t i = 0; i < points.size(); ++i) intensity.push_back(0.75f * float(i % 4000));
+  const auto path = (dir / "i.ply").string();
+  writePlyBinary(path, points, intensity);
+  const std::string bytes = fileBytes(dir / "i.ply");
+  EXPECT_NE(bytes.find("property float z\nproperty float intensity\nend_header\n"),
+            std::string::npos);
+  pcl::PointCloud<pcl::PointXYZI> cloud;
+  ASSERT_EQ(pcl::io::loadPLYFile(path, cloud), 0);
+  ASSERT_EQ(cloud.size(), points.size());
+  for (size_t i = 0; i < points.size(); ++i) {
+    ASSERT_EQ(Eigen::Vector3f(cloud[i].x, cloud[i].y, cloud[i].z), points[i]) << i;
+    ASSERT_EQ(cloud[i].intensity, intensity[i]) << i;
+  }
+  const auto las = readPlyVertices(path);
+  ASSERT_EQ(las.size(), points.size());
+  EXPECT_EQ(las[3].intensity, 2);  // 2.25
+  EXPECT_EQ(las[2].intensity, 2);  // 1.5: halves away from zero
+  EXPECT_EQ(las[5].intensity, 4);  // 3.75
+  EXPECT_EQ(lasIntensity(70000.0), 65535);
+  EXPECT_EQ(lasIntensity(-3.0), 0);
+  EXPECT_EQ(lasIntensity(std::nan("")), 0);
+  intensity.pop_back();
+  EXPECT_THROW(writePlyBinary(path, points, intensity), std::runtime_error);
+}
+
 TEST(CloudIo, PcdAndPlyWrittenTogether) {
   const auto dir = freshTestDir();
   writePcdAndPly((dir / "cloud").string(), samplePoints());

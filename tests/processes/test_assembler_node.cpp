@@ -3,6 +3,7 @@
 #include <cmath>
 #include <limits>
 
+#include "net/lcm_datagram.hpp"
 #include "processes/assembler_node.hpp"
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
@@ -20,7 +21,7 @@ class AssemblerNodeTest : public ::testing::Test {
     rig_.lidar.beam_count = 9;
     rig_.assembler.chunk_points = 50;
   }
-  Message scanMsg(int j, float range = 2.0f) const {
+  Message scanMsg(int j, float range = 2.0f, bool intensity = false) const {
     Scan2D s;
     s.utime = 1000000 + 25000 * j;
     s.seq = j;
@@ -30,6 +31,8 @@ class AssemblerNodeTest : public ::testing::Test {
     s.range_min_m = 0.06;
     s.range_max_m = 10.0;
     s.ranges_m.assign(9, range);
+    // Ray i of scan j reads 100 j + i: each point's intensity names its ray.
+    for (int i = 0; intensity && i < 9; ++i) s.intensities.push_back(float(100 * j + i));
     return encode(channels::kLidarScan, s.utime, toLcm(s));
   }
   Message windowMsg(int64_t id, int64_t start, int64_t end) const {
@@ -84,6 +87,58 @@ TEST_F(AssemblerNodeTest, WindowAssembledOnceAScanPassesItsEnd) {
   EXPECT_EQ(chunks[1].chunk_count, 2);
   EXPECT_EQ(chunks[0].frame, "O'");  // no plate in this data
   EXPECT_FALSE(chunks[0].corrected);
+}
+
+// The intensity of each ray reaches its point's place in the chunks (split across chunks),
+// and a lidar without intensity gives chunks without them.
+TEST_F(AssemblerNodeTest, ChunksCarryEachPointsIntensity) {
+  for (const bool intensity : {true, false}) {
+    AssemblerNode node(rig_);
+    std::vector<Message> msgs;
+    for (int j = 0; j < 9; ++j) msgs.push_back(scanMsg(j, 2.0f, intensity));
+    msgs.push_back(windowMsg(0, 1000000, 1000000 + 25000 * 8));
+    const auto chunks = feed(msgs, &node);
+    ASSERT_EQ(chunks.size(), 2u);
+    std::vector<float> got;
+    for (const auto& c : chunks) {
+      EXPECT_EQ(c.nintensities, intensity ? c.npoints : 0);
+      EXPECT_TRUE(validateChunk(c).empty()) << validateChunk(c);
+      got.insert(got.end(), c.intensities.begin(), c.intensities.end());
+    }
+    std::vector<float> want;
+    for (int j = 0; intensity && j < 8; ++j) {
+      for (int i = 0; i < 9; ++i) want.push_back(float(100 * j + i));
+    }
+    EXPECT_EQ(got, want);
+  }
+}
+
+// The largest chunk a rig allows (assembler.chunk_points <= 4000, rigs/rotating_lidar.cpp), with
+// its intensities, is still one LCM datagram on SWEEP_CLOUD.
+TEST(CloudChunk, TheLargestChunkWithIntensitiesIsOneDatagram) {
+  AssembledSweep sweep;
+  sweep.points.assign(4000, Eigen::Vector3f(1.0f, 2.0f, 3.0f));
+  sweep.intensities.assign(4000, 100.0f);
+  const auto chunks = toChunks(sweep, 4000);
+  ASSERT_EQ(chunks.size(), 1u);
+  ASSERT_EQ(chunks[0].nintensities, 4000);
+  const size_t bytes =
+      encodeMessage(chunks[0]).size() + std::string(channels::kSweepCloud).size() + 1;
+  EXPECT_LE(bytes, net::kLcmShortMessageMaxBytes);
+}
+
+TEST(CloudChunk, IntensitiesNeitherNoneNorOnePerPointAreInvalid) {
+  cloud_chunk_t c{};
+  c.chunk_count = 1;
+  c.total_points = c.npoints = 2;
+  c.xyz_m = {{1, 2, 3}, {4, 5, 6}};
+  EXPECT_EQ(validateChunk(c), "");
+  c.nintensities = 1;
+  c.intensities = {7};
+  EXPECT_EQ(validateChunk(c), "nintensities 1 is neither 0 nor npoints 2");
+  c.nintensities = 2;
+  c.intensities = {7, 8};
+  EXPECT_EQ(validateChunk(c), "");
 }
 
 // Live, the window message may arrive before or after the scans it covers.

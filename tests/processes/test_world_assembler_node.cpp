@@ -25,8 +25,9 @@ Message pose(int64_t utime, double x) {
   return encode(channels::kOdometryPose, p);
 }
 
-Message scan(int64_t utime) {
+Message scan(int64_t utime, std::vector<float> intensities = {}) {
   Scan2D s;
+  s.intensities = std::move(intensities);
   s.utime = utime;
   s.angle_min_rad = -0.1;
   s.angle_increment_rad = 0.1;
@@ -71,6 +72,20 @@ TEST(WorldAssemblerNode, WaitsForPosesThenPublishesWorldChunks) {
   EXPECT_NEAR(c.xyz_m[1][0], 0.2 + 0.1 + 2.0, 1e-5);
   EXPECT_NEAR(c.xyz_m[1][2], 0.2, 1e-6);
   EXPECT_NEAR(c.sensor_origin_m[0], 0.3, 1e-9);
+  EXPECT_EQ(c.nintensities, 0);  // the scan had none
+}
+
+TEST(WorldAssemblerNode, ChunksCarryTheScansIntensities) {
+  WorldAssemblerNode node = horizontal();
+  std::vector<float> seen;
+  node.setObserver([&](int64_t, const std::vector<Eigen::Vector3f>&,
+                       const std::vector<float>& intensities,
+                       const Eigen::Vector3d&) { seen = intensities; });
+  const auto chunks = feed(node, {pose(0, 0.0), scan(1000, {5.0f, 6.0f, 7.0f}), pose(10000, 1.0)});
+  ASSERT_EQ(chunks.size(), 1u);
+  EXPECT_EQ(chunks[0].nintensities, 3);
+  EXPECT_EQ(chunks[0].intensities, (std::vector<float>{5.0f, 6.0f, 7.0f}));
+  EXPECT_EQ(seen, chunks[0].intensities);
 }
 
 TEST(WorldAssemblerNode, BadPosesAndScansCounted) {

@@ -92,12 +92,30 @@ TEST_F(SimLidarTest, SeesWallsAtTheAnalyticRange) {
   EXPECT_NEAR(scan.ranges_m[ray(-90)], 2.8, 1e-6);
 }
 
+// Intensity (sim/reflectance.hpp): 20000 rho |cos incidence| / (1 + r), worked out by hand for
+// the rays of SeesWallsAtTheAnalyticRange: walls rho 0.7, ceiling 0.8, floor 0.3.
+TEST_F(SimLidarTest, IntensityFallsWithRangeIncidenceAndReflectivity) {
+  build();
+  const Scan2D scan = standingScan(0.0);
+  ASSERT_EQ(scan.intensities.size(), scan.ranges_m.size());
+  const double c45 = std::sqrt(0.5);
+  EXPECT_NEAR(scan.intensities[ray(90)], 20000 * 0.7 / 3.2, 0.5);   // +Y wall, 2.2 m, normal
+  EXPECT_NEAR(scan.intensities[ray(-90)], 20000 * 0.7 / 4.8, 0.5);  // -Y wall, 3.8 m
+  EXPECT_NEAR(scan.intensities[ray(0)], 20000 * 0.8 / 3.0, 0.5);    // ceiling, 2 m
+  EXPECT_NEAR(scan.intensities[ray(45)], 20000 * 0.8 * c45 / (1 + 2 * std::sqrt(2.0)), 0.5);
+  EXPECT_NEAR(scan.intensities[ray(135)], 20000 * 0.3 * c45 / (1 + std::sqrt(2.0)), 0.5);
+  for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    EXPECT_EQ(scan.intensities[i] > 0.0f, scan.ranges_m[i] > 0.0f) << "ray " << i;
+  }
+}
+
 TEST_F(SimLidarTest, OutOfRangeReadsZero) {
   lidar_.range_max_m = 2.5;
   build();
   const Scan2D scan = standingScan(0.0);
   EXPECT_NEAR(scan.ranges_m[ray(90)], 2.2, 1e-6);
   EXPECT_EQ(scan.ranges_m[ray(-90)], 0.0f);
+  EXPECT_EQ(scan.intensities[ray(-90)], 0.0f);  // no return, no intensity
 }
 
 TEST_F(SimLidarTest, SeesThePlateWhenTheShaftTurnsOverIt) {
@@ -167,6 +185,7 @@ TEST_F(SimLidarTest, SameSeedSameScansDifferentSeedDifferentNoise) {
   double sum_sq = 0.0;
   for (size_t s = 0; s < a.size(); ++s) {
     EXPECT_EQ(a[s].ranges_m, b[s].ranges_m);
+    EXPECT_EQ(a[s].intensities, b[s].intensities);
     for (size_t i = 0; i < a[s].ranges_m.size(); ++i) {
       if (a[s].ranges_m[i] != c[s].ranges_m[i]) ++differing;
       if (a[s].ranges_m[i] != 0.0f && exact[s].ranges_m[i] != 0.0f) {

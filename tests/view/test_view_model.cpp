@@ -3,6 +3,9 @@
 // bulk frames are dropped oldest first and counted, latest frames replace, control frames pass.
 #include <gtest/gtest.h>
 
+#include <cstring>
+#include <stdexcept>
+
 #include "processes/channels.hpp"
 #include "processes/message_codec.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
@@ -12,8 +15,8 @@
 namespace sweepmap {
 namespace {
 
-// One chunk of `n` points on a line along x, 0.1 m apart.
-Message chunk(int64_t sweep, int index, int count, int n) {
+// One chunk of `n` points on a line along x, 0.1 m apart; with intensity, point i's is 1000 + i.
+Message chunk(int64_t sweep, int index, int count, int n, bool intensity = false) {
   cloud_chunk_t c{};
   c.utime = 1000 * sweep;
   c.sweep_id = sweep;
@@ -23,6 +26,8 @@ Message chunk(int64_t sweep, int index, int count, int n) {
   c.frame = "O";
   c.npoints = n;
   for (int i = 0; i < n; ++i) c.xyz_m.push_back({0.1f * float(i + index * n), 0.0f, 0.0f});
+  for (int i = 0; intensity && i < n; ++i) c.intensities.push_back(1000.0f + float(i));
+  c.nintensities = static_cast<int32_t>(c.intensities.size());
   return Message{c.utime, channels::kSweepCloud, encodeMessage(c)};
 }
 
@@ -59,6 +64,54 @@ TEST(ViewModel, BudgetThinsTheOldestSweepFirstAndThePageCountFollows) {
   EXPECT_EQ(r.frames.back().points, 51u);
   r.drain();
   EXPECT_EQ(r.page.counters().points_drawn, static_cast<int64_t>(m.pointsOnScreen()));
+}
+
+// A cloud frame's flags and trailing intensities (view_model.hpp's layout), thinned with their
+// points; a chunk without intensities has neither.
+std::vector<float> frameIntensities(const ViewFrame& f) {
+  const std::string& d = *f.data;
+  uint32_t n = 0, flags = 0;
+  std::memcpy(&n, &d[4], 4);
+  std::memcpy(&flags, &d[44], 4);
+  if (flags != kCloudHasIntensity) {
+    EXPECT_EQ(d.size(), 48u + 12u * n);
+    return {};
+  }
+  EXPECT_EQ(d.size(), 48u + 16u * n);
+  std::vector<float> out(n);
+  std::memcpy(out.data(), &d[48 + 12 * size_t{n}], 4 * size_t{n});
+  return out;
+}
+
+const ViewFrame& lastCloud(const std::vector<ViewFrame>& frames) {
+  for (auto it = frames.rbegin(); it != frames.rend(); ++it) {
+    if (it->effect == ViewFrame::kAddPoints) return *it;
+  }
+  throw std::runtime_error("no cloud frame");
+}
+
+TEST(ViewModel, CloudFramesCarryIntensityThinnedWithTheirPoints) {
+  Recorder r;
+  ViewModelOptions o;
+  o.point_budget = 7;
+  ViewModel m(o, r.sink());
+  m.add(chunk(0, 0, 2, 5, true), 0);
+  EXPECT_EQ(frameIntensities(lastCloud(r.frames)),
+            (std::vector<float>{1000, 1001, 1002, 1003, 1004}));
+  m.add(chunk(1, 0, 1, 3, false), 0);  // 8 > 7: sweep 0 thinned to every second point
+  EXPECT_EQ(m.counters().thinned, 1);
+  EXPECT_TRUE(frameIntensities(lastCloud(r.frames)).empty());
+  m.add(chunk(0, 1, 2, 5, true), 0);  // a late chunk of the thinned sweep comes thinned
+  EXPECT_EQ(frameIntensities(lastCloud(r.frames)), (std::vector<float>{1000, 1002, 1004}));
+  EXPECT_EQ(m.counters().thinned, 2);  // 9 > 7: sweep 0 thinned again, 2 + 2 points
+  bool found = false;                  // a new page gets sweep 0's first chunk as thinned twice
+  for (const ViewFrame& f : m.snapshot()) {
+    if (f.effect == ViewFrame::kAddPoints && f.sweep == 0 && !found) {
+      EXPECT_EQ(frameIntensities(f), (std::vector<float>{1000, 1004}));
+      found = true;
+    }
+  }
+  EXPECT_TRUE(found);
 }
 
 TEST(ViewModel, SweepsPastTheLastThinningAreRemovedOldestFirst) {

@@ -72,7 +72,8 @@ TEST(FoxgloveConverter, CloudChunkBecomesPackedPointCloudWithTheSamePoints) {
   ASSERT_EQ(clouds.size(), 1u);
   const json j = json::parse(clouds[0].json);
   EXPECT_EQ(j["frame_id"], "O");
-  EXPECT_EQ(j["point_stride"], 12);
+  EXPECT_EQ(j["point_stride"], 12);  // no intensity field: the chunk has none
+  EXPECT_EQ(j["fields"].size(), 3u);
   EXPECT_EQ(j["timestamp"]["sec"], 1);
   EXPECT_EQ(j["timestamp"]["nsec"], 500000000);
   const auto data = unbase64(j["data"]);
@@ -89,6 +90,29 @@ TEST(FoxgloveConverter, CloudChunkBecomesPackedPointCloudWithTheSamePoints) {
   ASSERT_EQ(map.size(), 1u);
   EXPECT_EQ(unbase64(json::parse(map[0].json)["data"]).size(), 24u);  // two voxels
   EXPECT_TRUE(conv.finish(44).empty());                               // unchanged
+}
+
+TEST(FoxgloveConverter, ChunkIntensitiesBecomeTheCloudsIntensityField) {
+  FoxgloveConverter conv(loadRig("rig_a"));
+  cloud_chunk_t c = chunk({{1.0f, 2.0f, 3.0f}, {-0.5f, 0.25f, 7.0f}});
+  c.nintensities = 2;
+  c.intensities = {1234.0f, 56.0f};
+  const auto bytes = encodeMessage(c);
+  const auto clouds =
+      onTopic(conv.convert(channels::kSweepCloud, bytes.data(), bytes.size(), 0), "/sweep_cloud");
+  ASSERT_EQ(clouds.size(), 1u);
+  const json j = json::parse(clouds[0].json);
+  EXPECT_EQ(j["point_stride"], 16);
+  ASSERT_EQ(j["fields"].size(), 4u);
+  EXPECT_EQ(j["fields"][3]["name"], "intensity");
+  EXPECT_EQ(j["fields"][3]["offset"], 12);
+  const auto data = unbase64(j["data"]);
+  ASSERT_EQ(data.size(), 32u);
+  float f[8];
+  std::memcpy(f, data.data(), 32);
+  EXPECT_EQ(f[3], 1234.0f);
+  EXPECT_EQ(f[4], -0.5f);
+  EXPECT_EQ(f[7], 56.0f);
 }
 
 TEST(FoxgloveConverter, ScanWithPerRayAnglesBecomesPointsInTheLidarFrame) {

@@ -70,8 +70,9 @@ void addLas(CLI::App* parent, std::map<CLI::App*, Runner>* runners) {
       "Clouds as one LAS 1.4 file (ASPRS R15, point data format 6: scaled X, Y, Z at 0.1 mm, "
       "intensity, GPS time) from PLY files (replay's and eval's clouds) or LCM logs (every "
       "SWEEP_CLOUD point, its chunk's time as adjusted standard GPS time), in the order given. "
-      "Intensity is 0: sweepmap's clouds do not carry it; a PLY's intensity or "
-      "scalar_intensity property is kept");
+      "Intensity: the lidar's reading (device units) rounded and clipped to 0..65535, from a "
+      "chunk's intensities or a PLY's intensity or scalar_intensity property; 0 where the "
+      "lidar measures none (rig B's X4, rig C's profiler)");
   cmd->footer(
       "Exit status: 0 exported; 1 an input is not a readable PLY or log, a log held corrupt "
       "bytes (skipped; the file is written), or there is no point; 2 bad option or a missing "

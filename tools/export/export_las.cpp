@@ -33,7 +33,13 @@ void readLogClouds(const std::string& path, std::vector<LasPoint>* points, int64
     ++r->chunks;
     const double gps = adjustedGpsTime(static_cast<double>(c.utime) * 1e-6);
     *last_unix_s = std::max(*last_unix_s, c.utime / 1000000);
-    for (const auto& p : c.xyz_m) points->push_back({p[0], p[1], p[2], gps, 0});
+    // validateChunk: nintensities is 0 (a lidar without intensity: LAS intensity 0) or npoints.
+    const bool with_intensity = c.intensities.size() == c.xyz_m.size();
+    for (size_t i = 0; i < c.xyz_m.size(); ++i) {
+      const auto& p = c.xyz_m[i];
+      points->push_back(
+          {p[0], p[1], p[2], gps, with_intensity ? lasIntensity(c.intensities[i]) : uint16_t{0}});
+    }
   }
   if (!reader.skipped().empty()) {
     r->log_error = true;

@@ -128,7 +128,7 @@ ReplayResult replayLog(const ReplayOptions& options, const RotatingLidarConfig& 
     std::ostringstream name;
     // Numbered in log order: sweep ids start again when the motor process restarts.
     name << "sweep_" << std::setw(6) << std::setfill('0') << result.sweeps;
-    writePcdAndPly((out / "sweeps" / name.str()).string(), s.points);
+    writePcdAndPly((out / "sweeps" / name.str()).string(), s.points, s.intensities);
     sweeps.push_back(sweepJson(s, truth, name.str()));
     result.points += static_cast<int64_t>(s.points.size());
     if (options.plots) all_O.insert(all_O.end(), s.points.begin(), s.points.end());

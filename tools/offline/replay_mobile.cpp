@@ -28,6 +28,8 @@ namespace fs = std::filesystem;
 // What the replay collects besides the nodes' own outputs: the world cloud and both paths.
 struct Collected {
   std::vector<Eigen::Vector3f> cloud;
+  std::vector<float> intensity;  // one per cloud point while with_intensity
+  bool with_intensity = true;    // every scan so far had intensities
   std::vector<Eigen::Vector3f> ekf_path, odo_path;
 };
 
@@ -121,10 +123,13 @@ MobileReplayResult replayMobileLog(const std::string& log_path, const MobileLida
   WorldAssemblerNode assembler(rig.assembler, rig.mounting.toMounting());
   MapperNode mapper(rig.mapper, (out / "map.bt").string());
   Collected c;
-  assembler.setObserver(
-      [&](int64_t, const std::vector<Eigen::Vector3f>& pts, const Eigen::Vector3d&) {
-        c.cloud.insert(c.cloud.end(), pts.begin(), pts.end());
-      });
+  assembler.setObserver([&](int64_t, const std::vector<Eigen::Vector3f>& pts,
+                            const std::vector<float>& intensity, const Eigen::Vector3d&) {
+    // Intensities for the whole cloud only while every scan has them.
+    c.with_intensity = c.with_intensity && intensity.size() == pts.size();
+    c.cloud.insert(c.cloud.end(), pts.begin(), pts.end());
+    if (c.with_intensity) c.intensity.insert(c.intensity.end(), intensity.begin(), intensity.end());
+  });
   player.bus().attach(&odometry);
   player.bus().attach(&assembler);
   player.bus().attach(&mapper);
@@ -143,7 +148,8 @@ MobileReplayResult replayMobileLog(const std::string& log_path, const MobileLida
   result.error = played.error;
   result.scans = assembler.counter("scans");
   result.points = static_cast<int64_t>(c.cloud.size());
-  writePcdAndPly((out / "cloud").string(), c.cloud);
+  if (!c.with_intensity) c.intensity.clear();
+  writePcdAndPly((out / "cloud").string(), c.cloud, c.intensity);
   writeSummary(out, log_path, played, result, odometry, assembler, mapper, c);
   if (plots && !c.cloud.empty()) {
     plotTopViewOf(out, c);

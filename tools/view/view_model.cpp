@@ -87,11 +87,14 @@ std::string voxelFrame(const std::vector<uint64_t>& keys, double res) {
 }
 
 // Every 2^thinning-th point of `xyz` (the first one kept).
-std::vector<float> decimate(const float* xyz, size_t n, int thinning) {
+// Every 2^thinning-th of the n items of `width` floats each (xyz: 3, intensity: 1).
+std::vector<float> decimate(const float* values, size_t n, int thinning, size_t width = 3) {
   const size_t stride = size_t{1} << thinning;
   std::vector<float> out;
-  out.reserve((n + stride - 1) / stride * 3);
-  for (size_t i = 0; i < n; i += stride) out.insert(out.end(), xyz + 3 * i, xyz + 3 * i + 3);
+  out.reserve((n + stride - 1) / stride * width);
+  for (size_t i = 0; i < n; i += stride) {
+    out.insert(out.end(), values + width * i, values + width * i + width);
+  }
   return out;
 }
 
@@ -171,6 +174,9 @@ void ViewModel::addCloud(const Message& msg) {
   Chunk chunk;
   chunk.received_utime = now_utime_;
   chunk.xyz = s.thinning == 0 ? std::move(xyz) : decimate(xyz.data(), xyz.size() / 3, s.thinning);
+  if (c.intensities.size() == c.xyz_m.size() && c.nintensities > 0) {
+    chunk.intensity = decimate(c.intensities.data(), c.intensities.size(), s.thinning, 1);
+  }
   addVoxels(chunk.xyz);
   const size_t n = chunk.xyz.size() / 3;
   s.points += n;
@@ -187,8 +193,10 @@ ViewFrame ViewModel::cloudFrame(const ViewSweep& s, const Chunk& c) const {
   putLe<int64_t>(out, s.utime);
   putLe<int64_t>(out, c.received_utime);
   for (float o : s.origin) putLe<float>(out, o);
-  putLe<uint32_t>(out, 0);
+  const bool with_intensity = !c.intensity.empty();
+  putLe<uint32_t>(out, with_intensity ? kCloudHasIntensity : 0u);
   out.append(reinterpret_cast<const char*>(c.xyz.data()), c.xyz.size() * sizeof(float));
+  out.append(reinterpret_cast<const char*>(c.intensity.data()), c.intensity.size() * sizeof(float));
   ViewFrame f = bulk(std::move(out), true);
   f.sweep = s.id;
   f.points = n;
@@ -200,6 +208,7 @@ void ViewModel::thin(ViewSweep& s) {
   size_t kept = 0;
   for (Chunk& c : s.chunks) {
     c.xyz = decimate(c.xyz.data(), c.xyz.size() / 3, 1);
+    if (!c.intensity.empty()) c.intensity = decimate(c.intensity.data(), c.intensity.size(), 1, 1);
     kept += c.xyz.size() / 3;
   }
   points_on_screen_ -= s.points - kept;

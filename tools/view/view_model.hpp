@@ -48,12 +48,15 @@ struct ViewFrame {
 // Binary frame types (first byte; little-endian; header sizes are multiples of 4).
 //  1 cloud chunk: u8 type, u8[3] 0, u32 n, i64 view sweep, i64 utime [us] (the sweep's),
 //    i64 received [us] (when the view took the chunk: wall clock live, log time from a log),
-//    f32 sensor origin[3] [m], u32 0 (48 bytes), then n * f32 xyz [m].
+//    f32 sensor origin[3] [m], u32 flags (48 bytes), then n * f32 xyz [m], then, when flags has
+//    kCloudHasIntensity, n * f32 intensity (the lidar's device units; absent for a lidar
+//    without intensity, such as rig B's X4 and rig C's profiler).
 //  2 voxels: u8 type, u8[3] 0, u32 n, f32 resolution [m], u32 0 (16 bytes), then n * i32 key[3]
 //    (the voxel [key*res, (key+1)*res) on each axis).
 //  3 scan: u8 type, u8[3] 0, u32 n, i64 utime [us] (16 bytes), then n * f32 (y, z) [m] in the
 //    scan plane (lidar: frame L's Y-Z; profiler: the sensor's y-z).
 enum class BinaryFrame : uint8_t { kCloud = 1, kVoxels = 2, kScan = 3 };
+constexpr uint32_t kCloudHasIntensity = 1;  // a cloud frame's flags
 
 struct ViewModelOptions {
   size_t point_budget = 2'000'000;  // points on screen
@@ -97,6 +100,7 @@ class ViewModel {
  private:
   struct Chunk {
     std::vector<float> xyz;
+    std::vector<float> intensity;  // empty, or one per point
     int64_t received_utime = 0;
   };
   struct ViewSweep {

@@ -32,6 +32,7 @@ const pointMaterial = new THREE.PointsMaterial({ size: 2, sizeAttenuation: false
 const state = {
   mode: null, connected: false, sweeps: new Map(), colour: 'height',
   zRange: [Infinity, -Infinity], voxelRes: 0.05, voxelCount: 0, lastCheck: null,
+  iRange: [Infinity, -Infinity], hasIntensity: false,
   status: null, frames: 0, fps: 0, latencies: [], pendingLatency: [], time: null,
   messages: 0, dragging: false, statusSeq: 0,
 };
@@ -42,9 +43,11 @@ function ramp(t, out, i) {
   const c = new THREE.Color().setHSL(0.66 * (1 - t), 0.9, 0.5);
   out[i] = c.r; out[i + 1] = c.g; out[i + 2] = c.b;
 }
+// Intensity: the lidar's device units, linear between the smallest and largest seen so far;
+// grey where a sweep has none (a lidar that measures no intensity).
 function colourPoints(sweep, from, to) {
-  const p = sweep.positions, c = sweep.colours;
-  const [z0, z1] = state.zRange;
+  const p = sweep.positions, c = sweep.colours, inten = sweep.intensities;
+  const [z0, z1] = state.zRange, [i0, i1] = state.iRange;
   const hue = new THREE.Color().setHSL((sweep.id * 0.618034) % 1, 0.8, 0.55);
   for (let k = from; k < to; k++) {
     const i = 3 * k;
@@ -52,6 +55,9 @@ function colourPoints(sweep, from, to) {
       ramp((p[i + 2] - z0) / Math.max(1e-6, z1 - z0), c, i);
     } else if (state.colour === 'sweep') {
       c[i] = hue.r; c[i + 1] = hue.g; c[i + 2] = hue.b;
+    } else if (state.colour === 'intensity') {
+      if (sweep.hasIntensity) ramp((inten[k] - i0) / Math.max(1e-6, i1 - i0), c, i);
+      else c[i] = c[i + 1] = c[i + 2] = 0.5;
     } else {
       const o = sweep.origin;
       ramp(Math.hypot(p[i] - o[0], p[i + 1] - o[1], p[i + 2] - o[2]) / 10, c, i);
@@ -68,16 +74,18 @@ function recolourAll() {
 // One view sweep: its points in growing arrays, and the chunks they came in (for thinning).
 function makeSweep(id) {
   const s = { id, count: 0, capacity: 0, chunks: [], origin: [0, 0, 0], positions: null,
-    colours: null, geometry: null, points: null };
+    colours: null, intensities: null, hasIntensity: false, geometry: null, points: null };
   reallocate(s, 4096);
   state.sweeps.set(id, s);
   return s;
 }
 function reallocate(s, capacity) {
   const positions = new Float32Array(3 * capacity), colours = new Float32Array(3 * capacity);
+  const intensities = new Float32Array(capacity);
   if (s.positions) {
     positions.set(s.positions.subarray(0, 3 * s.count));
     colours.set(s.colours.subarray(0, 3 * s.count));
+    intensities.set(s.intensities.subarray(0, s.count));
   }
   const geometry = new THREE.BufferGeometry();
   geometry.setAttribute('position', new THREE.BufferAttribute(positions, 3));
@@ -92,7 +100,7 @@ function reallocate(s, capacity) {
     s.points.userData.sweep = s;
     scene.add(s.points);
   }
-  Object.assign(s, { positions, colours, geometry, capacity });
+  Object.assign(s, { positions, colours, intensities, geometry, capacity });
 }
 function updateGeometry(s) {
   s.geometry.setDrawRange(0, s.count);
@@ -106,6 +114,9 @@ function addCloud(view) {
   const id = Number(view.getBigInt64(8, true));
   const received = Number(view.getBigInt64(24, true));
   const xyz = new Float32Array(view.buffer, view.byteOffset + 48, 3 * n);
+  // Flags bit 0: n intensities follow the points (tools/view/view_model.hpp).
+  const inten = (view.getUint32(44, true) & 1) ?
+    new Float32Array(view.buffer, view.byteOffset + 48 + 12 * n, n) : null;
   const s = state.sweeps.get(id) || makeSweep(id);
   s.origin = [view.getFloat32(32, true), view.getFloat32(36, true), view.getFloat32(40, true)];
   if (s.count + n > s.capacity) reallocate(s, Math.max(2 * s.capacity, s.count + n));
@@ -115,12 +126,31 @@ function addCloud(view) {
     if (xyz[k] < state.zRange[0]) { state.zRange[0] = xyz[k]; rangeGrew = true; }
     if (xyz[k] > state.zRange[1]) { state.zRange[1] = xyz[k]; rangeGrew = true; }
   }
+  const intensityGrew = inten ? takeIntensities(s, inten) : false;
   s.chunks.push({ start: s.count, count: n });
   colourPoints(s, s.count, s.count + n);
   s.count += n;
   updateGeometry(s);
-  if (rangeGrew && state.colour === 'height') recolourAll();
+  if ((rangeGrew && state.colour === 'height') ||
+    (intensityGrew && state.colour === 'intensity')) recolourAll();
   if (state.mode === 'live') state.pendingLatency.push(received);
+}
+
+// A chunk's intensities into its sweep (after its points' place); whether the range grew.
+function takeIntensities(s, inten) {
+  s.intensities.set(inten, s.count);
+  s.hasIntensity = true;
+  if (!state.hasIntensity) {
+    state.hasIntensity = true;
+    $('colour-intensity').disabled = false;
+    $('colour-intensity').title = 'the lidar\'s intensity (device units)';
+  }
+  let grew = false;
+  for (const v of inten) {
+    if (v < state.iRange[0]) { state.iRange[0] = v; grew = true; }
+    if (v > state.iRange[1]) { state.iRange[1] = v; grew = true; }
+  }
+  return grew;
 }
 
 // Every second point of each chunk dropped (the server's arithmetic: ceil(m / 2) kept).
@@ -135,6 +165,7 @@ function thinSweep(id) {
       const r = 3 * (c.start + k);
       s.positions.copyWithin(3 * w, r, r + 3);
       s.colours.copyWithin(3 * w, r, r + 3);
+      s.intensities[w] = s.intensities[c.start + k];
       w++;
     }
     chunks.push({ start, count: w - start });
@@ -274,6 +305,7 @@ function resetAll() {
   pathGeometry.setDrawRange(0, 0);
   poseArrow.visible = false;
   state.zRange = [Infinity, -Infinity];
+  state.iRange = [Infinity, -Infinity];
 }
 function onText(msg) {
   switch (msg.type) {
@@ -483,4 +515,28 @@ window.sweepmapView = {
   play: () => send({ type: 'play' }),
   pause: () => send({ type: 'pause' }),
   setCamera: (which) => $(`cam-${which}`).click(),
+  get colour() { return state.colour; },
+  get intensityAvailable() { return state.hasIntensity; },
+  // Picks a colour mode as a person does (the selector, then its change event); false when
+  // that option is disabled (intensity before any chunk carried it).
+  setColour(mode) {
+    const option = [...$('colour').options].find((o) => o.value === mode);
+    if (!option || option.disabled) return false;
+    $('colour').value = mode;
+    $('colour').dispatchEvent(new Event('change'));
+    return true;
+  },
+  // Up to n points spread over the sweeps: z, intensity (null without) and the drawn hue.
+  colourSample(n) {
+    const out = [], hsl = {};
+    for (const s of state.sweeps.values()) {
+      const step = Math.max(1, Math.floor(s.count / n));
+      for (let k = 0; k < s.count && out.length < n * state.sweeps.size; k += step) {
+        new THREE.Color(s.colours[3 * k], s.colours[3 * k + 1], s.colours[3 * k + 2]).getHSL(hsl);
+        out.push({ z: s.positions[3 * k + 2], intensity: s.hasIntensity ? s.intensities[k] : null,
+          hue: hsl.h, saturation: hsl.s });
+      }
+    }
+    return out;
+  },
 };
