@@ -331,7 +331,12 @@ std::vector<CalibMeasure> roomMeasures(const std::vector<Eigen::Vector3f>& cloud
 void floorAndRoom(const MobileRigCalibrationInput& in, const std::vector<OverlapRay>& rays,
                   M& model, bool last, Solution* s) {
   const std::vector<Eigen::Vector3f> cloud = cloudAt(rays, model, s->r.x);
-  const RoomPlanes planes = findRoomPlanes(cloud);
+  // A drive in one end of the room sees the far wall thinly, and the furniture's and the
+  // door's planes come first: more and smaller planes than the defaults (a loop's).
+  WallExtractionOptions wo;
+  wo.max_planes = 16;
+  wo.min_inliers = 100;
+  const RoomPlanes planes = findRoomPlanes(cloud, wo);
   if (!s->free[M::kLeverZ]) {
     const FloorLever f = leverFromFloor(cloud, planes);
     s->floor_z = f.ok;

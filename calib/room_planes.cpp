@@ -25,9 +25,9 @@ double planeDistance(const WallPlaneFit& a, const std::vector<Eigen::Vector3f>& 
                 std::abs(signedDistance(b, inlierCentroid(cloud_a, a.inlier_indices))));
 }
 
-RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud) {
+RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud,
+                          const WallExtractionOptions& wo) {
   RoomPlanes r;
-  WallExtractionOptions wo;
   const WallExtraction walls = extractWalls(cloud, wo);
   r.walls = walls.walls;
   if (r.walls.empty()) r.reason = "walls: " + walls.reason;

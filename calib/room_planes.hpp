@@ -30,7 +30,8 @@ struct RoomPlanes {
   std::optional<WallPlaneFit> floor, ceiling;
   std::string reason;  // what is missing
 };
-RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud);
+RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud,
+                          const WallExtractionOptions& walls = WallExtractionOptions{});
 
 struct RoomDims {
   std::optional<double> L1, L2, L3;  // length, width (the longer and shorter wall spacing), height
