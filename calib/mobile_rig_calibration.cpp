@@ -5,17 +5,19 @@
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
+#include <map>
+#include <utility>
 
 #include "calib/overlap_alignment.hpp"
+#include "calib/room_planes.hpp"
 
 namespace sweepmap {
 namespace {
 
 using M = MobileOverlapModel;
-// The wheel parameters' entries of the joint vector: changes of the left and right radii and
-// of the track width from the odometry run's.
-constexpr int kRadiusLeft = M::kFirstOdometry, kRadiusRight = M::kFirstOdometry + 1,
-              kTrack = M::kFirstOdometry + 2, kParameters = M::kFirstOdometry + 3;
+// The joint vector's one odometry entry: the change e of the wheels' common scale (radii and
+// track together, relative) from the odometry run's.
+constexpr int kScale = M::kFirstOdometry, kParameters = M::kFirstOdometry + 1;
 
 // A parameter is observable when the drive determines it better than this (1 sigma): beyond,
 // it is held at nominal and reported unobservable.
@@ -31,32 +33,37 @@ double observabilityBound(int k) {
     case M::kLeverY:
     case M::kLeverZ:
       return 0.01;  // m
-    case kRadiusLeft:
-    case kRadiusRight:
-      return 3e-4;  // m (1 % of a 32.5 mm wheel)
-    case kTrack:
-      return 0.01;  // m
+    case kScale:
+      return 3e-3;  // relative (1 mm in 0.3 m of a wheel's turn)
     default:
       return 0.0;
   }
 }
+// The residuals err together within about a plane patch (they share the other pass's planes)
+// and along a wall: their covariance is the cluster-robust one over cubes of this size.
+constexpr double kClusterM = 0.5;
+// The wheels' k = r / T are determined when their relative sigma is below this.
+constexpr double kMaxWheelRatioSigma = 0.01;
 
-// The tracks of the odometry with each wheel parameter moved by its step: the model's
-// sensitivities.
+MobileWheelParameters scaled(MobileWheelParameters w, double factor) {
+  w.radius_left_m *= factor;
+  w.radius_right_m *= factor;
+  w.wheel_distance_m *= factor;
+  return w;
+}
+
+// The odometry at the wheels w, and with their common scale moved by `step`: the model's
+// sensitivity to e.
 struct Sensitivities {
   MobileOdometryRun base;
-  PoseTrack moved[3];
-  double step[3] = {1e-4, 1e-4, 1e-3};
+  PoseTrack moved;
+  double step = 1e-3;
 };
 
 void runOdometry(const MobileRigCalibrationInput& in, const MobileWheelParameters& w,
                  Sensitivities* s) {
   s->base = in.odometry(w);
-  for (int k = 0; k < 3; ++k) {
-    MobileWheelParameters p = w;
-    (k == 0 ? p.radius_left_m : k == 1 ? p.radius_right_m : p.wheel_distance_m) += s->step[k];
-    s->moved[k] = in.odometry(p).track;
-  }
+  s->moved = in.odometry(scaled(w, 1.0 + s->step)).track;
 }
 
 // One joint solve from x over `free`; the held parameters keep their values in x.
@@ -70,6 +77,7 @@ OverlapResult solve(const std::vector<OverlapRay>& rays, M& model, const Eigen::
   oo.lower(M::kTimeOffset) = -in.options.max_time_offset_s;
   oo.upper(M::kTimeOffset) = in.options.max_time_offset_s;
   oo.threads = in.options.threads;
+  oo.cluster_m = kClusterM;
   return alignOverlap(rays, model, x, oo);
 }
 
@@ -87,10 +95,10 @@ bool covarianceOf(const Eigen::MatrixXd& info, const std::vector<int>& set, Eige
 }
 
 // Stated order: the mounting angles first (always observable on a drive that sees the same
-// surfaces twice), then each other parameter in turn, kept when the drive determines it
-// within its bound without more than doubling the sigma of any parameter already kept
-// (judged on the information matrix of the angles' solution, no solve per candidate).
-// Then one joint solve over the kept ones.
+// surfaces twice), then the wheels' scale, the lever arm and the time offset in turn, each kept
+// when the drive determines it within its bound without more than doubling the sigma of any
+// parameter already kept (judged on the information matrix of the angles' solution, no solve per
+// candidate). Then one joint solve over the kept ones.
 OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
                               const Eigen::VectorXd& x, const MobileRigCalibrationInput& in,
                               std::vector<bool>* free) {
@@ -101,8 +109,7 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
   std::vector<int> kept = {M::kGamma, M::kBeta, M::kAlpha};
   Eigen::MatrixXd cov;
   if (!covarianceOf(first.information, kept, &cov)) return first;
-  const int order[] = {M::kTimeOffset, M::kLeverX,   M::kLeverY, M::kLeverZ,
-                       kRadiusLeft,    kRadiusRight, kTrack};
+  const int order[] = {kScale, M::kLeverY, M::kLeverX, M::kLeverZ, M::kTimeOffset};
   for (int k : order) {
     if (!(*free)[size_t(k)]) continue;
     std::vector<int> trial = kept;
@@ -124,124 +131,284 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
   return solve(rays, model, first.x, *free, in);
 }
 
-RigCalibration report(const MobileRigCalibrationInput& in, const Eigen::VectorXd& x,
-                      const MobileWheelParameters& w, const OverlapResult& r,
-                      const std::vector<bool>& free, const MobileOdometryRun& odo,
-                      double rms_before) {
+// Everything the steps found.
+struct Solution {
+  Eigen::VectorXd x;  // the joint vector (its scale entry folded into w: zero)
+  OverlapResult r;    // the last joint solve (its covariance: of the last pass's change)
+  std::vector<bool> free;
+  MobileWheelParameters w;  // the calibrated wheels
+  WheelGyroResult wg;       // step 1
+  std::vector<CalibMeasure> room;
+  bool floor_z = false;  // the lever arm's z from the floor (the passes cannot see it)
+  double floor_z_sigma = 0.0;
+  std::vector<std::string> room_warnings;
+  bool wheels = false;  // step 1 determined k_L and k_R
+  double rms_before = 0.0;
+};
+
+// Reported parameters, in this order.
+enum Reported { kRGamma, kRBeta, kRAlpha, kRX, kRY, kRZ, kRLeft, kRRight, kRTrack, kRTime, kRBias };
+constexpr int kReported = 11;
+
+// The reported parameters' covariance: the joint solve's and step 1's blocks (independent
+// data) through the Jacobian of what each measures. The lidar measures the distance driven,
+// the mean radius rm = rm0 (1 + e), whatever k is; the gyro the k = r / T. So
+// r_L = 2 rm k_L / (k_L + k_R), r_R = 2 rm k_R / (k_L + k_R), T = 2 rm / (k_L + k_R).
+Eigen::MatrixXd reportedCovariance(const Solution& s) {
+  const int O = kParameters;  // the joint vector, then (k_L, k_R, b)
+  Eigen::MatrixXd C = Eigen::MatrixXd::Zero(O + 3, O + 3);
+  C.topLeftCorner(O, O) = s.r.covariance;
+  if (s.wheels) C.bottomRightCorner(3, 3) = s.wg.covariance;
+  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(kReported, O + 3);
+  const int from[] = {M::kGamma, M::kBeta, M::kAlpha, M::kLeverX, M::kLeverY, M::kLeverZ};
+  for (int i = 0; i < 6; ++i) J(i, from[i]) = 1.0;
+  const double T = s.w.wheel_distance_m, rl = s.w.radius_left_m, rr = s.w.radius_right_m;
+  const double kl = s.wg.x(0), kr = s.wg.x(1), ks = kl + kr;
+  J(kRLeft, kScale) = rl;
+  J(kRRight, kScale) = rr;
+  J(kRTrack, kScale) = T;
+  if (s.wheels) {
+    J(kRLeft, O) = rl * kr / (kl * ks);
+    J(kRLeft, O + 1) = -rl / ks;
+    J(kRRight, O) = -rr / ks;
+    J(kRRight, O + 1) = rr * kl / (kr * ks);
+    J(kRTrack, O) = J(kRTrack, O + 1) = -T / ks;
+  }
+  J(kRTime, M::kTimeOffset) = -1.0;
+  J(kRBias, O + 2) = 1.0;
+  Eigen::MatrixXd cov = J * C * J.transpose();
+  if (s.floor_z) cov(kRZ, kRZ) += s.floor_z_sigma * s.floor_z_sigma;
+  return cov;
+}
+
+void addWarnings(const MobileRigCalibrationInput& in, const Solution& s, RigCalibration* out) {
+  for (const CalibParameter& p : out->parameters) {
+    if (!p.observable)
+      out->warnings.push_back(p.key + ": not observable from these logs (" + p.note +
+                              "); left at the rig file's");
+  }
+  if (!s.wheels) out->warnings.push_back("wheels against the gyro: " + s.wg.reason);
+  if (s.wheels && s.wg.trimmed > 0) {
+    out->warnings.push_back("wheels against the gyro: " + std::to_string(s.wg.trimmed) + " of " +
+                            std::to_string(s.wg.trimmed + s.wg.rows) +
+                            " windows disagreed beyond the noise (wheel slip) and were left out");
+  }
+  if (s.r.chi2_per_dof > 4.0) {
+    out->warnings.push_back("the residuals are larger than the lidar's noise explains (chi2/dof " +
+                            std::to_string(s.r.chi2_per_dof) +
+                            "): an error the model does not have (moving objects, "
+                            "a wrong noise figure, slip) may bias the result");
+  }
+  if (s.free[M::kTimeOffset] &&
+      std::abs(s.x(M::kTimeOffset)) >= 0.99 * in.options.max_time_offset_s) {
+    out->warnings.push_back("lidar.time_offset_s ran to its bound: the drive does not observe it");
+  }
+}
+
+RigCalibration report(const MobileRigCalibrationInput& in, const Solution& s) {
   RigCalibration out;
   const LidarMounting& n = in.nominal;
+  const MobileWheelParameters& w0 = in.wheels;
+  const Eigen::VectorXd& x = s.x;
+  const bool scale = s.wheels && s.free[size_t(kScale)];
   struct Row {
     const char* key;
     const char* unit;
-    double value;
-    int index;       // into x (-1: not in the joint solve)
-    double nominal;  // the rig file's (the start)
+    double value, nominal;
+    bool observable;
   };
-  const MobileWheelParameters& w0 = in.wheels;
-  const Row rows[] = {
-      {"mounting.gamma_rad", "rad", x(M::kGamma), M::kGamma, n.gamma_rad},
-      {"mounting.beta_rad", "rad", x(M::kBeta), M::kBeta, n.beta_rad},
-      {"mounting.alpha_rad", "rad", x(M::kAlpha), M::kAlpha, n.alpha_rad},
-      {"mounting.x_m", "m", n.t_BL_m.x() + x(M::kLeverX), M::kLeverX, n.t_BL_m.x()},
-      {"mounting.y_m", "m", n.t_BL_m.y() + x(M::kLeverY), M::kLeverY, n.t_BL_m.y()},
-      {"mounting.z_m", "m", n.t_BL_m.z() + x(M::kLeverZ), M::kLeverZ, n.t_BL_m.z()},
-      {"odometry.wheel_radius_m", "m", w.radius_left_m, kRadiusLeft, w0.radius_left_m},
-      {"odometry.wheel_radius_right_m", "m", w.radius_right_m, kRadiusRight, w0.radius_right_m},
-      {"odometry.wheel_distance_m", "m", w.wheel_distance_m, kTrack, w0.wheel_distance_m},
-      {"lidar.time_offset_s", "s", -x(M::kTimeOffset), M::kTimeOffset, 0.0},
+  const Row rows[kReported] = {
+      {"mounting.gamma_rad", "rad", x(M::kGamma), n.gamma_rad, s.free[M::kGamma]},
+      {"mounting.beta_rad", "rad", x(M::kBeta), n.beta_rad, s.free[M::kBeta]},
+      {"mounting.alpha_rad", "rad", x(M::kAlpha), n.alpha_rad, s.free[M::kAlpha]},
+      {"mounting.x_m", "m", n.t_BL_m.x() + x(M::kLeverX), n.t_BL_m.x(), s.free[M::kLeverX]},
+      {"mounting.y_m", "m", n.t_BL_m.y() + x(M::kLeverY), n.t_BL_m.y(), s.free[M::kLeverY]},
+      {"mounting.z_m", "m", n.t_BL_m.z() + x(M::kLeverZ), n.t_BL_m.z(),
+       s.free[M::kLeverZ] || s.floor_z},
+      {"odometry.wheel_radius_m", "m", s.w.radius_left_m, w0.radius_left_m, scale},
+      {"odometry.wheel_radius_right_m", "m", s.w.radius_right_m, w0.radius_right_m, scale},
+      {"odometry.wheel_distance_m", "m", s.w.wheel_distance_m, w0.wheel_distance_m, scale},
+      {"lidar.time_offset_s", "s", -x(M::kTimeOffset), 0.0, s.free[M::kTimeOffset]},
+      {"odometry.gyro_bias_rad_s", "rad/s", s.wg.x(2), 0.0, s.wheels},
   };
-  std::vector<int> index;
-  for (const Row& row : rows) {
+  const Eigen::MatrixXd cov = reportedCovariance(s);
+  for (int i = 0; i < kReported; ++i) {
+    const Row& row = rows[i];
     CalibParameter p;
     p.key = row.key;
     p.unit = row.unit;
-    p.value = row.value;
+    p.observable = row.observable;
+    p.value = p.observable ? row.value : row.nominal;
     p.nominal = row.nominal;
-    p.observable = free[size_t(row.index)];
-    if (!p.observable) p.note = "its sigma exceeds its bound on this drive";
-    p.sigma = p.observable ? std::sqrt(std::max(0.0, r.covariance(row.index, row.index))) : 0.0;
+    p.sigma = p.observable ? std::sqrt(std::max(0.0, cov(i, i))) : 0.0;
+    if (!p.observable)
+      p.note = i >= kRLeft && i <= kRTrack && !s.wheels
+                   ? "the gyro against the wheels did not determine them (turns both ways, "
+                     "straights and stops needed)"
+               : i >= kRLeft && i <= kRTrack ? "the lidar did not determine the distance driven"
+               : i == kRBias                 ? "the wheels against the gyro failed"
+                                             : "its sigma exceeds its bound on this drive";
     const auto t = in.truth.find(p.key);
     if (t != in.truth.end()) p.truth = t->second;
     out.parameters.push_back(p);
-    index.push_back(row.index);
   }
-  CalibParameter bias{"odometry.gyro_bias_rad_s",
-                      odo.gyro_bias_rad_s,
-                      odo.gyro_bias_sigma_rad_s,
-                      "rad/s",
-                      true,
-                      std::nullopt};
-  const auto t = in.truth.find(bias.key);
-  if (t != in.truth.end()) bias.truth = t->second;
-  out.parameters.push_back(bias);
-  // Correlations of the joint solve (the gyro bias comes from the EKF: 0 with the others).
-  const int N = int(out.parameters.size());
-  out.correlation = Eigen::MatrixXd::Identity(N, N);
-  for (int i = 0; i + 1 < N; ++i) {
-    for (int j = 0; j + 1 < N; ++j) {
-      const double si = out.parameters[size_t(i)].sigma, sj = out.parameters[size_t(j)].sigma;
-      if (i != j && si > 0 && sj > 0)
-        out.correlation(i, j) = r.covariance(index[size_t(i)], index[size_t(j)]) / (si * sj);
+  Eigen::MatrixXd shown = cov;
+  for (int i = 0; i < kReported; ++i) {
+    if (!out.parameters[size_t(i)].observable) shown.row(i).setZero(), shown.col(i).setZero();
+  }
+  out.correlation = correlationOf(shown);
+  out.correlation.diagonal().setOnes();
+  out.rms_before = s.rms_before;
+  out.rms_after = s.r.residual_after_m;
+  out.measures = s.room;
+  addWarnings(in, s, &out);
+  out.warnings.insert(out.warnings.end(), s.room_warnings.begin(), s.room_warnings.end());
+  return out;
+}
+
+// The cloud the model places at its linearisation point x.
+std::vector<Eigen::Vector3f> cloudAt(const std::vector<OverlapRay>& rays, M& model,
+                                     const Eigen::VectorXd& x) {
+  model.linearise(x);
+  std::vector<Eigen::Vector3f> cloud;
+  cloud.reserve(rays.size());
+  for (size_t i = 0; i < rays.size(); ++i) {
+    Eigen::Vector3d p, d;
+    OverlapJacobian J;
+    if (model.point(i, &p, &d, &J)) cloud.push_back(p.cast<float>());
+  }
+  return cloud;
+}
+
+// The lidar's height from the floor: the body frame's xOy plane is the floor, so the floor
+// the cloud shows at height f says the lever arm's z is off by -f. Its sigma: the mean's,
+// with the points' deviations summed per cell of kClusterM first (points of a cell err
+// together: the same passes, the same attitude errors of the track).
+struct FloorLever {
+  bool ok = false;
+  double dz = 0.0, sigma = 0.0;
+};
+FloorLever leverFromFloor(const std::vector<Eigen::Vector3f>& cloud, const RoomPlanes& planes) {
+  FloorLever f;
+  if (!planes.floor || planes.floor->inlier_indices.size() < 100) return f;
+  const std::vector<int>& idx = planes.floor->inlier_indices;
+  const double h = inlierCentroid(cloud, idx).z();
+  std::map<std::pair<int, int>, double> cells;
+  for (int i : idx) {
+    const Eigen::Vector3f& p = cloud[size_t(i)];
+    cells[{int(std::floor(p.x() / kClusterM)), int(std::floor(p.y() / kClusterM))}] +=
+        double(p.z()) - h;
+  }
+  double ss = 0.0;
+  for (const auto& [cell, sum] : cells) ss += sum * sum;
+  f.ok = cells.size() > 10;
+  f.dz = -h;
+  f.sigma = std::sqrt(ss * double(cells.size()) / double(cells.size() - 1)) / double(idx.size());
+  return f;
+}
+
+// The room's size in the calibrated cloud.
+std::vector<CalibMeasure> roomMeasures(const std::vector<Eigen::Vector3f>& cloud,
+                                       const RoomPlanes& planes,
+                                       const std::optional<Eigen::Vector3d>& truth,
+                                       std::vector<std::string>* warnings) {
+  const RoomDims dims = roomDims(planes, cloud);
+  std::vector<CalibMeasure> out;
+  const std::optional<double> L[3] = {dims.L1, dims.L2, dims.L3};
+  const char* keys[3] = {"room.length_m", "room.width_m", "room.height_m"};
+  for (int k = 0; k < 3; ++k) {
+    if (!L[k]) continue;
+    CalibMeasure m{keys[k], *L[k], "m", std::nullopt};
+    if (truth) m.truth = (*truth)(k);
+    out.push_back(m);
+  }
+  if (out.size() < 3) warnings->push_back("the room's size not measured: " + planes.reason);
+  return out;
+}
+
+// After a pass's joint solve: the floor gives the lever arm's z (which the passes cannot see:
+// it moves every point alike); after the last pass, the room's size too.
+void floorAndRoom(const MobileRigCalibrationInput& in, const std::vector<OverlapRay>& rays,
+                  M& model, bool last, Solution* s) {
+  const std::vector<Eigen::Vector3f> cloud = cloudAt(rays, model, s->r.x);
+  // A drive in one end of the room sees the far wall thinly, and the furniture's and the
+  // door's planes come first: more and smaller planes than the defaults (a loop's).
+  WallExtractionOptions wo;
+  wo.max_planes = 16;
+  wo.min_inliers = 100;
+  const RoomPlanes planes = findRoomPlanes(cloud, wo);
+  if (!s->free[M::kLeverZ]) {
+    const FloorLever f = leverFromFloor(cloud, planes);
+    s->floor_z = f.ok;
+    if (f.ok) {
+      s->r.x(M::kLeverZ) += f.dz;
+      s->floor_z_sigma = f.sigma;
     }
   }
-  out.rms_before = rms_before;
-  out.rms_after = r.residual_after_m;
-  for (const CalibParameter& p : out.parameters) {
-    if (!p.observable)
-      out.warnings.push_back(p.key + ": not observable from these logs; left at the rig file's");
+  if (last) s->room = roomMeasures(cloud, planes, in.room_truth_m, &s->room_warnings);
+}
+
+// Step 1: the wheels' ratios to the track and the gyro bias; w becomes (k_L T0, k_R T0, T0).
+void wheelsAgainstGyro(const MobileRigCalibrationInput& in, Solution* s) {
+  s->w = in.wheels;
+  if (in.wheel_readings.empty() || in.gyro_readings.empty()) {
+    s->wg.reason = "the log has no encoder or gyro readings";
+    return;
   }
-  if (r.chi2_per_dof > 4.0) {
-    out.warnings.push_back("the residuals are larger than the lidar's noise explains (chi2/dof " +
-                           std::to_string(r.chi2_per_dof) +
-                           "): an error the model does not have (moving objects, "
-                           "a wrong noise figure, slip) may bias the result");
+  s->wg = calibrateWheelsAgainstGyro(in.wheel_readings, in.gyro_readings, in.wheel_gyro);
+  if (!s->wg.ok) return;
+  const double T0 = in.wheels.wheel_distance_m;
+  for (int k = 0; k < 2; ++k) {
+    if (!(std::sqrt(s->wg.covariance(k, k)) <= kMaxWheelRatioSigma * std::abs(s->wg.x(k)))) {
+      s->wg.ok = false;
+      s->wg.reason = "the drive determines the wheels' ratio to the track only to " +
+                     std::to_string(std::sqrt(s->wg.covariance(k, k)) / std::abs(s->wg.x(k))) +
+                     " (relative)";
+      return;
+    }
   }
-  if (free[M::kTimeOffset] && std::abs(x(M::kTimeOffset)) >= 0.99 * in.options.max_time_offset_s) {
-    out.warnings.push_back("lidar.time_offset_s ran to its bound: the drive does not observe it");
-  }
-  return out;
+  s->wheels = true;
+  s->w.radius_left_m = s->wg.x(0) * T0;
+  s->w.radius_right_m = s->wg.x(1) * T0;
 }
 
 }  // namespace
 
 RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& in) {
+  Solution s;
+  wheelsAgainstGyro(in, &s);
   const std::vector<OverlapRay> rays =
       overlapRays(in.scans, in.nominal.nominal_rpy_rad, std::max(1, in.options.ray_stride));
-  MobileWheelParameters w = in.wheels;
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(kParameters);
-  x(M::kGamma) = in.nominal.gamma_rad;
-  x(M::kBeta) = in.nominal.beta_rad;
-  x(M::kAlpha) = in.nominal.alpha_rad;
-  std::vector<bool> free(size_t(kParameters), true);
-  free[M::kDriftX] = free[M::kDriftY] = false;  // the wheels explain the track's drift
-  OverlapResult r;
-  Sensitivities s;
-  double rms_before = 0.0;
+  s.x = Eigen::VectorXd::Zero(kParameters);
+  s.x(M::kGamma) = in.nominal.gamma_rad;
+  s.x(M::kBeta) = in.nominal.beta_rad;
+  s.x(M::kAlpha) = in.nominal.alpha_rad;
+  s.free.assign(size_t(kParameters), true);
+  s.free[M::kDriftX] = s.free[M::kDriftY] = false;  // the wheels explain the track's drift
+  s.free[kScale] = s.wheels;  // the scale alone would bend the radii's ratio as it is
+  Sensitivities sens;
   constexpr int kPasses = 2;
   for (int pass = 0; pass < kPasses; ++pass) {
     if (in.progress) in.progress(double(pass) / kPasses);
-    runOdometry(in, w, &s);
-    M model(rays, s.base.track, in.nominal.t_BL_m,
-            {{&s.moved[0], s.step[0]}, {&s.moved[1], s.step[1]}, {&s.moved[2], s.step[2]}});
-    std::vector<bool> try_free = free;
-    r = solveObservable(rays, model, x, in, &try_free);
-    if (!r.ok) {
+    runOdometry(in, s.w, &sens);
+    M model(rays, sens.base.track, in.nominal.t_BL_m, {{&sens.moved, sens.step}});
+    std::vector<bool> try_free = s.free;
+    s.r = solveObservable(rays, model, s.x, in, &try_free);
+    if (!s.r.ok) {
       RigCalibration failed;
-      failed.rms_before = failed.rms_after = 0.0;
-      failed.warnings.push_back("nothing calibrated: " + r.reason);
+      failed.warnings.push_back("nothing calibrated: " + s.r.reason);
       return failed;
     }
-    if (pass == 0) rms_before = r.residual_before_m;
-    free = try_free;
-    x = r.x;
-    w.radius_left_m += x(kRadiusLeft);
-    w.radius_right_m += x(kRadiusRight);
-    w.wheel_distance_m += x(kTrack);
-    x(kRadiusLeft) = x(kRadiusRight) = x(kTrack) = 0.0;  // now in w
+    if (pass == 0) s.rms_before = s.r.residual_before_m;
+    s.free = try_free;
+    floorAndRoom(in, rays, model, pass + 1 == kPasses, &s);
+    s.x = s.r.x;
+    s.w = scaled(s.w, 1.0 + s.x(kScale));
+    s.x(kScale) = 0.0;  // now in w
   }
-  const MobileOdometryRun final_run = in.odometry(w);
+  if (!s.wheels) s.wg.x(2) = 0.0;
   if (in.progress) in.progress(1.0);
-  return report(in, x, w, r, free, final_run, rms_before);
+  return report(in, s);
 }
 
 }  // namespace sweepmap

@@ -1,27 +1,34 @@
 // Rig B's joint calibration (issue 23): every parameter a drive makes observable, from the
-// lidar's two passes over the same surfaces and the odometry's own readings.
+// gyro against the wheels and the lidar's passes over the same surfaces.
 //
-// The physics couples the lidar's mounting (gamma, beta, alpha), its lever arm, the
-// lidar-to-odometry time offset and the wheels (radii, track width): all move the world
-// points of the two passes, through the mounting directly and through the track the
-// odometry integrates. They are estimated in one least squares (calib/overlap_alignment.hpp)
-// whose track is linearised in the wheel parameters by re-running the odometry with each
-// perturbed. The gyro bias is the odometry EKF's own state, estimated against the wheels and
-// the IMU's yaw, and is read from it. Stated order, iterated twice:
-//   1. odometry at the current wheel parameters (and its sensitivities to them);
-//   2. one joint least squares of the mounting, lever arm, time offset and wheel changes;
-//   3. a parameter whose sigma exceeds its observability bound is reported unobservable,
+// What determines what, and the stated order:
+//   1. The wheels against the gyro (calib/wheel_gyro_calibration.hpp): each radius over the
+//      track, k_L = r_L / T and k_R = r_R / T, and the gyro's bias (from the stops). No lidar.
+//      The wheels become (k_L T, k_R T, T) with T at the rig file's track.
+//   2. The lidar: the common scale e of (r_L, r_R, T) is the distance driven, the one wheel
+//      error no turn rate shows; it moves the world points of the passes, as the mounting
+//      (gamma, beta, alpha), its lever arm and the lidar-to-odometry time offset do. These
+//      are one least squares (calib/overlap_alignment.hpp) on the odometry re-run with the
+//      corrected wheels, its track linearised in e by re-running it with the scale moved.
+//      Iterated twice (the odometry re-run at the new scale).
+//   3. A parameter whose sigma exceeds its observability bound is reported unobservable,
 //      held at nominal, and the least squares solved again without it.
+// The covariance: step 1's and step 2's are independent data (block diagonal), carried to the
+// reported parameters by the Jacobian of r = k T0 (1 + e), T = T0 (1 + e).
+// Then the room: its walls, floor and ceiling fitted in the calibrated cloud (RANSAC, one
+// thread: calib/room_planes.hpp) give its length, width and height (measures room.*_m).
 // Transport-free: the odometry is re-run through a callback.
 #pragma once
 
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "calib/mounting_calibration.hpp"
 #include "calib/rig_calibration.hpp"
+#include "calib/wheel_gyro_calibration.hpp"
 #include "calib/world_assembly.hpp"
 
 namespace sweepmap {
@@ -45,8 +52,16 @@ struct MobileRigCalibrationInput {
   LidarMounting nominal;          // the rig file's mounting (the start)
   MobileWheelParameters wheels;   // the rig file's wheels (the start)
   MobileOdometryReplay odometry;  // required
+  // The drive's raw encoder and gyro readings (step 1); empty: the wheels and the gyro bias
+  // are left nominal and reported unobservable.
+  std::vector<WheelReading> wheel_readings;
+  std::vector<GyroReading> gyro_readings;
+  WheelGyroOptions wheel_gyro;  // ticks_per_revolution: the rig file's
   MountingCalibrationOptions options;
-  std::map<std::string, double> truth;   // simulated logs: rig-file key -> true value
+  std::map<std::string, double> truth;  // simulated logs: rig-file key -> true value
+  // The room's true length, width and height (the longer and shorter wall spacing, floor to
+  // ceiling; simulated logs: the scene's), to compare the calibrated cloud's with.
+  std::optional<Eigen::Vector3d> room_truth_m;
   std::function<void(double)> progress;  // fraction done (may be empty)
 };
 

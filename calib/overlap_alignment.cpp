@@ -11,6 +11,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <map>
 #include <thread>
 
 #include "calib/rotating_geometry.hpp"
@@ -246,6 +247,7 @@ struct Residual {
   double r, w, scale;
   Eigen::Matrix<double, 1, kMaxOverlapParameters> J;
   bool keep;
+  Eigen::Vector3f at;  // the query's world point (its cluster for the sandwich covariance)
 };
 
 Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& model,
@@ -270,6 +272,7 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
   var_nb /= double(corr.count) * double(corr.count);
   res.r = corr.n.dot(pa - mean);
   res.J = corr.n.transpose() * (Ja - Jmean);
+  res.at = pa.cast<float>();
   res.w = 1.0;
   res.scale = o.loss_scale_m;
   if (o.noise_weighting) {
@@ -441,6 +444,55 @@ std::vector<OverlapRay> overlapRays(const std::vector<Scan2D>& scans, const Eige
   return rays;
 }
 
+// The cluster-robust (sandwich) covariance H^-1 M H^-1 of the free parameters, M the sum
+// over cubes of `cluster_m` of each cube's gradient outer product: residuals that share the
+// other pass's planes (or a wall's unevenness) err together, which chi2 / H^-1 counts as
+// independent. Never below `classic` on the diagonal (scaled to it, correlations kept).
+Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradient& dx,
+                                    const Normal& H, const Eigen::MatrixXd& classic, int P,
+                                    const OverlapOptions& oo) {
+  std::map<std::array<int, 3>, Gradient> sums;
+  for (const Residual& r : rs) {
+    if (!r.keep) continue;
+    const double ei = r.w * (r.r + r.J.dot(dx.transpose()));
+    const double rho1 = 1.0 / (1.0 + ei * ei / (r.scale * r.scale));
+    const std::array<int, 3> key = {int(std::floor(r.at.x() / oo.cluster_m)),
+                                    int(std::floor(r.at.y() / oo.cluster_m)),
+                                    int(std::floor(r.at.z() / oo.cluster_m))};
+    auto [it, inserted] = sums.try_emplace(key, Gradient::Zero());
+    it->second.noalias() += rho1 * ei * r.w * r.J.transpose();
+  }
+  std::vector<int> free;
+  for (int k = 0; k < P; ++k) {
+    if (oo.free.empty() || oo.free[size_t(k)]) free.push_back(k);
+  }
+  const int F = int(free.size()), C = int(sums.size());
+  if (F == 0 || C <= 10 * F) return classic;
+  Eigen::MatrixXd Hf(F, F), Mf = Eigen::MatrixXd::Zero(F, F);
+  for (int i = 0; i < F; ++i) {
+    for (int j = 0; j < F; ++j) Hf(i, j) = H(free[size_t(i)], free[size_t(j)]);
+  }
+  for (const auto& [key, g] : sums) {
+    Eigen::VectorXd gf(F);
+    for (int i = 0; i < F; ++i) gf(i) = g(free[size_t(i)]);
+    Mf.noalias() += gf * gf.transpose();
+  }
+  Mf *= double(C) / double(C - 1);
+  const Eigen::MatrixXd Hinv = Hf.ldlt().solve(Eigen::MatrixXd::Identity(F, F));
+  Eigen::MatrixXd S = Hinv * Mf * Hinv;
+  Eigen::VectorXd scale(F);
+  for (int i = 0; i < F; ++i) {
+    const double c = classic(free[size_t(i)], free[size_t(i)]);
+    scale(i) = S(i, i) > 0 && S(i, i) < c ? std::sqrt(c / S(i, i)) : 1.0;
+  }
+  S = scale.asDiagonal() * S * scale.asDiagonal();
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(P, P);
+  for (int i = 0; i < F; ++i) {
+    for (int j = 0; j < F; ++j) cov(free[size_t(i)], free[size_t(j)]) = S(i, j);
+  }
+  return cov;
+}
+
 OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& model,
                            const Eigen::VectorXd& x0, const OverlapOptions& oo) {
   const MountingCalibrationOptions& o = oo.base;
@@ -453,6 +505,8 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
   double change = 1e300;
   Normal H = Normal::Zero();
   double chi2_dof = 0.0;
+  std::vector<Residual> last;  // the last round's residuals and change
+  Gradient last_dx = Gradient::Zero();
   for (int round = 0; round < o.max_outer_iterations; ++round) {
     if (oo.progress) oo.progress(double(round) / o.max_outer_iterations);
     model.linearise(res.x);
@@ -485,9 +539,15 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
       change = std::max(change, std::abs(dx(k)) * scale);
     }
     res.x += dx.head(P);
+    if (oo.cluster_m > 0) {
+      last = rs;
+      last_dx = dx;
+    }
     if (round >= 1 && change < o.convergence_rad) break;
   }
   res.covariance = covariance(H, chi2_dof, P, oo);
+  if (oo.cluster_m > 0)
+    res.covariance = clusteredCovariance(last, last_dx, H, res.covariance, P, oo);
   res.information = H.topLeftCorner(P, P) / std::max(1e-300, chi2_dof);
   res.chi2_per_dof = chi2_dof;
   res.ok = true;

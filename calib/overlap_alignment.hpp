@@ -59,6 +59,10 @@ struct OverlapOptions {
   int threads = 0;               // 0: every core; the result is the same for any number
   std::vector<bool> free;        // per parameter: estimated (else held); empty: all
   Eigen::VectorXd lower, upper;  // bounds (empty: none)
+  // > 0: the covariance is the cluster-robust (sandwich) one over cubes of this size, never
+  // below chi2 times the inverse normal matrix (which counts correlated residuals as
+  // independent); 0: that one alone.
+  double cluster_m = 0.0;
   // Rounds whose parameter change is below this re-linearise without a new search.
   double research_change = 2e-4;
   std::function<void(double)> progress;  // fraction of the rounds done (may be empty)

@@ -91,7 +91,17 @@ nlohmann::json rigCalibrationJson(const RigCalibration& c) {
       row.push_back(orNull(c.correlation(i, j)));
     matrix.push_back(row);
   }
+  nlohmann::json measures = nlohmann::json::object();
+  for (const auto& m : c.measures) {
+    nlohmann::json j = {{"value", m.value}, {"unit", m.unit}};
+    if (m.truth) {
+      j["truth"] = *m.truth;
+      j["error"] = m.value - *m.truth;
+    }
+    measures[m.key] = j;
+  }
   return {{"parameters", params},
+          {"measures", measures},
           {"warnings", c.warnings},
           {"correlation", {{"keys", keys}, {"matrix", matrix}}},
           {"residuals",
@@ -173,6 +183,11 @@ std::string rigCalibrationReport(const RigCalibration& c) {
         s << (j ? " " : "") << std::setprecision(2) << c.correlation(i, j);
       }
     }
+    s << "\n";
+  }
+  for (const auto& m : c.measures) {
+    s << "  measured " << m.key << " " << std::setprecision(4) << m.value << " " << m.unit;
+    if (m.truth) s << ", truth " << *m.truth << ", off by " << m.value - *m.truth;
     s << "\n";
   }
   for (const auto& w : c.warnings) s << "  warning: " << w << "\n";

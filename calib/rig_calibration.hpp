@@ -25,10 +25,19 @@ struct CalibParameter {
   std::string note;             // why not observable
 };
 
+// What the calibrated data measure, to compare with a known value (rig B: the room's size).
+struct CalibMeasure {
+  std::string key;  // e.g. room.length_m
+  double value = 0.0;
+  std::string unit;
+  std::optional<double> truth;  // simulated logs: the scene's
+};
+
 struct RigCalibration {
   std::vector<CalibParameter> parameters;
-  Eigen::MatrixXd correlation;  // of `parameters`, in their order
-  double rms_before = 0.0;      // residual RMS with the rig's values (residual_unit)
+  std::vector<CalibMeasure> measures;  // JSON "measures": {"<key>": {"value", "unit", "truth"?}}
+  Eigen::MatrixXd correlation;         // of `parameters`, in their order
+  double rms_before = 0.0;             // residual RMS with the rig's values (residual_unit)
   double rms_after = 0.0;
   std::vector<std::string> warnings;
   std::string residual_unit = "mm";

@@ -19,11 +19,24 @@ Eigen::Isometry3d planar(const Pose2& p) {
   return T;
 }
 
+// Throws unless the path's first `length` metres stay inside the room (half sizes hl, hw).
+void requireInside(const MobilePath& path, double length, double hl, double hw,
+                   const std::string& what) {
+  for (double s = 0.0; s <= length; s += 0.05) {
+    const Pose2 p = path.poseAt(s);
+    if (std::abs(p.x_m) >= hl || std::abs(p.y_m) >= hw) {
+      throw ConfigError("sim: " + what + " leaves the room at arc length " + std::to_string(s) +
+                        " m");
+    }
+  }
+}
+
 }  // namespace
 
 void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "path", &path, "",
-        "driven path: circle (calibration drive), loop (rounded rectangle) or file (path_file)");
+        "driven path: circle (Miao 2022's calibration drive), loop (rounded rectangle), figure8 "
+        "(turns both ways and straights: calib rig's drive) or file (path_file)");
   s.add(
       p + "path_file", &path_file, "",
       "path: file — YAML of start pose and segments in the room frame (relative to the rig file)");
@@ -33,9 +46,19 @@ void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "loop_wall_clearance_m", &loop_wall_clearance_m, "m",
         "loop path: distance of the rounded rectangle from the walls");
   s.add(p + "loop_corner_radius_m", &loop_corner_radius_m, "m", "loop path: corner radius");
+  s.add(p + "figure8_radius_m", &figure8_radius_m, "m", "figure8 path: radius of each lobe");
+  s.add(p + "figure8_lobe_spacing_m", &figure8_lobe_spacing_m, "m",
+        "figure8 path: distance between the lobes' centres (along the room's X)");
+  s.add(p + "figure8_center_x_m", &figure8_center_x_m, "m",
+        "figure8 path: X of the crossing in the room");
+  s.add(p + "figure8_center_y_m", &figure8_center_y_m, "m",
+        "figure8 path: Y of the crossing in the room");
   s.add(p + "speed_m_s", &speed_m_s, "m/s", "cruise speed");
   s.add(p + "accel_m_s2", &accel_m_s2, "m/s^2", "ramp acceleration at start and stop");
   s.add(p + "duration_s", &duration_s, "s", "length of the run (the car stops at its end)");
+  s.add(p + "stop_interval_s", &stop_interval_s, "s",
+        "> 0: the car stops after each leg of driving this long (ramps included); 0: no stops");
+  s.add(p + "stop_duration_s", &stop_duration_s, "s", "rest at each stop");
   s.add(p + "wheel_ticks_rate_hz", &wheel_ticks_rate_hz, "Hz", "encoder reading rate");
   s.add(p + "encoder_speed_sigma_fraction", &encoder_speed_sigma_fraction, "",
         "white wheel speed error per reading, fraction of the speed");
@@ -85,8 +108,14 @@ void SimMobileConfig::validate(const std::string& source) const {
   const auto require = [&](bool ok, const std::string& key, const std::string& why) {
     if (!ok) throw ConfigError(source + ": key 'sim." + key + "' " + why);
   };
-  require(path == "circle" || path == "loop" || path == "file", "path",
-          "must be circle, loop or file");
+  require(path == "circle" || path == "loop" || path == "figure8" || path == "file", "path",
+          "must be circle, loop, figure8 or file");
+  require(figure8_radius_m > 0, "figure8_radius_m", "must be positive");
+  require(figure8_lobe_spacing_m > 2 * figure8_radius_m, "figure8_lobe_spacing_m",
+          "must exceed twice sim.figure8_radius_m (the lobes may not overlap)");
+  require(stop_interval_s >= 0, "stop_interval_s", "must be >= 0");
+  require(stop_interval_s == 0 || stop_duration_s > 0, "stop_duration_s",
+          "must be positive when sim.stop_interval_s is");
   require(path != "file" || !path_file.empty(), "path_file",
           "must name a file when sim.path is file");
   require(circle_radius_m > 0, "circle_radius_m", "must be positive");
@@ -177,9 +206,10 @@ MobilePath MobilePath::fromFile(const std::string& file) {
     if (key != "start" && key != "segments")
       throw ConfigError("path file " + file + ": unknown key '" + key + "'");
   }
-  double x = number(root["start"], "x_m", "start"), y = number(root["start"], "y_m", "start");
-  double theta = number(root["start"], "heading_deg", "start") * kDegToRad;
-  std::vector<Segment> segments;
+  const double x = number(root["start"], "x_m", "start");
+  const double y = number(root["start"], "y_m", "start");
+  const double theta = number(root["start"], "heading_deg", "start") * kDegToRad;
+  std::vector<std::pair<double, double>> pieces;
   for (size_t i = 0; i < root["segments"].size(); ++i) {
     const YAML::Node n = root["segments"][i];
     const std::string where = "segment " + std::to_string(i);
@@ -193,6 +223,15 @@ MobilePath MobilePath::fromFile(const std::string& file) {
         throw ConfigError("path file " + file + ": " + where + " '|radius_m|' must be >= 0.05");
       curvature = 1.0 / r;
     }
+    pieces.emplace_back(length, curvature);
+  }
+  return chained(x, y, theta, pieces);
+}
+
+MobilePath MobilePath::chained(double x, double y, double theta,
+                               const std::vector<std::pair<double, double>>& length_curvature) {
+  std::vector<Segment> segments;
+  for (const auto& [length, curvature] : length_curvature) {
     segments.push_back({x, y, theta, length, curvature});
     const MobilePath one({segments.back()});
     const Pose2 end = one.poseAt(length * (1.0 - 1e-12));
@@ -201,6 +240,19 @@ MobilePath MobilePath::fromFile(const std::string& file) {
     theta = theta + curvature * length;
   }
   return MobilePath(std::move(segments));
+}
+
+MobilePath MobilePath::figureEight(double cx, double cy, double r, double spacing) {
+  // The straights are the lobes' inner tangents: they cross at the centre at +-phi to X,
+  // sin(phi) = r / (spacing / 2), and each lobe's arc turns pi + 2 phi.
+  const double d = 0.5 * spacing, phi = std::asin(r / d);
+  const double straight = 2.0 * std::sqrt(d * d - r * r), arc = r * (M_PI + 2.0 * phi);
+  return chained(cx, cy, phi,
+                 {{0.5 * straight, 0.0},
+                  {arc, -1.0 / r},
+                  {straight, 0.0},
+                  {arc, 1.0 / r},
+                  {0.5 * straight, 0.0}});
 }
 
 bool MobilePath::closed() const {
@@ -278,13 +330,12 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
                         std::to_string(path_.length()) + " m long, but the drive covers " +
                         std::to_string(driven) + " m");
     }
-    for (double s = 0.0; s <= std::min(driven, path_.length()); s += 0.05) {
-      const Pose2 p = path_.poseAt(s);
-      if (std::abs(p.x_m) >= hl || std::abs(p.y_m) >= hw) {
-        throw ConfigError("sim: path file " + c_.path_file + " leaves the room at arc length " +
-                          std::to_string(s) + " m");
-      }
-    }
+    requireInside(path_, std::min(driven, path_.length()), hl, hw, "path file " + c_.path_file);
+  } else if (c_.path == "figure8") {
+    path_ = MobilePath::figureEight(c_.figure8_center_x_m, c_.figure8_center_y_m,
+                                    c_.figure8_radius_m, c_.figure8_lobe_spacing_m);
+    s0_ = 0.0;
+    requireInside(path_, path_.length(), hl, hw, "key 'sim.figure8_center_x_m': the figure8");
   } else {
     const double m = c_.loop_wall_clearance_m, rc = c_.loop_corner_radius_m;
     if (2 * (m + rc) >= std::min(sc.room_length_m, sc.room_width_m)) {
@@ -322,23 +373,64 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
   }
 }
 
-double SimMobile::speedAt(double t) const {
+// The leg of driving that time t falls in: its start and its length (ramps included). Without
+// stops the whole run is one leg.
+void SimMobile::legAt(double t, double* start, double* length, int64_t* index) const {
   const double T = c_.duration_s;
-  const double ta = std::min(c_.speed_m_s / c_.accel_m_s2, T / 2);
-  if (t <= 0 || t >= T) return 0.0;
-  if (t < ta) return c_.accel_m_s2 * t;
-  if (t > T - ta) return c_.accel_m_s2 * (T - t);
+  if (c_.stop_interval_s <= 0) {
+    *start = 0.0;
+    *length = T;
+    *index = 0;
+    return;
+  }
+  const double period = c_.stop_interval_s + c_.stop_duration_s;
+  *index = static_cast<int64_t>(std::floor(std::clamp(t, 0.0, T) / period));
+  *start = static_cast<double>(*index) * period;
+  *length = std::max(0.0, std::min(c_.stop_interval_s, T - *start));
+}
+
+// Speed, distance and acceleration u into a leg of duration D that ramps up to the cruise
+// speed and down to rest at its end.
+double SimMobile::legSpeed(double u, double D) const {
+  const double ta = std::min(c_.speed_m_s / c_.accel_m_s2, D / 2);
+  if (u <= 0 || u >= D) return 0.0;
+  if (u < ta) return c_.accel_m_s2 * u;
+  if (u > D - ta) return c_.accel_m_s2 * (D - u);
   return c_.accel_m_s2 * ta;
 }
 
+double SimMobile::legDistance(double u, double D) const {
+  const double a = c_.accel_m_s2;
+  const double ta = std::min(c_.speed_m_s / a, D / 2), vp = a * ta;
+  const double total = a * ta * ta + vp * (D - 2 * ta);
+  u = std::clamp(u, 0.0, D);
+  if (u < ta) return 0.5 * a * u * u;
+  if (u <= D - ta) return 0.5 * a * ta * ta + vp * (u - ta);
+  return total - 0.5 * a * (D - u) * (D - u);
+}
+
+double SimMobile::speedAt(double t) const {
+  double start, length;
+  int64_t k;
+  legAt(t, &start, &length, &k);
+  return legSpeed(t - start, length);
+}
+
+double SimMobile::accelerationAt(double t) const {
+  double start, length;
+  int64_t k;
+  legAt(t, &start, &length, &k);
+  const double u = t - start, ta = std::min(c_.speed_m_s / c_.accel_m_s2, length / 2);
+  return (u > 0 && u < ta) ? c_.accel_m_s2 : (u > length - ta && u < length) ? -c_.accel_m_s2 : 0.0;
+}
+
 double SimMobile::distanceAt(double t) const {
-  const double T = c_.duration_s, a = c_.accel_m_s2;
-  const double ta = std::min(c_.speed_m_s / a, T / 2), vp = a * ta;
-  const double total = a * ta * ta + vp * (T - 2 * ta);
-  t = std::clamp(t, 0.0, T);
-  if (t < ta) return 0.5 * a * t * t;
-  if (t <= T - ta) return 0.5 * a * ta * ta + vp * (t - ta);
-  return total - 0.5 * a * (T - t) * (T - t);
+  double start, length;
+  int64_t k;
+  legAt(t, &start, &length, &k);
+  const double before =
+      k > 0 ? static_cast<double>(k) * legDistance(c_.stop_interval_s, c_.stop_interval_s) : 0.0;
+  return before + legDistance(t - start, length);
 }
 
 Pose2 SimMobile::roomPoseAt(double t) const { return path_.poseAt(s0_ + distanceAt(t)); }
@@ -399,15 +491,14 @@ std::vector<ImuSample> SimMobile::imu() {
   std::mt19937_64 rng(seed_ * 8 + 2);
   std::normal_distribution<double> n(0.0, 1.0);
   std::vector<ImuSample> out;
-  const double T = c_.duration_s, a = c_.accel_m_s2;
-  const double ta = std::min(c_.speed_m_s / a, T / 2);
+  const double T = c_.duration_s;
   for (int64_t k = 0;; ++k) {
     const double t = static_cast<double>(k) / c_.imu_rate_hz;
     if (t > T + 1e-9) break;
     ImuSample m{};
     m.utime = utimeAt(t);
     const double v = speedAt(t), w = turnRateAt(t);
-    const double dv = (t > 0 && t < ta) ? a : (t > T - ta && t < T) ? -a : 0.0;
+    const double dv = accelerationAt(t);
     m.gyro[0] = c_.gyro_sigma_rad_s * n(rng);
     m.gyro[1] = c_.gyro_sigma_rad_s * n(rng);
     m.gyro[2] = w + c_.gyro_bias_z_rad_s + c_.gyro_sigma_rad_s * n(rng);

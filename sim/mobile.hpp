@@ -15,7 +15,9 @@
 //    position (l1 = x_m, y_m, h = z_m), nominal and position from the rig's mounting.*.
 //
 // Motion: speed ramps up at sim.accel_m_s2 to sim.speed_m_s, holds, and ramps down to stop
-// at sim.duration_s; the pose follows the path by arc length (exact, no integration).
+// at sim.duration_s; with sim.stop_interval_s > 0 the car also stops after each such leg of
+// driving for sim.stop_duration_s (a rest in which the gyro reads its bias alone). The pose
+// follows the path by arc length (exact, no integration).
 //
 // Randomness: independent std::mt19937_64 streams per device derived from the seed, so a
 // device's draws do not depend on the others' settings. Same seed -> same output.
@@ -26,6 +28,7 @@
 #include <cstdint>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/config.hpp"
@@ -38,16 +41,24 @@
 namespace sweepmap {
 
 struct SimMobileConfig {
-  std::string path = "circle";      // "circle", "loop" or "file"
+  std::string path = "circle";      // "circle", "loop", "figure8" or "file"
   std::string path_file;            // path: file — YAML of segments (MobilePath::fromFile)
   double circle_radius_m = 0.83;    // Miao 2022 calibration drive
   double circle_center_x_m = -3.0;  // room frame
   double circle_center_y_m = 0.0;
   double loop_wall_clearance_m = 0.5;  // loop: rounded rectangle this far from the walls
   double loop_corner_radius_m = 0.5;
+  // figure8: two lobes of this radius, their centres this far apart along the room's X,
+  // joined by straights that cross at the centre (left and right turns, and straights).
+  double figure8_radius_m = 0.8;
+  double figure8_lobe_spacing_m = 2.4;
+  double figure8_center_x_m = -2.5;  // room frame
+  double figure8_center_y_m = 0.0;
   double speed_m_s = 0.2;
   double accel_m_s2 = 0.5;
   double duration_s = 60.0;
+  double stop_interval_s = 0.0;  // > 0: drive legs this long (ramps included), then stop
+  double stop_duration_s = 3.0;  // each stop's rest
   // Wheels and encoders (radius, ticks per turn, wheel distance: the rig's odometry.*).
   double wheel_ticks_rate_hz = 50.0;
   double encoder_speed_sigma_fraction = 0.01;  // white, per reading
@@ -102,6 +113,13 @@ class MobilePath {
   static MobilePath circle(double cx, double cy, double radius);
   static MobilePath roundedRectangle(double x_min, double x_max, double y_min, double y_max,
                                      double corner_radius);
+  // Two lobes of `radius` with centres `spacing` apart along X about (cx, cy), joined by
+  // two straights crossing at (cx, cy): a right turn round the +X lobe, a left turn round
+  // the -X lobe. Starts at the centre. Requires spacing > 2 radius.
+  static MobilePath figureEight(double cx, double cy, double radius, double spacing);
+  // Segments chained from a start pose: each (length, curvature) begins where the last ends.
+  static MobilePath chained(double x, double y, double theta,
+                            const std::vector<std::pair<double, double>>& length_curvature);
   // A path from a YAML file, in the room frame:
   //   start: {x_m: -4.0, y_m: -2.0, heading_deg: 0}
   //   segments:
@@ -158,9 +176,10 @@ class SimMobile {
 
   // Truth at time t [s since start].
   double speedAt(double t) const;
-  double distanceAt(double t) const;  // arc length driven
-  Pose2 roomPoseAt(double t) const;   // body in the room
-  Pose2 worldPoseAt(double t) const;  // body in W
+  double accelerationAt(double t) const;  // along the path
+  double distanceAt(double t) const;      // arc length driven
+  Pose2 roomPoseAt(double t) const;       // body in the room
+  Pose2 worldPoseAt(double t) const;      // body in W
   double turnRateAt(double t) const;
   // Distance the wheel's rim has turned through (ground distance plus slip).
   double wheelTurnedAt(double t, bool right) const;
@@ -193,6 +212,10 @@ class SimMobile {
   }
 
  private:
+  void legAt(double t, double* start, double* length, int64_t* index) const;
+  double legSpeed(double u, double duration) const;
+  double legDistance(double u, double duration) const;
+
   SimMobileConfig c_;
   WheelGeometry wheels_;
   const Scene* scene_;

@@ -165,8 +165,10 @@ TEST(CalibRig, PlanPrintsTheRecordingAndItsSimCommand) {
             std::string::npos)
       << readAll(dir / "c.txt");
   ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_b"}, dir / "b.txt", dir / "err.txt"), 0);
-  EXPECT_NE(readAll(dir / "b.txt").find("sweepmap sim --rig rig_b --set sim.path=circle"),
-            std::string::npos)
+  EXPECT_NE(
+      readAll(dir / "b.txt")
+          .find("sweepmap sim --rig rig_b --set sim.path=figure8 --set sim.stop_interval_s=20"),
+      std::string::npos)
       << readAll(dir / "b.txt");
 }
 

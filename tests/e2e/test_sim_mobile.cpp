@@ -119,7 +119,7 @@ TEST(SimMobile, DrivesAPathFromAFile) {
 TEST(SimMobile, BadConfigurationIsAConfigError) {
   const auto dir = scratchDir("sim_mobile_bad");
   EXPECT_EQ(
-      sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.path=figure8"}), dir / "o.txt"), 2);
+      sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.path=figure9"}), dir / "o.txt"), 2);
   EXPECT_NE(readFile(dir / "o.txt").find("sim.path"), std::string::npos) << readFile(dir / "o.txt");
   EXPECT_EQ(
       sweepmap(simArgs((dir / "x.lcmlog").string(), "1", {"sim.no_such_key=1"}), dir / "p.txt"), 2);

@@ -1,7 +1,10 @@
-// Rig B's joint calibration (tools/offline/mobile_rig_calibration.hpp) on a simulated drive
-// with every build error of the simulator at its default (wheel radii, track, lever arm,
-// clock offset, gyro bias, mounting): what it determines within 3 sigma of the truth, what it
-// cannot reported and left nominal.
+// Rig B's joint calibration (tools/offline/mobile_rig_calibration.hpp) on calib plan's drive
+// (a figure-eight with stops) with every build error of the simulator at its default (wheel
+// radii, track, lever arm, clock offset, gyro bias, mounting): every parameter determined,
+// within what this estimator reaches today. Not yet the issue's targets (mounting within
+// 0.3 mrad per axis, radii within 0.1 %, the room within 3 mm, the truth within 3 sigma):
+// on five seeds alpha is 0.4-1 mrad off at 2-6 sigma and the radii's common scale about
+// -0.1 % (the lidar's distance driven; see the report of issue 23).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -20,11 +23,12 @@ namespace {
 const std::string kRig = std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml";
 const std::string kScene = std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml";
 
-std::string simulate(double duration_s, uint64_t seed) {
+std::string simulate(double duration_s, uint64_t seed, const std::vector<std::string>& drive) {
   const std::string dir = std::string(SWEEPMAP_BINARY_DIR) + "/test_scratch/mobile_rig_calib";
   std::filesystem::create_directories(dir);
   const std::string path = dir + "/seed" + std::to_string(seed) + ".lcmlog";
-  const std::vector<std::string> sets = {"sim.duration_s=" + std::to_string(duration_s)};
+  std::vector<std::string> sets = drive;
+  sets.push_back("sim.duration_s=" + std::to_string(duration_s));
   const SimSetup setup = loadSimSetup(kRig, kScene, sets);
   SimMobileOptions so;
   so.rig = requireKind<MobileLidarConfig>(setup.rig, "test");
@@ -43,9 +47,9 @@ const CalibParameter& find(const RigCalibration& r, const std::string& key) {
   throw std::runtime_error("no parameter " + key);
 }
 
-TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheCalibrationCircle) {
+TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheFigureEight) {
   MobileRigCalibRequest request;
-  request.logs = {simulate(60.0, 1)};
+  request.logs = {simulate(120.0, 1, {"sim.path=figure8", "sim.stop_interval_s=20"})};
   request.rig = kRig;
   request.progress = false;
   const RigCalibration r = runMobileRigCalibration(request);
@@ -55,28 +59,39 @@ TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheCalibrationCircle) {
     if (p.truth) std::cerr << " error " << p.value - *p.truth;
     std::cerr << "\n";
   }
+  for (const auto& m : r.measures) std::cerr << m.key << " " << m.value << "\n";
   for (const auto& w : r.warnings) std::cerr << "warning: " << w << "\n";
   ASSERT_FALSE(r.parameters.empty());
   EXPECT_LT(r.rms_after, r.rms_before);
-  // On the circle alone, gamma and beta are determined within 3 sigma of the truth. (alpha
-  // is not: it shares the antipodal shift with the wheels' scale and the lever arm, which a
-  // circle cannot tell apart; see the report of issue 23.)
+  EXPECT_EQ(r.correlation.rows(), int(r.parameters.size()));
+  // The circle left alpha 3.5 mrad off and the wheels undetermined; the figure-eight
+  // determines every parameter.
+  for (const auto& p : r.parameters) {
+    EXPECT_TRUE(p.observable) << p.key;
+    EXPECT_GT(p.sigma, 0.0) << p.key;
+    ASSERT_TRUE(p.truth.has_value()) << p.key;
+  }
   for (const char* key : {"mounting.gamma_rad", "mounting.beta_rad"}) {
     const CalibParameter& p = find(r, key);
-    ASSERT_TRUE(p.truth.has_value());
-    EXPECT_TRUE(p.observable) << key;
-    EXPECT_GT(p.sigma, 0.0) << key;
-    EXPECT_NEAR(p.value, *p.truth, 3 * p.sigma) << key;
+    EXPECT_NEAR(p.value, *p.truth, std::min(3 * p.sigma, 5e-4)) << key;
   }
-  // What the drive cannot determine is reported and left at the rig file's value.
-  const CalibParameter& z = find(r, "mounting.z_m");
-  EXPECT_FALSE(z.observable);
-  EXPECT_EQ(z.value, 0.30);
-  EXPECT_EQ(z.sigma, 0.0);
-  bool warned = false;
-  for (const auto& w : r.warnings) warned = warned || w.find("mounting.z_m") != std::string::npos;
-  EXPECT_TRUE(warned);
-  EXPECT_EQ(r.correlation.rows(), int(r.parameters.size()));
+  EXPECT_NEAR(find(r, "mounting.alpha_rad").value, *find(r, "mounting.alpha_rad").truth, 1e-3);
+  for (const char* key :
+       {"odometry.wheel_radius_m", "odometry.wheel_radius_right_m", "odometry.wheel_distance_m"}) {
+    const CalibParameter& p = find(r, key);
+    EXPECT_NEAR(p.value / *p.truth, 1.0, 2e-3) << key;  // the errors were 0.8-2 %
+  }
+  const CalibParameter& bias = find(r, "odometry.gyro_bias_rad_s");
+  EXPECT_NEAR(bias.value, *bias.truth, 3 * bias.sigma);
+  for (const char* key : {"mounting.x_m", "mounting.y_m", "mounting.z_m"}) {
+    const CalibParameter& p = find(r, key);
+    EXPECT_NEAR(p.value, *p.truth, 1e-3) << key;  // the lever arm was 2-4 mm off
+  }
+  ASSERT_FALSE(r.measures.empty());
+  for (const auto& m : r.measures) {
+    ASSERT_TRUE(m.truth.has_value()) << m.key;
+    EXPECT_NEAR(m.value, *m.truth, 0.015) << m.key;
+  }
 }
 
 }  // namespace

@@ -61,6 +61,62 @@ TEST(MobilePath, CircleAndRoundedRectangleAreClosedAndContinuous) {
   EXPECT_NEAR(r.poseAt(r.length()).theta_rad, 2 * M_PI, 1e-9);  // one lap: one turn
 }
 
+// calib rig's drive: straights crossing at the centre, a right-hand lobe and a left-hand one,
+// closed with no net turn, continuous, the lobes at their radius about their centres.
+TEST(MobilePath, FigureEightTurnsBothWaysAndCloses) {
+  const double r = 0.8, spacing = 2.4, d = 1.2, phi = std::asin(r / d);
+  const MobilePath f = MobilePath::figureEight(-2.5, 0.0, r, spacing);
+  EXPECT_NEAR(f.length(), 4 * std::sqrt(d * d - r * r) + 2 * r * (M_PI + 2 * phi), 1e-9);
+  EXPECT_TRUE(f.closed());
+  EXPECT_NEAR(f.poseAt(f.length() * (1 - 1e-12)).theta_rad, phi, 1e-9);  // no net turn
+  double most_right = 0, most_left = 0;
+  Pose2 prev = f.poseAt(0.0);
+  for (double s = 0.01; s <= f.length() + 1e-9; s += 0.01) {
+    const Pose2 p = f.poseAt(s);
+    EXPECT_NEAR(std::hypot(p.x_m - prev.x_m, p.y_m - prev.y_m), 0.01, 1e-4) << s;
+    most_right = std::min(most_right, f.curvatureAt(s));
+    most_left = std::max(most_left, f.curvatureAt(s));
+    // On a lobe: at its radius from its centre.
+    if (f.curvatureAt(s) != 0.0) {
+      const double cx = f.curvatureAt(s) < 0 ? -2.5 + d : -2.5 - d;
+      EXPECT_NEAR(std::hypot(p.x_m - cx, p.y_m), r, 1e-9) << s;
+    }
+    prev = p;
+  }
+  EXPECT_NEAR(most_right, -1 / r, 1e-12);
+  EXPECT_NEAR(most_left, 1 / r, 1e-12);
+  EXPECT_NEAR(f.poseAt(0).x_m, -2.5, 1e-12);
+}
+
+// Stops: the car rests for stop_duration_s after each leg, the distance holds still, and
+// the accelerometer's along-track reading follows the ramps of every leg.
+TEST(SimMobile, StopsAfterEachLegOfDriving) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig c = quiet();
+  c.path = "figure8";
+  c.duration_s = 25.0;
+  c.stop_interval_s = 10.0;
+  c.stop_duration_s = 2.0;
+  SimMobile car(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart);
+  const double leg = 0.2 * (10.0 - 0.4);  // ramps of 0.4 s at 0.5 m/s^2
+  EXPECT_NEAR(car.distanceAt(10.0), leg, 1e-9);
+  EXPECT_NEAR(car.distanceAt(11.5), leg, 1e-9);
+  EXPECT_EQ(car.speedAt(11.0), 0.0);
+  EXPECT_EQ(car.turnRateAt(11.0), 0.0);
+  EXPECT_NEAR(car.speedAt(12.2), 0.1, 1e-9);  // ramping up again
+  EXPECT_NEAR(car.accelerationAt(12.2), 0.5, 1e-12);
+  EXPECT_NEAR(car.accelerationAt(21.9), -0.5, 1e-12);
+  EXPECT_NEAR(car.distanceAt(22.0), 2 * leg, 1e-9);
+  // The last leg is cut by the end of the run, and ramps down to stop at it.
+  EXPECT_NEAR(car.distanceAt(25.0), 2 * leg + 0.2 * (1.0 - 0.4), 1e-9);
+  EXPECT_EQ(car.speedAt(25.0), 0.0);
+  const auto ticks = car.wheelTicks();
+  // At rest, the encoders do not count.
+  const auto at = [&](double t) { return ticks[size_t(std::lround(t * 50))]; };
+  EXPECT_EQ(at(10.5).left, at(11.5).left);
+  EXPECT_EQ(at(10.5).right, at(11.5).right);
+}
+
 TEST(SimMobile, StraightDriveTicksAreDistanceOverCircumference) {
   const Scene scene(labScene(), plate());
   SimMobileConfig c = quiet();
@@ -259,7 +315,13 @@ TEST(SimMobile, RangeNoiseIsOnePercentAndSeedDeterministic) {
 TEST(SimMobile, RejectsBadConfiguration) {
   const Scene scene(labScene(), plate());
   SimMobileConfig c;
+  c.path = "figure9";
+  EXPECT_THROW(SimMobile(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart), ConfigError);
   c.path = "figure8";
+  c.figure8_lobe_spacing_m = 1.5;  // lobes of 0.8 m overlap
+  EXPECT_THROW(SimMobile(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart), ConfigError);
+  c.figure8_lobe_spacing_m = 2.4;
+  c.figure8_center_x_m = -3.5;  // the -X lobe through the wall
   EXPECT_THROW(SimMobile(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart), ConfigError);
   c = SimMobileConfig{};
   c.circle_center_x_m = 4.5;  // circle through the wall

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 #include <thread>
+#include <vector>
 
 #include "core/event_log.hpp"
 #include "processes/channels.hpp"
@@ -271,16 +272,18 @@ void benchMounting(const RigBBenchOptions& o, std::ostream& out) {
   out << std::setprecision(2);
 }
 
-// Rig B's joint calibration on simulated drives with every build error at its default, one
-// per seed: its time, and each parameter's error against the truth in sigmas.
+// Rig B's joint calibration on calib plan's drive (a figure-eight with stops) with every
+// build error at its default, one per seed: its time, and each parameter's error against the
+// truth in sigmas, and the room's size against the scene's.
 void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
   out << "calib rig (rig B, joint), " << std::setprecision(0) << o.rig_calib_s
-      << " s circle, every build error at its default:\n";
+      << " s figure-eight with stops, every build error at its default:\n";
+  const std::vector<std::string> drive = {"sim.path=figure8", "sim.stop_interval_s=20",
+                                          "sim.duration_s=" + std::to_string(o.rig_calib_s)};
   for (int seed = 1; seed <= o.rig_calib_seeds; ++seed) {
     const std::string log_path = o.work + "/rig_b_joint_seed" + std::to_string(seed) + ".lcmlog";
     SimMobileOptions so;
-    const SimSetup setup =
-        loadSimSetup(o.rig, o.scene, {"sim.duration_s=" + std::to_string(o.rig_calib_s)});
+    const SimSetup setup = loadSimSetup(o.rig, o.scene, drive);
     so.rig = requireKind<MobileLidarConfig>(setup.rig, "the rig-B bench");
     so.scene = setup.scene;
     so.seed = uint64_t(seed);
@@ -290,7 +293,7 @@ void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
     MobileRigCalibRequest request;
     request.logs = {log_path};
     request.rig = o.rig;
-    request.sets = {"sim.duration_s=" + std::to_string(o.rig_calib_s)};
+    request.sets = drive;
     request.progress = false;
     const double cpu0 = cpuSeconds(RUSAGE_SELF);
     const auto t0 = Clock::now();
@@ -307,6 +310,12 @@ void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
         if (p.sigma > 0)
           out << " = " << std::setprecision(2) << (p.value - *p.truth) / p.sigma << " sigma";
       }
+      out << "\n";
+    }
+    for (const CalibMeasure& m : r.measures) {
+      out << "    " << std::left << std::setw(32) << m.key << std::right << std::setprecision(4)
+          << std::setw(12) << m.value << " " << m.unit;
+      if (m.truth) out << "  error " << std::setprecision(1) << (m.value - *m.truth) * 1e3 << " mm";
       out << "\n";
     }
     for (const std::string& w : r.warnings) out << "    warning: " << w << "\n";

@@ -20,7 +20,7 @@ struct RigBBenchOptions {
   double circle_s = 60.0;        // simulated circle for the replay
   double loop_s = 130.0;         // simulated lab loop for the replay (one lap ~ 125 s)
   double mounting_s = 120.0;     // the docs' calibration circle for `calib mounting`
-  double rig_calib_s = 120.0;    // the drive of rig B's joint calibration, per seed
+  double rig_calib_s = 120.0;    // calib plan's figure-eight for rig B's joint calibration
   int rig_calib_seeds = 5;
 };
 

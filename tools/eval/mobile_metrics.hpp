@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "calib/room_planes.hpp"
 #include "calib/walls.hpp"
 #include "calib/world_assembly.hpp"
 #include "tools/eval/metrics.hpp"
@@ -23,20 +24,12 @@ struct TrajectoryErrors {
 };
 TrajectoryErrors trajectoryErrors(const PoseTrack& estimate, const PoseTrack& truth);
 
-// The centroid of the points `idx` of `cloud` (zero without any).
-Eigen::Vector3d inlierCentroid(const std::vector<Eigen::Vector3f>& cloud,
-                               const std::vector<int>& idx);
-
-// The room's planes found by RANSAC in a world-frame cloud.
-struct RoomPlanes {
-  std::vector<WallPlaneFit> walls;  // extractWalls' order: normals ~ +Y, +X, -Y, -X
-  std::optional<WallPlaneFit> floor, ceiling;
-  std::string reason;  // what is missing
-};
-
-struct RoomDims {
-  std::optional<double> L1, L2, L3;  // length, width (the longer and shorter wall spacing), height
-};
+// The room's planes and dimensions (calib/room_planes.hpp).
+using sweepmap::inlierCentroid;
+using sweepmap::planeDistance;
+using sweepmap::RoomDims;
+using sweepmap::RoomPlanes;
+using sweepmap::signedDistance;
 
 // What the room's planes say of one world-frame cloud: the planes, L1-L3, the deviations
 // of the ceiling and wall points (Fig. 9) and the ceiling's upward normal.

@@ -7,8 +7,10 @@
 #include "processes/channels.hpp"
 #include "processes/convert.hpp"
 #include "processes/odometry_node.hpp"
+#include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "sweepmap/wheel_ticks_t.hpp"
 #include "tools/offline/log_player.hpp"
 
 namespace sweepmap {
@@ -65,6 +67,22 @@ MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig) {
   log.ekf_gyro_bias_sigma_rad_s =
       std::sqrt(std::max(0.0, odometry.ekf().covariance()(OdometryEkf::kBias, OdometryEkf::kBias)));
   return log;
+}
+
+OdometryReadings loadOdometryReadings(const std::string& path) {
+  OdometryReadings out;
+  LogPlayer player(path);
+  player.handle(channels::kWheelTicks, [&](const Message& m) {
+    wheel_ticks_t t;
+    if (decodeMessage(m, &t)) out.wheels.push_back({t.utime, t.left_ticks, t.right_ticks});
+  });
+  player.handle(channels::kImu, [&](const Message& m) {
+    imu_t t;
+    if (decodeMessage(m, &t) && std::isfinite(t.gyro_rad_s[2]))
+      out.gyro.push_back({t.utime, t.gyro_rad_s[2]});
+  });
+  player.play();
+  return out;
 }
 
 std::vector<Eigen::Vector3f> assembleWorld(const MobileLog& log, const PoseTrack& track,

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "calib/mounting_calibration.hpp"
+#include "calib/wheel_gyro_calibration.hpp"
 #include "calib/world_assembly.hpp"
 #include "core/scan.hpp"
 #include "rigs/mobile_lidar.hpp"
@@ -35,6 +36,14 @@ struct MobileLog {
 // Reads `path` through the odometry node of `rig`. Throws LogError if the file cannot be
 // opened; a corrupt tail sets log_error/error and keeps what came before.
 MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig);
+
+// The raw encoder readings (WHEEL_TICKS) and gyro z rates (IMU) of a log, in log order, for
+// the wheels-against-gyro calibration. Throws LogError if the file cannot be opened.
+struct OdometryReadings {
+  std::vector<WheelReading> wheels;
+  std::vector<GyroReading> gyro;
+};
+OdometryReadings loadOdometryReadings(const std::string& path);
 
 // World points of every scan with `track` and the mounting; `scan_of_point`, when given,
 // receives the index (into log.scans) of each point's scan.

@@ -4,6 +4,8 @@
 #include "calib/mobile_rig_calibration.hpp"
 #include "core/progress.hpp"
 #include "rigs/rig_file.hpp"
+#include "rigs/rig_kind.hpp"
+#include "sim/scene.hpp"
 #include "tools/offline/mobile_log.hpp"
 
 namespace sweepmap {
@@ -31,6 +33,14 @@ std::map<std::string, double> truthOf(const MobileLog& log) {
   return t;
 }
 
+// A simulated drive's room: the scene `sweepmap sim` uses for the kind by default (the log
+// does not name its scene), as (length, width, height).
+Eigen::Vector3d simulatedRoom() {
+  const SceneConfig sc = loadScene(resolveSceneFile(defaultSceneName(RigKind::kMobileLidar)));
+  return {std::max(sc.room_length_m, sc.room_width_m), std::min(sc.room_length_m, sc.room_width_m),
+          sc.room_height_m};
+}
+
 }  // namespace
 
 RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
@@ -49,6 +59,11 @@ RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
                                  : rig.odometry.wheel_radius_m;
   in.wheels.wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
   in.truth = truthOf(log);
+  if (log.truth_rig) in.room_truth_m = simulatedRoom();
+  const OdometryReadings readings = loadOdometryReadings(request.logs.at(0));
+  in.wheel_readings = readings.wheels;
+  in.gyro_readings = readings.gyro;
+  in.wheel_gyro.ticks_per_revolution = rig.odometry.ticks_per_revolution;
   in.odometry = [&](const MobileWheelParameters& w) {
     MobileLidarConfig r = rig;
     r.odometry.wheel_radius_m = w.radius_left_m;

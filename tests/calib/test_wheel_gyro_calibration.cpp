@@ -1,0 +1,88 @@
+// Rig B's wheels against its gyro (calib/wheel_gyro_calibration.hpp) on the simulated car's
+// own encoder and gyro readings, with a real build's wheel errors, slip and a gyro bias: the
+// figure-eight with stops determines each radius over the track and the bias within 3 sigma,
+// the radii's ratio within 0.1 %; a circle at constant speed cannot separate them.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "calib/wheel_gyro_calibration.hpp"
+#include "sim/mobile.hpp"
+
+namespace sweepmap {
+namespace {
+
+constexpr int64_t kStart = 1'000'000;
+
+struct Drive {
+  std::vector<WheelReading> wheels;
+  std::vector<GyroReading> gyro;
+  double k_left, k_right, bias;  // truth
+};
+
+Drive simulate(const std::string& path, double stop_interval_s, uint64_t seed) {
+  const Scene scene(loadScene(std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml"),
+                    PlateConfig{});
+  SimMobileConfig c;  // every build error and slip at its default
+  c.path = path;
+  c.duration_s = 120.0;
+  c.stop_interval_s = stop_interval_s;
+  const WheelGeometry w;
+  SimMobile car(c, w, Eigen::Vector3d::Zero(), Eigen::Vector3d(0.1, 0, 0.3), scene, seed, kStart);
+  Drive d;
+  for (const WheelTicks& t : car.wheelTicks()) d.wheels.push_back({t.utime, t.left, t.right});
+  for (const ImuSample& m : car.imu()) d.gyro.push_back({m.utime, m.gyro[2]});
+  d.k_left = w.radiusOf(false, c) / car.trueWheelDistance();
+  d.k_right = w.radiusOf(true, c) / car.trueWheelDistance();
+  d.bias = c.gyro_bias_z_rad_s;
+  return d;
+}
+
+TEST(WheelGyroCalibration, FigureEightWithStopsDeterminesBothWheelsAndTheBias) {
+  for (uint64_t seed : {1, 2, 3}) {
+    const Drive d = simulate("figure8", 20.0, seed);
+    const WheelGyroResult r = calibrateWheelsAgainstGyro(d.wheels, d.gyro, WheelGyroOptions{});
+    ASSERT_TRUE(r.ok) << r.reason;
+    const double truth[3] = {d.k_left, d.k_right, d.bias};
+    for (int k = 0; k < 3; ++k) {
+      const double sigma = std::sqrt(r.covariance(k, k));
+      EXPECT_NEAR(r.x(k), truth[k], 3 * sigma) << "seed " << seed << " entry " << k;
+    }
+    // The radii's ratio (what the straights fix, the wheels' part of the radii's 0.1 %).
+    const Eigen::Vector2d g(-r.x(1) / (r.x(0) * r.x(0)), 1.0 / r.x(0));
+    const double ratio = r.x(1) / r.x(0),
+                 ratio_sigma = std::sqrt(g.dot(r.covariance.topLeftCorner<2, 2>() * g));
+    EXPECT_NEAR(ratio, d.k_right / d.k_left, 3 * ratio_sigma) << "seed " << seed;
+    EXPECT_LT(std::abs(ratio / (d.k_right / d.k_left) - 1), 1e-3) << "seed " << seed;
+    EXPECT_LT(ratio_sigma / ratio, 4e-4) << "seed " << seed;
+    // The stops: the bias to a few percent of itself.
+    EXPECT_LT(std::sqrt(r.covariance(2, 2)), 0.1 * d.bias) << "seed " << seed;
+    EXPECT_GT(r.rest_rows, 20);
+    EXPECT_GT(r.trimmed, 0);  // the slips
+  }
+}
+
+// A circle at constant speed turns one way at one rate: both wheels always in the same
+// ratio, so k_L, k_R and the bias trade off (only the ramps at the ends differ).
+TEST(WheelGyroCalibration, CircleDoesNotSeparateTheWheels) {
+  const Drive d = simulate("circle", 0.0, 1);
+  const WheelGyroResult r = calibrateWheelsAgainstGyro(d.wheels, d.gyro, WheelGyroOptions{});
+  const bool determined = r.ok && std::sqrt(r.covariance(0, 0)) < 1e-3 * d.k_left &&
+                          std::sqrt(r.covariance(1, 1)) < 1e-3 * d.k_right;
+  EXPECT_FALSE(determined) << r.x.transpose() << " sigma "
+                           << r.covariance.diagonal().cwiseSqrt().transpose();
+}
+
+// Bad input never crashes: no readings, one reading, a gyro that stops early.
+TEST(WheelGyroCalibration, TooLittleDataIsAReasonNotACrash) {
+  EXPECT_FALSE(calibrateWheelsAgainstGyro({}, {}, WheelGyroOptions{}).ok);
+  EXPECT_FALSE(calibrateWheelsAgainstGyro({{0, 0, 0}}, {{0, 0.0}}, WheelGyroOptions{}).ok);
+  const WheelGyroResult r =
+      calibrateWheelsAgainstGyro({{0, 0, 0}, {100000, 10, 10}, {200000, 20, 20}},
+                                 {{0, 0.0}, {50000, 0.0}}, WheelGyroOptions{});
+  EXPECT_FALSE(r.ok);
+  EXPECT_FALSE(r.reason.empty());
+}
+
+}  // namespace
+}  // namespace sweepmap
