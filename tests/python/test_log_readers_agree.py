@@ -8,7 +8,8 @@ core/event_log.hpp (through tests/core/log_events) and python/sweepmap_log.py ar
 and events and skipped ranges together cover every byte of the file, so nothing is lost
 unreported. A few cases also check what a damage must cost (only its own event).
 
-Usage: test_log_readers_agree.py LOG_EVENTS_EXE PYTHON_SOURCE_DIR WORK_DIR
+Usage: test_log_readers_agree.py LOG_EVENTS_EXE PYTHON_SOURCE_DIR WORK_DIR [EMULATOR...]
+(EMULATOR: what runs LOG_EVENTS_EXE when it was cross-built, e.g. qemu-aarch64-static.)
 """
 
 import os
@@ -87,10 +88,10 @@ def corpus(rng: random.Random):
     return logs, evs
 
 
-def read_cpp(exe: str, path: str):
-    p = subprocess.run([exe, path], capture_output=True, text=True)
+def read_cpp(exe: list, path: str):
+    p = subprocess.run([*exe, path], capture_output=True, text=True)
     if p.returncode != 0:
-        raise RuntimeError(f"{exe} {path}: exit {p.returncode}: {p.stderr}")
+        raise RuntimeError(f"{' '.join(exe)} {path}: exit {p.returncode}: {p.stderr}")
     events, skipped = [], []
     for line in p.stdout.splitlines():
         kind, *f = line.split(" ")
@@ -128,7 +129,7 @@ def uncovered(size: int, events, skipped):
     return gaps
 
 
-def main(exe: str, python_dir: str, work: str) -> int:
+def main(exe: str, python_dir: str, work: str, *emulator: str) -> int:
     sys.path.insert(0, python_dir)
     import sweepmap_log  # noqa: E402
     os.makedirs(work, exist_ok=True)
@@ -139,7 +140,7 @@ def main(exe: str, python_dir: str, work: str) -> int:
         path = os.path.join(work, name + ".lcmlog")
         with open(path, "wb") as f:
             f.write(data)
-        cpp = read_cpp(exe, path)
+        cpp = read_cpp([*emulator, exe], path)
         py = read_python(sweepmap_log, path)
         results[name] = cpp
         if cpp[0] != py[0]:
@@ -180,4 +181,4 @@ def main(exe: str, python_dir: str, work: str) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(*sys.argv[1:4]))
+    sys.exit(main(*sys.argv[1:]))
