@@ -77,19 +77,31 @@ TEST(WorldAssembly, DeskewsWithEachRaysPose) {
   EXPECT_NEAR(scanToWorld(s, frozen, m.T_BL()).back().x(), 5.0 - 0.06, 1e-4);
 }
 
+// A robot standing still at the origin for 5 ms, and a scan of n_rays returns at 1 m, 1 ms
+// apart from t = 0: rays 0-5 have a pose, the later ones fall after the track's end.
+struct StillTrackAndScan {
+  PoseTrack track;
+  Scan2D scan;
+};
+
+StillTrackAndScan stillTrackAndScan(size_t n_rays) {
+  StillTrackAndScan r;
+  r.track.add(0, {0, 0, 0});
+  r.track.add(5000, {0, 0, 0});
+  r.scan.time_increment_ns = 1000000;
+  r.scan.range_min_m = 0.02;
+  r.scan.range_max_m = 10;
+  r.scan.angle_increment_rad = 0.01;
+  r.scan.ranges_m.assign(n_rays, 1.0f);
+  return r;
+}
+
 // The intensity of each returned point is its own ray's; a scan without intensities gives
 // none.
 TEST(WorldAssembly, PointsKeepTheirRaysIntensity) {
-  PoseTrack track;
-  track.add(0, {0, 0, 0});
-  track.add(5000, {0, 0, 0});
-  Scan2D s;
-  s.time_increment_ns = 1000000;
-  s.range_min_m = 0.02;
-  s.range_max_m = 10;
-  s.angle_increment_rad = 0.01;
-  s.ranges_m = {1.0f, 0.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f, 1.0f};  // ray 1: no return
-  s.intensities = {100, 101, 102, 103, 104, 105, 106, 107};       // rays 6, 7: no pose
+  auto [track, s] = stillTrackAndScan(8);
+  s.ranges_m[1] = 0.0f;                                      // ray 1: no return
+  s.intensities = {100, 101, 102, 103, 104, 105, 106, 107};  // rays 6, 7: no pose
   std::vector<float> intensities = {-1};
   const auto pts = scanToWorld(s, track, Eigen::Isometry3d::Identity(), nullptr, &intensities);
   ASSERT_EQ(pts.size(), 5u);
@@ -100,15 +112,7 @@ TEST(WorldAssembly, PointsKeepTheirRaysIntensity) {
 }
 
 TEST(WorldAssembly, RaysOutsideTheTrackAreSkippedAndCounted) {
-  PoseTrack track;
-  track.add(0, {0, 0, 0});
-  track.add(5000, {0, 0, 0});
-  Scan2D s;
-  s.time_increment_ns = 1000000;
-  s.range_min_m = 0.02;
-  s.range_max_m = 10;
-  s.angle_increment_rad = 0.01;
-  s.ranges_m.assign(10, 1.0f);
+  const auto [track, s] = stillTrackAndScan(10);
   int uncovered = 0;
   EXPECT_EQ(scanToWorld(s, track, Eigen::Isometry3d::Identity(), &uncovered).size(), 6u);
   EXPECT_EQ(uncovered, 4);

@@ -134,4 +134,32 @@ async function until(page, fn, timeout_s, what, arg) {
   }
 }
 
-module.exports = { launch, openPage, nonBlankFraction, until };
+// The WebGL renderer the page's browser draws with (e.g. SwiftShader, llvmpipe), or 'unknown'.
+async function webglRenderer(page) {
+  return page.evaluate(() => {
+    const gl = document.createElement('canvas').getContext('webgl');
+    const ext = gl && gl.getExtension('WEBGL_debug_renderer_info');
+    return ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : 'unknown';
+  });
+}
+
+// The frame of every page script: opens `url` in the browser SWEEPMAP_BROWSER names and runs
+// `body(page, out)`; whatever happens, closes the browser, prints `out` as one JSON object on
+// stdout and sets the exit code to 1 if it failed. `out` starts as { errors, ...init }, `errors`
+// collecting the page's console errors and uncaught exceptions; a failure (the page not loading,
+// a wait running out) is out.failure, its message.
+async function runPageScript(url, body, init = {}) {
+  const out = { errors: [], ...init };
+  const { browser, close } = await launch();
+  try {
+    await body(await openPage(browser, url, out.errors), out);
+  } catch (e) {
+    out.failure = e.message;
+  } finally {
+    await close();
+  }
+  process.stdout.write(JSON.stringify(out) + '\n');
+  process.exitCode = out.failure ? 1 : 0;
+}
+
+module.exports = { launch, openPage, nonBlankFraction, until, webglRenderer, runPageScript };

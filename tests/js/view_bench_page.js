@@ -8,8 +8,8 @@
 // camera and counts the frames drawn in SECONDS. Prints one JSON object: points, sweeps and
 // voxels on screen, what the view received, frames per second, latency quantiles, the renderer.
 'use strict';
-const { launch, openPage } = require('./browser.js');
-const { poll, sleep, untilAllSent, waitForFile } = require('./view_page.js');
+const { runPageScript, webglRenderer } = require('./browser.js');
+const { fittedFrameRate, poll, untilAllSent, waitForFile } = require('./view_page.js');
 
 function quantiles(values) {
   const v = values.slice().sort((a, b) => a - b);
@@ -17,50 +17,28 @@ function quantiles(values) {
   return { chunks: v.length, median_ms: q(0.5), p90_ms: q(0.9), max_ms: q(1) };
 }
 
-async function main() {
-  const [url, doneFile, secondsArg] = process.argv.slice(2);
-  const errors = [];
-  const { browser, close } = await launch();
-  const out = { errors };
-  try {
-    const page = await openPage(browser, url, errors);
-    const log = doneFile === '--log';
-    if (log) {
-      await poll(page, () => !!window.sweepmapView.time, null, 30, 'the log\'s time');
-      await page.evaluate(() => {
-        window.sweepmapView.pause();
-        window.sweepmapView.seek(window.sweepmapView.time.end);
-      });
-    } else {
-      await waitForFile(doneFile, 900);
-    }
-    await untilAllSent(page, 600, 'everything sent', { logEnd: log });
-    await page.evaluate(() => window.sweepmapView.setCamera('fit'));
-    const f0 = await page.evaluate(() => window.sweepmapView.frames);
-    const t0 = Date.now();
-    await sleep(Number(secondsArg) * 1000);
-    const f1 = await page.evaluate(() => window.sweepmapView.frames);
-    out.fps = +((f1 - f0) / ((Date.now() - t0) / 1000)).toFixed(2);
-    Object.assign(out, await page.evaluate(() => {
-      const v = window.sweepmapView;
-      return { points: v.pointsDrawn(), sent: v.status.you.points, sweeps: v.sweeps(),
-        voxels: v.voxels(), mb_sent: +(v.status.you.bytes_sent / 1e6).toFixed(1),
-        received: v.status.board.view_model,
-        dropped: v.status.you.frames_dropped, latencies: v.latenciesMs };
-    }));
-    out.latency = quantiles(out.latencies);
-    delete out.latencies;
-    out.renderer = await page.evaluate(() => {
-      const gl = document.createElement('canvas').getContext('webgl');
-      const ext = gl && gl.getExtension('WEBGL_debug_renderer_info');
-      return ext ? gl.getParameter(ext.UNMASKED_RENDERER_WEBGL) : 'unknown';
+const [url, doneFile, secondsArg] = process.argv.slice(2);
+runPageScript(url, async (page, out) => {
+  const log = doneFile === '--log';
+  if (log) {
+    await poll(page, () => !!window.sweepmapView.time, null, 30, 'the log\'s time');
+    await page.evaluate(() => {
+      window.sweepmapView.pause();
+      window.sweepmapView.seek(window.sweepmapView.time.end);
     });
-  } catch (e) {
-    out.failure = e.message;
-  } finally {
-    await close();
+  } else {
+    await waitForFile(doneFile, 900);
   }
-  process.stdout.write(JSON.stringify(out) + '\n');
-  process.exitCode = out.failure ? 1 : 0;
-}
-main();
+  await untilAllSent(page, 600, 'everything sent', { logEnd: log });
+  out.fps = +(await fittedFrameRate(page, Number(secondsArg))).toFixed(2);
+  Object.assign(out, await page.evaluate(() => {
+    const v = window.sweepmapView;
+    return { points: v.pointsDrawn(), sent: v.status.you.points, sweeps: v.sweeps(),
+      voxels: v.voxels(), mb_sent: +(v.status.you.bytes_sent / 1e6).toFixed(1),
+      received: v.status.board.view_model,
+      dropped: v.status.you.frames_dropped, latencies: v.latenciesMs };
+  }));
+  out.latency = quantiles(out.latencies);
+  delete out.latencies;
+  out.renderer = await webglRenderer(page);
+});

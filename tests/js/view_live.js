@@ -8,62 +8,45 @@
 // fraction of the canvas, the server's status, and the colours of a sample of points by
 // intensity and by height. The C++ test judges it.
 'use strict';
-const { launch, openPage, nonBlankFraction, until } = require('./browser.js');
+const { nonBlankFraction, runPageScript } = require('./browser.js');
+const { untilAllSent } = require('./view_page.js');
 
-async function main() {
-  const [url, sweepsArg, timeoutArg, screenshot] = process.argv.slice(2);
-  const sweeps = Number(sweepsArg);
-  const errors = [];
-  const { browser, close } = await launch();
-  const out = { errors };
-  let page = null;
-  try {
-    page = await openPage(browser, url, errors);
-    out.connected = true;
-    process.stdout.write('page connected\n');
-    await until(page, (n) => {
-      const v = window.sweepmapView, s = v.status;
-      if (!s || v.sweeps() < n || !s.board || !s.board.mapper || s.board.mapper.sweeps < n) return false;
-      if (s.you.queued_frames !== 0) return false;
-      // No cloud point sent between two status frames (scans and statuses still flow).
-      if (window.__lastSeq === v.statusSeq) return false;  // the same status frame
-      window.__lastSeq = v.statusSeq;
-      const sent = `${s.you.points} ${s.board.view_model.chunks}`;
-      const quiet = window.__lastSent === sent;
-      window.__lastSent = sent;
-      return quiet;
-    }, Number(timeoutArg), `${sweeps} sweeps drawn and the server quiet`, sweeps);
-    await page.evaluate(() => window.sweepmapView.setCamera('fit'));
-    await page.waitForFunction((f) => window.sweepmapView.frames > f + 3, {},
-      await page.evaluate(() => window.sweepmapView.frames));
-    Object.assign(out, await page.evaluate(() => {
-      const v = window.sweepmapView;
-      return { check: v.lastCheck, points_drawn: v.pointsDrawn(), sweeps: v.sweeps(),
-        voxels: v.voxels(), extent: v.extent(0.01), status: v.status, mode: v.mode,
-        latencies_ms: v.latenciesMs };
-    }));
-    out.non_blank = await nonBlankFraction(page);
-    if (screenshot) await page.screenshot({ path: screenshot });
-    // The colour selector: intensity offered (rig A's lidar measures it), then each mode's
-    // colours for a sample of points (the C++ test checks the hue follows that mode's value).
-    out.colour = await page.evaluate(() => {
-      const v = window.sweepmapView;
-      const r = { available: v.intensityAvailable, initial: v.colour };
-      r.intensity_set = v.setColour('intensity');
-      r.intensity = v.colourSample(100).map((p) => [p.intensity, p.hue]);
-      r.height_set = v.setColour('height');
-      r.height = v.colourSample(100).map((p) => [p.z, p.hue]);
-      return r;
-    });
-  } catch (e) {
-    out.failure = e.message;
-    if (page) {
-      out.at_failure = await page.evaluate(() => ({ sweeps: window.sweepmapView.sweeps(),
-        status: window.sweepmapView.status })).catch(() => null);
-    }
-  } finally {
-    await close();
-  }
-  process.stdout.write(JSON.stringify(out) + '\n');
+// What the page shows once SWEEPS sweeps are drawn and sent: see the top of the file.
+async function check(page, out, sweeps, timeoutS, screenshot) {
+  await untilAllSent(page, timeoutS, `${sweeps} sweeps drawn and the server quiet`, { sweeps });
+  await page.evaluate(() => window.sweepmapView.setCamera('fit'));
+  await page.waitForFunction((f) => window.sweepmapView.frames > f + 3, {},
+    await page.evaluate(() => window.sweepmapView.frames));
+  Object.assign(out, await page.evaluate(() => {
+    const v = window.sweepmapView;
+    return { check: v.lastCheck, points_drawn: v.pointsDrawn(), sweeps: v.sweeps(),
+      voxels: v.voxels(), extent: v.extent(0.01), status: v.status, mode: v.mode,
+      latencies_ms: v.latenciesMs };
+  }));
+  out.non_blank = await nonBlankFraction(page);
+  if (screenshot) await page.screenshot({ path: screenshot });
+  // The colour selector: intensity offered (rig A's lidar measures it), then each mode's
+  // colours for a sample of points (the C++ test checks the hue follows that mode's value).
+  out.colour = await page.evaluate(() => {
+    const v = window.sweepmapView;
+    const r = { available: v.intensityAvailable, initial: v.colour };
+    r.intensity_set = v.setColour('intensity');
+    r.intensity = v.colourSample(100).map((p) => [p.intensity, p.hue]);
+    r.height_set = v.setColour('height');
+    r.height = v.colourSample(100).map((p) => [p.z, p.hue]);
+    return r;
+  });
 }
-main();
+
+const [url, sweepsArg, timeoutArg, screenshot] = process.argv.slice(2);
+runPageScript(url, async (page, out) => {
+  out.connected = true;
+  process.stdout.write('page connected\n');
+  try {
+    await check(page, out, Number(sweepsArg), Number(timeoutArg), screenshot);
+  } catch (e) {
+    out.at_failure = await page.evaluate(() => ({ sweeps: window.sweepmapView.sweeps(),
+      status: window.sweepmapView.status })).catch(() => null);
+    throw e;
+  }
+});

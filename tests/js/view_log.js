@@ -5,7 +5,7 @@
 // object: console errors and, per seek, the time reached, the sweeps and points drawn and the
 // points the server says it sent.
 'use strict';
-const { launch, openPage, until } = require('./browser.js');
+const { runPageScript, until } = require('./browser.js');
 
 // Only status frames the page gets after the time frame at UTIME count: one from before (its
 // counters taken before the server played back to UTIME, e.g. before a seek back's reset) can
@@ -39,22 +39,10 @@ async function seek(page, utime) {
   });
 }
 
-async function main() {
-  const [url, ...utimes] = process.argv.slice(2);
-  const errors = [];
-  const { browser, close } = await launch();
-  const out = { errors, seeks: [] };
-  try {
-    const page = await openPage(browser, url, errors);
-    await until(page, () => window.sweepmapView.time, 10, 'the log\'s time');
-    out.mode = await page.evaluate(() => window.sweepmapView.mode);
-    await page.evaluate(() => window.sweepmapView.pause());
-    for (const u of utimes) out.seeks.push(await seek(page, Number(u)));
-  } catch (e) {
-    out.failure = e.message;
-  } finally {
-    await close();
-  }
-  process.stdout.write(JSON.stringify(out) + '\n');
-}
-main();
+const [url, ...utimes] = process.argv.slice(2);
+runPageScript(url, async (page, out) => {
+  await until(page, () => window.sweepmapView.time, 10, 'the log\'s time');
+  out.mode = await page.evaluate(() => window.sweepmapView.mode);
+  await page.evaluate(() => window.sweepmapView.pause());
+  for (const u of utimes) out.seeks.push(await seek(page, Number(u)));
+}, { seeks: [] });

@@ -1,4 +1,5 @@
-// Waits shared by the view's page scripts (view_bench_page.js, tools/docs/view_screenshot.js).
+// Waits shared by the view's page scripts (view_live.js, view_bench.js, view_bench_page.js,
+// tools/docs/view_screenshot.js).
 // They poll from node with short calls: a page drawing 2 M points in software takes seconds a
 // frame, and one long wait inside the page would outlive puppeteer's protocol timeout.
 'use strict';
@@ -40,4 +41,14 @@ async function waitForFile(file, timeoutS) {
   if (!fs.existsSync(file)) throw new Error(`${file}: not there within ${timeoutS} s`);
 }
 
-module.exports = { poll, sleep, untilAllSent, waitForFile };
+// The frames per second the page draws over `seconds`, its camera fitted to the cloud first.
+async function fittedFrameRate(page, seconds) {
+  await page.evaluate(() => window.sweepmapView.setCamera('fit'));
+  const f0 = await page.evaluate(() => window.sweepmapView.frames);
+  const t0 = Date.now();
+  await sleep(seconds * 1000);
+  const f1 = await page.evaluate(() => window.sweepmapView.frames);
+  return (f1 - f0) / ((Date.now() - t0) / 1000);
+}
+
+module.exports = { fittedFrameRate, poll, sleep, untilAllSent, waitForFile };

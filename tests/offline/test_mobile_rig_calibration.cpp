@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
 
 #include "core/event_log.hpp"
 #include "tools/offline/mobile_rig_calibration.hpp"
@@ -23,13 +24,15 @@ namespace {
 const std::string kRig = std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml";
 const std::string kScene = std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml";
 
-std::string simulate(double duration_s, uint64_t seed, const std::vector<std::string>& drive) {
+std::string simulate(double duration_s, uint64_t seed, const std::vector<std::string>& drive,
+                     const std::string& scene = kScene) {
   const std::string dir = std::string(SWEEPMAP_BINARY_DIR) + "/test_scratch/mobile_rig_calib";
   std::filesystem::create_directories(dir);
-  const std::string path = dir + "/seed" + std::to_string(seed) + ".lcmlog";
+  const std::string path = dir + "/" + std::filesystem::path(scene).stem().string() + "_seed" +
+                           std::to_string(seed) + ".lcmlog";
   std::vector<std::string> sets = drive;
   sets.push_back("sim.duration_s=" + std::to_string(duration_s));
-  const SimSetup setup = loadSimSetup(kRig, kScene, sets);
+  const SimSetup setup = loadSimSetup(kRig, scene, sets);
   SimMobileOptions so;
   so.rig = requireKind<MobileLidarConfig>(setup.rig, "test");
   so.scene = setup.scene;
@@ -91,6 +94,27 @@ TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheFigureEight) {
   for (const auto& m : r.measures) {
     ASSERT_TRUE(m.truth.has_value()) << m.key;
     EXPECT_NEAR(m.value, *m.truth, 0.015) << m.key;
+  }
+}
+
+// The room's truth is the scene the drive was simulated in (its TRUTH_MOUNTING), not the
+// kind's default scene: a short circle in the 8 x 6 x 3 m conference room, not the 10 x 5 x
+// 2.5 m lab.
+TEST(MobileRigCalibration, RoomTruthIsTheSimulatedScenes) {
+  MobileRigCalibRequest request;
+  request.logs = {
+      simulate(20.0, 1, {"sim.path=circle"},
+               std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_conference_room.yaml")};
+  request.rig = kRig;
+  request.progress = false;
+  const RigCalibration r = runMobileRigCalibration(request);
+  const std::map<std::string, double> want = {
+      {"room.length_m", 8.0}, {"room.width_m", 6.0}, {"room.height_m", 3.0}};
+  ASSERT_FALSE(r.measures.empty());
+  for (const auto& m : r.measures) {
+    ASSERT_TRUE(m.truth.has_value()) << m.key;
+    ASSERT_EQ(want.count(m.key), 1u) << m.key;
+    EXPECT_DOUBLE_EQ(*m.truth, want.at(m.key)) << m.key;
   }
 }
 

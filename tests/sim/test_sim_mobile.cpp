@@ -38,6 +38,14 @@ SimMobileConfig quiet() {
   return c;
 }
 
+// quiet(), driving `path` for duration_s.
+SimMobileConfig quietDrive(const std::string& path, double duration_s) {
+  SimMobileConfig c = quiet();
+  c.path = path;
+  c.duration_s = duration_s;
+  return c;
+}
+
 TEST(MobilePath, CircleAndRoundedRectangleAreClosedAndContinuous) {
   const MobilePath c = MobilePath::circle(-3.0, 0.0, 0.83);
   EXPECT_NEAR(c.length(), 2 * M_PI * 0.83, 1e-12);
@@ -92,9 +100,7 @@ TEST(MobilePath, FigureEightTurnsBothWaysAndCloses) {
 // the accelerometer's along-track reading follows the ramps of every leg.
 TEST(SimMobile, StopsAfterEachLegOfDriving) {
   const Scene scene(labScene(), plate());
-  SimMobileConfig c = quiet();
-  c.path = "figure8";
-  c.duration_s = 25.0;
+  SimMobileConfig c = quietDrive("figure8", 25.0);
   c.stop_interval_s = 10.0;
   c.stop_duration_s = 2.0;
   SimMobile car(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 1, kStart);
@@ -119,9 +125,7 @@ TEST(SimMobile, StopsAfterEachLegOfDriving) {
 
 TEST(SimMobile, StraightDriveTicksAreDistanceOverCircumference) {
   const Scene scene(labScene(), plate());
-  SimMobileConfig c = quiet();
-  c.path = "loop";  // starts in the middle of a 8 m straight
-  c.duration_s = 15.0;
+  SimMobileConfig c = quietDrive("loop", 15.0);  // starts in the middle of a 8 m straight
   WheelGeometry w;
   SimMobile car(c, w, kRpy0, kLidarPos, scene, 1, kStart);
   const auto ticks = car.wheelTicks();
@@ -150,9 +154,7 @@ TEST(SimMobile, StraightDriveTicksAreDistanceOverCircumference) {
 // lidar sits at the true lever arm, and its stamps run ahead by the clock offset.
 TEST(SimMobile, BuildErrorsBiasTicksLeverAndStamps) {
   const Scene scene(labScene(), plate());
-  SimMobileConfig c = quiet();
-  c.path = "loop";
-  c.duration_s = 15.0;
+  SimMobileConfig c = quietDrive("loop", 15.0);
   c.wheel_radius_left_error_fraction = 0.01;
   c.wheel_radius_right_error_fraction = -0.012;
   c.lever_error_y_m = -0.002;
@@ -173,9 +175,7 @@ TEST(SimMobile, BuildErrorsBiasTicksLeverAndStamps) {
 
 TEST(SimMobile, SlipMakesOneWheelRunFastOnlyDuringTheEvent) {
   const Scene scene(labScene(), plate());
-  SimMobileConfig c = quiet();
-  c.path = "loop";
-  c.duration_s = 18.0;
+  SimMobileConfig c = quietDrive("loop", 18.0);
   c.slip_mean_interval_s = 3.0;
   WheelGeometry w;
   SimMobile car(c, w, kRpy0, kLidarPos, scene, 7, kStart);

@@ -185,10 +185,11 @@ CLI::App* addAxisOffset(CLI::App* calib, std::shared_ptr<AxisOffsetCalibRequest>
                         std::shared_ptr<LidarAxisOffsetCalibRequest> l) {
   auto* axis = calib->add_subcommand(
       "axis-offset",
-      "rotating_profile rigs (rig C): calibrate the profile sensor's offsets M, N from the "
-      "turntable's axis (Zhao 2021) from sweeps of a flat plate in m non-parallel poses; "
-      "rotating_lidar rigs (rig A): the lidar's offset t_L^O' from its rotation axis from room "
-      "sweeps, by the same plane constraint");
+      "rotating_profile and rotating_lidar rigs (C, A): the sensor's offset from its rotation "
+      "axis by the plane constraint. rotating_profile rigs (rig C): calibrate the profile "
+      "sensor's offsets M, N from the turntable's axis (Zhao 2021) from sweeps of a flat plate "
+      "in m non-parallel poses; rotating_lidar rigs (rig A): the lidar's offset t_L^O' from its "
+      "rotation axis from room sweeps, by the same plane constraint");
   axis->footer(kAxisOffsetFooter);
 
   axis->add_option("--logs", a->logs,
@@ -306,18 +307,22 @@ CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
       "sweep is one pose). Plate poses cannot fix the encoder zero (a turn of the whole cloud "
       "about the axis): it is reported not observable and kept. OUT has the format of `calib "
       "axis-offset` (geometry.calibration_file applies it).\n\n"
-      "mobile_lidar (rig B): the mounting angles, the lever arm, the wheel radii and track, the "
-      "lidar-odometry time offset (one least squares over the drive's two passes, the odometry "
-      "re-run with the wheels it asks for) and the gyro bias (the odometry EKF's). OUT holds the "
-      "mounting angles (mounting.calibration_file applies it); the other calibrated keys are "
-      "listed to set in the rig file by hand. One drive: the first log.\n\n"
+      "mobile_lidar (rig B), in order: each wheel radius over the track and the gyro bias from "
+      "the wheels against the gyro (straights, turns both ways, stops); then the distance "
+      "driven (the wheels' common scale), the mounting angles, the lever arm's x and y and the "
+      "lidar-odometry time offset in one least squares over the drive's passes over the same "
+      "walls, the odometry re-run with the corrected wheels; the lever arm's z from the floor; "
+      "the room's length, width and height from its planes in the calibrated cloud (measures "
+      "in --json). OUT holds the mounting angles (mounting.calibration_file applies it); the "
+      "other calibrated keys are listed to set in the rig file by hand. One drive: the first "
+      "log.\n\n"
       "Writes OUT atomically (rig A: parameters: rig-file keys; source: sigmas, residuals, logs) "
       "and "
       "prints the calibration_file line for the rig file, relative to its folder. The rig's "
       "plate.beta_method should be model so the assembler finds the plate as the calibration "
       "did. Human report and progress on stderr; --json prints {\"parameters\": {KEY: {value, "
-      "sigma, unit, observable, nominal, truth (simulated logs)}}, \"warnings\": [...], "
-      "correlation, residuals} on stdout.\n\n"
+      "sigma, unit, observable, nominal, truth (simulated logs)}}, \"measures\": {KEY: {value, "
+      "unit, truth}} (rig B's room), \"warnings\": [...], correlation, residuals} on stdout.\n\n"
       "Exit status: 0 calibrated; 1 nothing calibrated (no usable sweep, nothing observable, a "
       "log that cannot be read); 2 bad option or rig, a missing "
       "log, or an output folder that does not exist; 4 OUT cannot be written.\n"
@@ -359,10 +364,9 @@ Runner addCalibCommand(CLI::App& app) {
   auto* calib = app.add_subcommand(
       "calib",
       "Calibrate the rig from its own logs and write the result as a calibration file the rig "
-      "file points to. `rig` calibrates every parameter at once (rotating_lidar; `plan` says "
+      "file points to. `rig` calibrates every parameter at once (every rig kind; `plan` says "
       "what to record for it); single parameters by the rig's kind: plate-angle (rotating_lidar), "
-      "mounting "
-      "(mobile_lidar), axis-offset (rotating_profile; rotating_lidar: the lidar-to-axis "
+      "mounting (mobile_lidar), axis-offset (rotating_profile; rotating_lidar: the lidar-to-axis "
       "offset)");
   calib->require_subcommand(1);
   auto o = std::make_shared<PlateAngleCalibRequest>();

@@ -10,7 +10,7 @@
 'use strict';
 const path = require('path');
 const js = path.join(__dirname, '../../tests/js');
-const { launch, openPage } = require(path.join(js, 'browser.js'));
+const { runPageScript } = require(path.join(js, 'browser.js'));
 const { untilAllSent } = require(path.join(js, 'view_page.js'));
 
 async function waitFor(page, when) {
@@ -21,37 +21,24 @@ async function waitFor(page, when) {
   return untilAllSent(page, 600, `${n} sweeps drawn and mapped`, { sweeps: n });
 }
 
-async function main() {
-  const [url, when, out, clipMax] = process.argv.slice(2);
-  const errors = [];
-  const { browser, close } = await launch();
-  const result = { errors };
-  try {
-    const page = await openPage(browser, url, errors);
-    await waitFor(page, when);
-    await page.setViewport({ width: 1280, height: 800, deviceScaleFactor: 0.6 });
-    await page.evaluate((clip) => {
-      if (clip) {
-        const input = document.getElementById('clip-max');
-        input.value = clip;
-        input.dispatchEvent(new Event('input'));
-      }
-      window.sweepmapView.setCamera('fit');
-    }, clipMax || '');
-    const f = await page.evaluate(() => window.sweepmapView.frames);
-    await page.waitForFunction((n) => window.sweepmapView.frames > n + 2, { timeout: 60000 }, f);
-    await page.screenshot({ path: out });
-    Object.assign(result, await page.evaluate(() => {
-      const v = window.sweepmapView, procs = (v.status.board && v.status.board.processes) || {};
-      return { points: v.pointsDrawn(), sweeps: v.sweeps(), voxels: v.voxels(),
-        processes: Object.fromEntries(Object.entries(procs).map(([k, p]) => [k, p.status])) };
-    }));
-  } catch (e) {
-    result.failure = e.message;
-  } finally {
-    await close();
-  }
-  process.stdout.write(JSON.stringify(result) + '\n');
-  process.exitCode = result.failure ? 1 : 0;
-}
-main();
+const [url, when, png, clipMax] = process.argv.slice(2);
+runPageScript(url, async (page, out) => {
+  await waitFor(page, when);
+  await page.setViewport({ width: 1280, height: 800, deviceScaleFactor: 0.6 });
+  await page.evaluate((clip) => {
+    if (clip) {
+      const input = document.getElementById('clip-max');
+      input.value = clip;
+      input.dispatchEvent(new Event('input'));
+    }
+    window.sweepmapView.setCamera('fit');
+  }, clipMax || '');
+  const f = await page.evaluate(() => window.sweepmapView.frames);
+  await page.waitForFunction((n) => window.sweepmapView.frames > n + 2, { timeout: 60000 }, f);
+  await page.screenshot({ path: png });
+  Object.assign(out, await page.evaluate(() => {
+    const v = window.sweepmapView, procs = (v.status.board && v.status.board.processes) || {};
+    return { points: v.pointsDrawn(), sweeps: v.sweeps(), voxels: v.voxels(),
+      processes: Object.fromEntries(Object.entries(procs).map(([k, p]) => [k, p.status])) };
+  }));
+});

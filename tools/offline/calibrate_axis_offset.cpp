@@ -13,6 +13,7 @@
 #include "core/exit_codes.hpp"
 #include "mapping/plot.hpp"
 #include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/calibrate_logs.hpp"
 #include "tools/offline/profile_log.hpp"
 
 namespace sweepmap {
@@ -24,13 +25,7 @@ using calib_workflow::seconds;
 const std::string kWhat = "calib axis-offset";
 constexpr double kRadToDeg = 180.0 / M_PI;
 
-struct Inputs {
-  std::vector<PlanePoints> planes;  // subsampled
-  std::vector<size_t> full_points;  // before subsampling
-  std::vector<std::string> rejected;
-  std::optional<ProfileLogTruth> truth;
-  double read_s = 0.0;
-};
+using Inputs = PlateSweeps;
 
 bool checkInputs(const AxisOffsetCalibRequest& o, RotatingProfileConfig* rig) {
   if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kWhat, rig)) return false;
@@ -38,35 +33,6 @@ bool checkInputs(const AxisOffsetCalibRequest& o, RotatingProfileConfig* rig) {
     if (!calib_workflow::logFileExists(log, kWhat)) return false;
   }
   return calib_workflow::outputDirExists(o.out, kWhat);
-}
-
-// Every sweep of every log as a plate pose; false after saying why a log cannot serve.
-bool readLogs(const AxisOffsetCalibRequest& o, Inputs* in) {
-  const auto t0 = Clock::now();
-  for (const auto& log : o.logs) {
-    ProfileLog l;
-    try {
-      l = readProfileLog(log);
-    } catch (const ProfileLogError& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
-      return false;
-    }
-    if (l.truth && !in->truth) in->truth = l.truth;
-    for (auto& sweep : l.sweeps) {
-      if (static_cast<int>(sweep.samples.size()) < o.min_points_per_sweep) {
-        in->rejected.push_back(sweep.source + ": " + std::to_string(sweep.samples.size()) +
-                               " points (< " + std::to_string(o.min_points_per_sweep) + ")");
-        std::cerr << "  " << in->rejected.back() << ": rejected\n";
-        continue;
-      }
-      in->full_points.push_back(sweep.samples.size());
-      in->planes.push_back(subsample(sweep, o.max_points_per_sweep));
-      std::cerr << "  " << sweep.source << ": " << sweep.samples.size() << " points, "
-                << in->planes.back().samples.size() << " used\n";
-    }
-  }
-  in->read_s = seconds(Clock::now() - t0);
-  return true;
 }
 
 std::string figurePath(const AxisOffsetCalibRequest& o) {
@@ -235,7 +201,9 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   RotatingProfileConfig rig;
   if (!checkInputs(o, &rig)) return kExitUsage;
   Inputs in;
-  if (!readLogs(o, &in)) return kExitBadInput;
+  if (!readPlateSweeps(o.logs, {o.min_points_per_sweep, o.max_points_per_sweep}, kWhat,
+                       /*say_each=*/true, &in))
+    return kExitBadInput;
   if (in.planes.empty()) {
     std::cerr << kWhat << ": no sweep with " << o.min_points_per_sweep
               << " or more points in the logs: nothing calibrated\n";

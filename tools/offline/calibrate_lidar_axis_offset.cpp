@@ -14,6 +14,7 @@
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
 #include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/calibrate_logs.hpp"
 #include "tools/offline/log_sweeps.hpp"
 
 namespace sweepmap {
@@ -74,25 +75,13 @@ void takeSweep(const LidarAxisOffsetCalibRequest& o, const std::string& log,
 // opened. A corrupt tail is noted and what came before used.
 bool readLogs(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig, Inputs* in) {
   const auto t0 = Clock::now();
-  for (const auto& log : o.logs) {
-    LogSweepOptions opts;
-    opts.on_window_scans = [&](const AssembledSweep& s, const std::vector<Scan2D>& scans) {
-      takeSweep(o, log, s, scans, in);
-    };
-    LogReadResult r;
-    try {
-      r = forEachSweep(
-          log, rig, [](const AssembledSweep&, const SweepTruth&) {}, opts);
-    } catch (const LogError& e) {
-      std::cerr << kWhat << ": cannot read log '" << log << "': " << e.what() << "\n";
-      return false;
-    }
-    if (r.log_error) {
-      std::cerr << kWhat << ": " << r.error << " (the sweeps before it are used)\n";
-      in->log_errors.push_back(r.error);
-    }
-    if (r.lidar_offset_x_true_m && !in->truth_x_mm) in->truth_x_mm = *r.lidar_offset_x_true_m * 1e3;
-  }
+  LidarLogReading r;
+  r.take_sweep = [&](const std::string& log, const AssembledSweep& s,
+                     const std::vector<Scan2D>& scans) { takeSweep(o, log, s, scans, in); };
+  r.took_log = [&](const LogReadResult& l) {
+    if (l.lidar_offset_x_true_m && !in->truth_x_mm) in->truth_x_mm = *l.lidar_offset_x_true_m * 1e3;
+  };
+  if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) return false;
   in->read_s = seconds(Clock::now() - t0) - in->segment_s;
   return true;
 }

@@ -16,6 +16,7 @@
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
 #include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/calibrate_logs.hpp"
 #include "tools/offline/calibrate_rig_kinds.hpp"
 #include "tools/offline/log_sweeps.hpp"
 
@@ -72,29 +73,12 @@ void takeTruth(const LogReadResult& r, RigATruth* t) {
 bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress& progress,
               RigAInputs* in) {
   const auto t0 = Clock::now();
-  for (size_t i = 0; i < o.logs.size(); ++i) {
-    const std::string& log = o.logs[i];
-    progress.stage("reading " + fs::path(log).filename().string());
-    LogSweepOptions opts;
-    opts.on_window_scans = [&](const AssembledSweep& s, const std::vector<Scan2D>& scans) {
-      takeSweep(o, rig, log, s, scans, in);
-    };
-    const auto size = std::max<uint64_t>(1, fs::file_size(log));
-    opts.progress = [&](uint64_t offset, uint64_t) { progress.update(double(offset) / size); };
-    LogReadResult r;
-    try {
-      r = forEachSweep(
-          log, rig, [](const AssembledSweep&, const SweepTruth&) {}, opts);
-    } catch (const LogError& e) {
-      std::cerr << kWhat << ": cannot read log '" << log << "': " << e.what() << "\n";
-      return false;
-    }
-    if (r.log_error) {
-      std::cerr << kWhat << ": " << r.error << " (the sweeps before it are used)\n";
-      in->log_errors.push_back(r.error);
-    }
-    takeTruth(r, &in->truth);
-  }
+  LidarLogReading r;
+  r.take_sweep = [&](const std::string& log, const AssembledSweep& s,
+                     const std::vector<Scan2D>& scans) { takeSweep(o, rig, log, s, scans, in); };
+  r.took_log = [&](const LogReadResult& l) { takeTruth(l, &in->truth); };
+  r.progress = &progress;
+  if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) return false;
   in->read_s = seconds(Clock::now() - t0);
   return true;
 }

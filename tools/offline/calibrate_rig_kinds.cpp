@@ -15,6 +15,7 @@
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
 #include "tools/offline/calibrate_common.hpp"
+#include "tools/offline/calibrate_logs.hpp"
 #include "tools/offline/mobile_rig_calibration.hpp"
 #include "tools/offline/profile_log.hpp"
 
@@ -46,37 +47,7 @@ bool checkPaths(const RigCalibRequest& o) {
 
 // ---- rig C -------------------------------------------------------------------------------
 
-struct ProfileInputs {
-  std::vector<PlanePoints> planes;  // subsampled, one per plate pose
-  std::vector<std::string> rejected;
-  std::optional<ProfileLogTruth> truth;
-  double read_s = 0.0;
-};
-
-// Every sweep of every log as a plate pose; false after saying why a log cannot be read.
-bool readPlatePoses(const RigCalibRequest& o, ProfileInputs* in) {
-  const auto t0 = Clock::now();
-  for (const auto& log : o.logs) {
-    ProfileLog l;
-    try {
-      l = readProfileLog(log);
-    } catch (const ProfileLogError& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
-      return false;
-    }
-    if (l.truth && !in->truth) in->truth = l.truth;
-    for (auto& sweep : l.sweeps) {
-      if (static_cast<int>(sweep.samples.size()) < kMinPointsPerSweep) {
-        in->rejected.push_back(sweep.source + ": " + std::to_string(sweep.samples.size()) +
-                               " points (< " + std::to_string(kMinPointsPerSweep) + ")");
-        continue;
-      }
-      in->planes.push_back(subsample(sweep, kMaxPointsPerSweep));
-    }
-  }
-  in->read_s = seconds(Clock::now() - t0);
-  return true;
-}
+using ProfileInputs = PlateSweeps;
 
 // Why a parameter the solver did not determine is left nominal.
 std::string profileNote(size_t i, const AxisOffsetResult& r) {
@@ -202,7 +173,9 @@ int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
   Progress progress(kWhat, po);
   progress.stage("reading the plate poses");
   ProfileInputs in;
-  if (!readPlatePoses(o, &in)) return kExitBadInput;
+  if (!readPlateSweeps(o.logs, {kMinPointsPerSweep, kMaxPointsPerSweep}, kWhat,
+                       /*say_each=*/false, &in))
+    return kExitBadInput;
   if (in.planes.empty()) {
     progress.finish();
     std::cerr << kWhat << ": no sweep with " << kMinPointsPerSweep

@@ -1,11 +1,11 @@
 // Rig B's whole calibration from logs: see tools/offline/mobile_rig_calibration.hpp.
 #include "tools/offline/mobile_rig_calibration.hpp"
 
+#include <algorithm>
+
 #include "calib/mobile_rig_calibration.hpp"
 #include "core/progress.hpp"
 #include "rigs/rig_file.hpp"
-#include "rigs/rig_kind.hpp"
-#include "sim/scene.hpp"
 #include "tools/offline/mobile_log.hpp"
 
 namespace sweepmap {
@@ -33,12 +33,12 @@ std::map<std::string, double> truthOf(const MobileLog& log) {
   return t;
 }
 
-// A simulated drive's room: the scene `sweepmap sim` uses for the kind by default (the log
-// does not name its scene), as (length, width, height).
-Eigen::Vector3d simulatedRoom() {
-  const SceneConfig sc = loadScene(resolveSceneFile(defaultSceneName(RigKind::kMobileLidar)));
-  return {std::max(sc.room_length_m, sc.room_width_m), std::min(sc.room_length_m, sc.room_width_m),
-          sc.room_height_m};
+// A simulated drive's room, from its TRUTH_MOUNTING (the scene it was simulated in, whichever
+// --scene gave), as (length, width, height): the longer and the shorter wall spacing, floor to
+// ceiling.
+Eigen::Vector3d simulatedRoom(const truth_mounting_t& m) {
+  return {std::max(m.room_size_m[0], m.room_size_m[1]),
+          std::min(m.room_size_m[0], m.room_size_m[1]), m.room_size_m[2]};
 }
 
 }  // namespace
@@ -59,7 +59,7 @@ RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
                                  : rig.odometry.wheel_radius_m;
   in.wheels.wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
   in.truth = truthOf(log);
-  if (log.truth_rig) in.room_truth_m = simulatedRoom();
+  if (log.truth_mounting) in.room_truth_m = simulatedRoom(*log.truth_mounting);
   const OdometryReadings readings = loadOdometryReadings(request.logs.at(0));
   in.wheel_readings = readings.wheels;
   in.gyro_readings = readings.gyro;

@@ -1,7 +1,7 @@
 // Rig B's whole calibration from logs (the `calib rig` command's mobile_lidar part): reads
 // the drive and its raw encoder and gyro readings, re-runs its odometry with the wheels the
 // joint least squares asks for (calib/mobile_rig_calibration.hpp), and fills the truth from a
-// simulated log (the room's: the kind's default scene, scene_lab, which the log does not name).
+// simulated log (the room's from its TRUTH_MOUNTING: the scene it was simulated in).
 #pragma once
 
 #include <string>
