@@ -157,7 +157,9 @@ TEST(CalibRig, PlanPrintsTheRecordingAndItsSimCommand) {
   const fs::path dir = scratchDir("calib_plan");
   ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_a"}, dir / "out.txt", dir / "err.txt"), 0);
   const std::string plan = readAll(dir / "out.txt");
-  EXPECT_NE(plan.find("sweepmap sim --rig rig_a --set motor.mode=7 --sweeps 10"), std::string::npos)
+  EXPECT_NE(plan.find("sweepmap sim --rig rig_a --set motor.mode=7 --set motor.sweep_angle_deg=360 "
+                      "--sweeps 10"),
+            std::string::npos)
       << plan;
   EXPECT_NE(plan.find("Why"), std::string::npos);
   ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_c"}, dir / "c.txt", dir / "err.txt"), 0);
