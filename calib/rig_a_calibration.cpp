@@ -662,6 +662,22 @@ void checkResiduals(const RigASolveOptions& o, State* st, RigCalibration* r) {
   }
 }
 
+// A warning when alpha moves with the offset (each plate seen from one side of the scan
+// plane: half turns), naming what separates them.
+void warnOneSidedPlate(RigCalibration* r) {
+  if (r->correlation.rows() < 2 || !r->parameters[0].observable || !r->parameters[1].observable) {
+    return;
+  }
+  const double c = r->correlation(0, 1);
+  if (!(std::fabs(c) > 0.9)) return;
+  std::ostringstream w;
+  w << "plate.alpha_deg moves with geometry.lidar_offset_x_mm (correlation " << c
+    << "): the sweeps saw each part of the plate from one side of the scan plane, where an "
+       "offset turns it; alpha's sigma is the offset's times ~0.73 deg/mm. Sweeps of a full "
+       "turn (sweepmap calib plan) see it from both sides and separate the two";
+  r->warnings.push_back(w.str());
+}
+
 // alpha as the plates give it with the rays placed with g, the sweeps' attitudes held: the
 // mean of phi_s + the plate's angle in O'.
 double alphaFromPlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
@@ -770,6 +786,7 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
   r.correlation = correlationOf(cov);
   r.rms_after = inlierRms(keptResiduals(st), st.sigma_mm);
   checkResiduals(o, &st, &r);
+  warnOneSidedPlate(&r);
   r.sweeps_used = int(sweeps.size());
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;
