@@ -358,6 +358,60 @@ Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm
                                  ray.phi_rad, offset_mm);
 }
 
+namespace {
+
+// Each ray's scan (a new one where theta stops increasing: forEachSweepRay's order) and beam
+// (theta in steps of the smallest step between neighbouring rays of a scan).
+std::vector<std::pair<long, long>> scanBeamOf(const std::vector<SweepRay>& rays) {
+  std::vector<std::pair<long, long>> at(rays.size());
+  if (rays.empty()) return at;
+  double step = std::numeric_limits<double>::infinity(), lowest = rays[0].theta_rad;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    lowest = std::min(lowest, rays[i].theta_rad);
+    const double d = i ? rays[i].theta_rad - rays[i - 1].theta_rad : 0.0;
+    if (d > 1e-9) step = std::min(step, d);
+  }
+  if (!std::isfinite(step)) step = 1.0;
+  long scan = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (i && !(rays[i].theta_rad > rays[i - 1].theta_rad)) ++scan;
+    at[i] = {scan, std::lround((rays[i].theta_rad - lowest) / step)};
+  }
+  return at;
+}
+
+// Takes out of `owner` every ray within `m` beams and scans of a valid ray that is not of
+// its plane (owner -1: no plane or an edge; another plane).
+void dropDepthEdges(const std::vector<SweepRay>& rays, int m, std::vector<int>* owner) {
+  if (m <= 0 || rays.empty()) return;
+  const auto at = scanBeamOf(rays);
+  long scans = 0, beams = 0;
+  for (const auto& [scan, beam] : at) {
+    scans = std::max(scans, scan + 1);
+    beams = std::max(beams, beam + 1);
+  }
+  // The owner of each (scan, beam); -2: no valid ray there.
+  std::vector<int> grid(size_t(scans * beams), -2);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    grid[size_t(at[i].first * beams + at[i].second)] = (*owner)[i];
+  }
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const int mine = (*owner)[i];
+    if (mine < 0) continue;
+    bool inside = true;
+    for (long s = std::max(0L, at[i].first - m); s <= std::min(scans - 1, at[i].first + m); ++s) {
+      for (long b = std::max(0L, at[i].second - m); b <= std::min(beams - 1, at[i].second + m);
+           ++b) {
+        const int other = grid[size_t(s * beams + b)];
+        inside = inside && (other == -2 || other == mine);
+      }
+    }
+    if (!inside) (*owner)[i] = -1;
+  }
+}
+
+}  // namespace
+
 std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f>& points_Op,
                                                const std::vector<SweepRay>& rays,
                                                const PlaneSegmentationOptions& o,
@@ -401,6 +455,7 @@ std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f
     }
     if (alone) owner[i] = best;
   }
+  dropDepthEdges(rays, o.depth_edge_rays, &owner);
   std::vector<LidarPlaneRays> planes(found.size());
   for (size_t i = 0; i < owner.size(); ++i) {
     if (owner[i] >= 0) planes[static_cast<size_t>(owner[i])].rays.push_back(rays[i]);

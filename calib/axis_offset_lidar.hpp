@@ -47,13 +47,17 @@ struct PlaneSegmentationOptions {
   int max_planes = 8;
   int min_inliers = 300;          // after downsampling
   int max_rays_per_plane = 5000;  // evenly strided (time order: spread over the sweep)
+  // A ray is dropped when a ray within this many beams and scans of it (a valid one) is not
+  // of its plane: depth edges (a door's jamb, a table's edge, a person's outline, mixed
+  // pixels) are not the plane, yet their first millimetres pass the gate. 0: kept.
+  int depth_edge_rays = 0;
 };
 
 // The planes of one sweep: `points_Op` the cloud assembled with the nominal offset, `rays`
 // its rays in the same order (forEachSweepRay). A ray belongs to the plane whose crossing
 // along the ray its range is within assign_distance_m of, unless another plane crosses the
-// ray within edge_margin_m of that crossing (edges, corners). Planes with fewer than 3 rays
-// are dropped.
+// ray within edge_margin_m of that crossing (edges, corners) or it lies within
+// depth_edge_rays of a ray of no or another plane. Planes with fewer than 3 rays are dropped.
 std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f>& points_Op,
                                                const std::vector<SweepRay>& rays,
                                                const PlaneSegmentationOptions& options,

@@ -32,56 +32,100 @@ PreRay pre(const SweepRay& r) {
   return {std::cos(r.phi_rad), std::sin(r.phi_rad), 1e3 * r.range_m, r.theta_rad};
 }
 
-// p_O' [mm] of a ray with g = (x [mm], tilt [rad], mirror [rad]) (header's model).
+// A ray's origin [mm] and unit direction in O' with g = (x [mm], tilt [rad], mirror [rad])
+// (header's model): p_O' = origin + r direction.
 template <class T>
-void placeInOPrime(const PreRay& ray, const T* g, T* p) {
+void rayInOPrime(const PreRay& ray, const T* g, T* origin, T* dir) {
   using std::cos;
   using std::sin;
   const T th = T(ray.theta) + g[2];
   const T cth = cos(th);
-  const T lx = g[0] + ray.r_mm * sin(g[1]) * cth;
-  const T ly = ray.r_mm * sin(th);
-  p[0] = ray.c * lx - ray.s * ly;
-  p[1] = ray.s * lx + ray.c * ly;
-  p[2] = ray.r_mm * cos(g[1]) * cth;
+  const T dx = sin(g[1]) * cth;
+  const T dy = sin(th);
+  origin[0] = ray.c * g[0];
+  origin[1] = ray.s * g[0];
+  origin[2] = T(0.0);
+  dir[0] = ray.c * dx - ray.s * dy;
+  dir[1] = ray.s * dx + ray.c * dy;
+  dir[2] = cos(g[1]) * cth;
+}
+
+// p_O' [mm] of a ray with g.
+template <class T>
+void placeInOPrime(const PreRay& ray, const T* g, T* p) {
+  T o[3], d[3];
+  rayInOPrime(ray, g, o, d);
+  for (int i = 0; i < 3; ++i) p[i] = o[i] + ray.r_mm * d[i];
+}
+
+// Rays more glancing than this to their plane (|cos incidence|) stay out of the solve: the
+// range a plane predicts for them is ill-conditioned.
+constexpr double kMinCosIncidence = 0.05;
+
+// The residual of a ray against the plane n . p = dist (n unit, both in the frame of the
+// ray's origin and direction): its distance to the plane, written as w (r - r_plane), r_plane
+// = (dist - n . origin) / (n . dir) the range at which the ray meets the plane and w the ray's
+// n . dir when the problem was built (held fixed). Its value is the point-to-plane distance;
+// its derivatives are those of the plane's point on the ray, free of the measured range. The
+// point-to-plane distance n . (origin + r dir) - dist differentiates into r (n . d dir): the
+// range's noise in the Jacobian, correlated with the residual's own noise (errors in
+// variables, a bias of order sigma^2 / r^2). On the plan's logs the change was small (offset
+// -0.04 mm, mirror -0.0003 deg); the mirror's lean was the depth edges' (calib rig's
+// segmentation, depth_edge_rays).
+template <class T>
+T rayPlaneResidual(const PreRay& ray, double w, const T* origin, const T* dir, const T* n,
+                   const T& dist) {
+  const T a = n[0] * origin[0] + n[1] * origin[1] + n[2] * origin[2];
+  const T b = n[0] * dir[0] + n[1] * dir[1] + n[2] * dir[2];
+  return w * (ray.r_mm - (dist - a) / b);
+}
+
+// A room wall's unit normal (cos a cos lean, sin a cos lean, sin lean) in O turned into the
+// sweep's O' (by -phi_s).
+template <class T>
+void wallNormalInOPrime(double ca, double sa, const T& phi, const T* wall, T* n) {
+  using std::cos;
+  using std::sin;
+  const T cl = cos(wall[0]);
+  const T nx = ca * cl, ny = sa * cl;
+  const T cp = cos(phi), sp = sin(phi);
+  n[0] = cp * nx + sp * ny;
+  n[1] = -sp * nx + cp * ny;
+  n[2] = sin(wall[0]);
 }
 
 // A ray of a room wall: parameters g (3), phi_s (1), wall (lean [rad], distance [mm]).
 struct WallRayCost {
   PreRay ray;
-  double ca, sa, inv_sigma;
+  double ca, sa, w, inv_sigma;
   template <class T>
   bool operator()(const T* g, const T* phi, const T* wall, T* e) const {
-    using std::cos;
-    using std::sin;
-    T p[3];
-    placeInOPrime(ray, g, p);
-    const T cp = cos(phi[0]), sp = sin(phi[0]);
-    const T ox = cp * p[0] - sp * p[1], oy = sp * p[0] + cp * p[1];
-    const T cl = cos(wall[0]);
-    e[0] = (ca * cl * ox + sa * cl * oy + sin(wall[0]) * p[2] - wall[1]) * inv_sigma;
+    T o[3], d[3], n[3];
+    rayInOPrime(ray, g, o, d);
+    wallNormalInOPrime(ca, sa, phi[0], wall, n);
+    e[0] = rayPlaneResidual(ray, w, o, d, n, wall[1]) * inv_sigma;
     return true;
   }
-  static ceres::CostFunction* Create(const PreRay& r, double a, double inv_sigma) {
+  static ceres::CostFunction* Create(const PreRay& r, double a, double w, double inv_sigma) {
     return new ceres::AutoDiffCostFunction<WallRayCost, 1, 3, 1, 2>(
-        new WallRayCost{r, std::cos(a), std::sin(a), inv_sigma});
+        new WallRayCost{r, std::cos(a), std::sin(a), w, inv_sigma});
   }
 };
 
 // A ray of any other plane, in O': parameters g (3), unit normal (3), distance [mm] (1).
 struct PlaneRayCost {
   PreRay ray;
-  double inv_sigma;
+  double w, inv_sigma;
   template <class T>
-  bool operator()(const T* g, const T* n, const T* d, T* e) const {
-    T p[3];
-    placeInOPrime(ray, g, p);
-    e[0] = (n[0] * p[0] + n[1] * p[1] + n[2] * p[2] - d[0]) * inv_sigma;
+  bool operator()(const T* g, const T* n, const T* dist, T* e) const {
+    T o[3], d[3];
+    rayInOPrime(ray, g, o, d);
+    e[0] = rayPlaneResidual(ray, w, o, d, n, dist[0]) * inv_sigma;
     return true;
   }
-  static ceres::CostFunction* Create(const PreRay& r, double inv_sigma) {
+  static ceres::CostFunction* Create(const PreRay& r, double w, double inv_sigma) {
     return new ceres::AutoDiffCostFunction<PlaneRayCost, 1, 3, 3, 1>(
-        new PlaneRayCost{r, inv_sigma});
+        new PlaneRayCost{r, w, inv_sigma});
   }
 };
 
@@ -211,16 +255,36 @@ SweepState initSweep(const RigASweep& s, const RigASolveOptions& o, const State&
 }
 
 // Unscaled residual [mm] of ray i of plane k of a sweep at the state.
-double residualMm(const State& st, const SweepState& ss, size_t k, size_t i) {
-  double e = 0.0;
+// Plane k of a sweep at the state, in O': unit normal and distance [mm].
+void planeInOPrime(const SweepState& ss, size_t k, Eigen::Vector3d* n, double* dist) {
   if (ss.wall_class[k] >= 0) {
-    WallRayCost c{ss.rays[k][i], std::cos(ss.azimuth[k]), std::sin(ss.azimuth[k]), 1.0};
-    c(st.g, &ss.phi, ss.wall[k].data(), &e);
+    wallNormalInOPrime(std::cos(ss.azimuth[k]), std::sin(ss.azimuth[k]), ss.phi, ss.wall[k].data(),
+                       n->data());
+    *dist = ss.wall[k][1];
   } else {
-    PlaneRayCost c{ss.rays[k][i], 1.0};
-    c(st.g, ss.normal[k].data(), &ss.distance[k], &e);
+    *n = ss.normal[k];
+    *dist = ss.distance[k];
   }
-  return e;
+}
+
+// Unscaled residual [mm] of ray i of plane k of a sweep at the state: its point's distance to
+// the plane.
+double residualMm(const State& st, const SweepState& ss, size_t k, size_t i) {
+  Eigen::Vector3d n, p;
+  double dist = 0.0;
+  planeInOPrime(ss, k, &n, &dist);
+  placeInOPrime(ss.rays[k][i], st.g, p.data());
+  return n.dot(p) - dist;
+}
+
+// The weight of ray i of plane k in the ray-form residual (rayPlaneResidual): n . dir at the
+// state.
+double rayWeight(const State& st, const SweepState& ss, size_t k, size_t i) {
+  Eigen::Vector3d n, o, d;
+  double dist = 0.0;
+  planeInOPrime(ss, k, &n, &dist);
+  rayInOPrime(ss.rays[k][i], st.g, o.data(), d.data());
+  return n.dot(d);
 }
 
 std::vector<double> keptResiduals(const State& st) {
@@ -277,12 +341,14 @@ Built buildProblem(const std::vector<RigASweep>& sweeps, const RigASolveOptions&
     for (size_t k = 0; k < ss.rays.size(); ++k) {
       for (size_t i = 0; i < ss.rays[k].size(); ++i) {
         if (!ss.keep[k][i]) continue;
+        const double w = rayWeight(*st, ss, k, i);
+        if (!(std::fabs(w) >= kMinCosIncidence)) continue;
         if (ss.wall_class[k] >= 0) {
-          b.problem->AddResidualBlock(WallRayCost::Create(ss.rays[k][i], ss.azimuth[k], inv),
+          b.problem->AddResidualBlock(WallRayCost::Create(ss.rays[k][i], ss.azimuth[k], w, inv),
                                       b.loss.get(), st->g, &ss.phi, ss.wall[k].data());
         } else {
-          b.problem->AddResidualBlock(PlaneRayCost::Create(ss.rays[k][i], inv), b.loss.get(), st->g,
-                                      ss.normal[k].data(), &ss.distance[k]);
+          b.problem->AddResidualBlock(PlaneRayCost::Create(ss.rays[k][i], w, inv), b.loss.get(),
+                                      st->g, ss.normal[k].data(), &ss.distance[k]);
         }
       }
       if (ss.wall_class[k] < 0 && b.problem->HasParameterBlock(ss.normal[k].data())) {
@@ -596,6 +662,22 @@ void checkResiduals(const RigASolveOptions& o, State* st, RigCalibration* r) {
   }
 }
 
+// A warning when alpha moves with the offset (each plate seen from one side of the scan
+// plane: half turns), naming what separates them.
+void warnOneSidedPlate(RigCalibration* r) {
+  if (r->correlation.rows() < 2 || !r->parameters[0].observable || !r->parameters[1].observable) {
+    return;
+  }
+  const double c = r->correlation(0, 1);
+  if (!(std::fabs(c) > 0.9)) return;
+  std::ostringstream w;
+  w << "plate.alpha_deg moves with geometry.lidar_offset_x_mm (correlation " << c
+    << "): the sweeps saw each part of the plate from one side of the scan plane, where an "
+       "offset turns it; alpha's sigma is the offset's times ~0.73 deg/mm. Sweeps of a full "
+       "turn (sweepmap calib plan) see it from both sides and separate the two";
+  r->warnings.push_back(w.str());
+}
+
 // alpha as the plates give it with the rays placed with g, the sweeps' attitudes held: the
 // mean of phi_s + the plate's angle in O'.
 double alphaFromPlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
@@ -704,6 +786,7 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
   r.correlation = correlationOf(cov);
   r.rms_after = inlierRms(keptResiduals(st), st.sigma_mm);
   checkResiduals(o, &st, &r);
+  warnOneSidedPlate(&r);
   r.sweeps_used = int(sweeps.size());
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <map>
 #include <random>
 
 #include "calib/axis_offset_lidar.hpp"
@@ -181,6 +182,43 @@ TEST(LidarAxisOffset, SegmentsASweepsPlanesAndDropsEdges) {
   EXPECT_NEAR(r.offset_mm.x(), 16.0, 0.3);
   // A mismatch of points and rays is an error, not a wrong answer.
   EXPECT_THROW(segmentSweepPlanes({}, s.rays, o, "bad"), std::invalid_argument);
+}
+
+TEST(LidarAxisOffset, DropsTheRaysOfADepthEdgeThatPassTheGate) {
+  // A door recess 0.3 m deep in the +x wall, whose jambs' first 20 mm lie within the plane's
+  // gate: without depth_edge_rays they join the wall (20 mm off it); with it they do not.
+  SyntheticSweep s = sweep(Room{}, {16.0, 0, 0}, 0.0, 5);
+  std::vector<char> jamb(s.rays.size(), 0);
+  for (size_t i = 0; i < s.rays.size(); ++i) {
+    const double phi_deg = s.rays[i].phi_rad / kDeg;
+    if (s.face[i] != 1 || phi_deg < 69.0 - 1e-9 || phi_deg > 77.0 + 1e-9) continue;
+    const bool recess = phi_deg >= 70.0 - 1e-9 && phi_deg <= 76.0 + 1e-9;
+    s.rays[i].range_m += recess ? 0.3 : 0.02;
+    jamb[i] = !recess;
+    s.points_Op[i] = (placeRayMm(s.rays[i], {13.9, 0, 0}) * 1e-3).cast<float>();
+  }
+  std::map<std::pair<double, double>, size_t> index;
+  for (size_t i = 0; i < s.rays.size(); ++i) index[{s.rays[i].phi_rad, s.rays[i].theta_rad}] = i;
+  // The jamb's rays and the +x wall's other rays among the planes' rays.
+  const auto jambRaysIn = [&](const std::vector<LidarPlaneRays>& planes) {
+    size_t n = 0, wall = 0;
+    for (const auto& p : planes) {
+      for (const SweepRay& r : p.rays) {
+        const size_t i = index.at({r.phi_rad, r.theta_rad});
+        n += jamb[i] != 0;
+        wall += s.face[i] == 1 && !jamb[i];
+      }
+    }
+    return std::make_pair(n, wall);
+  };
+  PlaneSegmentationOptions o;
+  o.max_rays_per_plane = 0;
+  const auto [kept, wall_before] = jambRaysIn(segmentSweepPlanes(s.points_Op, s.rays, o, "a"));
+  EXPECT_GT(kept, 100u);
+  o.depth_edge_rays = 2;
+  const auto [dropped, wall_after] = jambRaysIn(segmentSweepPlanes(s.points_Op, s.rays, o, "b"));
+  EXPECT_EQ(dropped, 0u);
+  EXPECT_GT(wall_after, wall_before * 9 / 10);  // the rest of the wall stays
 }
 
 TEST(LidarAxisOffset, RejectsEmptyInput) {

@@ -72,6 +72,41 @@ TEST(CalibRig, EveryParameterOfARealisticBuildWithinThreeSigmaAndApplied) {
               j["parameters"]["geometry.scan_plane_tilt_deg"]["value"].get<double>(), 1e-9);
 }
 
+// Half turns see each part of the plate from one side of the scan plane, where an offset turns
+// it like alpha: alpha follows the offset and the command says so. Full turns (the plan's) see
+// it from both sides: alpha separates from the offset and its sigma falls many times.
+TEST(CalibRig, FullTurnsSeparateThePlateAngleFromTheOffset) {
+  const fs::path dir = scratchDir("calib_rig_full_turns");
+  const auto run = [&](const std::string& log, const std::string& name) {
+    const int status = runSplit({"calib", "rig", "--rig", kRig, "--logs", log, "--out",
+                                 (dir / (name + ".yaml")).string(), "--json"},
+                                dir / (name + ".json"), dir / (name + ".err"));
+    EXPECT_EQ(status, 0) << readAll(dir / (name + ".err"));
+    return nlohmann::json::parse(readAll(dir / (name + ".json")));
+  };
+  const auto half = run(realisticLog(), "half");
+  const auto full =
+      run(cachedSimLog("calib_rig_mode7x3_full_turns",
+                       {"--rig", kRig, "--mode", "7", "--sweeps", "3", "--seed", "3", "--set",
+                        "sim.lidar_offset_x_mm=16", "--set", "motor.sweep_angle_deg=360"}),
+          "full");
+  const auto alphaOffset = [](const nlohmann::json& j) {
+    return j["correlation"]["matrix"][0][1].get<double>();
+  };
+  const auto sigmaAlpha = [](const nlohmann::json& j) {
+    return j["parameters"]["plate.alpha_deg"]["sigma"].get<double>();
+  };
+  EXPECT_GT(std::fabs(alphaOffset(half)), 0.9);
+  EXPECT_NE(half["warnings"].dump().find("full turn"), std::string::npos) << half["warnings"];
+  EXPECT_LT(std::fabs(alphaOffset(full)), 0.6);
+  EXPECT_EQ(full["warnings"].dump().find("full turn"), std::string::npos) << full["warnings"];
+  EXPECT_LT(sigmaAlpha(full), sigmaAlpha(half) / 5.0);
+  const auto& a = full["parameters"]["plate.alpha_deg"];
+  EXPECT_LE(std::fabs(a["value"].get<double>() - a["truth"].get<double>()),
+            3.0 * a["sigma"].get<double>())
+      << a;
+}
+
 // Rig C: the plan's plate poses (3, non-parallel), every build error at its default (M, N a
 // few mm off the rig file's, laser tilt 0.2 deg, encoder zero 0.5 deg).
 std::string plateLog(const std::string& seed) {
@@ -157,7 +192,9 @@ TEST(CalibRig, PlanPrintsTheRecordingAndItsSimCommand) {
   const fs::path dir = scratchDir("calib_plan");
   ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_a"}, dir / "out.txt", dir / "err.txt"), 0);
   const std::string plan = readAll(dir / "out.txt");
-  EXPECT_NE(plan.find("sweepmap sim --rig rig_a --set motor.mode=7 --sweeps 10"), std::string::npos)
+  EXPECT_NE(plan.find("sweepmap sim --rig rig_a --set motor.mode=7 --set motor.sweep_angle_deg=360 "
+                      "--sweeps 10"),
+            std::string::npos)
       << plan;
   EXPECT_NE(plan.find("Why"), std::string::npos);
   ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_c"}, dir / "c.txt", dir / "err.txt"), 0);

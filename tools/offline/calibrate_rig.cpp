@@ -154,6 +154,47 @@ int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
   });
 }
 
+// Rig A's plan: the recording and why.
+void printRigAPlan(const std::string& rig_name, const RotatingLidarConfig& rig_a) {
+  const RigARecording r;
+  const ScanMode mode = scanMode(r.mode);
+  // Each sweep: the window, the ramps and homing (~3 s), the return at the move speed.
+  const double minutes =
+      r.sweeps * (mode.period_s + 3.0 + r.sweep_angle_deg / rig_a.motor.move_speed_deg_s) / 60.0;
+  std::cout
+      << "What to record for `sweepmap calib rig --rig " << rig_name << "` (rotating_lidar):\n"
+      << "  scene:    a closed rectangular room, 4 to 10 m, its four walls in view over most of "
+         "their height; the rig on its stand square to the walls (its front, X, facing one "
+         "wall) and well inside the room (1 m or more from every wall); the plate clear.\n"
+      << "            Why: the walls' planes fix each sweep's attitude and bend with the offset, "
+         "the tilt and the mirror offset (the plane constraint); the plate angle alpha is "
+         "defined against the walls (Yuan 2021 section 4.2). Clutter on the walls, people "
+         "walking, a window are tolerated; a room with few plain walls is not.\n"
+      << "  sweeps:   " << r.sweeps << ", mode " << r.mode << ", each a full turn (motor."
+      << "sweep_angle_deg=" << r.sweep_angle_deg << ": " << mode.period_s << " s, gamma "
+      << mode.gamma_deg * r.sweep_angle_deg / 180.0
+      << " deg), rig standing still; the lidar's cable must allow one turn (the motor turns "
+         "back after each sweep)\n"
+      << "            Why: a full turn shows the plate and every wall from both sides of the "
+         "scan plane. In a half turn each part of the plate is seen from one side, and 1 mm of "
+         "lidar-to-axis offset turns it by ~0.73 deg (it sits 55-111 mm from the axis): alpha "
+         "is then only as good as the offset the walls give (10 sweeps: sigma ~0.15 mm, so "
+         "alpha ~0.11 deg). Seen from both sides, the offset turns the plate's two views "
+         "opposite ways and doubles each wall: alpha's sigma falls to ~0.005 deg, the offset's "
+         "to ~0.1 mm, from 10 sweeps (both fall as 1/sqrt(sweeps)). Half turns (the rig's "
+         "sweep angle) still calibrate, with those larger sigmas.\n"
+      << "  duration: about " << std::fixed << std::setprecision(1) << minutes
+      << " min (sweeps, returns and homing)\n"
+      << "  record:   sweepmap record --rig " << rig_name
+      << " --out calib.lcmlog (live, the motor run from a rig file with motor.sweep_angle_deg: "
+      << r.sweep_angle_deg << "), or lcm-logger\n"
+      << "  simulate: sweepmap sim --rig " << rig_name << " --set motor.mode=" << r.mode
+      << " --set motor.sweep_angle_deg=" << r.sweep_angle_deg << " --sweeps " << r.sweeps
+      << " --out calib.lcmlog\n"
+      << "  then:     sweepmap calib rig --rig " << rig_name
+      << " --logs calib.lcmlog --out rig_calibration.yaml\n";
+}
+
 }  // namespace
 
 int reportRigCalibration(const RigCalibRequest& o, const Rig& loaded, double read_s,
@@ -219,34 +260,7 @@ int printCalibrationPlan(const std::string& rig_name, const std::vector<std::str
   }
   if (rig.kind() == RigKind::kRotatingProfile) return printProfileRigPlan(rig_name, rig);
   if (rig.kind() == RigKind::kMobileLidar) return printMobileLidarRigPlan(rig_name, rig);
-  const RigARecording r;
-  const ScanMode mode = scanMode(r.mode);
-  const double minutes = r.sweeps * (mode.period_s + 3.0) / 60.0;
-  std::cout
-      << "What to record for `sweepmap calib rig --rig " << rig_name << "` (rotating_lidar):\n"
-      << "  scene:    a closed rectangular room, 4 to 10 m, its four walls in view over most of "
-         "their height; the rig on its stand square to the walls (its front, X, facing one "
-         "wall) and well inside the room (1 m or more from every wall); the plate clear.\n"
-      << "            Why: the walls' planes fix each sweep's attitude and bend with the offset, "
-         "the tilt and the mirror offset (the plane constraint); the plate angle alpha is "
-         "defined against the walls (Yuan 2021 section 4.2). Clutter on the walls, people "
-         "walking, a window are tolerated; a room with few plain walls is not.\n"
-      << "  sweeps:   " << r.sweeps << ", mode " << r.mode << " (" << mode.period_s
-      << " s each, gamma " << mode.gamma_deg << " deg), rig standing still\n"
-      << "            Why: mode " << r.mode
-      << " gives the densest walls (offset and tilt) "
-         "and the most plate rays per sweep. alpha's sigma is mostly the offset's: the plate "
-         "sits 55-111 mm from the axis and each sweep sees it from one side, so 1 mm of offset "
-         "turns it by ~0.73 deg; both fall as 1/sqrt(sweeps) (10 sweeps: ~0.15 mm, ~0.1 deg).\n"
-      << "  duration: about " << std::fixed << std::setprecision(1) << minutes
-      << " min (sweeps, returns and homing)\n"
-      << "  record:   sweepmap record --rig " << rig_name
-      << " --out calib.lcmlog (live), or "
-         "lcm-logger\n"
-      << "  simulate: sweepmap sim --rig " << rig_name << " --set motor.mode=" << r.mode
-      << " --sweeps " << r.sweeps << " --out calib.lcmlog\n"
-      << "  then:     sweepmap calib rig --rig " << rig_name
-      << " --logs calib.lcmlog --out rig_calibration.yaml\n";
+  printRigAPlan(rig_name, std::get<RotatingLidarConfig>(rig.config));
   return 0;
 }
 

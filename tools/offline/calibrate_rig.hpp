@@ -31,10 +31,12 @@ int calibrateRigFromLogs(const RigCalibRequest& request);
 // that recording in simulation, on stdout. Returns the exit status (2: bad rig).
 int printCalibrationPlan(const std::string& rig, const std::vector<std::string>& sets);
 
-// The recommended recording of rig A, for the plan and the tests.
+// The recommended recording of rig A, for the plan and the tests: sweeps of a full turn, so
+// that the lidar sees the plate and the room from both sides of its scan plane.
 struct RigARecording {
   int mode = 7;
   int sweeps = 10;
+  int sweep_angle_deg = 360;
 };
 
 }  // namespace sweepmap
