@@ -513,6 +513,57 @@ void OccupancyMap::saveBinaryAtomic(const std::string& path) const {
   writeFileAtomic(path, bytes.str());
 }
 
+namespace {
+
+constexpr int32_t kKeyCentre = 32768;  // the key of index 0 (OcTree's tree_max_val, 16 levels)
+
+VoxelIndex indexOf(const octomap::OcTreeKey& k) {
+  return {int32_t{k[0]} - kKeyCentre, int32_t{k[1]} - kKeyCentre, int32_t{k[2]} - kKeyCentre};
+}
+
+}  // namespace
+
+void OccupancyMap::trackChanges() { impl_->tree.enableChangeDetection(true); }
+
+VoxelChanges OccupancyMap::takeChanges() {
+  octomap::OcTree& tree = impl_->tree;
+  VoxelChanges out;
+  for (auto it = tree.changedKeysBegin(); it != tree.changedKeysEnd(); ++it) {
+    const octomap::OcTreeNode* node = tree.search(it->first);  // a pruned block: its node
+    const bool occupied_now = node != nullptr && tree.isNodeOccupied(node);
+    // it->second: the leaf was created (unknown before), else its occupancy flipped.
+    if (occupied_now) {
+      out.occupied.push_back(indexOf(it->first));
+    } else if (!it->second) {
+      out.freed.push_back(indexOf(it->first));
+    }
+  }
+  tree.resetChangeDetection();
+  std::sort(out.occupied.begin(), out.occupied.end());  // the hash map's order must not leak
+  std::sort(out.freed.begin(), out.freed.end());
+  return out;
+}
+
+std::vector<VoxelIndex> OccupancyMap::occupiedVoxels() const {
+  const octomap::OcTree& tree = impl_->tree;
+  std::vector<VoxelIndex> out;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const int n = 1 << (tree.getTreeDepth() - it.getDepth());  // voxels a side
+    const octomap::OcTreeKey key = it.getKey();
+    octomap::OcTreeKey lo;
+    for (int a = 0; a < 3; ++a) lo[a] = static_cast<octomap::key_type>(key[a] & ~(n - 1));
+    const VoxelIndex i0 = indexOf(lo);
+    for (int x = 0; x < n; ++x) {
+      for (int y = 0; y < n; ++y) {
+        for (int z = 0; z < n; ++z) out.push_back({i0[0] + x, i0[1] + y, i0[2] + z});
+      }
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
 OccupancyMap OccupancyMap::loadBinary(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw std::runtime_error("cannot open " + path);
