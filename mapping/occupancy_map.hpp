@@ -97,8 +97,10 @@ class OccupancyMap {
   int64_t skippedPoints() const;
   const MapperConfig& config() const;
 
-  // Starts recording which voxels change occupancy (OctoMap's change detection: every leaf
-  // update notes its key when the leaf is new or its occupancy flips), for takeChanges().
+  // Starts recording which voxels change occupancy, for takeChanges(): a set of the occupied
+  // voxels is kept beside the tree, updated by each leaf update that can change a voxel's
+  // occupancy (see ChangeTracker in the .cpp; cheaper than OctoMap's change detection, which
+  // notes every new free leaf).
   void trackChanges();
   // The voxels whose occupancy changed since trackChanges() or the last takeChanges(), judged
   // on the tree as it is now (a voxel that flipped and flipped back is in neither list); the
