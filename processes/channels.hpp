@@ -18,7 +18,7 @@ constexpr const char* kSweepStatus = "SWEEP_STATUS";  // sweep_status_t
 constexpr const char* kMapStats = "MAP_STATS";        // map_stats_t
 constexpr const char* kMapSave = "MAP_SAVE";          // map_save_t
 constexpr const char* kMapUpdate =
-    "MAP_UPDATE";  // map_update_t: the voxels each map update made occupied or freed
+    "MAP_UPDATE";  // map_update_t, the voxels each map update made occupied or freed
 constexpr const char* kWheelTicks = "WHEEL_TICKS";        // wheel_ticks_t, raw (rig B)
 constexpr const char* kImu = "IMU";                       // imu_t, raw (rig B)
 constexpr const char* kWheelCmd = "WHEEL_CMD";            // wheel_cmd_t, to the wheel board

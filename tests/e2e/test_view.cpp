@@ -394,8 +394,8 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   expectHueFollows(colour["height"], "height");
 }
 
-// A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps,
-// back to the start none, between the two sweeps' clouds one.
+// A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps and
+// the mapper's final voxels, back to the start none, between the two sweeps' clouds one.
 TEST_P(ViewTest, TimeSliderReplaysALog) {
   const auto dir = scratchDir("view_log_" + GetParam());
   procs.setDir(dir);
@@ -440,6 +440,14 @@ TEST_P(ViewTest, TimeSliderReplaysALog) {
   }
   EXPECT_GT(page["seeks"][0]["points_drawn"].get<int64_t>(),
             page["seeks"][2]["points_drawn"].get<int64_t>());
+  // The replay's mapper recorded MAP_UPDATE: at the end the page draws its final map.
+  const std::vector<Message> stats = readChannel(derived, channels::kMapStats);
+  ASSERT_FALSE(stats.empty());
+  map_stats_t last;
+  ASSERT_TRUE(decodeMessage(stats.back(), &last));
+  EXPECT_EQ(page["seeks"][0]["voxel_source"], "mapper");
+  EXPECT_EQ(page["seeks"][0]["voxels"].get<int64_t>(), last.occupied_voxels);
+  EXPECT_EQ(page["seeks"][1]["voxels"], 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Browser, ViewTest, ::testing::Values("chromium", "firefox"),

@@ -115,6 +115,36 @@ TEST(MapUpdate, StreamRebuildsTheOccupiedVoxelsIncludingFreedOnes) {
   EXPECT_GT(rx.chunks, rx.last_seq) << "the first update (6464 voxels) is one chunk";
 }
 
+// OccupancyMap's changes alone, over both ways of insertion (its own discretized one, and
+// OctoMap's insertPointCloud, whose updates the tracker does not see) and a map that had voxels
+// before tracking began: applied in turn, they give occupiedVoxels() after every insertion.
+TEST(MapUpdate, ChangesFollowEveryInsertModeFromAnyStart) {
+  OccupancyMap map(MapperConfig{});
+  std::vector<Eigen::Vector3f> wall;
+  for (int i = 0; i < 400; ++i) wall.emplace_back(1.5f, -1.0f + 0.005f * i, 0.1f * (i % 7));
+  map.insertCloud(wall, Eigen::Vector3f::Zero());
+  map.trackChanges();
+  std::set<Voxel> rebuilt;
+  for (const Voxel& v : map.occupiedVoxels()) rebuilt.insert(v);
+  const InsertMode modes[] = {InsertMode::kDiscretized, InsertMode::kEveryRay,
+                              InsertMode::kOctomapDiscretized};
+  int64_t freed = 0;
+  for (int k = 0; k < 9; ++k) {
+    std::vector<Eigen::Vector3f> far;
+    for (const auto& p : wall) far.emplace_back(p.x() + 0.5f + 0.1f * (k % 3), p.y(), p.z());
+    map.insertCloud(far, Eigen::Vector3f(0.0f, 0.01f * k, 0.0f), modes[k % 3]);
+    const VoxelChanges c = map.takeChanges();
+    EXPECT_TRUE(std::is_sorted(c.occupied.begin(), c.occupied.end()));
+    EXPECT_TRUE(std::is_sorted(c.freed.begin(), c.freed.end()));
+    for (const Voxel& v : c.occupied) EXPECT_TRUE(rebuilt.insert(v).second);
+    for (const Voxel& v : c.freed) EXPECT_EQ(rebuilt.erase(v), 1u);
+    freed += static_cast<int64_t>(c.freed.size());
+    EXPECT_EQ(asVector(rebuilt), map.occupiedVoxels()) << "after insertion " << k;
+  }
+  EXPECT_GT(freed, 0);
+  EXPECT_TRUE(map.takeChanges().occupied.empty());
+}
+
 // A mobile rig's batches (mapper.batch_s): one update per batch, flushed at finish().
 TEST(MapUpdate, BatchesPublishOneUpdateEach) {
   MapperConfig c;
