@@ -10,7 +10,8 @@
 //   /map           foxglove.PointCloud      centres of the mapper's occupied voxels, kept from
 //                                           MAP_UPDATE; at most once per second of log time,
 //                                           after an update's last chunk, SWEEP_STATUS or
-//                                           MAP_STATS (at once on the first update), and from finish().
+//                                           MAP_STATS (at once on the first update), and
+//                                           from finish().
 //                                           Until a MAP_UPDATE comes (a log recorded before the
 //                                           mapper published it), the voxels a cloud point fell
 //                                           in, at the rig's mapper resolution.
