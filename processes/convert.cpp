@@ -218,6 +218,7 @@ std::string validateMapUpdate(const map_update_t& m) {
     return "noccupied " + std::to_string(m.noccupied) + " / nfreed " + std::to_string(m.nfreed) +
            " do not match their arrays";
   }
+  if (m.full && m.total_freed != 0) return "a full update frees voxels";
   if (m.noccupied > m.total_occupied || m.nfreed > m.total_freed) {
     return "a chunk holds more voxels than its update";
   }

@@ -52,8 +52,9 @@ std::vector<map_update_t> toMapUpdates(const std::vector<std::array<int32_t, 3>>
                                        const map_update_t& header,
                                        int chunk_voxels = kMapUpdateChunkVoxels);
 // Empty when valid, else the reason: seq >= 1, a chunk index inside its count, counts that
-// match their arrays and stay within the update's totals and kMapUpdateChunkVoxels, a finite
-// resolution > 0, indices inside OctoMap's +-2^15 voxels, occupied_voxels >= 0.
+// match their arrays and stay within the update's totals (a full update's freed: 0) and
+// kMapUpdateChunkVoxels, a finite resolution > 0, indices inside OctoMap's +-2^15 voxels,
+// occupied_voxels >= 0.
 std::string validateMapUpdate(const map_update_t& msg);
 
 truth_shaft_t toLcm(const ShaftSegment& segment, int64_t utime);

@@ -212,10 +212,12 @@ void MapperNode::autosave() {
 }
 
 void MapperNode::publishUpdate(int64_t now_utime, int64_t sweep_id, Outbox& out) {
-  const VoxelChanges changes = map_->takeChanges();
+  VoxelChanges changes = map_->takeChanges();
   map_update_t header{};
   header.utime = last_sweep_utime_;
   header.seq = ++update_seq_;
+  header.full = (header.seq - 1) % kFullUpdateEvery == 0;  // a late viewer catches up
+  if (header.full) changes = VoxelChanges{map_->occupiedVoxels(), {}};
   header.sweep_id = sweep_id;
   header.resolution_m = map_->config().resolution_m;
   header.occupied_voxels = map_->stats().occupied_voxels;

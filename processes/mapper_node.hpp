@@ -27,6 +27,8 @@ namespace sweepmap {
 
 class MapperNode : public Node {
  public:
+  // MAP_UPDATE number 1, 1 + kFullUpdateEvery, ... lists the whole occupied set (`full`).
+  static constexpr int64_t kFullUpdateEvery = 20;
   // `save_path`: where the map goes at finish() and on a MAP_SAVE request ("" = none). A
   // request may name another file, but only inside save_path's directory. `save_every` > 0:
   // also after every that many map updates (a sweep, or a batch of a mobile rig), so that a

@@ -282,6 +282,7 @@ void FoxgloveConverter::State::mapUpdate(const map_update_t& m) {
     force_map = true;
   }
   from_mapper = true;
+  if (m.full && m.chunk_index == 0) voxels.clear();  // its chunks list every occupied voxel
   resolution_m = m.resolution_m;
   for (const auto& v : m.occupied) voxels.emplace(v[0], v[1], v[2]);
   for (const auto& v : m.freed) voxels.erase({v[0], v[1], v[2]});

@@ -21,8 +21,7 @@ async function check(page, out, sweeps, timeoutS, screenshot) {
     const v = window.sweepmapView;
     return { check: v.lastCheck, points_drawn: v.pointsDrawn(), sweeps: v.sweeps(),
       voxels: v.voxels(), voxel_source: v.voxelSource(), extent: v.extent(0.01), status: v.status,
-      mode: v.mode,
-      latencies_ms: v.latenciesMs };
+      mode: v.mode, latencies_ms: v.latenciesMs };
   }));
   out.non_blank = await nonBlankFraction(page);
   if (screenshot) await page.screenshot({ path: screenshot });

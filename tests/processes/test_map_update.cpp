@@ -57,14 +57,23 @@ struct Receiver {
   std::set<Voxel> occupied;
   int64_t last_seq = 0, freed = 0, chunks = 0, last_total = -1;
   size_t max_chunk_voxels = 0;
+  int64_t join_seq = 1;  // updates before this one are not seen (a viewer started late)
+  bool synced = true;    // false until a full update when join_seq > 1
   void apply(const Message& m) {
     map_update_t u;
     ASSERT_TRUE(decodeMessage(m, &u));
     ASSERT_EQ(validateMapUpdate(u), "");
-    EXPECT_TRUE(u.seq == last_seq || u.seq == last_seq + 1) << u.seq;
+    if (u.seq < join_seq) return;
+    EXPECT_TRUE(u.seq == last_seq || u.seq == last_seq + 1 || last_seq == 0) << u.seq;
+    EXPECT_EQ(u.full, (u.seq - 1) % MapperNode::kFullUpdateEvery == 0) << u.seq;
     last_seq = u.seq;
     ++chunks;
     max_chunk_voxels = std::max(max_chunk_voxels, u.occupied.size() + u.freed.size());
+    if (u.full && u.chunk_index == 0) {
+      occupied.clear();
+      synced = true;
+    }
+    if (!synced) return;
     for (const auto& v : u.occupied) EXPECT_TRUE(occupied.insert({v[0], v[1], v[2]}).second);
     for (const auto& v : u.freed) EXPECT_EQ(occupied.erase({v[0], v[1], v[2]}), 1u);
     freed += u.nfreed;
@@ -81,7 +90,7 @@ void deliver(MapperNode& node, const std::vector<Message>& msgs, Receiver* rx) {
     for (const Message& o : out.take()) {
       if (o.channel == channels::kMapUpdate) rx->apply(o);
       map_stats_t s;
-      if (o.channel == channels::kMapStats && decodeMessage(o, &s)) {
+      if (o.channel == channels::kMapStats && rx->synced && decodeMessage(o, &s)) {
         EXPECT_EQ(s.occupied_voxels, static_cast<int64_t>(rx->occupied.size()));
         EXPECT_EQ(rx->last_total, s.occupied_voxels);
       }
@@ -143,6 +152,20 @@ TEST(MapUpdate, ChangesFollowEveryInsertModeFromAnyStart) {
   }
   EXPECT_GT(freed, 0);
   EXPECT_TRUE(map.takeChanges().occupied.empty());
+}
+
+// A viewer that starts after the mapper has the mapper's voxels from the next full update on.
+TEST(MapUpdate, ALateViewerCatchesUpAtTheNextFullUpdate) {
+  MapperNode node(MapperConfig{}, "");
+  Receiver rx;
+  rx.join_seq = 4;
+  rx.synced = false;
+  for (int64_t id = 0; id <= MapperNode::kFullUpdateEvery; ++id) {
+    deliver(node, sweep(id, id % 4 ? 3.0f : 2.0f, id == 2), &rx);
+  }
+  EXPECT_EQ(rx.last_seq, MapperNode::kFullUpdateEvery + 1);
+  EXPECT_TRUE(rx.synced);
+  EXPECT_EQ(asVector(rx.occupied), node.map().occupiedVoxels());
 }
 
 // A mobile rig's batches (mapper.batch_s): one update per batch, flushed at finish().
@@ -247,6 +270,7 @@ TEST(MapUpdate, ValidationRefusesEachBadField) {
       {"outside", [](map_update_t& m) { m.occupied[1][2] = 40000; }},
       {"outside", [](map_update_t& m) { m.freed[0][0] = -32769; }},
       {"not 3 indices", [](map_update_t& m) { m.freed[0].pop_back(); }},
+      {"full update frees", [](map_update_t& m) { m.full = true; }},
   };
   for (const auto& [what, spoil] : cases) {
     map_update_t m = validUpdate();

@@ -144,10 +144,13 @@ TEST(ViewModel, VoxelsAreSentOnceAndMalformedChunksAreCounted) {
 }
 
 Message mapUpdate(int64_t seq, std::vector<std::vector<int32_t>> occupied,
-                  std::vector<std::vector<int32_t>> freed, int64_t total) {
+                  std::vector<std::vector<int32_t>> freed, int64_t total, bool full = false,
+                  int chunk_index = 0, int chunk_count = 1) {
   map_update_t u{};
   u.seq = seq;
-  u.chunk_count = 1;
+  u.full = full;
+  u.chunk_index = chunk_index;
+  u.chunk_count = chunk_count;
   u.resolution_m = 0.1;
   u.total_occupied = u.noccupied = static_cast<int32_t>(occupied.size());
   u.total_freed = u.nfreed = static_cast<int32_t>(freed.size());
@@ -209,6 +212,17 @@ TEST(ViewModel, MapUpdatesDriveTheVoxels) {
   EXPECT_EQ(m.voxels(), 2u);
   m.add(mapUpdate(1, {{9, 9, 9}}, {}, 1), 0);  // the mapper started again
   EXPECT_EQ(pageVoxels(r.frames), (std::set<std::array<int32_t, 3>>{{9, 9, 9}}));
+  // A full update in two chunks: what it does not list goes once both came; with one lost,
+  // nothing goes and a gap is counted.
+  m.add(mapUpdate(2, {{1, 1, 1}}, {}, 2, true, 0, 2), 0);
+  m.add(mapUpdate(2, {{2, 2, 2}}, {}, 2, true, 1, 2), 0);
+  const std::set<std::array<int32_t, 3>> full = {{1, 1, 1}, {2, 2, 2}};
+  EXPECT_EQ(pageVoxels(r.frames), full);
+  EXPECT_EQ(pageVoxels(m.snapshot()), full);
+  const int64_t gaps = m.counters().map_update_gaps;
+  m.add(mapUpdate(3, {{3, 3, 3}}, {}, 2, true, 1, 2), 0);  // chunk 0 lost
+  EXPECT_EQ(m.counters().map_update_gaps, gaps + 1);
+  EXPECT_EQ(m.voxels(), 3u);
 }
 
 ViewFrame frame(ViewFrame::Kind kind, size_t bytes, const std::string& key = "") {

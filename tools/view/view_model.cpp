@@ -141,6 +141,8 @@ void ViewModel::reset() {
   voxels_from_mapper_ = false;
   mapper_res_ = 0.0;
   last_update_seq_ = 0;
+  full_seq_ = 0;
+  full_keys_.clear();
   counters_.mapper_occupied_voxels = -1;
   path_.clear();
   last_pose_.clear();
@@ -282,7 +284,8 @@ void ViewModel::addVoxels(const std::vector<float>& xyz) {
 double ViewModel::voxelRes() const { return voxels_from_mapper_ ? mapper_res_ : options_.voxel_m; }
 
 // One MAP_UPDATE chunk: its voxels added to and removed from the set, and the same to the
-// pages (a "voxels" control frame first, which empties the pages' voxels).
+// pages (a "voxels" control frame first, which empties the pages' voxels). A full update's
+// chunks list every occupied voxel: once all of them came, the voxels they did not list go.
 void ViewModel::addMapUpdate(const Message& msg) {
   map_update_t u;
   if (!decodeMessage(msg.data.data(), msg.data.size(), &u) || !validateMapUpdate(u).empty()) {
@@ -305,10 +308,19 @@ void ViewModel::addMapUpdate(const Message& msg) {
   }
   last_update_seq_ = std::max(last_update_seq_, u.seq);
   counters_.mapper_occupied_voxels = u.occupied_voxels;
+  if (u.full && u.chunk_index == 0) {
+    full_seq_ = u.seq;
+    full_chunks_ = 0;
+    full_keys_.clear();
+  }
+  const bool in_full = u.full && u.seq == full_seq_;
+  full_chunks_ += in_full ? 1 : 0;
   std::vector<uint64_t> added, removed;
   for (const auto& v : u.occupied) {
     uint64_t key;
-    if (!packIndex(v, &key) || voxels_.count(key)) continue;
+    if (!packIndex(v, &key)) continue;
+    if (in_full) full_keys_.insert(key);
+    if (voxels_.count(key)) continue;
     if (voxels_.size() >= options_.max_voxels) {
       ++counters_.voxels_refused;
       continue;
@@ -320,8 +332,27 @@ void ViewModel::addMapUpdate(const Message& msg) {
     uint64_t key;
     if (packIndex(v, &key) && voxels_.erase(key)) removed.push_back(key);
   }
+  if (u.full && u.chunk_index == u.chunk_count - 1) removed = endFullUpdate(u.seq, u.chunk_count);
   if (!added.empty()) sink_(bulk(voxelFrame(added, mapper_res_), true));
   if (!removed.empty()) sink_(bulk(voxelFrame(removed, mapper_res_, kVoxelsRemoved), true));
+}
+
+// The last chunk of a full update: with every chunk received, the voxels it did not list are
+// no longer occupied (returned, sorted); with one missing, nothing is removed and a gap counted.
+std::vector<uint64_t> ViewModel::endFullUpdate(int64_t seq, int chunk_count) {
+  std::vector<uint64_t> gone;
+  if (full_seq_ != seq || full_chunks_ != chunk_count) {
+    ++counters_.map_update_gaps;
+  } else {
+    for (const auto& [key, hits] : voxels_) {
+      if (!full_keys_.count(key)) gone.push_back(key);
+    }
+    std::sort(gone.begin(), gone.end());
+    for (const uint64_t key : gone) voxels_.erase(key);
+  }
+  full_seq_ = 0;
+  full_keys_.clear();
+  return gone;
 }
 
 void ViewModel::addPose(const Message& msg) {

@@ -17,7 +17,9 @@
 // log recorded before the mapper published it, or no mapper running), a fallback: the voxels
 // the cloud points fall in at the mapper's resolution (a voxel shown occupied from its first
 // point; rays clearing space are not modelled). The first MAP_UPDATE replaces those with the
-// mapper's voxels (a "voxels" control frame tells the pages the source).
+// mapper's voxels (a "voxels" control frame tells the pages the source). A full update (the
+// mapper's first, and every 20th) lists every occupied voxel: a view started late, or one that
+// lost an update, has the mapper's set again after it.
 #pragma once
 
 #include <cstdint>
@@ -26,6 +28,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "processes/node.hpp"
@@ -83,7 +86,8 @@ struct ViewModelCounters {
   int64_t voxels_refused = 0;       // new voxels beyond max_voxels
   int64_t map_updates = 0;          // MAP_UPDATE chunks applied
   int64_t map_updates_invalid = 0;  // MAP_UPDATE chunks refused (validateMapUpdate), in malformed
-  int64_t map_update_gaps = 0;      // updates missed (a jump in seq): the voxels may differ
+  int64_t map_update_gaps = 0;      // updates (or a full update's chunks) missed: the voxels may
+                                    // differ until the next full update
   int64_t mapper_occupied_voxels = -1;  // the mapper's count after the last update (-1: none)
 };
 
@@ -131,6 +135,7 @@ class ViewModel {
   void thin(ViewSweep& s);
   void addVoxels(const std::vector<float>& xyz);
   void addMapUpdate(const Message& msg);
+  std::vector<uint64_t> endFullUpdate(int64_t seq, int chunk_count);
   double voxelRes() const;
   void addPose(const Message& msg);
   void addScan(const Message& msg);
@@ -150,7 +155,10 @@ class ViewModel {
   bool voxels_from_mapper_ = false;
   double mapper_res_ = 0.0;  // MAP_UPDATE's resolution
   int64_t last_update_seq_ = 0;
-  std::vector<float> path_;  // x, y pairs [m]
+  int64_t full_seq_ = 0;                    // the full update being received (0: none)
+  int full_chunks_ = 0;                     // its chunks received
+  std::unordered_set<uint64_t> full_keys_;  // the voxels its chunks listed
+  std::vector<float> path_;                 // x, y pairs [m]
   std::string last_pose_;
   int64_t last_scan_utime_ = 0;
   std::shared_ptr<const std::string> last_scan_;
