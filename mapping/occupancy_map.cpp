@@ -237,11 +237,78 @@ class IncrementalFinalizer {
   bool all_dirty_ = true;
 };
 
+uint64_t packKey(const octomap::OcTreeKey& k) {
+  return (uint64_t{k[2]} << 32) | (uint64_t{k[1]} << 16) | k[0];
+}
+
+// Which full-depth voxels are occupied, kept beside the tree as the insertion updates it, and
+// each one's state at the last take(). OctoMap's own change detection notes every new leaf (a
+// sweep's millions of new free voxels) in a hash map; here a leaf update costs a hash operation
+// only when it can change the voxel's occupancy: a hit, or a miss that leaves the voxel's
+// log-odds in [log-odds(prob_miss), 0), the only values a miss reaches from an occupied voxel
+// (>= 0) or from a new one (0, i.e. unknown before). A miss that leaves it >= 0 left it occupied,
+// one below that found it free already (or clamped, unchanged).
+class ChangeTracker {
+ public:
+  bool on() const { return on_; }
+  void start(std::vector<uint64_t> occupied) {
+    on_ = true;
+    occupied_ = std::unordered_set<uint64_t>(occupied.begin(), occupied.end());
+    before_.clear();
+  }
+  void afterHit(const octomap::OcTree& tree, const octomap::OcTreeKey& k,
+                const octomap::OcTreeNode* leaf) {
+    if (on_ && leaf != nullptr) set(packKey(k), tree.isNodeOccupied(leaf));
+  }
+  void afterMiss(const octomap::OcTree& tree, const octomap::OcTreeKey& k,
+                 const octomap::OcTreeNode* leaf) {
+    if (!on_ || leaf == nullptr) return;
+    const float l = leaf->getLogOdds();
+    if (l < tree.getOccupancyThresLog() && l >= tree.getProbMissLog()) set(packKey(k), false);
+  }
+  // Brings the set to `occupied` (after an insertion whose updates were not seen).
+  void resync(const std::vector<uint64_t>& occupied) {
+    const std::unordered_set<uint64_t> now(occupied.begin(), occupied.end());
+    std::vector<uint64_t> gone;
+    for (const uint64_t k : occupied_) {
+      if (!now.count(k)) gone.push_back(k);
+    }
+    for (const uint64_t k : gone) set(k, false);
+    for (const uint64_t k : occupied) set(k, true);
+  }
+  // The keys whose state differs from the last take(), as (key, occupied now); then forgets.
+  std::vector<std::pair<uint64_t, bool>> take() {
+    std::vector<std::pair<uint64_t, bool>> out;
+    for (const auto& [k, was] : before_) {
+      const bool now = occupied_.count(k) > 0;
+      if (now != was) out.emplace_back(k, now);
+    }
+    before_.clear();
+    return out;
+  }
+
+ private:
+  void set(uint64_t k, bool occupied) {
+    const bool was = occupied_.count(k) > 0;
+    if (was == occupied) return;
+    before_.emplace(k, was);  // the first change since the last take keeps its state then
+    if (occupied) {
+      occupied_.insert(k);
+    } else {
+      occupied_.erase(k);
+    }
+  }
+  bool on_ = false;
+  std::unordered_set<uint64_t> occupied_;
+  std::unordered_map<uint64_t, bool> before_;
+};
+
 // octomap's discretized insertion (computeDiscreteUpdate + computeUpdate), with the ray
 // keys collected in a bitmap over the sweep's key box instead of a hash set: the same
 // voxels get the same single update, about twice as fast.
 void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::Pointcloud& cloud,
-                       const octomap::point3d& origin, IncrementalFinalizer* touched) {
+                       const octomap::point3d& origin, IncrementalFinalizer* touched,
+                       ChangeTracker* changes) {
   octomap::OcTreeKey origin_key;
   if (!tree.coordToKeyChecked(origin, origin_key)) {
     throw std::invalid_argument("OccupancyMap::insertCloud: sensor origin outside the map");
@@ -297,12 +364,12 @@ void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::P
   free_bits.forEach([&](const octomap::OcTreeKey& k) {
     if (!occupied_bits.test(k)) {
       touched->markDirty(k);
-      tree.updateNode(k, false, /*lazy_eval=*/true);
+      changes->afterMiss(tree, k, tree.updateNode(k, false, /*lazy_eval=*/true));
     }
   });
   for (const auto& k : occupied) {
     touched->markDirty(k);
-    tree.updateNode(k, true, /*lazy_eval=*/true);
+    changes->afterHit(tree, k, tree.updateNode(k, true, /*lazy_eval=*/true));
   }
 }
 
@@ -332,6 +399,9 @@ struct OccupancyMap::Impl {
   MapStats cached_stats;
   bool stats_valid = false;
   IncrementalFinalizer finalizer;
+  ChangeTracker changes;
+  // The packed keys of every occupied full-depth voxel, from the tree.
+  std::vector<uint64_t> occupiedKeys() const;
 };
 
 OccupancyMap::OccupancyMap(const MapperConfig& config)
@@ -371,11 +441,12 @@ void OccupancyMap::Impl::castCloud(const std::vector<Eigen::Vector3f>& points_m,
   // (then pruned, see finalize()), instead of after every leaf update; the same tree,
   // about 1.4x faster.
   if (mode == InsertMode::kDiscretized) {
-    insertDiscretized(tree, config.max_range_m, cloud, origin, &finalizer);
+    insertDiscretized(tree, config.max_range_m, cloud, origin, &finalizer, &changes);
   } else {
     finalizer.markAllDirty();
     tree.insertPointCloud(cloud, origin, config.max_range_m, /*lazy_eval=*/true,
                           mode == InsertMode::kOctomapDiscretized);
+    if (changes.on()) changes.resync(occupiedKeys());  // its updates were not seen
   }
   points += static_cast<int64_t>(cloud.size());
   ++sweeps;
@@ -511,6 +582,60 @@ void OccupancyMap::saveBinaryAtomic(const std::string& path) const {
   writeBinaryQuietly(impl_->tree, bytes);
   if (!bytes) throw std::runtime_error("cannot save " + path + ": OctoMap serialisation failed");
   writeFileAtomic(path, bytes.str());
+}
+
+namespace {
+
+constexpr int32_t kKeyCentre = 32768;  // the key of index 0 (OcTree's tree_max_val, 16 levels)
+
+octomap::OcTreeKey unpackKey(uint64_t p) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(p & 0xffff),
+                            static_cast<octomap::key_type>((p >> 16) & 0xffff),
+                            static_cast<octomap::key_type>(p >> 32));
+}
+
+VoxelIndex indexOf(const octomap::OcTreeKey& k) {
+  return {int32_t{k[0]} - kKeyCentre, int32_t{k[1]} - kKeyCentre, int32_t{k[2]} - kKeyCentre};
+}
+
+}  // namespace
+
+void OccupancyMap::trackChanges() {
+  if (!impl_->changes.on()) impl_->changes.start(impl_->occupiedKeys());
+}
+
+VoxelChanges OccupancyMap::takeChanges() {
+  VoxelChanges out;
+  for (const auto& [packed, occupied] : impl_->changes.take()) {
+    (occupied ? out.occupied : out.freed).push_back(indexOf(unpackKey(packed)));
+  }
+  std::sort(out.occupied.begin(), out.occupied.end());  // the hash map's order must not leak
+  std::sort(out.freed.begin(), out.freed.end());
+  return out;
+}
+
+std::vector<uint64_t> OccupancyMap::Impl::occupiedKeys() const {
+  std::vector<uint64_t> out;
+  for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
+    if (!tree.isNodeOccupied(*it)) continue;
+    const int n = 1 << (tree.getTreeDepth() - it.getDepth());  // voxels a side
+    const octomap::OcTreeKey key = it.getKey();
+    uint64_t lo[3];
+    for (int a = 0; a < 3; ++a) lo[a] = static_cast<uint64_t>(key[a] & ~(n - 1));
+    for (uint64_t z = lo[2]; z < lo[2] + n; ++z) {
+      for (uint64_t y = lo[1]; y < lo[1] + n; ++y) {
+        for (uint64_t x = lo[0]; x < lo[0] + n; ++x) out.push_back((z << 32) | (y << 16) | x);
+      }
+    }
+  }
+  return out;
+}
+
+std::vector<VoxelIndex> OccupancyMap::occupiedVoxels() const {
+  std::vector<VoxelIndex> out;
+  for (const uint64_t k : impl_->occupiedKeys()) out.push_back(indexOf(unpackKey(k)));
+  std::sort(out.begin(), out.end());
+  return out;
 }
 
 OccupancyMap OccupancyMap::loadBinary(const std::string& path) {

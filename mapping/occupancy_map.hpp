@@ -9,6 +9,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -40,6 +41,16 @@ enum class Occupancy { kUnknown, kFree, kOccupied };
 struct SensorCloud {
   std::vector<Eigen::Vector3f> points_m;
   Eigen::Vector3f origin_m = Eigen::Vector3f::Zero();
+};
+
+// A full-depth voxel by its integer index per axis: it spans [i * res, (i + 1) * res) in the map
+// frame, its centre is (i + 0.5) * res. Ordered x, then y, then z.
+using VoxelIndex = std::array<int32_t, 3>;
+
+// What insertions changed since the last takeChanges(): each list sorted, no voxel in both.
+struct VoxelChanges {
+  std::vector<VoxelIndex> occupied;  // occupied now, not before
+  std::vector<VoxelIndex> freed;     // occupied before, free now
 };
 
 class OccupancyMap {
@@ -85,6 +96,19 @@ class OccupancyMap {
   bool matchesOctomapReference() const;
   int64_t skippedPoints() const;
   const MapperConfig& config() const;
+
+  // Starts recording which voxels change occupancy, for takeChanges(): a set of the occupied
+  // voxels is kept beside the tree, updated by each leaf update that can change a voxel's
+  // occupancy (see ChangeTracker in the .cpp; cheaper than OctoMap's change detection, which
+  // notes every new free leaf).
+  void trackChanges();
+  // The voxels whose occupancy changed since trackChanges() or the last takeChanges(), judged
+  // on the tree as it is now (a voxel that flipped and flipped back is in neither list); the
+  // record starts again empty. Applied in turn to an empty set, the changes give exactly
+  // occupiedVoxels(). Empty lists when not tracking.
+  VoxelChanges takeChanges();
+  // Every occupied full-depth voxel (a pruned block of 8^k voxels as its 8^k voxels), sorted.
+  std::vector<VoxelIndex> occupiedVoxels() const;
 
   // Centres of the occupied leaves [m] (a pruned block of occupied voxels: its centre), in the
   // tree's order (deterministic): what the report's 3D map picture draws.

@@ -9,14 +9,16 @@ constexpr const char* kDefaultLcmUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf
 
 namespace channels {
 
-constexpr const char* kLidarScan = "LIDAR_SCAN";          // lidar_scan_t, raw
-constexpr const char* kMotorState = "MOTOR_STATE";        // motor_state_t
-constexpr const char* kMotorSwitch = "MOTOR_SWITCH";      // switch_event_t, raw
-constexpr const char* kScanWindow = "SCAN_WINDOW";        // scan_window_t
-constexpr const char* kSweepCloud = "SWEEP_CLOUD";        // cloud_chunk_t
-constexpr const char* kSweepStatus = "SWEEP_STATUS";      // sweep_status_t
-constexpr const char* kMapStats = "MAP_STATS";            // map_stats_t
-constexpr const char* kMapSave = "MAP_SAVE";              // map_save_t
+constexpr const char* kLidarScan = "LIDAR_SCAN";      // lidar_scan_t, raw
+constexpr const char* kMotorState = "MOTOR_STATE";    // motor_state_t
+constexpr const char* kMotorSwitch = "MOTOR_SWITCH";  // switch_event_t, raw
+constexpr const char* kScanWindow = "SCAN_WINDOW";    // scan_window_t
+constexpr const char* kSweepCloud = "SWEEP_CLOUD";    // cloud_chunk_t
+constexpr const char* kSweepStatus = "SWEEP_STATUS";  // sweep_status_t
+constexpr const char* kMapStats = "MAP_STATS";        // map_stats_t
+constexpr const char* kMapSave = "MAP_SAVE";          // map_save_t
+constexpr const char* kMapUpdate =
+    "MAP_UPDATE";  // map_update_t, the voxels each map update made occupied or freed
 constexpr const char* kWheelTicks = "WHEEL_TICKS";        // wheel_ticks_t, raw (rig B)
 constexpr const char* kImu = "IMU";                       // imu_t, raw (rig B)
 constexpr const char* kWheelCmd = "WHEEL_CMD";            // wheel_cmd_t, to the wheel board

@@ -155,6 +155,84 @@ std::string validateChunk(const cloud_chunk_t& m) {
   return {};
 }
 
+std::vector<map_update_t> toMapUpdates(const std::vector<std::array<int32_t, 3>>& occupied,
+                                       const std::vector<std::array<int32_t, 3>>& freed,
+                                       const map_update_t& header, int chunk_voxels) {
+  const size_t per = static_cast<size_t>(std::max(1, chunk_voxels));
+  const size_t n_occupied = occupied.size(), n = n_occupied + freed.size();
+  const int count = static_cast<int>(std::max<size_t>(1, (n + per - 1) / per));
+  std::vector<map_update_t> chunks;
+  chunks.reserve(static_cast<size_t>(count));
+  for (int c = 0; c < count; ++c) {
+    map_update_t m = header;
+    m.chunk_index = c;
+    m.chunk_count = count;
+    m.total_occupied = static_cast<int32_t>(n_occupied);
+    m.total_freed = static_cast<int32_t>(freed.size());
+    m.occupied.clear();
+    m.freed.clear();
+    const size_t begin = static_cast<size_t>(c) * per, end = std::min(n, begin + per);
+    for (size_t i = begin; i < end; ++i) {
+      if (i < n_occupied) {
+        const auto& v = occupied[i];
+        m.occupied.push_back({v[0], v[1], v[2]});
+      } else {
+        const auto& v = freed[i - n_occupied];
+        m.freed.push_back({v[0], v[1], v[2]});
+      }
+    }
+    m.noccupied = static_cast<int32_t>(m.occupied.size());
+    m.nfreed = static_cast<int32_t>(m.freed.size());
+    chunks.push_back(std::move(m));
+  }
+  return chunks;
+}
+
+namespace {
+
+// Empty when every index of `voxels` lies inside OctoMap's key range, else the reason.
+std::string checkIndices(const std::vector<std::vector<int32_t>>& voxels, const char* list) {
+  for (size_t i = 0; i < voxels.size(); ++i) {
+    if (voxels[i].size() != 3)
+      return std::string(list) + " voxel " + std::to_string(i) + ": not 3 indices";
+    for (const int32_t v : voxels[i]) {
+      if (v < -32768 || v > 32767) {
+        return std::string(list) + " voxel " + std::to_string(i) + ": index " + std::to_string(v) +
+               " outside -32768..32767";
+      }
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+std::string validateMapUpdate(const map_update_t& m) {
+  if (m.seq < 1) return "seq " + std::to_string(m.seq) + " is not >= 1";
+  if (m.chunk_count <= 0 || m.chunk_index < 0 || m.chunk_index >= m.chunk_count) {
+    return "bad chunk index " + std::to_string(m.chunk_index) + " of " +
+           std::to_string(m.chunk_count);
+  }
+  if (m.noccupied < 0 || m.nfreed < 0 || m.occupied.size() != static_cast<size_t>(m.noccupied) ||
+      m.freed.size() != static_cast<size_t>(m.nfreed)) {
+    return "noccupied " + std::to_string(m.noccupied) + " / nfreed " + std::to_string(m.nfreed) +
+           " do not match their arrays";
+  }
+  if (m.full && m.total_freed != 0) return "a full update frees voxels";
+  if (m.noccupied > m.total_occupied || m.nfreed > m.total_freed) {
+    return "a chunk holds more voxels than its update";
+  }
+  if (int64_t{m.noccupied} + m.nfreed > kMapUpdateChunkVoxels) {
+    return "more than " + std::to_string(kMapUpdateChunkVoxels) + " voxels in one chunk";
+  }
+  if (!std::isfinite(m.resolution_m) || !(m.resolution_m > 0.0)) {
+    return "resolution_m is not a finite number > 0";
+  }
+  if (m.occupied_voxels < 0) return "occupied_voxels is negative";
+  if (std::string why = checkIndices(m.occupied, "occupied"); !why.empty()) return why;
+  return checkIndices(m.freed, "freed");
+}
+
 truth_shaft_t toLcm(const ShaftSegment& s, int64_t utime) {
   truth_shaft_t m;
   m.utime = utime;

@@ -2,6 +2,7 @@
 // message types (message_codec.hpp) and the conversions to and from the library structs.
 #pragma once
 
+#include <array>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/map_update_t.hpp"
 #include "sweepmap/profile_t.hpp"
 #include "sweepmap/scan_window_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
@@ -36,6 +38,24 @@ sweep_status_t toStatus(const AssembledSweep& sweep, int chunk_count);
 // Empty when valid, else the reason (a bad chunk index, more points than the sweep, a
 // non-finite point or sensor origin, intensities neither 0 nor one per point).
 std::string validateChunk(const cloud_chunk_t& msg);
+
+// Voxels per MAP_UPDATE chunk: 4000 * 12 bytes of indices and a 76-byte header, one UDP
+// datagram (as SWEEP_CLOUD's 4000-point chunks).
+constexpr int kMapUpdateChunkVoxels = 4000;
+// Splits one map update (mapping/occupancy_map.hpp's VoxelChanges: the voxel indices that became
+// occupied and those freed, each list sorted) into chunks of at most `chunk_voxels` voxels,
+// occupied first, then freed, in the lists' order; `header` gives utime, seq, sweep_id,
+// resolution_m and occupied_voxels. An update that changed nothing is one empty chunk, so that
+// `seq` has no gaps a receiver would take for a loss.
+std::vector<map_update_t> toMapUpdates(const std::vector<std::array<int32_t, 3>>& occupied,
+                                       const std::vector<std::array<int32_t, 3>>& freed,
+                                       const map_update_t& header,
+                                       int chunk_voxels = kMapUpdateChunkVoxels);
+// Empty when valid, else the reason: seq >= 1, a chunk index inside its count, counts that
+// match their arrays and stay within the update's totals (a full update's freed: 0) and
+// kMapUpdateChunkVoxels, a finite resolution > 0, indices inside OctoMap's +-2^15 voxels,
+// occupied_voxels >= 0.
+std::string validateMapUpdate(const map_update_t& msg);
 
 truth_shaft_t toLcm(const ShaftSegment& segment, int64_t utime);
 

@@ -46,7 +46,8 @@ int main(int argc, char** argv) {
       "sweepmap-mapper: inserts assembled sweeps (rotating_lidar rigs) or world-frame "
       "scans (mobile_lidar rigs) or profiles (rotating_profile rigs), in mapper.batch_s "
       "batches, "
-      "into an OctoMap OcTree, publishes MAP_STATS, saves the map (.bt, atomically) on "
+      "into an OctoMap OcTree, publishes after every map update the voxels it made occupied or "
+      "freed (MAP_UPDATE) and MAP_STATS, saves the map (.bt, atomically) on "
       "MAP_SAVE, after every --save-every map updates and on shutdown. With --save-every, a map "
       "file left by an earlier run (one killed and restarted) is kept, renamed "
       "NAME.<UTC time>.bt"};

@@ -11,6 +11,7 @@
 #include "processes/convert.hpp"
 #include "sweepmap/map_save_t.hpp"
 #include "sweepmap/map_stats_t.hpp"
+#include "sweepmap/map_update_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
 
 namespace sweepmap {
@@ -20,7 +21,9 @@ MapperNode::MapperNode(const MapperConfig& config, std::string save_path, int sa
       config_(config),
       save_path_(std::move(save_path)),
       save_every_(save_every),
-      map_(std::make_unique<OccupancyMap>(config)) {}
+      map_(std::make_unique<OccupancyMap>(config)) {
+  map_->trackChanges();
+}
 
 MapperNode::~MapperNode() = default;
 
@@ -177,6 +180,7 @@ void MapperNode::insert(int64_t now_utime, SweepKey key, Outbox& out) {
   }
   ++sweeps_inserted_;
   count("sweeps");
+  publishUpdate(now_utime, sweep_id, out);
   publishStats(now_utime, out);
   autosave();
 }
@@ -190,11 +194,13 @@ void MapperNode::flushBatch(int64_t now_utime, Outbox& out) {
                                " not inserted: non-finite sensor origin or outside the map");
   }
   const int64_t inserted = static_cast<int64_t>(batch_.size() - rejected.size());
+  const int64_t last_sweep_id = batch_sweep_ids_.back();
   batch_.clear();
   batch_sweep_ids_.clear();
   if (inserted == 0) return;
   sweeps_inserted_ += inserted;
   count("sweeps", inserted);
+  publishUpdate(now_utime, last_sweep_id, out);
   publishStats(now_utime, out);
   autosave();
 }
@@ -203,6 +209,22 @@ void MapperNode::autosave() {
   if (save_every_ <= 0 || save_path_.empty() || ++updates_since_save_ < save_every_) return;
   updates_since_save_ = 0;
   save(save_path_);
+}
+
+void MapperNode::publishUpdate(int64_t now_utime, int64_t sweep_id, Outbox& out) {
+  VoxelChanges changes = map_->takeChanges();
+  map_update_t header{};
+  header.utime = last_sweep_utime_;
+  header.seq = ++update_seq_;
+  header.full = (header.seq - 1) % kFullUpdateEvery == 0;  // a late viewer catches up
+  if (header.full) changes = VoxelChanges{map_->occupiedVoxels(), {}};
+  header.sweep_id = sweep_id;
+  header.resolution_m = map_->config().resolution_m;
+  header.occupied_voxels = map_->stats().occupied_voxels;
+  for (const map_update_t& m : toMapUpdates(changes.occupied, changes.freed, header)) {
+    out.publish(channels::kMapUpdate, now_utime, m);
+  }
+  count("map_update_voxels", static_cast<int64_t>(changes.occupied.size() + changes.freed.size()));
 }
 
 void MapperNode::publishStats(int64_t now_utime, Outbox& out) {

@@ -1,8 +1,10 @@
 // sweepmap-mapper: gathers the chunks of each sweep from SWEEP_CLOUD and inserts the
-// sweep into an OctoMap OcTree (sensor at the origin of the sweep's frame), publishes
-// MAP_STATS after each sweep, and saves the map (.bt, written atomically) on MAP_SAVE
-// and at finish(). A sweep is inserted when its SWEEP_STATUS arrives or a later sweep
-// starts; missing chunks cost only their points and are counted.
+// sweep into an OctoMap OcTree (sensor at the origin of the sweep's frame). After each map
+// update (a sweep, or a batch) it publishes MAP_UPDATE, the voxels that update made occupied
+// or freed (OccupancyMap::takeChanges(); lcmtypes/map_update_t.lcm), then MAP_STATS. It saves
+// the map (.bt, written atomically) on MAP_SAVE and at finish(). A sweep is inserted when its
+// SWEEP_STATUS arrives or a later sweep starts; missing chunks cost only their points and are
+// counted.
 //
 // Batches (config.batch_s > 0, rig B: one small sweep per lidar scan): sweeps whose time
 // (the SWEEP_CLOUD utime) falls in the same batch_s window, counted from utime 0, are
@@ -25,6 +27,8 @@ namespace sweepmap {
 
 class MapperNode : public Node {
  public:
+  // MAP_UPDATE number 1, 1 + kFullUpdateEvery, ... lists the whole occupied set (`full`).
+  static constexpr int64_t kFullUpdateEvery = 20;
   // `save_path`: where the map goes at finish() and on a MAP_SAVE request ("" = none). A
   // request may name another file, but only inside save_path's directory. `save_every` > 0:
   // also after every that many map updates (a sweep, or a batch of a mobile rig), so that a
@@ -58,6 +62,8 @@ class MapperNode : public Node {
   // callers pass pending_.begin()->first, which the erase would free.
   void insert(int64_t now_utime, SweepKey key, Outbox& out);
   void flushBatch(int64_t now_utime, Outbox& out);
+  // MAP_UPDATE: what the insertion just made changed in the map (OccupancyMap::takeChanges()).
+  void publishUpdate(int64_t now_utime, int64_t sweep_id, Outbox& out);
   void publishStats(int64_t now_utime, Outbox& out);
   void autosave();
   void save(const std::string& path);
@@ -80,6 +86,7 @@ class MapperNode : public Node {
   int64_t sweeps_inserted_ = 0;
   int64_t incomplete_ = 0;
   int64_t last_sweep_utime_ = 0;
+  int64_t update_seq_ = 0;  // MAP_UPDATE's seq of the last update
   // Sweeps waiting for the end of their batch window (batch_s > 0).
   std::vector<SensorCloud> batch_;
   std::vector<int64_t> batch_sweep_ids_;

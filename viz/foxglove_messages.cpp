@@ -15,6 +15,7 @@
 #include "processes/message_codec.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/map_update_t.hpp"
 #include "sweepmap/motor_state_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/process_status_t.hpp"
@@ -168,6 +169,8 @@ struct FoxgloveConverter::State {
   bool static_sent = false;
   double last_phi_offset = NAN;
   std::set<std::tuple<int, int, int>> voxels;
+  bool from_mapper = false;  // voxels from MAP_UPDATE (else from the cloud points)
+  bool force_map = false;    // the source changed: the next /map goes out at once
   bool map_changed = false;
   int64_t last_map_ns = INT64_MIN;
   int64_t last_cloud_utime = 0;
@@ -187,6 +190,7 @@ struct FoxgloveConverter::State {
 
   void staticFrames(int64_t utime, int64_t t_ns, std::vector<FoxgloveMessage>* out);
   void cloud(const cloud_chunk_t& c, int64_t t_ns, std::vector<FoxgloveMessage>* out);
+  void mapUpdate(const map_update_t& m);
   void map(int64_t t_ns, bool force, std::vector<FoxgloveMessage>* out);
   void pose(const char* topic, const pose2d_t& p, int64_t t_ns, std::vector<FoxgloveMessage>* out);
   void scan(const lidar_scan_t& s, int64_t t_ns, std::vector<FoxgloveMessage>* out);
@@ -248,12 +252,13 @@ void FoxgloveConverter::State::cloud(const cloud_chunk_t& c, int64_t t_ns,
     const auto& p = c.xyz_m[i];
     values.insert(values.end(), {p[0], p[1], p[2]});
     if (with_intensity) values.push_back(c.intensities[i]);
-    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) continue;
+    if (from_mapper || !std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      continue;
     voxels.emplace(static_cast<int>(std::floor(p[0] / resolution_m)),
                    static_cast<int>(std::floor(p[1] / resolution_m)),
                    static_cast<int>(std::floor(p[2] / resolution_m)));
   }
-  map_changed = map_changed || !c.xyz_m.empty();
+  map_changed = map_changed || (!from_mapper && !c.xyz_m.empty());
   last_cloud_utime = c.utime;
   // Rig A: a corrected chunk is in O, rotated by phi_offset about Z from O' (Eq. 8-10).
   if (kind == RigKind::kRotatingLidar && c.phi_offset_rad != last_phi_offset) {
@@ -269,10 +274,28 @@ void FoxgloveConverter::State::cloud(const cloud_chunk_t& c, int64_t t_ns,
               t_ns));
 }
 
+// The mapper's own voxels: from the first MAP_UPDATE on, the cloud-derived ones are dropped and
+// the set follows the updates (validated by the caller).
+void FoxgloveConverter::State::mapUpdate(const map_update_t& m) {
+  if (!from_mapper) {
+    voxels.clear();
+    force_map = true;
+  }
+  from_mapper = true;
+  if (m.full && m.chunk_index == 0) voxels.clear();  // its chunks list every occupied voxel
+  resolution_m = m.resolution_m;
+  for (const auto& v : m.occupied) voxels.emplace(v[0], v[1], v[2]);
+  for (const auto& v : m.freed) voxels.erase({v[0], v[1], v[2]});
+  map_changed = true;
+  last_cloud_utime = m.utime;
+}
+
 void FoxgloveConverter::State::map(int64_t t_ns, bool force, std::vector<FoxgloveMessage>* out) {
   // INT64_MIN: no map sent yet (the difference would overflow).
+  force = force || force_map;
   if (!map_changed || (!force && last_map_ns != INT64_MIN && t_ns - last_map_ns < kMapPeriodNs))
     return;
+  force_map = false;
   std::vector<float> values;
   values.reserve(voxels.size() * 3);
   for (const auto& [i, j, k] : voxels) {  // voxel centres, in key order (deterministic)
@@ -399,6 +422,16 @@ std::vector<FoxgloveMessage> FoxgloveConverter::convert(const std::string& chann
     if (decode(channel, data, size, &m, &rejected)) {
       if (validateChunk(m).empty()) {
         s.cloud(m, log_time_ns, &out);
+      } else {
+        ++rejected[channel];
+      }
+    }
+  } else if (channel == ch::kMapUpdate) {
+    map_update_t m;
+    if (decode(channel, data, size, &m, &rejected)) {
+      if (validateMapUpdate(m).empty()) {
+        s.mapUpdate(m);
+        if (m.chunk_index == m.chunk_count - 1) s.map(log_time_ns, false, &out);  // update done
       } else {
         ++rejected[channel];
       }

@@ -7,11 +7,14 @@
 //   /sweep_cloud   foxglove.PointCloud      each SWEEP_CLOUD chunk, float32 x, y, z [m] in the
 //                                           chunk's frame, and float32 intensity (the lidar's
 //                                           device units) when the chunk carries intensities
-//   /map           foxglove.PointCloud      centres of the voxels (the rig's mapper resolution)
-//                                           that a cloud point fell in, so far; at most once per
-//                                           second of log time, after SWEEP_STATUS / MAP_STATS,
-//                                           and from finish(). Endpoints only: the mapper's
-//                                           ray-cast OctoMap (free space) is map.bt.
+//   /map           foxglove.PointCloud      centres of the mapper's occupied voxels, kept from
+//                                           MAP_UPDATE; at most once per second of log time,
+//                                           after an update's last chunk, SWEEP_STATUS or
+//                                           MAP_STATS (at once on the first update), and
+//                                           from finish().
+//                                           Until a MAP_UPDATE comes (a log recorded before the
+//                                           mapper published it), the voxels a cloud point fell
+//                                           in, at the rig's mapper resolution.
 //   /pose, /wheel_odometry, /truth_pose
 //                  foxglove.PoseInFrame     ODOMETRY_POSE, WHEEL_ODOMETRY, TRUTH_POSE in "world"
 //   /tf            foxglove.FrameTransform  the rig's frames: its static ones (mounting, lidar

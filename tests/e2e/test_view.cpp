@@ -13,6 +13,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <set>
 
 #include "core/event_log.hpp"
 #include "core/lcm_schema.hpp"
@@ -20,6 +21,7 @@
 #include "processes/message_codec.hpp"
 #include "sim/scene.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/map_stats_t.hpp"
 #include "tests/e2e/fixtures.hpp"
 
 namespace sweepmap {
@@ -276,6 +278,36 @@ void expectHueFollows(const nlohmann::json& samples, const std::string& mode) {
   EXPECT_GT(v.front().second - v.back().second, 0.2) << mode << ": one colour for all";
 }
 
+// The voxels are the mapper's OctoMap (MAP_UPDATE), not the cloud points': the view's set has
+// the mapper's occupied count (MAP_STATS), and so has the page's when it lost no frame; the
+// Foxglove client's last /map holds as many voxel centres as the mapper had after one of its
+// updates (the counts MAP_STATS published, in the log).
+void expectMapperVoxels(const nlohmann::json& page, const nlohmann::json& fox,
+                        const std::string& log) {
+  const nlohmann::json& status = page["status"];
+  const nlohmann::json& vm = status["board"]["view_model"];
+  const int64_t mapper = status["board"]["mapper"]["occupied_voxels"].get<int64_t>();
+  EXPECT_EQ(vm["voxel_source"], "mapper") << vm;
+  EXPECT_EQ(page["voxel_source"], "mapper");
+  EXPECT_EQ(vm["map_updates_invalid"], 0) << vm;
+  EXPECT_EQ(vm["map_update_gaps"], 0) << vm;
+  EXPECT_GT(mapper, 0);
+  EXPECT_EQ(vm["voxels"].get<int64_t>(), mapper) << vm;
+  EXPECT_EQ(vm["mapper_occupied_voxels"].get<int64_t>(), mapper) << vm;
+  if (status["you"]["frames_dropped"].get<int64_t>() == 0) {
+    EXPECT_EQ(page["voxels"].get<int64_t>(), mapper);
+  }
+  std::set<int64_t> counts;
+  for (const Message& m : readChannel(log, channels::kMapStats)) {
+    map_stats_t st;
+    if (decodeMessage(m, &st)) counts.insert(st.occupied_voxels);
+  }
+  const nlohmann::json& map = fox["topics"]["/map"];
+  ASSERT_TRUE(map.contains("points") && !map["points"].empty()) << map;
+  EXPECT_TRUE(counts.count(map["points"].back().get<int64_t>()))
+      << "/map's last " << map["points"].back() << " voxels are no count the mapper had";
+}
+
 // Rig A's processes in mode 2 (4 sweeps, ~5 MB of clouds and voxels) with the view, a page,
 // a stalled client and a Foxglove client: the page draws every point the server says it sent
 // it and shows the room, while the stalled client's frames are dropped and counted, the view
@@ -285,8 +317,8 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   procs.setDir(dir);
   const ProcessCommand proc{{"--rig", kRig, "--set", "motor.mode=2", "--lcm-url", kUrl}};
   const std::string log = (dir / "live.lcmlog").string();
-  const pid_t logger =
-      procs.startSubscriber("logger", loggerCommand(kUrl, log, "SWEEP_CLOUD"), kDefaultLcmPort);
+  const pid_t logger = procs.startSubscriber(
+      "logger", loggerCommand(kUrl, log, "SWEEP_CLOUD|MAP_STATS"), kDefaultLcmPort);
   const pid_t view = startView({"--lcm-url", kUrl, "--rig", kRig, "--client-queue-mb", "2"});
   const pid_t mapper = procs.startSubscriber("mapper", proc("mapper"), kDefaultLcmPort);
   const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kDefaultLcmPort);
@@ -297,9 +329,9 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   const std::string shot = (dir / "live.png").string();
   const pid_t node =
       procs.start("node", nodeCommand("view_live.js", {"http://127.0.0.1:8080/", "4", "80", shot}));
-  const std::vector<std::string> topics = {"/sweep_cloud",    "/map",    "/tf",
-                                           "/lidar_scan",     "/status", "/lcm/LIDAR_SCAN",
-                                           "/lcm/SWEEP_CLOUD"};
+  const std::vector<std::string> topics = {"/sweep_cloud",     "/map",           "/tf",
+                                           "/lidar_scan",      "/status",        "/lcm/LIDAR_SCAN",
+                                           "/lcm/SWEEP_CLOUD", "/lcm/MAP_UPDATE"};
   std::vector<std::string> foxglove_args = {"node", sourcePath("tests/js/foxglove_client.js"),
                                             "ws://127.0.0.1:8080/", "80"};
   foxglove_args.insert(foxglove_args.end(), topics.begin(), topics.end());
@@ -350,6 +382,7 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
       return chunk.second == first;
     })) << "the first /lcm/SWEEP_CLOUD message is no chunk the assembler published";
   }
+  expectMapperVoxels(page, fox, log);
   // Colour by intensity (the simulated UST measures it) and back by height.
   ASSERT_TRUE(page.contains("colour")) << page.dump();
   const nlohmann::json& colour = page["colour"];
@@ -361,8 +394,8 @@ TEST_P(ViewTest, LivePageShowsTheSweepsBesideAStalledClient) {
   expectHueFollows(colour["height"], "height");
 }
 
-// A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps,
-// back to the start none, between the two sweeps' clouds one.
+// A replayed log (two mode-1 sweeps): moving the time slider to the end shows both sweeps and
+// the mapper's final voxels, back to the start none, between the two sweeps' clouds one.
 TEST_P(ViewTest, TimeSliderReplaysALog) {
   const auto dir = scratchDir("view_log_" + GetParam());
   procs.setDir(dir);
@@ -407,6 +440,14 @@ TEST_P(ViewTest, TimeSliderReplaysALog) {
   }
   EXPECT_GT(page["seeks"][0]["points_drawn"].get<int64_t>(),
             page["seeks"][2]["points_drawn"].get<int64_t>());
+  // The replay's mapper recorded MAP_UPDATE: at the end the page draws its final map.
+  const std::vector<Message> stats = readChannel(derived, channels::kMapStats);
+  ASSERT_FALSE(stats.empty());
+  map_stats_t last;
+  ASSERT_TRUE(decodeMessage(stats.back(), &last));
+  EXPECT_EQ(page["seeks"][0]["voxel_source"], "mapper");
+  EXPECT_EQ(page["seeks"][0]["voxels"].get<int64_t>(), last.occupied_voxels);
+  EXPECT_EQ(page["seeks"][1]["voxels"], 0);
 }
 
 INSTANTIATE_TEST_SUITE_P(Browser, ViewTest, ::testing::Values("chromium", "firefox"),

@@ -106,7 +106,7 @@ async function main() {
   const expect = process.env.EXPECT_INTENSITY;
   if (expect === "all") check(withIntensity === want["/sweep_cloud"] && withIntensity > 0, `intensity on ${withIntensity} of ${want["/sweep_cloud"]} clouds`);
   if (expect === "none") check(withIntensity === 0, `intensity on ${withIntensity} clouds of a lidar without`);
-  if (want["/sweep_cloud"] > 0) check(counts.get("/map") > 0, "a /map from the clouds");
+  if (want["/sweep_cloud"] > 0) check(counts.get("/map") > 0, "a /map (the mapper's MAP_UPDATE, else the clouds)");
 
   const schemaOf = { "/sweep_cloud": "foxglove.PointCloud", "/map": "foxglove.PointCloud",
     "/lidar_points": "foxglove.PointCloud", "/profile": "foxglove.PointCloud",

@@ -7,7 +7,7 @@
 // Unsubscribes from the first channel after its first message. Ends when every TOPIC has had a
 // message (and 1.5 s more) or at the timeout, and prints one JSON object: the server's info, the
 // channels (with a raw channel's schema text), per topic the messages received and the schema
-// problems found, and messages after the unsubscribe.
+// problems found (for /map also each message's point count), and messages after the unsubscribe.
 'use strict';
 const { FoxgloveClient } = require('@foxglove/ws-protocol');
 const WebSocket = require('ws');
@@ -85,6 +85,9 @@ function checkJson(sub, t, data) {
     return false;
   }
   if (sub.schema && t.problems.length < 5) t.problems.push(...validate(sub.schema, msg).slice(0, 5));
+  if (sub.channel.topic === '/map' && msg.point_stride > 0) {  // voxel centres per message
+    (t.points = t.points || []).push(Buffer.from(msg.data, 'base64').length / msg.point_stride);
+  }
   return true;
 }
 setTimeout(finish, Number(timeoutArg) * 1000);

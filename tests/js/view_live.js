@@ -20,8 +20,8 @@ async function check(page, out, sweeps, timeoutS, screenshot) {
   Object.assign(out, await page.evaluate(() => {
     const v = window.sweepmapView;
     return { check: v.lastCheck, points_drawn: v.pointsDrawn(), sweeps: v.sweeps(),
-      voxels: v.voxels(), extent: v.extent(0.01), status: v.status, mode: v.mode,
-      latencies_ms: v.latenciesMs };
+      voxels: v.voxels(), voxel_source: v.voxelSource(), extent: v.extent(0.01), status: v.status,
+      mode: v.mode, latencies_ms: v.latenciesMs };
   }));
   out.non_blank = await nonBlankFraction(page);
   if (screenshot) await page.screenshot({ path: screenshot });

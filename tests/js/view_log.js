@@ -2,8 +2,8 @@
 // Loads the page of `sweepmap view LOG`, pauses the playback, and for each UTIME moves the time
 // slider there (as a person drags it: its value, then a change event), waits until the server
 // has played to that time and sent everything, and records what the page draws. Prints one JSON
-// object: console errors and, per seek, the time reached, the sweeps and points drawn and the
-// points the server says it sent.
+// object: console errors and, per seek, the time reached, the sweeps and points drawn, the
+// points the server says it sent, and the voxels drawn and their source.
 'use strict';
 const { runPageScript, until } = require('./browser.js');
 
@@ -35,7 +35,7 @@ async function seek(page, utime) {
   return page.evaluate(() => {
     const v = window.sweepmapView;
     return { utime: v.time.utime, sweeps: v.sweeps(), points_drawn: v.pointsDrawn(),
-      check: v.lastCheck };
+      check: v.lastCheck, voxels: v.voxels(), voxel_source: v.voxelSource() };
   });
 }
 

@@ -3,12 +3,15 @@
 // bulk frames are dropped oldest first and counted, latest frames replace, control frames pass.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstring>
+#include <set>
 #include <stdexcept>
 
 #include "processes/channels.hpp"
 #include "processes/message_codec.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
+#include "sweepmap/map_update_t.hpp"
 #include "tools/view/client_queue.hpp"
 #include "tools/view/view_model.hpp"
 
@@ -138,6 +141,88 @@ TEST(ViewModel, VoxelsAreSentOnceAndMalformedChunksAreCounted) {
   m.add(bad, 0);
   EXPECT_EQ(m.counters().malformed, 1);
   EXPECT_EQ(m.counters().chunks, 2);
+}
+
+Message mapUpdate(int64_t seq, std::vector<std::vector<int32_t>> occupied,
+                  std::vector<std::vector<int32_t>> freed, int64_t total, bool full = false,
+                  int chunk_index = 0, int chunk_count = 1) {
+  map_update_t u{};
+  u.seq = seq;
+  u.full = full;
+  u.chunk_index = chunk_index;
+  u.chunk_count = chunk_count;
+  u.resolution_m = 0.1;
+  u.total_occupied = u.noccupied = static_cast<int32_t>(occupied.size());
+  u.total_freed = u.nfreed = static_cast<int32_t>(freed.size());
+  u.occupied = std::move(occupied);
+  u.freed = std::move(freed);
+  u.occupied_voxels = total;
+  return Message{0, channels::kMapUpdate, encodeMessage(u)};
+}
+
+// The voxels a page holds after the voxel frames and "voxels" controls so far (view.js's rule).
+std::set<std::array<int32_t, 3>> pageVoxels(const std::vector<ViewFrame>& frames) {
+  std::set<std::array<int32_t, 3>> out;
+  for (const ViewFrame& f : frames) {
+    const std::string& d = *f.data;
+    if (!f.binary) {
+      if (d.find("\"type\":\"voxels\"") != std::string::npos) out.clear();
+      continue;
+    }
+    if (d[0] != 2) continue;
+    uint32_t n = 0, flags = 0;
+    std::memcpy(&n, &d[4], 4);
+    std::memcpy(&flags, &d[12], 4);
+    EXPECT_EQ(d.size(), 16u + 12u * n);
+    for (uint32_t k = 0; k < n; ++k) {
+      std::array<int32_t, 3> v;
+      std::memcpy(v.data(), &d[16 + 12 * k], 12);
+      flags& kVoxelsRemoved ? static_cast<void>(out.erase(v)) : static_cast<void>(out.insert(v));
+    }
+  }
+  return out;
+}
+
+// MAP_UPDATE replaces the cloud-derived voxels, adds and removes; a new page's snapshot holds
+// the same set; bad updates are counted and change nothing; a seq jump is counted.
+TEST(ViewModel, MapUpdatesDriveTheVoxels) {
+  Recorder r;
+  ViewModel m(ViewModelOptions{}, r.sink());
+  m.add(chunk(0, 0, 1, 10), 0);  // the fallback: 10 cloud-derived voxels
+  EXPECT_EQ(m.voxels(), 10u);
+  EXPECT_FALSE(m.voxelsFromMapper());
+  m.add(mapUpdate(1, {{1, 2, 3}, {4, 5, 6}, {-7, 8, 9}}, {}, 3), 0);
+  m.add(mapUpdate(2, {{0, 0, 0}}, {{4, 5, 6}}, 3), 0);
+  m.add(chunk(1, 0, 1, 10), 0);  // clouds no longer make voxels
+  EXPECT_TRUE(m.voxelsFromMapper());
+  const std::set<std::array<int32_t, 3>> expected = {{0, 0, 0}, {1, 2, 3}, {-7, 8, 9}};
+  EXPECT_EQ(m.voxels(), 3u);
+  EXPECT_EQ(pageVoxels(r.frames), expected);
+  EXPECT_EQ(pageVoxels(m.snapshot()), expected);
+  EXPECT_EQ(m.counters().mapper_occupied_voxels, 3);
+  Message spoilt = mapUpdate(3, {{1, 1, 1}}, {}, 4);
+  spoilt.data.resize(spoilt.data.size() - 3);
+  m.add(spoilt, 0);
+  m.add(mapUpdate(3, {{1, 1, 1}}, {}, -4), 0);  // decodes, but fails validateMapUpdate
+  EXPECT_EQ(m.counters().map_updates_invalid, 2);
+  EXPECT_EQ(m.counters().malformed, 2);
+  EXPECT_EQ(m.voxels(), 3u);
+  m.add(mapUpdate(5, {}, {{0, 0, 0}}, 2), 0);  // 3 and 4 lost
+  EXPECT_EQ(m.counters().map_update_gaps, 2);
+  EXPECT_EQ(m.voxels(), 2u);
+  m.add(mapUpdate(1, {{9, 9, 9}}, {}, 1), 0);  // the mapper started again
+  EXPECT_EQ(pageVoxels(r.frames), (std::set<std::array<int32_t, 3>>{{9, 9, 9}}));
+  // A full update in two chunks: what it does not list goes once both came; with one lost,
+  // nothing goes and a gap is counted.
+  m.add(mapUpdate(2, {{1, 1, 1}}, {}, 2, true, 0, 2), 0);
+  m.add(mapUpdate(2, {{2, 2, 2}}, {}, 2, true, 1, 2), 0);
+  const std::set<std::array<int32_t, 3>> full = {{1, 1, 1}, {2, 2, 2}};
+  EXPECT_EQ(pageVoxels(r.frames), full);
+  EXPECT_EQ(pageVoxels(m.snapshot()), full);
+  const int64_t gaps = m.counters().map_update_gaps;
+  m.add(mapUpdate(3, {{3, 3, 3}}, {}, 2, true, 1, 2), 0);  // chunk 0 lost
+  EXPECT_EQ(m.counters().map_update_gaps, gaps + 1);
+  EXPECT_EQ(m.voxels(), 3u);
 }
 
 ViewFrame frame(ViewFrame::Kind kind, size_t bytes, const std::string& key = "") {

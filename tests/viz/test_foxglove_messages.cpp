@@ -7,6 +7,7 @@
 #include "processes/message_codec.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
+#include "sweepmap/map_update_t.hpp"
 #include "sweepmap/process_status_t.hpp"
 #include "viz/foxglove_messages.hpp"
 
@@ -90,6 +91,46 @@ TEST(FoxgloveConverter, CloudChunkBecomesPackedPointCloudWithTheSamePoints) {
   ASSERT_EQ(map.size(), 1u);
   EXPECT_EQ(unbase64(json::parse(map[0].json)["data"]).size(), 24u);  // two voxels
   EXPECT_TRUE(conv.finish(44).empty());                               // unchanged
+}
+
+// /map from MAP_UPDATE: the first update replaces the cloud-derived voxels and goes out at once
+// (its last chunk); freed voxels leave; an invalid update is counted and changes nothing.
+TEST(FoxgloveConverter, MapFollowsTheMappersUpdates) {
+  FoxgloveConverter conv(loadRig("rig_a"));
+  const auto cloud = encodeMessage(chunk({{1.0f, 2.0f, 3.0f}, {-0.5f, 0.25f, 7.0f}}));
+  conv.convert(channels::kSweepCloud, cloud.data(), cloud.size(), 1);
+  map_update_t u{};
+  u.seq = 1;
+  u.chunk_count = 1;
+  u.resolution_m = 0.5;
+  u.occupied = {{0, 0, 0}, {1, 2, 3}, {-2, 0, 1}};
+  u.total_occupied = u.noccupied = 3;
+  u.occupied_voxels = 3;
+  auto bytes = encodeMessage(u);
+  auto map = onTopic(conv.convert(channels::kMapUpdate, bytes.data(), bytes.size(), 2), "/map");
+  ASSERT_EQ(map.size(), 1u);
+  auto data = unbase64(json::parse(map[0].json)["data"]);
+  ASSERT_EQ(data.size(), 36u);  // the mapper's three voxels, none of the cloud's
+  float f[3];
+  std::memcpy(f, data.data(), 12);  // key order: (-2, 0, 1) first, its centre
+  EXPECT_EQ(f[0], -0.75f);
+  EXPECT_EQ(f[1], 0.25f);
+  EXPECT_EQ(f[2], 0.75f);
+  u.seq = 2;
+  u.occupied.clear();
+  u.noccupied = u.total_occupied = 0;
+  u.freed = {{1, 2, 3}};
+  u.nfreed = u.total_freed = 1;
+  bytes = encodeMessage(u);
+  conv.convert(channels::kMapUpdate, bytes.data(), bytes.size(), 3);
+  u.resolution_m = -1.0;  // invalid
+  bytes = encodeMessage(u);
+  conv.convert(channels::kMapUpdate, bytes.data(), bytes.size(), 4);
+  EXPECT_EQ(conv.rejected().at(channels::kMapUpdate), 1);
+  conv.convert(channels::kSweepCloud, cloud.data(), cloud.size(), 5);  // no voxels any more
+  map = conv.finish(6);
+  ASSERT_EQ(map.size(), 1u);
+  EXPECT_EQ(unbase64(json::parse(map[0].json)["data"]).size(), 24u);
 }
 
 TEST(FoxgloveConverter, ChunkIntensitiesBecomeTheCloudsIntensityField) {

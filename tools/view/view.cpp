@@ -156,6 +156,11 @@ std::string ViewApp::boardJson() {
                      {"points_on_screen", model_->pointsOnScreen()},
                      {"voxels", model_->voxels()},
                      {"voxels_refused", c.voxels_refused},
+                     {"voxel_source", model_->voxelsFromMapper() ? "mapper" : "points"},
+                     {"map_updates", c.map_updates},
+                     {"map_updates_invalid", c.map_updates_invalid},
+                     {"map_update_gaps", c.map_update_gaps},
+                     {"mapper_occupied_voxels", c.mapper_occupied_voxels},
                      {"thinned", c.thinned},
                      {"removed_sweeps", c.removed_sweeps}};
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);

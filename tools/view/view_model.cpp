@@ -1,10 +1,12 @@
 #include "tools/view/view_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <nlohmann/json.hpp>
 
 #include "processes/channels.hpp"
+#include "processes/convert.hpp"
 #include "processes/message_codec.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
@@ -73,10 +75,21 @@ bool voxelKey(const float* p, double res, uint64_t* key) {
   return true;
 }
 
-std::string voxelFrame(const std::vector<uint64_t>& keys, double res) {
+// A voxel index (map_update_t's) packed like voxelKey(); false when outside +-2^20 voxels.
+bool packIndex(const std::vector<int32_t>& v, uint64_t* key) {
+  uint64_t k = 0;
+  for (int a = 0; a < 3; ++a) {
+    if (v[a] < -kKeyOffset || v[a] >= kKeyOffset) return false;
+    k |= (static_cast<uint64_t>(int64_t{v[a]} + kKeyOffset) & kKeyMask) << (a * kKeyBits);
+  }
+  *key = k;
+  return true;
+}
+
+std::string voxelFrame(const std::vector<uint64_t>& keys, double res, uint32_t flags = 0) {
   std::string out = binaryHeader(BinaryFrame::kVoxels, static_cast<uint32_t>(keys.size()));
   putLe<float>(out, static_cast<float>(res));
-  putLe<uint32_t>(out, 0);
+  putLe<uint32_t>(out, flags);
   for (uint64_t k : keys) {
     for (int a = 0; a < 3; ++a) {
       putLe<int32_t>(out, static_cast<int32_t>(
@@ -109,6 +122,8 @@ void ViewModel::add(const Message& msg, int64_t now_utime) {
   board_.add(msg, now_utime);
   if (msg.channel == channels::kSweepCloud) {
     addCloud(msg);
+  } else if (msg.channel == channels::kMapUpdate) {
+    addMapUpdate(msg);
   } else if (msg.channel == channels::kOdometryPose) {
     addPose(msg);
   } else if (msg.channel == channels::kLidarScan) {
@@ -123,6 +138,12 @@ void ViewModel::reset() {
   cloud_to_view_.clear();
   points_on_screen_ = 0;
   voxels_.clear();
+  voxels_from_mapper_ = false;
+  mapper_res_ = 0.0;
+  last_update_seq_ = 0;
+  full_seq_ = 0;
+  full_keys_.clear();
+  counters_.mapper_occupied_voxels = -1;
   path_.clear();
   last_pose_.clear();
   last_scan_utime_ = 0;
@@ -177,7 +198,7 @@ void ViewModel::addCloud(const Message& msg) {
   if (c.intensities.size() == c.xyz_m.size() && c.nintensities > 0) {
     chunk.intensity = decimate(c.intensities.data(), c.intensities.size(), s.thinning, 1);
   }
-  addVoxels(chunk.xyz);
+  if (!voxels_from_mapper_) addVoxels(chunk.xyz);
   const size_t n = chunk.xyz.size() / 3;
   s.points += n;
   points_on_screen_ += n;
@@ -260,6 +281,80 @@ void ViewModel::addVoxels(const std::vector<float>& xyz) {
   if (!fresh.empty()) sink_(bulk(voxelFrame(fresh, options_.voxel_m), true));
 }
 
+double ViewModel::voxelRes() const { return voxels_from_mapper_ ? mapper_res_ : options_.voxel_m; }
+
+// One MAP_UPDATE chunk: its voxels added to and removed from the set, and the same to the
+// pages (a "voxels" control frame first, which empties the pages' voxels). A full update's
+// chunks list every occupied voxel: once all of them came, the voxels they did not list go.
+void ViewModel::addMapUpdate(const Message& msg) {
+  map_update_t u;
+  if (!decodeMessage(msg.data.data(), msg.data.size(), &u) || !validateMapUpdate(u).empty()) {
+    ++counters_.malformed;
+    ++counters_.map_updates_invalid;
+    return;
+  }
+  ++counters_.map_updates;
+  // The first update, or a mapper that started again (seq back, or another resolution): the
+  // set starts empty, and the pages' too.
+  if (!voxels_from_mapper_ || u.resolution_m != mapper_res_ || u.seq < last_update_seq_) {
+    voxels_.clear();
+    voxels_from_mapper_ = true;
+    mapper_res_ = u.resolution_m;
+    last_update_seq_ = 0;
+    sink_(control({{"type", "voxels"}, {"source", "mapper"}, {"voxel_m", mapper_res_}}));
+  }
+  if (last_update_seq_ != 0 && u.seq > last_update_seq_ + 1) {
+    counters_.map_update_gaps += u.seq - last_update_seq_ - 1;
+  }
+  last_update_seq_ = std::max(last_update_seq_, u.seq);
+  counters_.mapper_occupied_voxels = u.occupied_voxels;
+  if (u.full && u.chunk_index == 0) {
+    full_seq_ = u.seq;
+    full_chunks_ = 0;
+    full_keys_.clear();
+  }
+  const bool in_full = u.full && u.seq == full_seq_;
+  full_chunks_ += in_full ? 1 : 0;
+  std::vector<uint64_t> added, removed;
+  for (const auto& v : u.occupied) {
+    uint64_t key;
+    if (!packIndex(v, &key)) continue;
+    if (in_full) full_keys_.insert(key);
+    if (voxels_.count(key)) continue;
+    if (voxels_.size() >= options_.max_voxels) {
+      ++counters_.voxels_refused;
+      continue;
+    }
+    voxels_.emplace(key, 1);
+    added.push_back(key);
+  }
+  for (const auto& v : u.freed) {
+    uint64_t key;
+    if (packIndex(v, &key) && voxels_.erase(key)) removed.push_back(key);
+  }
+  if (u.full && u.chunk_index == u.chunk_count - 1) removed = endFullUpdate(u.seq, u.chunk_count);
+  if (!added.empty()) sink_(bulk(voxelFrame(added, mapper_res_), true));
+  if (!removed.empty()) sink_(bulk(voxelFrame(removed, mapper_res_, kVoxelsRemoved), true));
+}
+
+// The last chunk of a full update: with every chunk received, the voxels it did not list are
+// no longer occupied (returned, sorted); with one missing, nothing is removed and a gap counted.
+std::vector<uint64_t> ViewModel::endFullUpdate(int64_t seq, int chunk_count) {
+  std::vector<uint64_t> gone;
+  if (full_seq_ != seq || full_chunks_ != chunk_count) {
+    ++counters_.map_update_gaps;
+  } else {
+    for (const auto& [key, hits] : voxels_) {
+      if (!full_keys_.count(key)) gone.push_back(key);
+    }
+    std::sort(gone.begin(), gone.end());
+    for (const uint64_t key : gone) voxels_.erase(key);
+  }
+  full_seq_ = 0;
+  full_keys_.clear();
+  return gone;
+}
+
 void ViewModel::addPose(const Message& msg) {
   pose2d_t p;
   if (!decodeMessage(msg.data.data(), msg.data.size(), &p) || !std::isfinite(p.x_m) ||
@@ -336,16 +431,19 @@ std::vector<ViewFrame> ViewModel::snapshot() const {
   for (const auto& [id, s] : sweeps_) {
     for (const Chunk& c : s.chunks) out.push_back(cloudFrame(s, c));
   }
-  std::vector<uint64_t> keys;
-  keys.reserve(std::min<size_t>(voxels_.size(), 65536));
-  for (const auto& [key, hits] : voxels_) {
-    keys.push_back(key);
-    if (keys.size() == 65536) {
-      out.push_back(bulk(voxelFrame(keys, options_.voxel_m), true));
-      keys.clear();
-    }
+  if (voxels_from_mapper_) {
+    out.push_back(control({{"type", "voxels"}, {"source", "mapper"}, {"voxel_m", mapper_res_}}));
   }
-  if (!keys.empty()) out.push_back(bulk(voxelFrame(keys, options_.voxel_m), true));
+  std::vector<uint64_t> keys;
+  keys.reserve(voxels_.size());
+  for (const auto& [key, hits] : voxels_) keys.push_back(key);
+  std::sort(keys.begin(), keys.end());  // the hash map's order must not reach the pages
+  for (size_t i = 0; i < keys.size(); i += 65536) {
+    const std::vector<uint64_t> part(
+        keys.begin() + static_cast<std::ptrdiff_t>(i),
+        keys.begin() + static_cast<std::ptrdiff_t>(std::min(keys.size(), i + 65536)));
+    out.push_back(bulk(voxelFrame(part, voxelRes()), true));
+  }
   if (!path_.empty()) {
     nlohmann::json xy = nlohmann::json::array();
     for (float v : path_) xy.push_back(v);

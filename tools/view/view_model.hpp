@@ -11,10 +11,15 @@
 // points; then the oldest view sweep is removed ("remove"). A chunk of a sweep already thinned
 // is sent thinned. Pages apply the same arithmetic, so they draw exactly the points sent.
 //
-// Voxels: the mapper publishes its statistics only (MAP_STATS), not its voxels, so the view
-// computes the voxels the cloud points fall in at the mapper's resolution (a voxel is shown
-// occupied from its first point: one hit makes an OctoMap voxel occupied with the rigs'
-// prob_hit; rays clearing space again are not modelled), bounded by max_voxels.
+// Voxels: the mapper's OctoMap, kept from MAP_UPDATE (lcmtypes/map_update_t.lcm: each map
+// update's voxels that became occupied or were freed), bounded by max_voxels; each update goes
+// to the pages as the voxels it adds and those it removes. Until a first MAP_UPDATE arrives (a
+// log recorded before the mapper published it, or no mapper running), a fallback: the voxels
+// the cloud points fall in at the mapper's resolution (a voxel shown occupied from its first
+// point; rays clearing space are not modelled). The first MAP_UPDATE replaces those with the
+// mapper's voxels (a "voxels" control frame tells the pages the source). A full update (the
+// mapper's first, and every 20th) lists every occupied voxel: a view started late, or one that
+// lost an update, has the mapper's set again after it.
 #pragma once
 
 #include <cstdint>
@@ -23,6 +28,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <unordered_set>
 #include <vector>
 
 #include "processes/node.hpp"
@@ -51,12 +57,14 @@ struct ViewFrame {
 //    f32 sensor origin[3] [m], u32 flags (48 bytes), then n * f32 xyz [m], then, when flags has
 //    kCloudHasIntensity, n * f32 intensity (the lidar's device units; absent for a lidar
 //    without intensity, such as rig B's X4 and rig C's profiler).
-//  2 voxels: u8 type, u8[3] 0, u32 n, f32 resolution [m], u32 0 (16 bytes), then n * i32 key[3]
-//    (the voxel [key*res, (key+1)*res) on each axis).
+//  2 voxels: u8 type, u8[3] 0, u32 n, f32 resolution [m], u32 flags (16 bytes), then n * i32
+//    key[3] (the voxel [key*res, (key+1)*res) on each axis): added to the page's voxels, or,
+//    when flags has kVoxelsRemoved, removed from them.
 //  3 scan: u8 type, u8[3] 0, u32 n, i64 utime [us] (16 bytes), then n * f32 (y, z) [m] in the
 //    scan plane (lidar: frame L's Y-Z; profiler: the sensor's y-z).
 enum class BinaryFrame : uint8_t { kCloud = 1, kVoxels = 2, kScan = 3 };
 constexpr uint32_t kCloudHasIntensity = 1;  // a cloud frame's flags
+constexpr uint32_t kVoxelsRemoved = 1;      // a voxel frame's flags
 
 struct ViewModelOptions {
   size_t point_budget = 2'000'000;  // points on screen
@@ -73,9 +81,14 @@ struct ViewModelCounters {
   int64_t malformed = 0;  // undecodable messages on a viewed channel
   int64_t chunks = 0;     // SWEEP_CLOUD chunks taken
   int64_t points_received = 0;
-  int64_t thinned = 0;         // thinning steps of a view sweep
-  int64_t removed_sweeps = 0;  // view sweeps removed for the budget
-  int64_t voxels_refused = 0;  // new voxels beyond max_voxels
+  int64_t thinned = 0;              // thinning steps of a view sweep
+  int64_t removed_sweeps = 0;       // view sweeps removed for the budget
+  int64_t voxels_refused = 0;       // new voxels beyond max_voxels
+  int64_t map_updates = 0;          // MAP_UPDATE chunks applied
+  int64_t map_updates_invalid = 0;  // MAP_UPDATE chunks refused (validateMapUpdate), in malformed
+  int64_t map_update_gaps = 0;      // updates (or a full update's chunks) missed: the voxels may
+                                    // differ until the next full update
+  int64_t mapper_occupied_voxels = -1;  // the mapper's count after the last update (-1: none)
 };
 
 class ViewModel {
@@ -95,6 +108,8 @@ class ViewModel {
   std::string boardJson(int64_t now_utime) const { return board_.json(now_utime); }
   size_t pointsOnScreen() const { return points_on_screen_; }
   size_t voxels() const { return voxels_.size(); }
+  // Whether the voxels are the mapper's (MAP_UPDATE), not the cloud-derived fallback.
+  bool voxelsFromMapper() const { return voxels_from_mapper_; }
   const ViewModelCounters& counters() const { return counters_; }
 
  private:
@@ -119,6 +134,9 @@ class ViewModel {
   void keepBudget();
   void thin(ViewSweep& s);
   void addVoxels(const std::vector<float>& xyz);
+  void addMapUpdate(const Message& msg);
+  std::vector<uint64_t> endFullUpdate(int64_t seq, int chunk_count);
+  double voxelRes() const;
   void addPose(const Message& msg);
   void addScan(const Message& msg);
   void addProfile(const Message& msg);
@@ -133,8 +151,14 @@ class ViewModel {
   std::map<std::pair<int64_t, int64_t>, int64_t> cloud_to_view_;  // (utime, sweep) -> view sweep
   int64_t next_sweep_id_ = 0;
   size_t points_on_screen_ = 0;
-  std::unordered_map<uint64_t, uint32_t> voxels_;  // packed key -> points seen
-  std::vector<float> path_;                        // x, y pairs [m]
+  std::unordered_map<uint64_t, uint32_t> voxels_;  // packed key -> points seen (1: the mapper's)
+  bool voxels_from_mapper_ = false;
+  double mapper_res_ = 0.0;  // MAP_UPDATE's resolution
+  int64_t last_update_seq_ = 0;
+  int64_t full_seq_ = 0;                    // the full update being received (0: none)
+  int full_chunks_ = 0;                     // its chunks received
+  std::unordered_set<uint64_t> full_keys_;  // the voxels its chunks listed
+  std::vector<float> path_;                 // x, y pairs [m]
   std::string last_pose_;
   int64_t last_scan_utime_ = 0;
   std::shared_ptr<const std::string> last_scan_;

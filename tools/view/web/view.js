@@ -32,6 +32,7 @@ const pointMaterial = new THREE.PointsMaterial({ size: 2, sizeAttenuation: false
 const state = {
   mode: null, connected: false, sweeps: new Map(), colour: 'height',
   zRange: [Infinity, -Infinity], voxelRes: 0.05, voxelCount: 0, lastCheck: null,
+  voxelSource: 'points',  // 'mapper' once MAP_UPDATE arrives
   iRange: [Infinity, -Infinity], hasIntensity: false,
   status: null, frames: 0, fps: 0, latencies: [], pendingLatency: [], time: null,
   messages: 0, dragging: false, statusSeq: 0,
@@ -199,9 +200,31 @@ voxelGeometry.setAttribute('position', new THREE.BufferAttribute(voxelXyz, 3));
 const voxelPoints = new THREE.Points(voxelGeometry, voxelMaterial);
 voxelPoints.frustumCulled = false;
 scene.add(voxelPoints);
+// The voxels drawn, by key ("i,j,k") -> their slot in voxelXyz; a removed voxel's slot takes
+// the last one's, so the first voxelCount slots are the drawn voxels.
+const voxelSlots = new Map();
+const voxelKeys = [];
+function clearVoxels() {
+  state.voxelCount = 0;
+  voxelSlots.clear();
+  voxelKeys.length = 0;
+  voxelGeometry.setDrawRange(0, 0);
+}
+function removeVoxel(key) {
+  const slot = voxelSlots.get(key);
+  if (slot === undefined) return;
+  const last = --state.voxelCount;
+  voxelXyz.copyWithin(3 * slot, 3 * last, 3 * last + 3);
+  voxelKeys[slot] = voxelKeys[last];
+  voxelSlots.set(voxelKeys[slot], slot);
+  voxelKeys.length = last;
+  voxelSlots.delete(key);
+}
+// Frame type 2 (tools/view/view_model.hpp): n voxel keys added, or removed when flags has 1.
 function addVoxels(view) {
   const n = view.getUint32(4, true);
   const res = view.getFloat32(8, true);
+  const removed = (view.getUint32(12, true) & 1) !== 0;
   state.voxelRes = res;
   voxelMaterial.size = res;
   if (3 * (state.voxelCount + n) > voxelXyz.length) {
@@ -211,10 +234,20 @@ function addVoxels(view) {
     voxelGeometry.setAttribute('position', new THREE.BufferAttribute(voxelXyz, 3));
   }
   for (let k = 0; k < n; k++) {
-    const o = 16 + 12 * k, i = 3 * state.voxelCount++;
-    voxelXyz[i] = (view.getInt32(o, true) + 0.5) * res;
-    voxelXyz[i + 1] = (view.getInt32(o + 4, true) + 0.5) * res;
-    voxelXyz[i + 2] = (view.getInt32(o + 8, true) + 0.5) * res;
+    const o = 16 + 12 * k;
+    const x = view.getInt32(o, true), y = view.getInt32(o + 4, true), z = view.getInt32(o + 8, true);
+    const key = `${x},${y},${z}`;
+    if (removed) {
+      removeVoxel(key);
+      continue;
+    }
+    if (voxelSlots.has(key)) continue;
+    const slot = state.voxelCount++, i = 3 * slot;
+    voxelSlots.set(key, slot);
+    voxelKeys[slot] = key;
+    voxelXyz[i] = (x + 0.5) * res;
+    voxelXyz[i + 1] = (y + 0.5) * res;
+    voxelXyz[i + 2] = (z + 0.5) * res;
   }
   voxelGeometry.setDrawRange(0, state.voxelCount);
   voxelGeometry.attributes.position.needsUpdate = true;
@@ -293,14 +326,16 @@ function showStatus(msg) {
 }
 function showCounts() {
   $('counts').textContent = `${state.sweeps.size} sweeps, ${pointsDrawn()} points, ` +
-    `${state.voxelCount} voxels (${state.voxelRes.toFixed(3)} m)`;
+    `${state.voxelCount} voxels (${state.voxelRes.toFixed(3)} m, ` +
+    (state.voxelSource === 'mapper' ? "the mapper's OctoMap)"
+      : 'from the cloud points: no MAP_UPDATE yet)');
 }
 
 // ---- Connection --------------------------------------------------------------------------
 function resetAll() {
   for (const id of [...state.sweeps.keys()]) removeSweep(id);
-  state.voxelCount = 0;
-  voxelGeometry.setDrawRange(0, 0);
+  clearVoxels();
+  state.voxelSource = 'points';
   pathCount = 0;
   pathGeometry.setDrawRange(0, 0);
   poseArrow.visible = false;
@@ -318,6 +353,11 @@ function onText(msg) {
     case 'thin': thinSweep(msg.sweep); break;
     case 'remove': removeSweep(msg.sweep); break;
     case 'reset': resetAll(); break;
+    case 'voxels':  // the mapper's voxels (MAP_UPDATE) replace the cloud-derived ones
+      clearVoxels();
+      state.voxelSource = msg.source;
+      state.voxelRes = msg.voxel_m;
+      break;
     case 'pose': setPose(msg); break;
     case 'path': addPath(msg.xy); break;
     case 'time': showTime(msg); break;
@@ -502,6 +542,7 @@ window.sweepmapView = {
   pointsDrawn,
   sweeps: () => state.sweeps.size,
   voxels: () => state.voxelCount,
+  voxelSource: () => state.voxelSource,
   // Per axis, the q and 1-q quantiles of the drawn points' coordinates.
   extent(q) {
     const axes = [[], [], []];
