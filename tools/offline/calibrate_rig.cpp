@@ -259,8 +259,8 @@ int printCalibrationPlan(const std::string& rig_name, const std::vector<std::str
       << "  record:   sweepmap record --rig " << rig_name
       << " --out calib.lcmlog (live), or "
          "lcm-logger\n"
-      << "  simulate: sweepmap sim --rig " << rig_name << " --set motor.mode=" << r.mode
-      << " --sweeps " << r.sweeps << " --out calib.lcmlog\n"
+      << "  simulate: sweepmap sim --rig " << rig_name << " "
+      << calibrationRecordingSimLine(RigKind::kRotatingLidar) << " --out calib.lcmlog\n"
       << "  then:     sweepmap calib rig --rig " << rig_name
       << " --logs calib.lcmlog --out rig_calibration.yaml\n";
   return 0;
