@@ -1,9 +1,6 @@
 #include "tools/bench/bench_mobile.hpp"
 
-#include <fcntl.h>
-#include <spawn.h>
 #include <sys/resource.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -183,40 +180,14 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
     std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path,     "--rig",  o.rig,
                                      "--out",        out_dir,  "--no-plots", "--force"};
     for (const std::string& kv : c.overrides) args.insert(args.end(), {"--set", kv});
-    std::vector<char*> argv;
-    for (std::string& a : args) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
     const std::string log_txt = out_dir + ".txt";
-    posix_spawn_file_actions_addopen(&actions, 1, log_txt.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_adddup2(&actions, 1, 2);
-    const auto t0 = Clock::now();
-    pid_t child = -1;
-    const int spawn_rc = posix_spawn(&child, argv[0], &actions, nullptr, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    // Its peak RSS: VmHWM polled while it runs (the rusage of a spawned child would report
-    // this process's own peak, which the child's image inherits through exec).
-    int status = 0;
-    int64_t peak_kib = 0;
-    rusage usage{};  // its CPU time (exact; only ru_maxrss carries over through exec)
-    bool ok = spawn_rc == 0;
-    while (ok) {
-      const pid_t r = wait4(child, &status, WNOHANG, &usage);
-      if (r == child) break;
-      if (r < 0) ok = false;
-      peak_kib = std::max(peak_kib, statusKib(child, "VmHWM:"));
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
-    const double wall_s = secondsSince(t0);
-    if (!ok) {
+    const ChildRun run = runChild(args, log_txt, log_txt);
+    if (!run.ok) {
       out << "  " << c.name << ": replay failed (see " << log_txt << ")\n";
       continue;
     }
-    const double cpu_s = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
-                         (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+    const double wall_s = run.wall_s, cpu_s = run.cpu_s;
+    const int64_t peak_kib = run.peak_kib;
     int64_t points = 0;
     try {
       std::ifstream f(out_dir + "/summary.json");
@@ -234,48 +205,23 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
   }
 }
 
-// `calib mounting`'s point-to-plane solver, the fast one and the reference one (the code
-// before issue 23), on the same simulated circle, in the same run: wall and CPU time (all
-// threads) and the error against the truth.
-void benchMounting(const RigBBenchOptions& o, std::ostream& out) {
-  const std::string log_path = o.work + "/rig_b_mounting_circle.lcmlog";
-  const SimulatedLog sim =
-      simulate(o, {"sim.duration_s=" + std::to_string(o.mounting_s)}, log_path, false);
-  const MobileLog log = loadMobileLog(log_path, sim.rig);
-  const LidarMounting initial = sim.rig.mounting.toMounting();
-  const LidarMounting truth = trueMounting(*log.truth_mounting);
-  out << "calib mounting, point to plane, EKF track, " << std::setprecision(0) << o.mounting_s
-      << " s circle (" << log.scans.size() << " scans), the same log:\n";
-  double fast_wall = 0, fast_cpu = 0;
-  for (bool reference : {false, true}) {
-    MountingCalibrationOptions options;
-    options.reference_solver = reference;
-    const double cpu0 = cpuSeconds(RUSAGE_SELF);
-    const auto t0 = Clock::now();
-    const MountingCalibrationResult r = calibrateMounting(log.scans, log.ekf, initial, options);
-    const double wall = secondsSince(t0), cpu = cpuSeconds(RUSAGE_SELF) - cpu0;
-    out << "  " << (reference ? "reference (before)" : "fast") << ": " << std::setprecision(2)
-        << wall << " s wall, " << cpu << " CPU s; error gamma " << std::setprecision(3)
-        << (r.gamma_rad - truth.gamma_rad) * 1e3 << ", beta " << (r.beta_rad - truth.beta_rad) * 1e3
-        << ", alpha " << (r.alpha_rad - truth.alpha_rad) * 1e3 << " mrad, " << r.correspondences
-        << " residuals";
-    if (!reference) {
-      fast_wall = wall;
-      fast_cpu = cpu;
-      out << ", sigma " << r.sigma_gamma_rad * 1e3 << ", " << r.sigma_beta_rad * 1e3 << ", "
-          << r.sigma_alpha_rad * 1e3 << " mrad\n";
-    } else {
-      out << "\n  speed-up: " << std::setprecision(1) << wall / fast_wall << "x wall, "
-          << cpu / fast_cpu << "x CPU\n";
-    }
-  }
-  out << std::setprecision(2);
+}  // namespace
+
+int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
+  std::filesystem::create_directories(o.work);
+  out << std::fixed << std::setprecision(2);
+  out << "rig B (" << o.rig << ", " << o.scene << ")\n";
+  benchEkfInProcess(o, out);
+  benchReplay(o, out);
+  // Last: it moves this process into a private network namespace.
+  benchOdometryProcess(o, out);
+  return 0;
 }
 
 // Rig B's joint calibration on calib plan's drive (a figure-eight with stops) with every
 // build error at its default, one per seed: its time, and each parameter's error against the
 // truth in sigmas, and the room's size against the scene's.
-void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
+void benchRigBCalibrationSeeds(const RigBBenchOptions& o, std::ostream& out) {
   out << "calib rig (rig B, joint), " << std::setprecision(0) << o.rig_calib_s
       << " s figure-eight with stops, every build error at its default:\n";
   const std::vector<std::string> drive = {"sim.path=figure8", "sim.stop_interval_s=20",
@@ -321,21 +267,6 @@ void benchRigCalibration(const RigBBenchOptions& o, std::ostream& out) {
     for (const std::string& w : r.warnings) out << "    warning: " << w << "\n";
   }
   out << std::setprecision(2);
-}
-
-}  // namespace
-
-int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
-  std::filesystem::create_directories(o.work);
-  out << std::fixed << std::setprecision(2);
-  out << "rig B (" << o.rig << ", " << o.scene << ")\n";
-  benchEkfInProcess(o, out);
-  benchReplay(o, out);
-  benchMounting(o, out);
-  benchRigCalibration(o, out);
-  // Last: it moves this process into a private network namespace.
-  benchOdometryProcess(o, out);
-  return 0;
 }
 
 }  // namespace sweepmap

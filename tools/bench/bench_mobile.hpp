@@ -1,8 +1,8 @@
 // Rig-B part of `sweepmap bench`: EKF updates per second in process, the CPU share of the
 // real sweepmap-odometry executable at HI219-like IMU rates (in a private network
 // namespace, fed by lcm-logplayer at real-time pace), and the `sweepmap replay` real-time
-// factor on a simulated circle and lab loop, and `calib mounting`'s fast solver against the
-// reference one on the same log. Prints figures; asserts nothing.
+// factor on a simulated circle and lab loop; and the joint calibration on several seeds (for
+// the calibration part, tools/bench/bench_calibration.hpp). Prints figures; asserts nothing.
 #pragma once
 
 #include <ostream>
@@ -19,12 +19,15 @@ struct RigBBenchOptions {
   double process_feed_s = 12.0;  // log time fed to sweepmap-odometry per IMU rate
   double circle_s = 60.0;        // simulated circle for the replay
   double loop_s = 130.0;         // simulated lab loop for the replay (one lap ~ 125 s)
-  double mounting_s = 120.0;     // the docs' calibration circle for `calib mounting`
   double rig_calib_s = 120.0;    // calib plan's figure-eight for rig B's joint calibration
   int rig_calib_seeds = 5;
 };
 
 // Returns 0; a part that cannot run (no network namespace) says why and is skipped.
 int benchRigB(const RigBBenchOptions& options, std::ostream& out);
+
+// `calib rig`'s joint calibration in this process on calib plan's drive, one per seed
+// (rig_calib_seeds): its time, each parameter's error against the truth in sigmas, the room.
+void benchRigBCalibrationSeeds(const RigBBenchOptions& options, std::ostream& out);
 
 }  // namespace sweepmap

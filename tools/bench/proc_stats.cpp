@@ -1,13 +1,18 @@
 #include "tools/bench/proc_stats.hpp"
 
+#include <fcntl.h>
+#include <spawn.h>
 #include <sys/resource.h>
+#include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <thread>
 
 namespace sweepmap {
 
@@ -70,6 +75,43 @@ int64_t statusKib(pid_t pid, const std::string& key) {
     }
   }
   return 0;
+}
+
+ChildRun runChild(const std::vector<std::string>& args, const std::string& stdout_path,
+                  const std::string& stderr_path) {
+  std::vector<std::string> copy = args;
+  std::vector<char*> argv;
+  for (std::string& a : copy) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  const int flags = O_WRONLY | O_CREAT | O_TRUNC;
+  posix_spawn_file_actions_addopen(&actions, 1, stdout_path.c_str(), flags, 0644);
+  if (stderr_path == stdout_path) {
+    posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  } else {
+    posix_spawn_file_actions_addopen(&actions, 2, stderr_path.c_str(), flags, 0644);
+  }
+  ChildRun run;
+  const auto t0 = BenchClock::now();
+  pid_t child = -1;
+  const int spawn_rc = posix_spawn(&child, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  int status = 0;
+  rusage usage{};
+  bool ok = spawn_rc == 0;
+  while (ok) {
+    const pid_t r = wait4(child, &status, WNOHANG, &usage);
+    if (r == child) break;
+    if (r < 0) ok = false;
+    run.peak_kib = std::max(run.peak_kib, statusKib(child, "VmHWM:"));
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  run.wall_s = secondsSince(t0);
+  run.ok = ok && WIFEXITED(status) && WEXITSTATUS(status) == 0;
+  run.cpu_s = usage.ru_utime.tv_sec + usage.ru_stime.tv_sec +
+              (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec) * 1e-6;
+  return run;
 }
 
 namespace {

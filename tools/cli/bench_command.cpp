@@ -9,6 +9,7 @@
 #include "core/command_line.hpp"
 #include "core/progress.hpp"
 #include "rigs/rig_file.hpp"
+#include "tools/bench/bench_calibration.hpp"
 #include "tools/bench/bench_devices.hpp"
 #include "tools/bench/bench_mobile.hpp"
 #include "tools/bench/bench_onboard.hpp"
@@ -40,9 +41,16 @@ const char* const kBenchDescription =
     "published Pi figure (--no-devices skips all this). rotating_profile (rig C): the "
     "axis-offset calibration on the default simulated plates (calib axis-offset's default "
     "point subset), ours (Ceres) against the paper's grid search over its interval at 1 mm "
-    "and at 0.1 mm (10x finer), as seconds and a ratio. Prints figures; run on an idle "
-    "machine, compare "
-    "ratios within one run";
+    "and at 0.1 mm (10x finer), as seconds and a ratio. Then the calibrations (--no-calib "
+    "skips them): per rig, `sweepmap calib rig` on the recording `sweepmap calib plan` "
+    "recommends (rig A: 10 mode-7 sweeps; rig B: the 120 s figure-eight with stops; rig C: "
+    "the three plates), simulated by `sweepmap sim` with every build error at its default: "
+    "the command's wall time, CPU time and peak RSS and each parameter's error against the "
+    "simulator's truth; for rig B also the joint calibration on 5 seeds, and the "
+    "single-parameter `calib mounting` before issue 23 (its reference solver, minutes) and "
+    "today's on the 120 s circle with exact odometry, in the same run: their times and "
+    "mounting errors, and the speed-up of calib rig against the old one. Prints figures; run "
+    "on an idle machine, compare ratios within one run";
 
 struct BenchArgs {
   std::vector<std::string> rigs = {"rig_a", "rig_b", "rig_c"};
@@ -52,6 +60,8 @@ struct BenchArgs {
   double odometry_feed_s = RigBBenchOptions{}.process_feed_s;
   bool no_devices = false;
   bool only_devices = false;
+  bool no_calib = false;
+  bool only_calib = false;
   double lidar_process_s = DevicesBenchOptions{}.process_s;
 };
 
@@ -73,6 +83,10 @@ void addBenchOptions(CLI::App* cmd, BenchArgs* o) {
   cmd->add_flag("--only-devices", o->only_devices,
                 "only the decoders, the device processes (lidar, odometry) and the step "
                 "generator");
+  cmd->add_flag("--no-calib", o->no_calib,
+                "skip the calibrations (calib rig per rig, rig B's old calib mounting)");
+  cmd->add_flag("--only-calib", o->only_calib,
+                "only the calibrations (calib rig per rig, rig B's old calib mounting)");
   cmd->add_option("--lidar-process-s", o->lidar_process_s,
                   "how long the CPU share of each device process (sweepmap-motor, -lidar, "
                   "-odometry) is measured")
@@ -122,6 +136,22 @@ void benchRig(const Rig& rig, const BenchArgs& o) {
   }
 }
 
+// One rig's calibration figures: calib rig on calib plan's recording (rig B: also the old
+// calib mounting, and the joint calibration on several seeds).
+void benchRigCalibration(const Rig& rig, const BenchArgs& o) {
+  CalibrationBenchOptions c;
+  c.work = o.work;
+  std::error_code ec;
+  c.sweepmap_exe = std::filesystem::read_symlink("/proc/self/exe", ec).string();
+  benchCalibration(c, rig, std::cout);
+  if (rig.kind() == RigKind::kMobileLidar) {
+    RigBBenchOptions b;
+    b.rig = rig.path;
+    b.work = o.work;
+    benchRigBCalibrationSeeds(b, std::cout);
+  }
+}
+
 // The real-device drivers, the step generator and the on-board estimate.
 void benchDeviceDrivers(const std::vector<Rig>& rigs, const BenchArgs& o) {
   std::cout << "== real-device drivers\n";
@@ -155,12 +185,18 @@ int runBench(const BenchArgs& o) {
   po.enabled = isatty(STDOUT_FILENO) == 0;
   Progress progress("bench", po);
   ProgressTicker ticker(progress);
-  for (const Rig& rig : o.only_devices ? std::vector<Rig>{} : rigs) {
+  const std::vector<Rig> none;
+  for (const Rig& rig : o.only_devices || o.only_calib ? none : rigs) {
     progress.stage(rig.path);
     std::cout << "== " << rig.path << " (" << rig.kindName() << ")\n";
     benchRig(rig, o);
   }
-  if (!o.no_devices) {
+  for (const Rig& rig : o.only_devices || o.no_calib ? none : rigs) {
+    progress.stage("calibration of " + rig.path);
+    std::cout << "== calibration: " << rig.path << " (" << rig.kindName() << ")\n";
+    benchRigCalibration(rig, o);
+  }
+  if (!o.no_devices && !o.only_calib) {
     progress.stage("real-device drivers");
     benchDeviceDrivers(rigs, o);
   }

@@ -74,7 +74,10 @@ void measure(const EvalMobileOptions& o, const fs::path& out, MobileEvaluation* 
   eval::progressLine(o.progress, "density D over " + std::to_string(ev->cloud.size()) + " points");
   ev->density_m = meanNearestNeighbourDistance(ev->cloud);
   eval::progressLine(o.progress, "loop closure");
-  ev->loop = eval::loopClosure(ev->log, ev->track(), ev->cloud, ev->scan_of_point);
+  // The room's walls, each pass's band by the rig's range noise (its simulated lidar's, the
+  // X4's 1 %).
+  ev->loop = eval::loopClosure(ev->log, ev->track(), ev->cloud, ev->scan_of_point, ev->mounting,
+                               ev->room.planes.walls, o.rig.sim.range_sigma_fraction);
 }
 
 // evalMobileLog; the paper experiment adds its calibration from the circle and the figures it

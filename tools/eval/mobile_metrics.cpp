@@ -91,6 +91,32 @@ std::vector<Eigen::Vector3f> pointsOfScans(const std::vector<Eigen::Vector3f>& c
 namespace {
 
 constexpr double kMinGapS = 30.0, kRadiusM = 0.3, kHeadingRad = 0.35;
+// A wall counts when each pass has this many points in its band: the median of 100 points
+// of noise sigma is known to 0.125 sigma (1.25 sigma / sqrt(100)), 6 mm at 4.5 m with 1 %.
+constexpr int kMinWallPoints = 100;
+constexpr double kBandSigmas = 3.0;  // the band: +-3 sigma of each point's range noise
+// The first band's widening: a wall fitted to the whole drive can sit centimetres off one
+// pass's copy (the ghost itself).
+constexpr double kSeedBandM = 0.06;
+constexpr double kSettledM = 1e-4;
+constexpr int kMaxRounds = 50;
+
+// The lidar's origin in the world at each scan's middle ray (nullopt: no pose then).
+std::vector<std::optional<Eigen::Vector3d>> scanOrigins(const MobileLog& log,
+                                                        const PoseTrack& track,
+                                                        const LidarMounting& mounting) {
+  const Eigen::Vector3d t_BL = mounting.T_BL().translation();
+  std::vector<std::optional<Eigen::Vector3d>> origin(log.scans.size());
+  for (size_t j = 0; j < log.scans.size(); ++j) {
+    const Scan2D& s = log.scans[j];
+    const auto pose = track.at(s.rayUtime(s.ranges_m.size() / 2));
+    if (!pose) continue;
+    const double c = std::cos(pose->theta_rad), si = std::sin(pose->theta_rad);
+    origin[j] = Eigen::Vector3d(pose->x_m + c * t_BL.x() - si * t_BL.y(),
+                                pose->y_m + si * t_BL.x() + c * t_BL.y(), t_BL.z());
+  }
+  return origin;
+}
 
 // The scans of the early pass (not also late) and of the late pass, into lc.early / lc.late.
 void findRevisits(const MobileLog& log, const PoseTrack& track, LoopClosure* lc) {
@@ -118,43 +144,91 @@ void findRevisits(const MobileLog& log, const PoseTrack& track, LoopClosure* lc)
   }
 }
 
-// Each vertical plane of the early pass, refitted in the late pass's points, and their distance.
-void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts,
-                     const std::vector<Eigen::Vector3f>& late_pts, LoopClosure* lc) {
-  PlaneExtractionOptions po;
-  po.orientation = PlaneExtractionOptions::Orientation::kVertical;
-  po.voxel_m = 0.03;
-  po.max_planes = 4;
-  po.min_inliers = 100;
-  po.distance_threshold_m = 0.03;
-  for (const WallPlaneFit& e : extractPlanes(early_pts, po)) {
-    // A far, noisy wall (1 % of 5 m) can come out of RANSAC as two parallel planes a few
-    // centimetres apart, the second made of the first one's outliers: one surface, one plane.
-    const Eigen::Vector3d c = inlierCentroid(early_pts, e.inlier_indices);
-    const bool seen =
-        std::any_of(lc->planes.begin(), lc->planes.end(), [&](const LoopClosure::Plane& q) {
-          return std::abs(q.early.normal.dot(e.normal)) > std::cos(3.0 * M_PI / 180.0) &&
-                 std::abs(signedDistance(q.early, c)) < 0.1;
-        });
-    if (seen) continue;
-    const auto refit = refitWalls(late_pts, {e}, 0.1);
-    if (refit.empty() || refit[0].inliers < 100) continue;
-    // The late pass's plane through its points near the early plane, then its own inliers.
-    const auto late = refitWalls(late_pts, refit, po.distance_threshold_m);
-    if (late.empty() || late[0].inliers < 100) continue;
-    // The two passes' copies apart along the early wall's horizontal normal (a wall is
-    // vertical): each pass's inliers averaged. A RANSAC plane through a far wall's sparse points
-    // can tilt by a degree; the distance of one pass's plane from the other's centroid then
-    // grows with the height between the centroids, not with the ghost (29 mm on the lab's wall
-    // 5 m off, where the passes' own offsets agree to a few millimetres).
-    WallPlaneFit vertical = e;
-    vertical.normal.z() = 0.0;
-    vertical.normal.normalize();
-    const double distance_m =
-        std::abs(meanOffset(vertical, late_pts, late[0]) - meanOffset(vertical, early_pts, e));
-    LoopClosure::Plane p{e, late[0], distance_m};
-    lc->planes.push_back(p);
-    lc->ghost_m = std::max(lc->ghost_m.value_or(0.0), p.distance_m);
+// One pass's points and, for each, the lidar's origin when it was measured.
+struct PassPoints {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<Eigen::Vector3d> origins;
+};
+
+PassPoints passPoints(const std::vector<Eigen::Vector3f>& cloud,
+                      const std::vector<int>& scan_of_point, const std::vector<int>& scans,
+                      const std::vector<std::optional<Eigen::Vector3d>>& origin) {
+  std::vector<char> wanted(origin.size(), 0);
+  for (int j : scans) wanted[size_t(j)] = origin[size_t(j)] ? 1 : 0;
+  PassPoints p;
+  for (size_t k = 0; k < cloud.size(); ++k) {
+    const size_t j = size_t(scan_of_point[k]);
+    if (!wanted[j]) continue;
+    p.points.push_back(cloud[k]);
+    p.origins.push_back(*origin[j]);
+  }
+  return p;
+}
+
+double median(std::vector<double> v) {
+  const size_t mid = v.size() / 2;
+  std::nth_element(v.begin(), v.begin() + long(mid), v.end());
+  return v[mid];
+}
+
+// One pass's copy of the wall (n, offset): the median offset along n of the pass's points
+// within +-3 sigma of the copy, sigma being the range noise seen along the normal
+// (range_sigma_fraction x range x cos(incidence) = range_sigma_fraction x the distance of the
+// point's lidar origin from the wall). The band starts around the seed plane, widened by
+// kSeedBandM, then follows the copy's median until it moves less than 0.1 mm (a truncated
+// band pulls the median toward its centre, so one round is not enough on a far wall). Rays lying in
+// the plane (a vertical lidar's own scan plane, which RANSAC can take for a wall) have no band.
+// Nullopt with fewer than kMinWallPoints points in the band.
+std::optional<double> passCopy(const PassPoints& pass, const Eigen::Vector3d& n, double offset,
+                               double range_sigma_fraction, int* points) {
+  double centre = 0.0;
+  for (int round = 0; round < kMaxRounds; ++round) {
+    const double widen = round == 0 ? kSeedBandM : 0.0;
+    std::vector<double> d;
+    for (size_t k = 0; k < pass.points.size(); ++k) {
+      const double dist = n.dot(pass.points[k].cast<double>()) + offset;
+      const double sigma = range_sigma_fraction * std::abs(n.dot(pass.origins[k]) + offset);
+      if (std::abs(dist - centre) <= kBandSigmas * sigma + widen) d.push_back(dist);
+    }
+    *points = int(d.size());
+    if (*points < kMinWallPoints) return std::nullopt;
+    const double next = median(std::move(d));
+    const bool settled = round > 0 && std::abs(next - centre) < kSettledM;
+    centre = next;
+    if (settled) break;
+  }
+  return centre;
+}
+
+// The wall near the vertical plane `seed` (its normal made horizontal) in both passes: each
+// pass's copy, their distance, and the plane midway. Nullopt when a pass has too few points
+// in its band (it does not see that wall there).
+std::optional<LoopClosure::Plane> measureWall(const WallPlaneFit& seed, const PassPoints& early,
+                                              const PassPoints& late, double range_sigma_fraction) {
+  LoopClosure::Plane w;
+  w.normal = Eigen::Vector3d(seed.normal.x(), seed.normal.y(), 0.0).normalized();
+  const auto e = passCopy(early, w.normal, seed.offset, range_sigma_fraction, &w.early_points);
+  const auto l = passCopy(late, w.normal, seed.offset, range_sigma_fraction, &w.late_points);
+  if (!e || !l) return std::nullopt;
+  w.distance_m = std::abs(*l - *e);
+  w.offset_m = seed.offset - 0.5 * (*e + *l);
+  // Where the wall is, for the report: the early pass's mean lidar origin's foot on it.
+  Eigen::Vector3d o = Eigen::Vector3d::Zero();
+  for (const auto& x : early.origins) o += x;
+  o /= double(early.origins.size());
+  w.range_m = std::abs(w.normal.dot(o) + w.offset_m);
+  w.foot_m = o - (w.normal.dot(o) + w.offset_m) * w.normal;
+  return w;
+}
+
+// Each of the room's walls that both passes see, measured by measureWall.
+void measurePassWalls(const std::vector<WallPlaneFit>& walls, const PassPoints& early,
+                      const PassPoints& late, double range_sigma_fraction, LoopClosure* lc) {
+  for (const WallPlaneFit& wall : walls) {
+    const auto w = measureWall(wall, early, late, range_sigma_fraction);
+    if (!w) continue;
+    lc->planes.push_back(*w);
+    lc->ghost_m = std::max(lc->ghost_m.value_or(0.0), w->distance_m);
   }
 }
 
@@ -162,7 +236,8 @@ void matchPassPlanes(const std::vector<Eigen::Vector3f>& early_pts,
 
 LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track,
                         const std::vector<Eigen::Vector3f>& cloud,
-                        const std::vector<int>& scan_of_point) {
+                        const std::vector<int>& scan_of_point, const LidarMounting& mounting,
+                        const std::vector<WallPlaneFit>& walls, double range_sigma_fraction) {
   LoopClosure lc;
   findRevisits(log, track, &lc);
   if (lc.early.size() < 5 || lc.late.size() < 5) {
@@ -170,13 +245,12 @@ LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track,
         "the drive does not come back to a place it passed " + fixed(kMinGapS, 0) + " s earlier";
     return lc;
   }
-  std::vector<Eigen::Vector3f> early_pts =
-      pointsOfScans(cloud, scan_of_point, lc.early, log.scans.size());
-  const std::vector<Eigen::Vector3f> late_pts =
-      pointsOfScans(cloud, scan_of_point, lc.late, log.scans.size());
-  matchPassPlanes(early_pts, late_pts, &lc);
-  if (!lc.ghost_m) lc.reason = "no wall seen by both passes";
-  lc.early_points = std::move(early_pts);
+  const auto origin = scanOrigins(log, track, mounting);
+  const PassPoints early = passPoints(cloud, scan_of_point, lc.early, origin);
+  const PassPoints late = passPoints(cloud, scan_of_point, lc.late, origin);
+  measurePassWalls(walls, early, late, range_sigma_fraction, &lc);
+  if (!lc.ghost_m)
+    lc.reason = walls.empty() ? "no room walls found" : "no room wall seen by both passes";
   return lc;
 }
 

@@ -172,13 +172,13 @@ void addLoopClosure(const LoopClosure& lc, json* r) {
   jl["late_scans"] = lc.late.size();
   jl["planes"] = json::array();
   for (const auto& p : lc.planes) {
-    jl["planes"].push_back({{"normal",
-                             {roundTo(p.early.normal.x(), 6), roundTo(p.early.normal.y(), 6),
-                              roundTo(p.early.normal.z(), 6)}},
-                            {"centroid_m", planeJson(p.early, lc.early_points)["centroid_m"]},
-                            {"early_points", p.early.inliers},
-                            {"late_points", p.late.inliers},
-                            {"distance_mm", roundTo(1000.0 * p.distance_m, 6)}});
+    jl["planes"].push_back(
+        {{"normal", {roundTo(p.normal.x(), 6), roundTo(p.normal.y(), 6), roundTo(p.normal.z(), 6)}},
+         {"foot_m", {roundTo(p.foot_m.x(), 6), roundTo(p.foot_m.y(), 6), roundTo(p.foot_m.z(), 6)}},
+         {"range_m", roundTo(p.range_m, 6)},
+         {"early_points", p.early_points},
+         {"late_points", p.late_points},
+         {"distance_mm", roundTo(1000.0 * p.distance_m, 6)}});
   }
   if (!lc.reason.empty()) jl["reason"] = lc.reason;
   (*r)["loop_closure"] = jl;

@@ -188,9 +188,8 @@ void printRigAPlan(const std::string& rig_name, const RotatingLidarConfig& rig_a
       << "  record:   sweepmap record --rig " << rig_name
       << " --out calib.lcmlog (live, the motor run from a rig file with motor.sweep_angle_deg: "
       << r.sweep_angle_deg << "), or lcm-logger\n"
-      << "  simulate: sweepmap sim --rig " << rig_name << " --set motor.mode=" << r.mode
-      << " --set motor.sweep_angle_deg=" << r.sweep_angle_deg << " --sweeps " << r.sweeps
-      << " --out calib.lcmlog\n"
+      << "  simulate: sweepmap sim --rig " << rig_name << " "
+      << calibrationRecordingSimLine(RigKind::kRotatingLidar) << " --out calib.lcmlog\n"
       << "  then:     sweepmap calib rig --rig " << rig_name
       << " --logs calib.lcmlog --out rig_calibration.yaml\n";
 }

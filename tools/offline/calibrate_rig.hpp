@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "calib/axis_offset_lidar.hpp"
+#include "rigs/rig_kind.hpp"
 
 namespace sweepmap {
 
@@ -38,5 +39,12 @@ struct RigARecording {
   int sweeps = 10;
   int sweep_angle_deg = 360;
 };
+
+// The `sweepmap sim` options after `--rig RIG` that make the recording calib plan recommends
+// for `kind` (its "simulate:" line; `make bench` times calib rig on it), without --out.
+std::vector<std::string> calibrationRecordingSimArgs(RigKind kind);
+
+// The same as one line: the options joined by spaces.
+std::string calibrationRecordingSimLine(RigKind kind);
 
 }  // namespace sweepmap

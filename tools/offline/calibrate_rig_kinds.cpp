@@ -245,8 +245,8 @@ int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
       << "  duration: about " << std::fixed << std::setprecision(0)
       << kPlatePoses * (sweep_s + 30.0) << " s (sweeps and moving the plate between them)\n"
       << "  record:   lcm-logger calib.lcmlog while the rig sweeps each pose\n"
-      << "  simulate: sweepmap sim --rig " << rig_name
-      << " --set sim.scene=plate --set sim.plate_count=" << kPlatePoses << " --out calib.lcmlog\n"
+      << "  simulate: sweepmap sim --rig " << rig_name << " "
+      << calibrationRecordingSimLine(RigKind::kRotatingProfile) << " --out calib.lcmlog\n"
       << "  then:     sweepmap calib rig --rig " << rig_name
       << " --logs calib.lcmlog --out rig_calibration.yaml\n"
       << "            and set geometry.calibration_file: rig_calibration.yaml in the rig file\n";
@@ -271,14 +271,38 @@ int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
          "rate: alpha and the wheels trade off).\n"
       << "  duration: 120 s (about two laps)\n"
       << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
-      << "  simulate: sweepmap sim --rig " << rig_name
-      << " --set sim.path=figure8 --set sim.stop_interval_s=20 --set sim.duration_s=120 --out "
-         "calib.lcmlog\n"
+      << "  simulate: sweepmap sim --rig " << rig_name << " "
+      << calibrationRecordingSimLine(RigKind::kMobileLidar) << " --out calib.lcmlog\n"
       << "  then:     sweepmap calib rig --rig " << rig_name
       << " --logs calib.lcmlog --out mounting_calibration.yaml\n"
       << "            and set mounting.calibration_file: mounting_calibration.yaml in the rig "
          "file; the other calibrated keys are listed to set by hand\n";
   return 0;
+}
+
+std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
+  switch (kind) {
+    case RigKind::kRotatingLidar: {
+      const RigARecording r;
+      return {"--set", "motor.mode=" + std::to_string(r.mode), "--set",
+              "motor.sweep_angle_deg=" + std::to_string(r.sweep_angle_deg), "--sweeps",
+              std::to_string(r.sweeps)};
+    }
+    case RigKind::kMobileLidar:
+      return {"--set", "sim.path=figure8",  "--set", "sim.stop_interval_s=20",
+              "--set", "sim.duration_s=120"};
+    case RigKind::kRotatingProfile:
+      return {"--set", "sim.scene=plate", "--set",
+              "sim.plate_count=" + std::to_string(kPlatePoses)};
+  }
+  return {};
+}
+
+std::string calibrationRecordingSimLine(RigKind kind) {
+  std::string line;
+  for (const std::string& a : calibrationRecordingSimArgs(kind))
+    line += (line.empty() ? "" : " ") + a;
+  return line;
 }
 
 }  // namespace sweepmap
