@@ -225,6 +225,43 @@ TEST(ViewModel, MapUpdatesDriveTheVoxels) {
   EXPECT_EQ(m.voxels(), 3u);
 }
 
+// A page whose queue dropped a voxel frame is marked stale; the voxel snapshot sent then
+// (what the server does, ViewServer's on_voxels_stale) gives it the view's set again, after
+// the frames it still had queued.
+TEST(ViewModel, APageThatLostAVoxelFrameGetsTheWholeSetAgain) {
+  ClientQueue page(100);  // smaller than one voxel frame of 10 keys (136 bytes)
+  ViewModel m(ViewModelOptions{}, [&](const ViewFrame& f) { page.push(f); });
+  std::vector<ViewFrame> drawn;
+  auto drain = [&] {
+    while (auto f = page.pop()) drawn.push_back(*f);
+  };
+  m.add(mapUpdate(1, {{1, 1, 1}, {2, 2, 2}}, {}, 2), 0);
+  drain();
+  EXPECT_FALSE(page.voxelsStale());
+  std::vector<std::vector<int32_t>> many;
+  for (int i = 0; i < 10; ++i) many.push_back({i, 0, 7});
+  m.add(mapUpdate(2, many, {{1, 1, 1}}, 11), 0);  // the additions do not fit: dropped
+  EXPECT_TRUE(page.voxelsStale());
+  drain();
+  EXPECT_NE(pageVoxels(drawn).size(), m.voxels());
+  ASSERT_TRUE(page.takeVoxelsStale());
+  EXPECT_FALSE(page.takeVoxelsStale());
+  EXPECT_EQ(page.counters().voxel_resyncs, 1);
+  ClientQueue roomy(1u << 20);
+  for (const ViewFrame& f : m.voxelSnapshot()) roomy.push(f);
+  while (auto f = roomy.pop()) drawn.push_back(*f);
+  EXPECT_EQ(pageVoxels(drawn).size(), 11u);
+  EXPECT_EQ(pageVoxels(drawn), pageVoxels(m.snapshot()));
+  // Other bulk frames lost do not make the voxels stale.
+  ClientQueue q(10);
+  ViewFrame cloud;
+  cloud.kind = ViewFrame::kBulk;
+  cloud.data = std::make_shared<const std::string>(50, 'x');
+  q.push(cloud);
+  EXPECT_EQ(q.counters().frames_dropped, 1);
+  EXPECT_FALSE(q.voxelsStale());
+}
+
 ViewFrame frame(ViewFrame::Kind kind, size_t bytes, const std::string& key = "") {
   ViewFrame f;
   f.kind = kind;

@@ -284,9 +284,9 @@ std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
   switch (kind) {
     case RigKind::kRotatingLidar: {
       const RigARecording r;
-      return {"--set", "motor.mode=" + std::to_string(r.mode), "--set",
-              "motor.sweep_angle_deg=" + std::to_string(r.sweep_angle_deg), "--sweeps",
-              std::to_string(r.sweeps)};
+      return {"--set",    "motor.mode=" + std::to_string(r.mode),
+              "--set",    "motor.sweep_angle_deg=" + std::to_string(r.sweep_angle_deg),
+              "--sweeps", std::to_string(r.sweeps)};
     }
     case RigKind::kMobileLidar:
       return {"--set", "sim.path=figure8",  "--set", "sim.stop_interval_s=20",

@@ -21,9 +21,7 @@ void ClientQueue::push(const ViewFrame& f) {
   }
   if (f.kind != ViewFrame::kControl) dropForRoom(sizeOf(f));
   if (f.kind == ViewFrame::kBulk && bytes_ + sizeOf(f) > max_bytes_) {
-    ++counters_.frames_dropped;  // larger than the whole bound
-    counters_.bytes_dropped += static_cast<int64_t>(sizeOf(f));
-    counters_.points_dropped += f.points;
+    countDrop(f);  // larger than the whole bound
     return;
   }
   bytes_ += sizeOf(f);
@@ -36,12 +34,30 @@ void ClientQueue::dropForRoom(size_t incoming) {
       ++it;
       continue;
     }
-    ++counters_.frames_dropped;
-    counters_.bytes_dropped += static_cast<int64_t>(sizeOf(*it));
-    counters_.points_dropped += it->points;
+    countDrop(*it);
     bytes_ -= sizeOf(*it);
     it = frames_.erase(it);
   }
+}
+
+void ClientQueue::countDrop(const ViewFrame& f) {
+  ++counters_.frames_dropped;
+  counters_.bytes_dropped += static_cast<int64_t>(sizeOf(f));
+  counters_.points_dropped += f.points;
+  if (f.effect == ViewFrame::kVoxels) voxels_stale_ = true;
+}
+
+bool ClientQueue::takeVoxelsStale() {
+  std::lock_guard<std::mutex> lock(mutex_);
+  if (!voxels_stale_) return false;
+  voxels_stale_ = false;
+  ++counters_.voxel_resyncs;
+  return true;
+}
+
+bool ClientQueue::voxelsStale() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return voxels_stale_;
 }
 
 std::optional<ViewFrame> ClientQueue::pop() {
@@ -82,6 +98,7 @@ void ClientQueue::account(const ViewFrame& f) {
       counters_.points_drawn = 0;
       break;
     case ViewFrame::kNone:
+    case ViewFrame::kVoxels:
       break;
   }
 }

@@ -24,6 +24,7 @@ struct ClientCounters {
   int64_t bytes_dropped = 0;
   int64_t replaced = 0;        // kLatest frames replaced by a newer one before being sent
   int64_t points_dropped = 0;  // cloud points in dropped frames
+  int64_t voxel_resyncs = 0;   // the page's voxels replaced after it lost a voxel frame
   int64_t points_drawn = 0;    // points sent that the page still draws
   size_t queued_bytes = 0;
   size_t queued_frames = 0;
@@ -36,9 +37,14 @@ class ClientQueue {
   // The oldest frame, taken off the queue and counted as sent; nullopt when empty.
   std::optional<ViewFrame> pop();
   ClientCounters counters() const;
+  // Whether a voxel frame was dropped since the last call (the page's voxels differ from the
+  // view's until it is sent ViewModel::voxelSnapshot()); clears the flag and counts a resync.
+  bool takeVoxelsStale();
+  bool voxelsStale() const;
 
  private:
   void dropForRoom(size_t incoming);
+  void countDrop(const ViewFrame& f);
   void account(const ViewFrame& f);
 
   mutable std::mutex mutex_;
@@ -46,6 +52,7 @@ class ClientQueue {
   std::deque<ViewFrame> frames_;
   size_t bytes_ = 0;
   ClientCounters counters_;
+  bool voxels_stale_ = false;
   std::map<int64_t, std::vector<uint32_t>> drawn_;  // view sweep -> points of each chunk sent
 };
 

@@ -337,6 +337,10 @@ void ViewApp::startServer() {
   cb.on_view_open = [this](const auto& attach) { onViewOpen(attach); };
   cb.on_view_command = [this](const std::string& t) { onCommand(t); };
   cb.board_json = [this] { return boardJson(); };
+  cb.on_voxels_stale = [this](const auto& attach) {
+    std::lock_guard<std::mutex> lock(model_mutex_);
+    attach(model_->voxelSnapshot());
+  };
   server_ = std::make_unique<ViewServer>(options_.server, cb);
   model_ = std::make_unique<ViewModel>(options_.model,
                                        [this](const ViewFrame& f) { server_->broadcast(f); });

@@ -62,6 +62,12 @@ ViewFrame bulk(std::string data, bool binary) {
   return f;
 }
 
+ViewFrame voxelBulk(std::string data, bool binary) {
+  ViewFrame f = bulk(std::move(data), binary);
+  f.effect = ViewFrame::kVoxels;
+  return f;
+}
+
 // Packs a voxel's integer coordinates; false when outside +-2^20 voxels.
 bool voxelKey(const float* p, double res, uint64_t* key) {
   uint64_t k = 0;
@@ -278,7 +284,7 @@ void ViewModel::addVoxels(const std::vector<float>& xyz) {
       fresh.push_back(key);
     }
   }
-  if (!fresh.empty()) sink_(bulk(voxelFrame(fresh, options_.voxel_m), true));
+  if (!fresh.empty()) sink_(voxelBulk(voxelFrame(fresh, options_.voxel_m), true));
 }
 
 double ViewModel::voxelRes() const { return voxels_from_mapper_ ? mapper_res_ : options_.voxel_m; }
@@ -333,8 +339,8 @@ void ViewModel::addMapUpdate(const Message& msg) {
     if (packIndex(v, &key) && voxels_.erase(key)) removed.push_back(key);
   }
   if (u.full && u.chunk_index == u.chunk_count - 1) removed = endFullUpdate(u.seq, u.chunk_count);
-  if (!added.empty()) sink_(bulk(voxelFrame(added, mapper_res_), true));
-  if (!removed.empty()) sink_(bulk(voxelFrame(removed, mapper_res_, kVoxelsRemoved), true));
+  if (!added.empty()) sink_(voxelBulk(voxelFrame(added, mapper_res_), true));
+  if (!removed.empty()) sink_(voxelBulk(voxelFrame(removed, mapper_res_, kVoxelsRemoved), true));
 }
 
 // The last chunk of a full update: with every chunk received, the voxels it did not list are
@@ -426,14 +432,11 @@ void ViewModel::emitScan(int64_t utime, const std::vector<float>& yz) {
   sink_(latest("scan", last_scan_, true));
 }
 
-std::vector<ViewFrame> ViewModel::snapshot() const {
+std::vector<ViewFrame> ViewModel::voxelSnapshot() const {
   std::vector<ViewFrame> out;
-  for (const auto& [id, s] : sweeps_) {
-    for (const Chunk& c : s.chunks) out.push_back(cloudFrame(s, c));
-  }
-  if (voxels_from_mapper_) {
-    out.push_back(control({{"type", "voxels"}, {"source", "mapper"}, {"voxel_m", mapper_res_}}));
-  }
+  out.push_back(control({{"type", "voxels"},
+                         {"source", voxels_from_mapper_ ? "mapper" : "points"},
+                         {"voxel_m", voxelRes()}}));
   std::vector<uint64_t> keys;
   keys.reserve(voxels_.size());
   for (const auto& [key, hits] : voxels_) keys.push_back(key);
@@ -442,8 +445,17 @@ std::vector<ViewFrame> ViewModel::snapshot() const {
     const std::vector<uint64_t> part(
         keys.begin() + static_cast<std::ptrdiff_t>(i),
         keys.begin() + static_cast<std::ptrdiff_t>(std::min(keys.size(), i + 65536)));
-    out.push_back(bulk(voxelFrame(part, voxelRes()), true));
+    out.push_back(voxelBulk(voxelFrame(part, voxelRes()), true));
   }
+  return out;
+}
+
+std::vector<ViewFrame> ViewModel::snapshot() const {
+  std::vector<ViewFrame> out;
+  for (const auto& [id, s] : sweeps_) {
+    for (const Chunk& c : s.chunks) out.push_back(cloudFrame(s, c));
+  }
+  for (ViewFrame& f : voxelSnapshot()) out.push_back(std::move(f));
   if (!path_.empty()) {
     nlohmann::json xy = nlohmann::json::array();
     for (float v : path_) xy.push_back(v);

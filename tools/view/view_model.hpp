@@ -48,7 +48,9 @@ struct ViewFrame {
   std::string key;      // kLatest: what it replaces
   int64_t sweep = -1;   // a cloud chunk's view sweep (for the per-client point count)
   uint32_t points = 0;  // a cloud chunk's points
-  enum Effect { kNone, kAddPoints, kThin, kRemove, kReset } effect = kNone;
+  // kVoxels: a voxel frame (added or removed); a page that misses one is resynchronised
+  // (ClientQueue::takeVoxelsStale, ViewModel::voxelSnapshot).
+  enum Effect { kNone, kAddPoints, kThin, kRemove, kReset, kVoxels } effect = kNone;
 };
 
 // Binary frame types (first byte; little-endian; header sizes are multiples of 4).
@@ -104,6 +106,9 @@ class ViewModel {
   void reset();
   // The frames that bring a new page to the current state, in order.
   std::vector<ViewFrame> snapshot() const;
+  // The frames that replace a page's voxels with the current set: a "voxels" control frame
+  // (the page empties its voxels) and the set, sorted. For a page that lost a voxel frame.
+  std::vector<ViewFrame> voxelSnapshot() const;
   // The status board as JSON (tools/ops/status.hpp) at now_utime.
   std::string boardJson(int64_t now_utime) const { return board_.json(now_utime); }
   size_t pointsOnScreen() const { return points_on_screen_; }

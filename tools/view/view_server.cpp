@@ -114,6 +114,7 @@ struct ViewServer::Impl {
   void pumpAll();
   void pump(Handle h, Session& s);
   void tick();
+  void resyncVoxels();
   std::string statusFrame(const std::string& board, const ClientCounters& you) const;
 };
 
@@ -292,10 +293,29 @@ std::string ViewServer::Impl::statusFrame(const std::string& board, const Client
                         {"frames_dropped", c.frames_dropped}, {"bytes_dropped", c.bytes_dropped},
                         {"points_dropped", c.points_dropped}, {"replaced", c.replaced},
                         {"points", c.points_drawn},           {"queued_bytes", c.queued_bytes},
-                        {"queued_frames", c.queued_frames}};
+                        {"queued_frames", c.queued_frames},   {"voxel_resyncs", c.voxel_resyncs}};
   std::string out = nlohmann::json({{"type", "status"}, {"view", view}, {"you", you}}).dump();
   out.pop_back();  // the board, already JSON, goes in as it is
   return out + ",\"board\":" + (board.empty() ? "null" : board) + "}";
+}
+
+// The pages that lost a voxel frame get the view's whole voxel set again (newest wins: a
+// lost update is never replayed, the current state replaces it).
+void ViewServer::Impl::resyncVoxels() {
+  if (!callbacks.on_voxels_stale) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    bool any = false;
+    for (const auto& [h, s] : sessions) any = any || (!s.foxglove && s.queue->voxelsStale());
+    if (!any) return;
+  }
+  callbacks.on_voxels_stale([&](const std::vector<ViewFrame>& frames) {
+    std::lock_guard<std::mutex> lock(mutex);
+    for (auto& [h, s] : sessions) {
+      if (s.foxglove || !s.queue->takeVoxelsStale()) continue;
+      for (const ViewFrame& f : frames) s.queue->push(f);
+    }
+  });
 }
 
 // Every 20 ms: the connections whose sockets took what they had get more; once a second: a
@@ -311,6 +331,7 @@ void ViewServer::Impl::tick() {
       if (!s.foxglove) s.queue->push(f);
     }
   }
+  resyncVoxels();
   pumpAll();
   timer->expires_after(std::chrono::milliseconds(20));
   timer->async_wait([this](const std::error_code& ec) {
@@ -431,6 +452,7 @@ ViewServerCounters ViewServer::counters() const {
     c.all.bytes_dropped += q.bytes_dropped;
     c.all.points_dropped += q.points_dropped;
     c.all.replaced += q.replaced;
+    c.all.voxel_resyncs += q.voxel_resyncs;
     c.all.queued_bytes += q.queued_bytes;
   }
   return c;

@@ -63,6 +63,11 @@ class ViewServer {
     std::function<void(const std::string& text)> on_view_command;
     // The JSON of the status board, for the per-connection status frames (once a second).
     std::function<std::string()> board_json;
+    // Pages lost a voxel frame (their queue was full): call `attach` with the frames that
+    // replace a page's voxels (ViewModel::voxelSnapshot), holding the broadcasts' lock as
+    // on_view_open does; they go to every page that lost one.
+    std::function<void(const std::function<void(const std::vector<ViewFrame>&)>& attach)>
+        on_voxels_stale;
   };
 
   // Binds; throws std::runtime_error naming the address when it cannot.
