@@ -49,7 +49,7 @@ void ClientQueue::countDrop(const ViewFrame& f) {
 
 bool ClientQueue::takeVoxelsStale() {
   std::lock_guard<std::mutex> lock(mutex_);
-  if (!voxels_stale_) return false;
+  if (!voxels_stale_ || !frames_.empty()) return false;
   voxels_stale_ = false;
   ++counters_.voxel_resyncs;
   return true;
@@ -57,7 +57,7 @@ bool ClientQueue::takeVoxelsStale() {
 
 bool ClientQueue::voxelsStale() const {
   std::lock_guard<std::mutex> lock(mutex_);
-  return voxels_stale_;
+  return voxels_stale_ && frames_.empty();
 }
 
 std::optional<ViewFrame> ClientQueue::pop() {

@@ -37,8 +37,10 @@ class ClientQueue {
   // The oldest frame, taken off the queue and counted as sent; nullopt when empty.
   std::optional<ViewFrame> pop();
   ClientCounters counters() const;
-  // Whether a voxel frame was dropped since the last call (the page's voxels differ from the
-  // view's until it is sent ViewModel::voxelSnapshot()); clears the flag and counts a resync.
+  // Whether a voxel frame was dropped (the page's voxels differ from the view's until it is
+  // sent ViewModel::voxelSnapshot()) and the queue has drained since, so the snapshot has
+  // room: a stalled page is not sent one snapshot after another. Take clears the flag and
+  // counts a resync.
   bool takeVoxelsStale();
   bool voxelsStale() const;
 
