@@ -28,12 +28,16 @@ PlateModel PlateModel::fromConfig(const PlateConfig& plate) {
   return m;
 }
 
-double plateCoverage(const PlateModel& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
-                     double angle_rad) {
+namespace {
+
+// The ray's margins inside the model plate at `angle_rad` [m]: beyond the hypotenuse, inside
+// each leg, where it meets the solid (all >= 0: the ray ends on the plate). nullopt when the
+// ray does not go down to the upper surface.
+std::optional<Eigen::Vector3d> plateMargins(const PlateModel& m, const Eigen::Vector3d& o,
+                                            const Eigen::Vector3d& d, double angle_rad) {
   const auto top = crossing(o, d, m.height_m);
-  if (!top) return 0.0;
+  if (!top) return std::nullopt;
   const double c = std::cos(angle_rad), s = std::sin(angle_rad);
-  const double k = 4.0 / m.edge_m;  // logistic slope: 0.12 .. 0.88 across edge_m
   const double half = 0.5 * m.hypotenuse_m;
   // Plate frame: u along the middle line (from the axis), v across it.
   const auto uv = [&](const Eigen::Vector3d& p) {
@@ -56,8 +60,23 @@ double plateCoverage(const PlateModel& m, const Eigen::Vector3d& o, const Eigen:
   }
   // Inside both legs (|v| <= half - (u - base)) where it meets the solid.
   const double legs = half - (hit.x() - m.base_distance_m);
-  return logistic(k * (b.x() - m.base_distance_m)) * logistic(k * (legs - hit.y())) *
-         logistic(k * (legs + hit.y()));
+  return Eigen::Vector3d(b.x() - m.base_distance_m, legs - hit.y(), legs + hit.y());
+}
+
+}  // namespace
+
+double plateCoverage(const PlateModel& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                     double angle_rad) {
+  const auto e = plateMargins(m, o, d, angle_rad);
+  if (!e) return 0.0;
+  const double k = 4.0 / m.edge_m;  // logistic slope: 0.12 .. 0.88 across edge_m
+  return logistic(k * e->x()) * logistic(k * e->y()) * logistic(k * e->z());
+}
+
+bool plateCovers(const PlateModel& m, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                 double angle_rad) {
+  const auto e = plateMargins(m, o, d, angle_rad);
+  return e && e->x() >= 0.0 && e->y() >= 0.0 && e->z() >= 0.0;
 }
 
 std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& rays) {
@@ -69,8 +88,12 @@ std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& ra
   return hits;
 }
 
-std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
-                                            double angle_rad, const std::vector<char>* given) {
+namespace {
+
+// The measured-minus-predicted centroid direction with the predicted coverage `cover(ray)`.
+template <class Cover>
+std::optional<double> centroidMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                       const std::vector<char>* given, Cover&& cover) {
   Eigen::Vector2d measured = Eigen::Vector2d::Zero(), predicted = Eigen::Vector2d::Zero();
   double hits = 0.0, weight = 0.0;
   for (size_t i = 0; i < rays.size(); ++i) {
@@ -83,7 +106,7 @@ std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vect
       measured += top->head<2>();
       hits += 1.0;
     }
-    const double w = plateCoverage(m, r.origin, r.direction, angle_rad);
+    const double w = cover(r);
     predicted += w * top->head<2>();
     weight += w;
   }
@@ -91,6 +114,54 @@ std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vect
   // Both sums' directions: the weights' totals do not change them.
   return std::atan2(predicted.x() * measured.y() - predicted.y() * measured.x(),
                     predicted.dot(measured));
+}
+
+}  // namespace
+
+std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                            double angle_rad, const std::vector<char>* given) {
+  return centroidMismatch(m, rays, given, [&](const PlateRay& r) {
+    return plateCoverage(m, r.origin, r.direction, angle_rad);
+  });
+}
+
+std::optional<double> plateSampledMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                           double angle_rad, const std::vector<char>& hits) {
+  return centroidMismatch(m, rays, &hits, [&](const PlateRay& r) {
+    return plateCovers(m, r.origin, r.direction, angle_rad) ? 1.0 : 0.0;
+  });
+}
+
+std::optional<double> fitPlateSampled(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                      const std::vector<char>& hits, double start_rad) {
+  // sign(a) = +1 while the predicted centroid lies short of the measured one (mismatch > 0).
+  const auto above = [&](double a, bool strict) -> std::optional<bool> {
+    const auto e = plateSampledMismatch(m, rays, a, hits);
+    if (!e) return std::nullopt;
+    return strict ? *e > 0.0 : *e >= 0.0;
+  };
+  // A bracket [lo, hi] around the sign change, widened from the start.
+  double step = 1e-3, lo = start_rad - step, hi = start_rad + step;
+  for (int i = 0;; ++i) {
+    const auto a = above(lo, true), b = above(hi, false);
+    if (!a || !b) return std::nullopt;
+    if (*a && !*b) break;
+    if (i == 20) return std::nullopt;
+    step *= 2.0;
+    if (!*a) lo -= step;
+    if (*b) hi += step;
+  }
+  // The last angle still short (mismatch > 0) and the first past it (mismatch < 0): between
+  // them the model's rays are exactly the measured ones (noise-free), or the centroid jumps.
+  const auto edge = [&](bool strict) {
+    double l = lo, h = hi;
+    for (int i = 0; i < 60 && h - l > 1e-12; ++i) {
+      const double mid = 0.5 * (l + h);
+      (above(mid, strict).value_or(false) ? l : h) = mid;
+    }
+    return 0.5 * (l + h);
+  };
+  return 0.5 * (edge(true) + edge(false));
 }
 
 PlateModelFit fitPlateModel(const PlateModel& m, const std::vector<PlateRay>& rays, int min_hits) {

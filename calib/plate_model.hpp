@@ -40,6 +40,11 @@ struct PlateModel {
 double plateCoverage(const PlateModel& m, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                      double angle_rad);
 
+// The same plate with sharp edges: does the ray (origin, unit dir) end on it? What the rays of
+// a real (or simulated) plate do: each is in or out.
+bool plateCovers(const PlateModel& m, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                 double angle_rad);
+
 struct PlateModelFit {
   bool found = false;
   double angle_rad = 0.0;     // the plate's middle line in the rays' frame
@@ -63,5 +68,21 @@ std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& ra
 // The angle whose predicted centroid points where the measured one does (fixed-point
 // iteration from the measured centroid's direction). Not found with fewer than `min_hits`.
 PlateModelFit fitPlateModel(const PlateModel& m, const std::vector<PlateRay>& rays, int min_hits);
+
+// The sampled estimator: the smooth edge stands for the mean over where the edges fall between
+// the rays, but a sweep's rays are one fixed grid (scans 0.56 deg apart on a full turn, rays
+// 0.25 deg apart), whose hits along the edges are what they are: the smooth prediction misses
+// the measured centroid by up to 0.025 deg per sweep even without noise. With sharp edges the
+// model's hits at the true angle are exactly the measured ones (noise-free), so the predicted
+// centroid equals the measured one on an interval of angles around it.
+// plateSampledMismatch: plateCentroidMismatch with plateCovers' 0 / 1 coverage (a step function
+// of the angle, non-increasing).
+std::optional<double> plateSampledMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                           double angle_rad, const std::vector<char>& hits);
+// fitPlateSampled: where plateSampledMismatch changes sign, by bisection from `start_rad` (e.g.
+// fitPlateModel's angle): the middle of the interval where it is 0, or its jump through 0.
+// nullopt when no ray is covered or no sign change lies within ~1 rad.
+std::optional<double> fitPlateSampled(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                      const std::vector<char>& hits, double start_rad);
 
 }  // namespace sweepmap

@@ -142,20 +142,18 @@ std::vector<PlateRay> placePlateRays(const std::vector<SweepRay>& rays, const do
   return out;
 }
 
-// The plate of one sweep: parameters alpha (1), phi_s (1); numeric derivatives. The rays are
-// placed with g as the walls determined it (`g`, a snapshot): one centroid per sweep cannot
+// The plate of one sweep: parameters alpha (1), phi_s (1). Its angle in O' (`beta`) is the
+// sampled estimator's (calib/plate_model.hpp fitPlateSampled) with the rays placed with g as the
+// walls determined it (a snapshot, refreshed with each new g): one centroid per sweep cannot
 // tell the offset from alpha (a sideways shift of the lidar turns the plate's centroid by
-// ~0.7 deg/mm), so the plates do not move g; g's uncertainty reaches alpha by propagation.
+// ~0.7 deg/mm), so the plates do not move g; g's uncertainty reaches alpha by propagation. The
+// sampled estimator is a step function of the geometry, so the plate is a fixed angle here.
 struct PlateCost {
-  const std::vector<SweepRay>* rays;
-  const std::vector<char>* hits;
-  const PlateModel* model;
-  const double* g;
+  const double* beta;
   double inv_sigma;
-  bool operator()(const double* alpha, const double* phi, double* e) const {
-    const auto m = plateCentroidMismatch(*model, placePlateRays(*rays, g), alpha[0] - phi[0], hits);
-    if (!m) return false;
-    e[0] = *m * inv_sigma;
+  template <class T>
+  bool operator()(const T* alpha, const T* phi, T* e) const {
+    e[0] = (T(*beta) - (alpha[0] - phi[0])) * inv_sigma;
     return true;
   }
 };
@@ -166,6 +164,7 @@ struct SweepState {
   double phi = 0.0;
   bool plate = false;
   std::vector<char> plate_hits;
+  double beta = 0.0;            // the plate's angle in O' (PlateCost)
   std::vector<int> wall_class;  // per plane: 0..3 a room wall (azimuth class * 90 deg), -1 free
   std::vector<double> azimuth;  // per room wall [rad]
   std::vector<std::array<double, 2>> wall;  // lean, distance
@@ -214,6 +213,7 @@ SweepState initSweep(const RigASweep& s, const RigASolveOptions& o, const State&
   ss.plate = fit.found;
   if (fit.found) {
     ss.phi = st.alpha - fit.angle_rad;
+    ss.beta = fit.angle_rad;
     ss.plate_hits = plateHits(o.plate, pr);
   }
   const size_t n = s.planes.size();
@@ -356,11 +356,10 @@ Built buildProblem(const std::vector<RigASweep>& sweeps, const RigASolveOptions&
       }
     }
     if (ss.plate) {
-      auto* cost = new PlateCost{&sweeps[s].plate_rays, &ss.plate_hits, &o.plate, st->g_plate,
-                                 1.0 / st->sigma_plate_rad};
-      b.problem->AddResidualBlock(
-          new ceres::NumericDiffCostFunction<PlateCost, ceres::CENTRAL, 1, 1, 1>(cost),
-          st->plate_robust ? b.plate_loss.get() : nullptr, &st->alpha, &ss.phi);
+      auto* cost = new PlateCost{&ss.beta, 1.0 / st->sigma_plate_rad};
+      b.problem->AddResidualBlock(new ceres::AutoDiffCostFunction<PlateCost, 1, 1, 1>(cost),
+                                  st->plate_robust ? b.plate_loss.get() : nullptr, &st->alpha,
+                                  &ss.phi);
     }
   }
   std::vector<int> held_g;
@@ -488,15 +487,12 @@ WallCells wallCells(const RigASolveOptions& o, const State& st) {
 }
 
 // The plates' mismatches [rad] at the state (unscaled), for their scatter.
-std::vector<double> plateMismatches(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
-                                    const State& st) {
+std::vector<double> plateMismatches(const State& st) {
   std::vector<double> m;
   for (size_t s = 0; s < st.sweeps.size(); ++s) {
     const SweepState& ss = st.sweeps[s];
     if (!ss.plate) continue;
-    const auto e = plateCentroidMismatch(o.plate, placePlateRays(sweeps[s].plate_rays, st.g),
-                                         st.alpha - ss.phi, &ss.plate_hits);
-    if (e) m.push_back(*e);
+    m.push_back(wrapAngle(ss.beta - (st.alpha - ss.phi)));
   }
   return m;
 }
@@ -571,14 +567,26 @@ std::vector<SweepRay> plateCandidateRays(const std::vector<SweepRay>& rays, cons
 
 namespace {
 
+// The plates seen with the walls' g: g_plate <- g and each sweep's plate angle in O' again.
+void placePlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
+  std::copy(st->g, st->g + 3, st->g_plate);
+  for (size_t s = 0; s < st->sweeps.size(); ++s) {
+    SweepState& ss = st->sweeps[s];
+    if (!ss.plate) continue;
+    const auto beta = fitPlateSampled(o.plate, placePlateRays(sweeps[s].plate_rays, st->g_plate),
+                                      ss.plate_hits, st->alpha - ss.phi);
+    if (beta) ss.beta = *beta;
+  }
+}
+
 State initState(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o) {
   State st;
   st.g[0] = o.nominal.offset_x_mm;
   st.g[1] = o.nominal.tilt_deg * kDegToRad;
   st.g[2] = o.nominal.mirror_deg * kDegToRad;
   st.alpha = o.nominal.alpha_deg * kDegToRad;
-  std::copy(st.g, st.g + 3, st.g_plate);
   for (const RigASweep& s : sweeps) st.sweeps.push_back(initSweep(s, o, st));
+  placePlates(sweeps, o, &st);
   st.held[0] = std::none_of(st.sweeps.begin(), st.sweeps.end(),
                             [](const SweepState& ss) { return ss.plate; });
   return st;
@@ -604,11 +612,13 @@ Eigen::Matrix4d inUnits(const Eigen::Matrix4d& c) {
   return s.asDiagonal() * c * s.asDiagonal();
 }
 
-// Stage 2's weights: the points' robust sigma, the walls' clutter out, the plates' scatter.
+// Stage 2's weights: the points' robust sigma, the walls' clutter out, the plates' angles with
+// the walls' g and their scatter.
 void reweigh(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
   st->sigma_mm = robustSigma(keptResiduals(*st));
   removeClutter(o, st);
-  const std::vector<double> m = plateMismatches(sweeps, o, *st);
+  placePlates(sweeps, o, st);
+  const std::vector<double> m = plateMismatches(*st);
   // Their scatter about their mean (alpha takes the mean), robustly; Cauchy from now on.
   if (m.size() >= 2) {
     double mean = 0.0;
@@ -679,7 +689,9 @@ void warnOneSidedPlate(RigCalibration* r) {
 }
 
 // alpha as the plates give it with the rays placed with g, the sweeps' attitudes held: the
-// mean of phi_s + the plate's angle in O'.
+// mean of phi_s + the plate's angle in O'. By the smooth model (fitPlateModel): its angle moves
+// with g as the plate's does, where the sampled estimator's steps would make the difference
+// quotient below noise.
 double alphaFromPlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
                        const State& st, const double* g) {
   double sum = 0.0;
@@ -746,12 +758,11 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
     Built b = buildProblem(sweeps, o, &st);
     solve(o, &b);
   }
-  std::copy(st.g, st.g + 3, st.g_plate);
   reweigh(sweeps, o, &st);
   Built b = buildProblem(sweeps, o, &st);
   if (!solve(o, &b)) r.warnings.push_back("the solver stopped before converging");
   // The plates once more with the final g.
-  std::copy(st.g, st.g + 3, st.g_plate);
+  placePlates(sweeps, o, &st);
   solve(o, &b);
   Eigen::Matrix4d cov = parameterCovariance(sweeps, o, &b, &st);
   r.parameters = parameterTable(st, o);
@@ -765,7 +776,7 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
     holdAtNominal(flagged, o, &st);
     Built b2 = buildProblem(sweeps, o, &st);
     solve(o, &b2);
-    std::copy(st.g, st.g + 3, st.g_plate);
+    placePlates(sweeps, o, &st);
     solve(o, &b2);
     cov = parameterCovariance(sweeps, o, &b2, &st);
     r.parameters = parameterTable(st, o);

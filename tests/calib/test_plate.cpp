@@ -4,6 +4,7 @@
 #include <random>
 
 #include "calib/plate.hpp"
+#include "calib/plate_model.hpp"
 #include "calib/rotating_geometry.hpp"
 
 namespace sweepmap {
@@ -234,6 +235,57 @@ TEST_F(PlateCheckTest, MissingHalfIsPartial) {
 TEST_F(PlateCheckTest, WrongBetaDisagreesWithExtent) {
   const RayScan s = regionRays(20 * kDeg, 0.0);
   EXPECT_NE(check(s, 35 * kDeg).problem, "");
+}
+
+// The rays of one full turn as rig A's UST-10LX casts them (scans 0.5625 deg apart, rays 0.25
+// deg apart, 13.9 mm off the axis, scan plane tilted 0.3 deg, mirror 0.2 deg) that cross the
+// plate's plane in the region, each with the range of a sharp plate at `alpha` (its upper
+// surface or its hypotenuse's face; 1 m past it).
+std::vector<PlateRay> fullTurnPlateRays(const PlateModel& m, const PlateRegion& region,
+                                        double alpha) {
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDeg, 0.2 * kDeg);
+  std::vector<PlateRay> rays;
+  for (int k = 0; k < 640; ++k) {
+    const Eigen::Matrix3d Rz = rotating::rotZ(k * 0.5625 * kDeg);
+    for (int i = 0; i < 1081; ++i) {
+      const Eigen::Vector3d o = Rz * Eigen::Vector3d(0.0139, 0, 0);
+      const Eigen::Vector3d d = Rz * R_L * rotating::pointInLidar(1.0, (-135 + 0.25 * i) * kDeg);
+      const auto t = plateRayRange(o, d, region);
+      if (!t) continue;
+      rays.push_back({o, d, plateCovers(m, o, d, alpha) ? *t : *t + 1.0});
+    }
+  }
+  return rays;
+}
+
+// A sweep's rays are one fixed grid: the smooth edge's prediction misses its centroid by the
+// grid's sampling of the edges (0.007-0.016 deg on these four, up to 0.025 deg on the
+// simulator's sweeps); with sharp edges
+// the model's hits at the true angle are the measured ones, and the fit finds it to the
+// grid's resolution.
+TEST(PlateModel, SampledFitFindsTheAngleOnAFullTurnsRayGrid) {
+  PlateConfig c;
+  const PlateModel m = PlateModel::fromConfig(c);
+  const PlateRegion region = PlateRegion::fromConfig(c);
+  for (const double alpha_deg : {29.3598, 30.1, 31.77, -12.3}) {
+    SCOPED_TRACE(alpha_deg);
+    const auto rays = fullTurnPlateRays(m, region, alpha_deg * kDeg);
+    const auto hits = plateHits(m, rays);
+    const PlateModelFit smooth = fitPlateModel(m, rays, 30);
+    ASSERT_TRUE(smooth.found);
+    EXPECT_NEAR(smooth.angle_rad / kDeg, alpha_deg, 0.05);  // the start
+    const auto sampled = fitPlateSampled(m, rays, hits, smooth.angle_rad);
+    ASSERT_TRUE(sampled.has_value());
+    EXPECT_NEAR(*sampled / kDeg, alpha_deg, 0.002);
+    EXPECT_EQ(*plateSampledMismatch(m, rays, alpha_deg * kDeg, hits), 0.0);
+  }
+}
+
+TEST(PlateModel, SampledFitWithoutAHitIsNotFound) {
+  PlateConfig c;
+  const PlateModel m = PlateModel::fromConfig(c);
+  const auto rays = fullTurnPlateRays(m, PlateRegion::fromConfig(c), 0.5);
+  EXPECT_FALSE(fitPlateSampled(m, rays, std::vector<char>(rays.size(), 0), 0.5).has_value());
 }
 
 }  // namespace
