@@ -16,6 +16,7 @@
 #include "net/udpm_receiver.hpp"
 #include "processes/live_runner.hpp"
 #include "rigs/rig_file.hpp"
+#include "tools/view/receive_queue.hpp"
 #include "viz/foxglove_messages.hpp"
 
 namespace sweepmap {
@@ -67,6 +68,8 @@ struct Playback {
   std::optional<int64_t> seek;
 };
 
+constexpr size_t kReceiveQueueBytes = 512u << 20;  // live messages not yet fed to the view
+
 class ViewApp {
  public:
   ViewApp(const ViewOptions& o, std::optional<Rig> rig) : options_(o), rig_(std::move(rig)) {}
@@ -83,6 +86,7 @@ class ViewApp {
   void feed(const Message& m, int64_t now_utime);
   void forwardRaw(const Message& m, int64_t now_utime);
   void receiveLive();
+  void receiveInto(ReceiveQueue& queue);
   void playLog();
   void feedUntil(int64_t t, size_t* next);
   ViewFrame timeFrame();
@@ -102,6 +106,7 @@ class ViewApp {
   std::unique_ptr<ViewModel> model_;
   std::unique_ptr<ViewServer> server_;
   std::atomic<bool> stop_{false};
+  ReceiveQueue received_{kReceiveQueueBytes};
   LoadedLog log_;
   Playback playback_;
 };
@@ -162,7 +167,9 @@ std::string ViewApp::boardJson() {
                      {"map_update_gaps", c.map_update_gaps},
                      {"mapper_occupied_voxels", c.mapper_occupied_voxels},
                      {"thinned", c.thinned},
-                     {"removed_sweeps", c.removed_sweeps}};
+                     {"removed_sweeps", c.removed_sweeps},
+                     {"receive_dropped", received_.dropped()},
+                     {"receive_queue_peak_mb", static_cast<double>(received_.peakBytes()) / 1e6}};
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
 
@@ -247,29 +254,48 @@ void ViewApp::startFoxglove() {
   server_->addFoxgloveChannels(channels);
 }
 
+// The receiver only queues (tools/view/receive_queue.hpp); this thread's worker feeds the view
+// each message with the time it was received.
+void ViewApp::receiveLive() {
+  std::atomic<bool> receiving{true};
+  std::thread worker([this, &receiving] {
+    Message m;
+    while (receiving) {
+      if (received_.pop(&m, std::chrono::milliseconds(100))) add(m, m.utime);
+    }
+  });
+  try {
+    receiveInto(received_);
+  } catch (...) {
+    receiving = false;
+    worker.join();
+    throw;
+  }
+  receiving = false;
+  worker.join();
+}
+
 // udpm:// through sweepmap's own receiver (one malformed datagram must not end the view);
 // other providers (memq://, file://) through liblcm.
-void ViewApp::receiveLive() {
+void ViewApp::receiveInto(ReceiveQueue& queue) {
   const std::string url = net::effectiveLcmUrl(options_.lcm_url);
   if (net::isUdpmUrl(url)) {
     net::UdpmReceiver rx(url);
-    rx.subscribe(".*", [this](const std::string& c, const uint8_t* d, size_t n) {
-      const int64_t now = nowUtime();
-      add(Message{now, c, std::vector<uint8_t>(d, d + n)}, now);
+    rx.subscribe(".*", [&queue](const std::string& c, const uint8_t* d, size_t n) {
+      queue.push(Message{nowUtime(), c, std::vector<uint8_t>(d, d + n)});
     });
     while (!stop_) rx.handleTimeout(100);
     return;
   }
   lcm::LCM lcm(url);
   if (!lcm.good()) throw std::runtime_error("cannot open LCM at '" + url + "'");
-  lcm.subscribeFunction<ViewApp*>(
+  lcm.subscribeFunction<ReceiveQueue*>(
       ".*",
-      [](const lcm::ReceiveBuffer* rb, const std::string& c, ViewApp* app) {
+      [](const lcm::ReceiveBuffer* rb, const std::string& c, ReceiveQueue* q) {
         const auto* p = static_cast<const uint8_t*>(rb->data);
-        app->add(Message{rb->recv_utime, c, std::vector<uint8_t>(p, p + rb->data_size)},
-                 nowUtime());
+        q->push(Message{nowUtime(), c, std::vector<uint8_t>(p, p + rb->data_size)});
       },
-      this);
+      &queue);
   while (!stop_) lcm.handleTimeout(100);
 }
 
