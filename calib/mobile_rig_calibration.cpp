@@ -266,53 +266,72 @@ RigCalibration report(const MobileRigCalibrationInput& in, const Solution& s) {
   return out;
 }
 
-// The cloud the model places at its linearisation point x.
-std::vector<Eigen::Vector3f> cloudAt(const std::vector<OverlapRay>& rays, M& model,
-                                     const Eigen::VectorXd& x) {
+// The cloud the model places at its linearisation point x, and where the lidar was for each
+// point (the point less its ray).
+struct PlacedCloud {
+  std::vector<Eigen::Vector3f> points, origins;
+};
+PlacedCloud cloudAt(const std::vector<OverlapRay>& rays, M& model, const Eigen::VectorXd& x) {
   model.linearise(x);
-  std::vector<Eigen::Vector3f> cloud;
-  cloud.reserve(rays.size());
+  PlacedCloud cloud;
+  cloud.points.reserve(rays.size());
+  cloud.origins.reserve(rays.size());
   for (size_t i = 0; i < rays.size(); ++i) {
     Eigen::Vector3d p, d;
-    OverlapJacobian J;
-    if (model.point(i, &p, &d, &J)) cloud.push_back(p.cast<float>());
+    if (!model.point(i, &p, &d, nullptr)) continue;
+    cloud.points.push_back(p.cast<float>());
+    cloud.origins.push_back((p - rays[i].range_m * d).cast<float>());
   }
   return cloud;
 }
 
+// The lidar's range noise and limit, for the room's planes (calib/room_planes.hpp).
+RangeNoise rangeNoiseOf(const MobileRigCalibrationInput& in) {
+  RangeNoise noise;
+  noise.fraction = in.options.range_noise_fraction;
+  for (const Scan2D& s : in.scans) noise.range_max_m = std::max(noise.range_max_m, s.range_max_m);
+  return noise;
+}
+
 // The lidar's height from the floor: the body frame's xOy plane is the floor, so the floor
-// the cloud shows at height f says the lever arm's z is off by -f. Its sigma: the mean's,
-// with the points' deviations summed per cell of kClusterM first (points of a cell err
-// together: the same passes, the same attitude errors of the track).
+// the cloud shows at height f says the lever arm's z is off by -f. The floor refined against
+// the range noise (the RANSAC plane's 30 mm window also holds the foot of every wall, all of
+// it above the floor: +0.13 mm). Its sigma: the weighted mean's, with the points' weighted
+// deviations summed per cell of kClusterM first (points of a cell err together: the same
+// passes, the same attitude errors of the track).
 struct FloorLever {
   bool ok = false;
   double dz = 0.0, sigma = 0.0;
 };
-FloorLever leverFromFloor(const std::vector<Eigen::Vector3f>& cloud, const RoomPlanes& planes) {
+FloorLever leverFromFloor(const PlacedCloud& cloud, const RoomPlanes& planes,
+                          const RangeNoise& noise) {
   FloorLever f;
   if (!planes.floor || planes.floor->inlier_indices.size() < 100) return f;
-  const std::vector<int>& idx = planes.floor->inlier_indices;
-  const double h = inlierCentroid(cloud, idx).z();
+  const RefinedPlane floor = refinePlane(cloud.points, cloud.origins, *planes.floor, noise);
+  if (!floor.ok) return f;
+  const double h = floor.centroid.z();
   std::map<std::pair<int, int>, double> cells;
-  for (int i : idx) {
-    const Eigen::Vector3f& p = cloud[size_t(i)];
+  double sw = 0.0;
+  for (size_t k = 0; k < floor.inliers.size(); ++k) {
+    const Eigen::Vector3f& p = cloud.points[size_t(floor.inliers[k])];
     cells[{int(std::floor(p.x() / kClusterM)), int(std::floor(p.y() / kClusterM))}] +=
-        double(p.z()) - h;
+        floor.weights[k] * (double(p.z()) - h);
+    sw += floor.weights[k];
   }
   double ss = 0.0;
   for (const auto& [cell, sum] : cells) ss += sum * sum;
   f.ok = cells.size() > 10;
   f.dz = -h;
-  f.sigma = std::sqrt(ss * double(cells.size()) / double(cells.size() - 1)) / double(idx.size());
+  f.sigma = std::sqrt(ss * double(cells.size()) / double(cells.size() - 1)) / sw;
   return f;
 }
 
 // The room's size in the calibrated cloud.
-std::vector<CalibMeasure> roomMeasures(const std::vector<Eigen::Vector3f>& cloud,
-                                       const RoomPlanes& planes,
+std::vector<CalibMeasure> roomMeasures(const PlacedCloud& cloud, const RoomPlanes& planes,
+                                       const RangeNoise& noise,
                                        const std::optional<Eigen::Vector3d>& truth,
                                        std::vector<std::string>* warnings) {
-  const RoomDims dims = roomDims(planes, cloud);
+  const RoomDims dims = refinedRoomDims(planes, cloud.points, cloud.origins, noise);
   std::vector<CalibMeasure> out;
   const std::optional<double> L[3] = {dims.L1, dims.L2, dims.L3};
   const char* keys[3] = {"room.length_m", "room.width_m", "room.height_m"};
@@ -330,22 +349,23 @@ std::vector<CalibMeasure> roomMeasures(const std::vector<Eigen::Vector3f>& cloud
 // it moves every point alike); after the last pass, the room's size too.
 void floorAndRoom(const MobileRigCalibrationInput& in, const std::vector<OverlapRay>& rays,
                   M& model, bool last, Solution* s) {
-  const std::vector<Eigen::Vector3f> cloud = cloudAt(rays, model, s->r.x);
+  const PlacedCloud cloud = cloudAt(rays, model, s->r.x);
   // A drive in one end of the room sees the far wall thinly, and the furniture's and the
   // door's planes come first: more and smaller planes than the defaults (a loop's).
   WallExtractionOptions wo;
   wo.max_planes = 16;
   wo.min_inliers = 100;
-  const RoomPlanes planes = findRoomPlanes(cloud, wo);
+  const RoomPlanes planes = findRoomPlanes(cloud.points, wo);
+  const RangeNoise noise = rangeNoiseOf(in);
   if (!s->free[M::kLeverZ]) {
-    const FloorLever f = leverFromFloor(cloud, planes);
+    const FloorLever f = leverFromFloor(cloud, planes, noise);
     s->floor_z = f.ok;
     if (f.ok) {
       s->r.x(M::kLeverZ) += f.dz;
       s->floor_z_sigma = f.sigma;
     }
   }
-  if (last) s->room = roomMeasures(cloud, planes, in.room_truth_m, &s->room_warnings);
+  if (last) s->room = roomMeasures(cloud, planes, noise, in.room_truth_m, &s->room_warnings);
 }
 
 // Step 1: the wheels' ratios to the track and the gyro bias; w becomes (k_L T0, k_R T0, T0).
