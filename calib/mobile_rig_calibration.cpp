@@ -42,6 +42,10 @@ double observabilityBound(int k) {
 // The residuals err together within about a plane patch (they share the other pass's planes)
 // and along a wall: their covariance is the cluster-robust one over cubes of this size.
 constexpr double kClusterM = 0.5;
+// ... and between the same two stretches of the drive (the track's error between them: the
+// encoders' noise, a slip, the gyro's drift), wherever they lie: two-way with time windows of
+// this length (0.6 m at the plan's 0.2 m/s, about a cube).
+constexpr double kClusterS = 3.0;
 // The wheels' k = r / T are determined when their relative sigma is below this.
 constexpr double kMaxWheelRatioSigma = 0.01;
 
@@ -78,6 +82,7 @@ OverlapResult solve(const std::vector<OverlapRay>& rays, M& model, const Eigen::
   oo.upper(M::kTimeOffset) = in.options.max_time_offset_s;
   oo.threads = in.options.threads;
   oo.cluster_m = kClusterM;
+  oo.cluster_s = kClusterS;
   return alignOverlap(rays, model, x, oo);
 }
 

@@ -247,7 +247,8 @@ struct Residual {
   double r, w, scale;
   Eigen::Matrix<double, 1, kMaxOverlapParameters> J;
   bool keep;
-  Eigen::Vector3f at;  // the query's world point (its cluster for the sandwich covariance)
+  Eigen::Vector3f at;   // the query's world point (its cluster for the sandwich covariance)
+  double t_a_s, t_b_s;  // the query's and its neighbours' (mean) times [s], likewise
 };
 
 Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& model,
@@ -260,8 +261,9 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
     const double s = o.range_noise_fraction * rays[i].range_m * d.dot(corr.n);
     return s * s;
   };
-  double var_nb = 0.0;
+  double var_nb = 0.0, t_b = 0.0;
   for (int j = 0; j < corr.count; ++j) {
+    t_b += 1e-6 * double(rays[size_t(corr.nb[j])].utime - rays.front().utime);
     model.point(size_t(corr.nb[j]), &pb, &db, &Jb);
     mean += pb;
     Jmean += Jb;
@@ -273,6 +275,8 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
   res.r = corr.n.dot(pa - mean);
   res.J = corr.n.transpose() * (Ja - Jmean);
   res.at = pa.cast<float>();
+  res.t_a_s = 1e-6 * double(rays[size_t(corr.a)].utime - rays.front().utime);
+  res.t_b_s = t_b / double(corr.count);
   res.w = 1.0;
   res.scale = o.loss_scale_m;
   if (o.noise_weighting) {
@@ -444,42 +448,78 @@ std::vector<OverlapRay> overlapRays(const std::vector<Scan2D>& scans, const Eige
   return rays;
 }
 
-// The cluster-robust (sandwich) covariance H^-1 M H^-1 of the free parameters, M the sum
-// over cubes of `cluster_m` of each cube's gradient outer product: residuals that share the
-// other pass's planes (or a wall's unevenness) err together, which chi2 / H^-1 counts as
-// independent. Never below `classic` on the diagonal (scaled to it, correlations kept).
-Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradient& dx,
-                                    const Normal& H, const Eigen::MatrixXd& classic, int P,
-                                    const OverlapOptions& oo) {
-  std::map<std::array<int, 3>, Gradient> sums;
+// A residual's cluster: its cube of cluster_m (residuals that share the other pass's planes,
+// or a wall's unevenness, err together) and, with cluster_s, the pair of time windows of its
+// query and its neighbours (residuals between the same two stretches of the drive share the
+// track's error between them: the encoders' noise, a slip, the gyro's drift).
+using ClusterKey = std::array<int64_t, 5>;
+enum class Clustering { kSpace, kTime, kBoth };
+ClusterKey clusterOf(const Residual& r, const OverlapOptions& oo, Clustering c) {
+  ClusterKey key = {0, 0, 0, 0, 0};
+  if (c != Clustering::kTime) {
+    for (int k = 0; k < 3; ++k) key[size_t(k)] = int64_t(std::floor(r.at(k) / oo.cluster_m));
+  }
+  if (c != Clustering::kSpace) {
+    const int64_t a = int64_t(std::floor(r.t_a_s / oo.cluster_s));
+    const int64_t b = int64_t(std::floor(r.t_b_s / oo.cluster_s));
+    key[3] = std::min(a, b);  // either way round: the same two stretches
+    key[4] = std::max(a, b);
+  }
+  return key;
+}
+
+// The sum over clusters of each cluster's gradient outer product (free parameters), scaled
+// by C / (C - 1); false with too few clusters for it.
+bool clusterMeat(const std::vector<Residual>& rs, const Gradient& dx, const std::vector<int>& free,
+                 const OverlapOptions& oo, Clustering c, Eigen::MatrixXd* M) {
+  std::map<ClusterKey, Gradient> sums;
   for (const Residual& r : rs) {
     if (!r.keep) continue;
     const double ei = r.w * (r.r + r.J.dot(dx.transpose()));
     const double rho1 = 1.0 / (1.0 + ei * ei / (r.scale * r.scale));
-    const std::array<int, 3> key = {int(std::floor(r.at.x() / oo.cluster_m)),
-                                    int(std::floor(r.at.y() / oo.cluster_m)),
-                                    int(std::floor(r.at.z() / oo.cluster_m))};
-    auto [it, inserted] = sums.try_emplace(key, Gradient::Zero());
+    auto [it, inserted] = sums.try_emplace(clusterOf(r, oo, c), Gradient::Zero());
     it->second.noalias() += rho1 * ei * r.w * r.J.transpose();
   }
+  const int F = int(free.size()), C = int(sums.size());
+  if (C <= 10 * F) return false;
+  *M = Eigen::MatrixXd::Zero(F, F);
+  for (const auto& [key, g] : sums) {
+    Eigen::VectorXd gf(F);
+    for (int i = 0; i < F; ++i) gf(i) = g(free[size_t(i)]);
+    M->noalias() += gf * gf.transpose();
+  }
+  *M *= double(C) / double(C - 1);
+  return true;
+}
+
+// The cluster-robust (sandwich) covariance H^-1 M H^-1 of the free parameters: M over cubes of
+// cluster_m and, with cluster_s, two-way (Cameron, Gelbach and Miller 2011: the cubes' M plus
+// the time pairs' less their intersection's; where that is not positive, the sum of the two).
+// chi2 / H^-1 counts correlated residuals as independent. Never below `classic` on the
+// diagonal (scaled to it, correlations kept).
+Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradient& dx,
+                                    const Normal& H, const Eigen::MatrixXd& classic, int P,
+                                    const OverlapOptions& oo) {
   std::vector<int> free;
   for (int k = 0; k < P; ++k) {
     if (oo.free.empty() || oo.free[size_t(k)]) free.push_back(k);
   }
-  const int F = int(free.size()), C = int(sums.size());
-  if (F == 0 || C <= 10 * F) return classic;
-  Eigen::MatrixXd Hf(F, F), Mf = Eigen::MatrixXd::Zero(F, F);
+  const int F = int(free.size());
+  Eigen::MatrixXd M;
+  if (F == 0 || !clusterMeat(rs, dx, free, oo, Clustering::kSpace, &M)) return classic;
+  Eigen::MatrixXd Hf(F, F);
   for (int i = 0; i < F; ++i) {
     for (int j = 0; j < F; ++j) Hf(i, j) = H(free[size_t(i)], free[size_t(j)]);
   }
-  for (const auto& [key, g] : sums) {
-    Eigen::VectorXd gf(F);
-    for (int i = 0; i < F; ++i) gf(i) = g(free[size_t(i)]);
-    Mf.noalias() += gf * gf.transpose();
-  }
-  Mf *= double(C) / double(C - 1);
   const Eigen::MatrixXd Hinv = Hf.ldlt().solve(Eigen::MatrixXd::Identity(F, F));
-  Eigen::MatrixXd S = Hinv * Mf * Hinv;
+  Eigen::MatrixXd Mt, Mb;
+  if (oo.cluster_s > 0 && clusterMeat(rs, dx, free, oo, Clustering::kTime, &Mt) &&
+      clusterMeat(rs, dx, free, oo, Clustering::kBoth, &Mb)) {
+    const Eigen::MatrixXd two_way = M + Mt - Mb;
+    const Eigen::MatrixXd S = Hinv * two_way * Hinv;
+    M = S.diagonal().minCoeff() > 0 ? two_way : Eigen::MatrixXd(M + Mt);
+  }
+  Eigen::MatrixXd S = Hinv * M * Hinv;
   Eigen::VectorXd scale(F);
   for (int i = 0; i < F; ++i) {
     const double c = classic(free[size_t(i)], free[size_t(i)]);
