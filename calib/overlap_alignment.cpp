@@ -149,22 +149,44 @@ int nearest(const Cloud& c, int h, const Eigen::Vector3d& p, int k, double radiu
 // Query a's correspondence, as the reference solver's planeResidual decides it: the other
 // pass's local plane flat, the query's own half seeing the same plane, not grazing, the query
 // over the middle of the patch.
-// The local planes at query a from the voxel centroids: the other pass's (its normal), and
-// the one the query's own half sees there, which must agree (the query lies on that surface,
-// not on another one near an edge). False if either is not flat or they disagree.
-bool localPlane(const OverlapRay& ra, const Cloud& c, const Eigen::Vector3d& pa, double max_var,
-                const MountingCalibrationOptions& o, Eigen::Vector3d* n) {
-  Eigen::Vector3d patch[64], mean;
-  const int n_patch = voxelsNear(c, ra.left ? 0 : 1, pa, o.plane_radius_m, patch);
-  if (n_patch < o.min_neighbours ||
-      !fitPcaPlane(patch, n_patch, o.max_planarity_ratio, max_var, &mean, n)) {
+// The range a ray from `origin` along `dir` meets the plane (normal n through m) at.
+double predictedRange(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                      const Eigen::Vector3d& n, const Eigen::Vector3d& m) {
+  return std::abs(n.dot(m - origin)) / std::max(1e-9, std::abs(n.dot(dir)));
+}
+
+// The plane of a patch of voxel centroids, if flat to within the range noise of the query's ray
+// (at most along the normal) plus a millimetre. The noise is that of the range the plane
+// predicts for the ray, not of the range measured: a limit from the measured range would pass
+// the queries measured long more often than those measured short, and a noise-weighted one
+// weigh them less (together 0.1 % of every range, taken up as the wheels' scale).
+bool flatPatch(const Eigen::Vector3d* patch, int count, const Eigen::Vector3d& origin,
+               const Eigen::Vector3d& dir, const MountingCalibrationOptions& o,
+               Eigen::Vector3d* mean, Eigen::Vector3d* n) {
+  if (count < o.min_neighbours ||
+      !fitPcaPlane(patch, count, o.max_planarity_ratio, 1e300, mean, n)) {
     return false;
   }
+  const double sigma = o.range_noise_fraction * predictedRange(origin, dir, *n, *mean);
+  double var = 0.0;
+  for (int i = 0; i < count; ++i) var += std::pow(n->dot(patch[i] - *mean), 2);
+  return var / count <= 2.0 * sigma * sigma + 1e-6;
+}
+
+// The local planes at query a from the voxel centroids: the other pass's (its normal and
+// mean), and the one the query's own half sees there, which must agree (the query lies on that
+// surface, not on another one near an edge). False if either is not flat or they disagree.
+bool localPlane(const OverlapRay& ra, const Cloud& c, size_t a, const MountingCalibrationOptions& o,
+                Eigen::Vector3d* n, Eigen::Vector3d* mean) {
+  const Eigen::Vector3d& pa = c.p[a];
+  const Eigen::Vector3d origin = pa - ra.range_m * c.dir[a];
+  Eigen::Vector3d patch[64];
+  const int n_patch = voxelsNear(c, ra.left ? 0 : 1, pa, o.plane_radius_m, patch);
+  if (!flatPatch(patch, n_patch, origin, c.dir[a], o, mean, n)) return false;
   if (!o.check_own_plane) return true;
-  Eigen::Vector3d own_n;
+  Eigen::Vector3d own_n, own_mean;
   const int n_own = voxelsNear(c, ra.left ? 1 : 0, pa, o.plane_radius_m, patch);
-  return n_own >= o.min_neighbours &&
-         fitPcaPlane(patch, n_own, o.max_planarity_ratio, max_var, &mean, &own_n) &&
+  return flatPatch(patch, n_own, origin, c.dir[a], o, &own_mean, &own_n) &&
          std::abs(own_n.dot(*n)) >= std::cos(o.max_normal_angle_rad);
 }
 
@@ -177,11 +199,10 @@ bool findCorrespondence(const std::vector<OverlapRay>& rays, const Cloud& c, int
   const MountingCalibrationOptions& o = oo.base;
   const OverlapRay& ra = rays[size_t(a)];
   const Eigen::Vector3d& pa = c.p[size_t(a)];
-  // A plane is flat to within the range noise (at most along the normal) plus a millimetre.
-  const double sigma = o.range_noise_fraction * ra.range_m;
-  const double max_var = 2.0 * sigma * sigma + 1e-6;
-  Eigen::Vector3d n;
-  if (!localPlane(ra, c, pa, max_var, o, &n)) return false;
+  Eigen::Vector3d n, plane_mean;
+  if (!localPlane(ra, c, size_t(a), o, &n, &plane_mean)) return false;
+  const double sigma = o.range_noise_fraction * predictedRange(pa - ra.range_m * c.dir[size_t(a)],
+                                                               c.dir[size_t(a)], n, plane_mean);
   if (o.max_incidence_rad < 0.5 * M_PI &&
       std::abs(c.dir[size_t(a)].dot(n)) < std::cos(o.max_incidence_rad)) {
     return false;
@@ -257,19 +278,24 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
   Eigen::Vector3d pa, da, pb, db, mean = Eigen::Vector3d::Zero();
   OverlapJacobian Ja, Jb, Jmean = OverlapJacobian::Zero();
   model.point(size_t(corr.a), &pa, &da, &Ja);
-  const auto variance = [&](size_t i, const Eigen::Vector3d& d) {
-    const double s = o.range_noise_fraction * rays[i].range_m * d.dot(corr.n);
+  // The range noise along the normal of a ray from its origin: that of the range the
+  // neighbours' plane predicts for it (flatPatch says why not the measured one).
+  Eigen::Vector3d origins[kMaxNb];
+  const auto variance = [&](const Eigen::Vector3d& origin) {
+    const double s = o.range_noise_fraction * corr.n.dot(mean - origin);
     return s * s;
   };
-  double var_nb = 0.0, t_b = 0.0;
+  double t_b = 0.0;
   for (int j = 0; j < corr.count; ++j) {
     t_b += 1e-6 * double(rays[size_t(corr.nb[j])].utime - rays.front().utime);
     model.point(size_t(corr.nb[j]), &pb, &db, &Jb);
+    origins[j] = pb - rays[size_t(corr.nb[j])].range_m * db;
     mean += pb;
     Jmean += Jb;
-    var_nb += variance(size_t(corr.nb[j]), db);
   }
   mean /= double(corr.count);
+  double var_nb = 0.0;
+  for (int j = 0; j < corr.count; ++j) var_nb += variance(origins[j]);
   Jmean /= double(corr.count);
   var_nb /= double(corr.count) * double(corr.count);
   res.r = corr.n.dot(pa - mean);
@@ -280,8 +306,8 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
   res.w = 1.0;
   res.scale = o.loss_scale_m;
   if (o.noise_weighting) {
-    res.w =
-        1.0 / std::sqrt(variance(size_t(corr.a), da) + var_nb + o.model_sigma_m * o.model_sigma_m);
+    res.w = 1.0 / std::sqrt(variance(pa - rays[size_t(corr.a)].range_m * da) + var_nb +
+                            o.model_sigma_m * o.model_sigma_m);
     res.scale = std::max(o.loss_scale_sigmas, o.loss_scale_m * res.w);
   }
   res.keep = true;
