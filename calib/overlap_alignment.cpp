@@ -149,22 +149,44 @@ int nearest(const Cloud& c, int h, const Eigen::Vector3d& p, int k, double radiu
 // Query a's correspondence, as the reference solver's planeResidual decides it: the other
 // pass's local plane flat, the query's own half seeing the same plane, not grazing, the query
 // over the middle of the patch.
-// The local planes at query a from the voxel centroids: the other pass's (its normal), and
-// the one the query's own half sees there, which must agree (the query lies on that surface,
-// not on another one near an edge). False if either is not flat or they disagree.
-bool localPlane(const OverlapRay& ra, const Cloud& c, const Eigen::Vector3d& pa, double max_var,
-                const MountingCalibrationOptions& o, Eigen::Vector3d* n) {
-  Eigen::Vector3d patch[64], mean;
-  const int n_patch = voxelsNear(c, ra.left ? 0 : 1, pa, o.plane_radius_m, patch);
-  if (n_patch < o.min_neighbours ||
-      !fitPcaPlane(patch, n_patch, o.max_planarity_ratio, max_var, &mean, n)) {
+// The range a ray from `origin` along `dir` meets the plane (normal n through m) at.
+double predictedRange(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+                      const Eigen::Vector3d& n, const Eigen::Vector3d& m) {
+  return std::abs(n.dot(m - origin)) / std::max(1e-9, std::abs(n.dot(dir)));
+}
+
+// The plane of a patch of voxel centroids, if flat to within the range noise of the query's ray
+// (at most along the normal) plus a millimetre. The noise is that of the range the plane
+// predicts for the ray, not of the range measured: a limit from the measured range would pass
+// the queries measured long more often than those measured short, and a noise-weighted one
+// weigh them less (together 0.1 % of every range, taken up as the wheels' scale).
+bool flatPatch(const Eigen::Vector3d* patch, int count, const Eigen::Vector3d& origin,
+               const Eigen::Vector3d& dir, const MountingCalibrationOptions& o,
+               Eigen::Vector3d* mean, Eigen::Vector3d* n) {
+  if (count < o.min_neighbours ||
+      !fitPcaPlane(patch, count, o.max_planarity_ratio, 1e300, mean, n)) {
     return false;
   }
+  const double sigma = o.range_noise_fraction * predictedRange(origin, dir, *n, *mean);
+  double var = 0.0;
+  for (int i = 0; i < count; ++i) var += std::pow(n->dot(patch[i] - *mean), 2);
+  return var / count <= 2.0 * sigma * sigma + 1e-6;
+}
+
+// The local planes at query a from the voxel centroids: the other pass's (its normal and
+// mean), and the one the query's own half sees there, which must agree (the query lies on that
+// surface, not on another one near an edge). False if either is not flat or they disagree.
+bool localPlane(const OverlapRay& ra, const Cloud& c, size_t a, const MountingCalibrationOptions& o,
+                Eigen::Vector3d* n, Eigen::Vector3d* mean) {
+  const Eigen::Vector3d& pa = c.p[a];
+  const Eigen::Vector3d origin = pa - ra.range_m * c.dir[a];
+  Eigen::Vector3d patch[64];
+  const int n_patch = voxelsNear(c, ra.left ? 0 : 1, pa, o.plane_radius_m, patch);
+  if (!flatPatch(patch, n_patch, origin, c.dir[a], o, mean, n)) return false;
   if (!o.check_own_plane) return true;
-  Eigen::Vector3d own_n;
+  Eigen::Vector3d own_n, own_mean;
   const int n_own = voxelsNear(c, ra.left ? 1 : 0, pa, o.plane_radius_m, patch);
-  return n_own >= o.min_neighbours &&
-         fitPcaPlane(patch, n_own, o.max_planarity_ratio, max_var, &mean, &own_n) &&
+  return flatPatch(patch, n_own, origin, c.dir[a], o, &own_mean, &own_n) &&
          std::abs(own_n.dot(*n)) >= std::cos(o.max_normal_angle_rad);
 }
 
@@ -177,11 +199,10 @@ bool findCorrespondence(const std::vector<OverlapRay>& rays, const Cloud& c, int
   const MountingCalibrationOptions& o = oo.base;
   const OverlapRay& ra = rays[size_t(a)];
   const Eigen::Vector3d& pa = c.p[size_t(a)];
-  // A plane is flat to within the range noise (at most along the normal) plus a millimetre.
-  const double sigma = o.range_noise_fraction * ra.range_m;
-  const double max_var = 2.0 * sigma * sigma + 1e-6;
-  Eigen::Vector3d n;
-  if (!localPlane(ra, c, pa, max_var, o, &n)) return false;
+  Eigen::Vector3d n, plane_mean;
+  if (!localPlane(ra, c, size_t(a), o, &n, &plane_mean)) return false;
+  const double sigma = o.range_noise_fraction * predictedRange(pa - ra.range_m * c.dir[size_t(a)],
+                                                               c.dir[size_t(a)], n, plane_mean);
   if (o.max_incidence_rad < 0.5 * M_PI &&
       std::abs(c.dir[size_t(a)].dot(n)) < std::cos(o.max_incidence_rad)) {
     return false;
@@ -247,7 +268,8 @@ struct Residual {
   double r, w, scale;
   Eigen::Matrix<double, 1, kMaxOverlapParameters> J;
   bool keep;
-  Eigen::Vector3f at;  // the query's world point (its cluster for the sandwich covariance)
+  Eigen::Vector3f at;   // the query's world point (its cluster for the sandwich covariance)
+  double t_a_s, t_b_s;  // the query's and its neighbours' (mean) times [s], likewise
 };
 
 Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& model,
@@ -256,28 +278,36 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
   Eigen::Vector3d pa, da, pb, db, mean = Eigen::Vector3d::Zero();
   OverlapJacobian Ja, Jb, Jmean = OverlapJacobian::Zero();
   model.point(size_t(corr.a), &pa, &da, &Ja);
-  const auto variance = [&](size_t i, const Eigen::Vector3d& d) {
-    const double s = o.range_noise_fraction * rays[i].range_m * d.dot(corr.n);
+  // The range noise along the normal of a ray from its origin: that of the range the
+  // neighbours' plane predicts for it (flatPatch says why not the measured one).
+  Eigen::Vector3d origins[kMaxNb];
+  const auto variance = [&](const Eigen::Vector3d& origin) {
+    const double s = o.range_noise_fraction * corr.n.dot(mean - origin);
     return s * s;
   };
-  double var_nb = 0.0;
+  double t_b = 0.0;
   for (int j = 0; j < corr.count; ++j) {
+    t_b += 1e-6 * double(rays[size_t(corr.nb[j])].utime - rays.front().utime);
     model.point(size_t(corr.nb[j]), &pb, &db, &Jb);
+    origins[j] = pb - rays[size_t(corr.nb[j])].range_m * db;
     mean += pb;
     Jmean += Jb;
-    var_nb += variance(size_t(corr.nb[j]), db);
   }
   mean /= double(corr.count);
+  double var_nb = 0.0;
+  for (int j = 0; j < corr.count; ++j) var_nb += variance(origins[j]);
   Jmean /= double(corr.count);
   var_nb /= double(corr.count) * double(corr.count);
   res.r = corr.n.dot(pa - mean);
   res.J = corr.n.transpose() * (Ja - Jmean);
   res.at = pa.cast<float>();
+  res.t_a_s = 1e-6 * double(rays[size_t(corr.a)].utime - rays.front().utime);
+  res.t_b_s = t_b / double(corr.count);
   res.w = 1.0;
   res.scale = o.loss_scale_m;
   if (o.noise_weighting) {
-    res.w =
-        1.0 / std::sqrt(variance(size_t(corr.a), da) + var_nb + o.model_sigma_m * o.model_sigma_m);
+    res.w = 1.0 / std::sqrt(variance(pa - rays[size_t(corr.a)].range_m * da) + var_nb +
+                            o.model_sigma_m * o.model_sigma_m);
     res.scale = std::max(o.loss_scale_sigmas, o.loss_scale_m * res.w);
   }
   res.keep = true;
@@ -444,42 +474,78 @@ std::vector<OverlapRay> overlapRays(const std::vector<Scan2D>& scans, const Eige
   return rays;
 }
 
-// The cluster-robust (sandwich) covariance H^-1 M H^-1 of the free parameters, M the sum
-// over cubes of `cluster_m` of each cube's gradient outer product: residuals that share the
-// other pass's planes (or a wall's unevenness) err together, which chi2 / H^-1 counts as
-// independent. Never below `classic` on the diagonal (scaled to it, correlations kept).
-Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradient& dx,
-                                    const Normal& H, const Eigen::MatrixXd& classic, int P,
-                                    const OverlapOptions& oo) {
-  std::map<std::array<int, 3>, Gradient> sums;
+// A residual's cluster: its cube of cluster_m (residuals that share the other pass's planes,
+// or a wall's unevenness, err together) and, with cluster_s, the pair of time windows of its
+// query and its neighbours (residuals between the same two stretches of the drive share the
+// track's error between them: the encoders' noise, a slip, the gyro's drift).
+using ClusterKey = std::array<int64_t, 5>;
+enum class Clustering { kSpace, kTime, kBoth };
+ClusterKey clusterOf(const Residual& r, const OverlapOptions& oo, Clustering c) {
+  ClusterKey key = {0, 0, 0, 0, 0};
+  if (c != Clustering::kTime) {
+    for (int k = 0; k < 3; ++k) key[size_t(k)] = int64_t(std::floor(r.at(k) / oo.cluster_m));
+  }
+  if (c != Clustering::kSpace) {
+    const int64_t a = int64_t(std::floor(r.t_a_s / oo.cluster_s));
+    const int64_t b = int64_t(std::floor(r.t_b_s / oo.cluster_s));
+    key[3] = std::min(a, b);  // either way round: the same two stretches
+    key[4] = std::max(a, b);
+  }
+  return key;
+}
+
+// The sum over clusters of each cluster's gradient outer product (free parameters), scaled
+// by C / (C - 1); false with too few clusters for it.
+bool clusterMeat(const std::vector<Residual>& rs, const Gradient& dx, const std::vector<int>& free,
+                 const OverlapOptions& oo, Clustering c, Eigen::MatrixXd* M) {
+  std::map<ClusterKey, Gradient> sums;
   for (const Residual& r : rs) {
     if (!r.keep) continue;
     const double ei = r.w * (r.r + r.J.dot(dx.transpose()));
     const double rho1 = 1.0 / (1.0 + ei * ei / (r.scale * r.scale));
-    const std::array<int, 3> key = {int(std::floor(r.at.x() / oo.cluster_m)),
-                                    int(std::floor(r.at.y() / oo.cluster_m)),
-                                    int(std::floor(r.at.z() / oo.cluster_m))};
-    auto [it, inserted] = sums.try_emplace(key, Gradient::Zero());
+    auto [it, inserted] = sums.try_emplace(clusterOf(r, oo, c), Gradient::Zero());
     it->second.noalias() += rho1 * ei * r.w * r.J.transpose();
   }
+  const int F = int(free.size()), C = int(sums.size());
+  if (C <= 10 * F) return false;
+  *M = Eigen::MatrixXd::Zero(F, F);
+  for (const auto& [key, g] : sums) {
+    Eigen::VectorXd gf(F);
+    for (int i = 0; i < F; ++i) gf(i) = g(free[size_t(i)]);
+    M->noalias() += gf * gf.transpose();
+  }
+  *M *= double(C) / double(C - 1);
+  return true;
+}
+
+// The cluster-robust (sandwich) covariance H^-1 M H^-1 of the free parameters: M over cubes of
+// cluster_m and, with cluster_s, two-way (Cameron, Gelbach and Miller 2011: the cubes' M plus
+// the time pairs' less their intersection's; where that is not positive, the sum of the two).
+// chi2 / H^-1 counts correlated residuals as independent. Never below `classic` on the
+// diagonal (scaled to it, correlations kept).
+Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradient& dx,
+                                    const Normal& H, const Eigen::MatrixXd& classic, int P,
+                                    const OverlapOptions& oo) {
   std::vector<int> free;
   for (int k = 0; k < P; ++k) {
     if (oo.free.empty() || oo.free[size_t(k)]) free.push_back(k);
   }
-  const int F = int(free.size()), C = int(sums.size());
-  if (F == 0 || C <= 10 * F) return classic;
-  Eigen::MatrixXd Hf(F, F), Mf = Eigen::MatrixXd::Zero(F, F);
+  const int F = int(free.size());
+  Eigen::MatrixXd M;
+  if (F == 0 || !clusterMeat(rs, dx, free, oo, Clustering::kSpace, &M)) return classic;
+  Eigen::MatrixXd Hf(F, F);
   for (int i = 0; i < F; ++i) {
     for (int j = 0; j < F; ++j) Hf(i, j) = H(free[size_t(i)], free[size_t(j)]);
   }
-  for (const auto& [key, g] : sums) {
-    Eigen::VectorXd gf(F);
-    for (int i = 0; i < F; ++i) gf(i) = g(free[size_t(i)]);
-    Mf.noalias() += gf * gf.transpose();
-  }
-  Mf *= double(C) / double(C - 1);
   const Eigen::MatrixXd Hinv = Hf.ldlt().solve(Eigen::MatrixXd::Identity(F, F));
-  Eigen::MatrixXd S = Hinv * Mf * Hinv;
+  Eigen::MatrixXd Mt, Mb;
+  if (oo.cluster_s > 0 && clusterMeat(rs, dx, free, oo, Clustering::kTime, &Mt) &&
+      clusterMeat(rs, dx, free, oo, Clustering::kBoth, &Mb)) {
+    const Eigen::MatrixXd two_way = M + Mt - Mb;
+    const Eigen::MatrixXd S = Hinv * two_way * Hinv;
+    M = S.diagonal().minCoeff() > 0 ? two_way : Eigen::MatrixXd(M + Mt);
+  }
+  Eigen::MatrixXd S = Hinv * M * Hinv;
   Eigen::VectorXd scale(F);
   for (int i = 0; i < F; ++i) {
     const double c = classic(free[size_t(i)], free[size_t(i)]);

@@ -63,6 +63,10 @@ struct OverlapOptions {
   // below chi2 times the inverse normal matrix (which counts correlated residuals as
   // independent); 0: that one alone.
   double cluster_m = 0.0;
+  // > 0 (with cluster_m): two-way, also over the pairs of time windows of this length that
+  // each residual's query and neighbours fall in (the track's error between two stretches of
+  // the drive is common to all their residuals, wherever they lie).
+  double cluster_s = 0.0;
   // Rounds whose parameter change is below this re-linearise without a new search.
   double research_change = 2e-4;
   std::function<void(double)> progress;  // fraction of the rounds done (may be empty)

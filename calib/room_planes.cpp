@@ -1,6 +1,7 @@
 // A room's planes and dimensions: see calib/room_planes.hpp.
 #include "calib/room_planes.hpp"
 
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 
@@ -60,6 +61,101 @@ RoomDims roomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud
     d.L2 = std::min(x, y);
   }
   if (p.floor && p.ceiling) d.L3 = planeDistance(*p.floor, cloud, *p.ceiling, cloud);
+  return d;
+}
+
+namespace {
+
+// The points of `plane`'s window (each within window_sigmas of its sigma, its ray's predicted
+// range clear of range_max_m), with their weights.
+void planeWindow(const std::vector<Eigen::Vector3f>& cloud,
+                 const std::vector<Eigen::Vector3f>& origins, const Eigen::Vector3d& n, double d,
+                 const RangeNoise& noise, std::vector<int>* idx, std::vector<double>* w) {
+  idx->clear();
+  w->clear();
+  const double r_lim = noise.range_max_m * (1.0 - noise.window_sigmas * noise.fraction);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const Eigen::Vector3d p = cloud[i].cast<double>(), o = origins[i].cast<double>();
+    const double h = n.dot(o) + d;  // the origin's signed distance from the plane
+    const double s = std::hypot(noise.fraction * h, noise.floor_m);
+    if (!(std::abs(n.dot(p) + d) <= noise.window_sigmas * s)) continue;
+    if (noise.range_max_m > 0) {
+      const Eigen::Vector3d ray = p - o;
+      const double along = n.dot(ray);  // the ray's approach to the plane per unit of ray
+      if (!(along * h < 0)) continue;   // the ray does not run towards the plane
+      if (-h / along * ray.norm() > r_lim) continue;
+    }
+    idx->push_back(int(i));
+    w->push_back(1.0 / (s * s));
+  }
+}
+
+}  // namespace
+
+RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
+                         const RangeNoise& noise) {
+  RefinedPlane r;
+  r.normal = start.normal.normalized();
+  r.offset = start.offset / std::max(1e-12, start.normal.norm());
+  std::vector<int> last;
+  for (int it = 0; it < noise.iterations; ++it) {
+    std::vector<int> idx;
+    std::vector<double> w;
+    planeWindow(cloud, origins, r.normal, r.offset, noise, &idx, &w);
+    if (idx.size() < 10) {
+      r.ok = false;
+      return r;
+    }
+    double sw = 0.0;
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (size_t k = 0; k < idx.size(); ++k) {
+      c += w[k] * cloud[size_t(idx[k])].cast<double>();
+      sw += w[k];
+    }
+    c /= sw;
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();
+    for (size_t k = 0; k < idx.size(); ++k) {
+      const Eigen::Vector3d e = cloud[size_t(idx[k])].cast<double>() - c;
+      cov += w[k] * e * e.transpose();
+    }
+    Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
+    if (n.dot(r.normal) < 0) n = -n;
+    r.normal = n;
+    r.offset = -n.dot(c);
+    r.centroid = c;
+    r.inliers = idx;
+    r.weights = w;
+    r.ok = true;
+    if (idx == last) break;
+    last = std::move(idx);
+  }
+  return r;
+}
+
+double refinedDistance(const RefinedPlane& a, const RefinedPlane& b) {
+  return 0.5 * (std::abs(a.normal.dot(b.centroid) + a.offset) +
+                std::abs(b.normal.dot(a.centroid) + b.offset));
+}
+
+RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise) {
+  RoomDims d;
+  const auto distance = [&](const WallPlaneFit& a, const WallPlaneFit& b) -> std::optional<double> {
+    const RefinedPlane ra = refinePlane(cloud, origins, a, noise);
+    const RefinedPlane rb = refinePlane(cloud, origins, b, noise);
+    if (!ra.ok || !rb.ok) return std::nullopt;
+    return refinedDistance(ra, rb);
+  };
+  if (p.walls.size() == 4) {
+    const std::optional<double> y = distance(p.walls[0], p.walls[2]);
+    const std::optional<double> x = distance(p.walls[1], p.walls[3]);
+    if (x && y) {
+      d.L1 = std::max(*x, *y);
+      d.L2 = std::min(*x, *y);
+    }
+  }
+  if (p.floor && p.ceiling) d.L3 = distance(*p.floor, *p.ceiling);
   return d;
 }
 

@@ -38,4 +38,44 @@ struct RoomDims {
 };
 RoomDims roomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& cloud);
 
+// A plane of a lidar's cloud refined against the lidar's range noise (calib rig's room and
+// floor). A point's noise along the plane's normal is the range's, fraction f of the range,
+// times the cosine of its incidence: f times its origin's distance from the plane, whatever
+// the ray. So a wall seen from 9 m scatters +-90 mm along its normal, the floor under a lidar
+// 0.3 m up +-3 mm: one fixed window (RANSAC's 30 mm) keeps the near wall's bumps and cuts a
+// far wall's noise on one side wherever its RANSAC plane sits. Here each point's window is
+// window_sigmas of its own sigma and its weight the inverse variance, iterated to a fixed
+// point (symmetric about the plane: unbiased). And a lidar loses the returns measured beyond
+// its range_max_m: near that range only the short ones are left, which pulls a far wall
+// towards the lidar. A ray whose range to the plane (predicted by the plane, not measured) is
+// within window_sigmas of its noise below range_max_m is left out: which rays remain no
+// longer depends on their noise.
+struct RangeNoise {
+  double fraction = 0.01;
+  double range_max_m = 0.0;  // 0: no limit
+  double floor_m = 0.001;    // added in quadrature to each sigma (the model's own error)
+  double window_sigmas = 3.0;
+  int iterations = 12;
+};
+struct RefinedPlane {
+  bool ok = false;
+  Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  double offset = 0.0;                                 // normal.dot(p) + offset = 0
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  // of the inliers, weighted
+  std::vector<int> inliers;
+  std::vector<double> weights;  // of each inlier: 1 / sigma^2
+};
+// `origins[i]`: where the lidar was when it measured cloud[i]. Starts from `start` (a RANSAC
+// plane); not ok when fewer than 10 points remain.
+RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
+                         const RangeNoise& noise);
+// The distance of two near-parallel refined planes: the mean of each one's distance from the
+// other's weighted centroid.
+double refinedDistance(const RefinedPlane& a, const RefinedPlane& b);
+// The room's length, width and height from refined planes (RoomPlanes' walls, floor and
+// ceiling refined in its cloud).
+RoomDims refinedRoomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise);
+
 }  // namespace sweepmap

@@ -108,8 +108,19 @@ class OdometryEkf {
 
   bool add(const Measurement& m);
   bool apply(const Measurement& m);  // predict to m.utime, update; false if gated out
-  // The wheels' turn rate disagrees with the gyro's mean over the same interval.
-  bool slipsAgainstGyro(const Measurement& m, double w_wheels, double var_w_wheels) const;
+  // The wheels' turn rate disagrees with the gyro's mean over the same interval; *d: the
+  // wheels' less the gyro's.
+  bool slipsAgainstGyro(const Measurement& m, double w_wheels, double var_w_wheels,
+                        double* d) const;
+  // The same over the wheel readings of the last kSlipWindowS (this one's and those before it
+  // in the history): a slip too small to stand out in one reading stands out over several.
+  bool slipsOverWindow(const Measurement& m, double* d) const;
+  // A wheel reading's turn rate (w_rad_s) and forward speed, their covariance in R.
+  BodyTwist wheelTwist(const Measurement& m, Eigen::Matrix2d* R) const;
+  double wheelSpeedSigma(const Measurement& m, double v) const;
+  // After a slip: the wheel that did not slip (the left if the wheels turned the body more to
+  // the left than the gyro saw, i.e. the right one ran fast) measures v -+ w T / 2.
+  void applyGoodWheel(const Measurement& m, double d);
   void insertGyro(int64_t utime, double w);
   static bool holds(const Measurement& wheels, int64_t utime);  // utime within its interval
   void predict(int64_t utime);

@@ -10,7 +10,8 @@ namespace sweepmap {
 namespace {
 
 // A car on a circle (radius 0.83 m, 0.2 m/s), wheels at 50 Hz with 1 % speed noise, a gyro at
-// 200 Hz with white noise and a constant bias. Optionally a slip: one wheel reads 20 % fast.
+// 200 Hz with white noise and a constant bias. Optionally a slip: from 5 to 5.4 s the right
+// wheel reads `slip_factor` times its speed.
 struct Drive {
   struct Sample {
     int64_t utime;
@@ -21,7 +22,8 @@ struct Drive {
   std::vector<std::pair<int64_t, Pose2>> truth;  // at every wheel sample
 };
 
-Drive simulateDrive(unsigned seed, double duration_s, bool slip, double bias = 0.01) {
+Drive simulateDrive(unsigned seed, double duration_s, bool slip, double bias = 0.01,
+                    double slip_factor = 1.2) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   const double wd = 0.2, v = 0.2, w = v / 0.83;
@@ -35,7 +37,7 @@ Drive simulateDrive(unsigned seed, double duration_s, bool slip, double bias = 0
       double vl = v - 0.5 * w * wd, vr = v + 0.5 * w * wd;
       vl *= 1.0 + 0.01 * n(rng);
       vr *= 1.0 + 0.01 * n(rng);
-      if (slip && t > 5000000 && t < 5400000) vr *= 1.2;
+      if (slip && t > 5000000 && t < 5400000) vr *= slip_factor;
       d.samples.push_back({t, true, vl, vr});
       d.truth.push_back({t, p});
     }
@@ -156,8 +158,30 @@ TEST(OdometryEkf, WheelIntervalsKeepTheOrderedEstimateAndGateTheSlip) {
   EXPECT_EQ(ordered.covariance(), shuffled.covariance());
   EXPECT_EQ(ordered.counters().gated_wheels, shuffled.counters().gated_wheels);
   EXPECT_EQ(ordered.counters().gated_gyro, shuffled.counters().gated_gyro);
-  EXPECT_GE(ordered.counters().gated_wheels, 15);  // 0.4 s of 50 Hz wheel samples
-  EXPECT_LE(ordered.counters().gated_wheels, 22);
+  // 0.4 s of 50 Hz wheel samples, and up to 0.2 s after (the slip test's longer window still
+  // holds the slip).
+  EXPECT_GE(ordered.counters().gated_wheels, 15);
+  EXPECT_LE(ordered.counters().gated_wheels, 32);
+}
+
+// A slip of 8 % at 0.2 m/s turns the wheels 0.08 rad/s faster than the gyro: under the gate of
+// one 20 ms reading (0.085 rad/s), 11 sigma over 0.2 s. Caught over the window, and the wheel
+// that did not slip keeps the distance.
+TEST(OdometryEkf, ASlipTooSmallForOneReadingIsCaughtOverSeveral) {
+  const Drive d = simulateDrive(5, 10.0, true, 0.01, 1.03);
+  OdometryEkf ekf(EkfConfig{});
+  for (const auto& s : d.samples) {
+    if (s.wheels) {
+      ekf.addWheels(s.utime - 10000, s.a, s.b, 20000);  // the mean over the last 20 ms
+    } else {
+      ekf.addGyro(s.utime, s.a);
+    }
+  }
+  std::cout << "gated wheel readings: " << ekf.counters().gated_wheels << "\n";
+  EXPECT_GE(ekf.counters().gated_wheels, 12);  // of the slip's 20 readings
+  const Pose2 truth = d.truth.back().second;
+  EXPECT_NEAR(ekf.pose().x_m, truth.x_m, 0.01);
+  EXPECT_NEAR(ekf.pose().y_m, truth.y_m, 0.01);
 }
 
 TEST(OdometryEkf, BadInputRejectedAndStateStaysFinite) {

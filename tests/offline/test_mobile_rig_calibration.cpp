@@ -1,10 +1,10 @@
 // Rig B's joint calibration (tools/offline/mobile_rig_calibration.hpp) on calib plan's drive
 // (a figure-eight with stops) with every build error of the simulator at its default (wheel
 // radii, track, lever arm, clock offset, gyro bias, mounting): every parameter determined,
-// within what this estimator reaches today. Not yet the issue's targets (mounting within
-// 0.3 mrad per axis, radii within 0.1 %, the room within 3 mm, the truth within 3 sigma):
-// on five seeds alpha is 0.4-1 mrad off at 2-6 sigma and the radii's common scale about
-// -0.1 % (the lidar's distance driven; see the report of issue 23).
+// the radii within the issue's 0.1 %, alpha within 0.3 mrad, the room within 3 mm (before the
+// noise-independent weights and the EKF's slip window the radii came out 0.1 % short, and
+// before the room's planes were refined against the range noise the room up to 17 mm short).
+// beta is held to 0.5 mrad: on seven seeds it reaches 0.6 mrad (the issue's 0.3 not yet).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -78,11 +78,13 @@ TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheFigureEight) {
     const CalibParameter& p = find(r, key);
     EXPECT_NEAR(p.value, *p.truth, std::min(3 * p.sigma, 5e-4)) << key;
   }
-  EXPECT_NEAR(find(r, "mounting.alpha_rad").value, *find(r, "mounting.alpha_rad").truth, 1e-3);
+  const CalibParameter& alpha = find(r, "mounting.alpha_rad");
+  EXPECT_NEAR(alpha.value, *alpha.truth, std::min(3 * alpha.sigma, 3e-4));
   for (const char* key :
        {"odometry.wheel_radius_m", "odometry.wheel_radius_right_m", "odometry.wheel_distance_m"}) {
     const CalibParameter& p = find(r, key);
-    EXPECT_NEAR(p.value / *p.truth, 1.0, 2e-3) << key;  // the errors were 0.8-2 %
+    EXPECT_NEAR(p.value / *p.truth, 1.0, 1e-3) << key;  // the errors were 0.8-2 %
+    EXPECT_NEAR(p.value, *p.truth, 3 * p.sigma) << key;
   }
   const CalibParameter& bias = find(r, "odometry.gyro_bias_rad_s");
   EXPECT_NEAR(bias.value, *bias.truth, 3 * bias.sigma);
@@ -90,10 +92,14 @@ TEST(MobileRigCalibration, EveryBuildErrorAtOnceOnTheFigureEight) {
     const CalibParameter& p = find(r, key);
     EXPECT_NEAR(p.value, *p.truth, 1e-3) << key;  // the lever arm was 2-4 mm off
   }
+  // The floor gives the lever arm's z within 3 sigma (the foot of the walls had put it 0.13 mm
+  // low at 4.7 sigma on every seed).
+  const CalibParameter& z = find(r, "mounting.z_m");
+  EXPECT_NEAR(z.value, *z.truth, 3 * z.sigma);
   ASSERT_FALSE(r.measures.empty());
   for (const auto& m : r.measures) {
     ASSERT_TRUE(m.truth.has_value()) << m.key;
-    EXPECT_NEAR(m.value, *m.truth, 0.015) << m.key;
+    EXPECT_NEAR(m.value, *m.truth, 0.003) << m.key;
   }
 }
 

@@ -431,8 +431,9 @@ TEST(OdometryNode, SlipIsGatedWhateverThePhaseOfImuAndWheels) {
     for (auto& [t, m] : timed) msgs.push_back(std::move(m));
     run(node, msgs, channels::kOdometryPose);
     const auto& n = node.ekf().counters();
-    EXPECT_GE(n.gated_wheels, 15) << "phase " << phase_us << " us";  // 20 readings slip
-    EXPECT_LE(n.gated_wheels, 25) << "phase " << phase_us << " us";
+    // 20 readings slip; up to 0.2 s after it the slip test's longer window still holds it.
+    EXPECT_GE(n.gated_wheels, 15) << "phase " << phase_us << " us";
+    EXPECT_LE(n.gated_wheels, 32) << "phase " << phase_us << " us";
     EXPECT_LE(n.gated_gyro, 2) << "phase " << phase_us << " us";
     EXPECT_NEAR(node.ekf().pose().theta_rad, w * 10.0, 0.01) << "phase " << phase_us << " us";
   }
