@@ -88,11 +88,18 @@ live, log, clients = last("live.json"), last("log.json"), last("clients.json")
 for what, r in (("live page", live), ("log page", log), ("clients", clients)):
     if "failure" in r:
         sys.exit(f"bench_view: {what}: {r['failure']} (see {work})")
-l, got = live["latency"], live["received"]
+l = live["latency"]
+# What the view itself took in, from the counters it prints when stopped (the page's last
+# status frame can be a backlog behind: the page drew more points than that status said).
+stopped = [x for x in open(f"{work}/view_live.txt") if x.startswith("sweepmap view: stopped: ")]
+if not stopped:
+    sys.exit(f"bench_view: the live view printed no counters when stopped (see {work})")
+got = json.loads(stopped[-1].split("stopped: ", 1)[1])
 print(f"view, rig A, {sweeps} mode-7 sweeps, headless chromium ({log['renderer']}):")
 print(f"  live: the view received {got['chunks']} of the {logged} SWEEP_CLOUD chunks the recorder "
-      f"logged ({got['points_received']} of {logged_points} points); the page drew "
-      f"{live['points']} points, console errors: {len(live['errors'])}")
+      f"logged ({got['points_received']} of {logged_points} points; {got['receive_dropped']} "
+      f"dropped by its receive queue, {got['receive_queue_peak_mb']:.1f} MB at its peak); the "
+      f"page drew {live['points']} points, console errors: {len(live['errors'])}")
 print(f"  latency, sweep end (chunk at the view) -> drawn, {l['chunks']} chunks: median "
       f"{l['median_ms']} ms, 90 % {l['p90_ms']} ms, max {l['max_ms']} ms")
 print(f"  log, at its end: {log['points']} points on screen, {log['sweeps']} sweeps, "
