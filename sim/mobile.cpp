@@ -585,4 +585,14 @@ std::vector<TruthPose> SimMobile::truth() const {
   return out;
 }
 
+std::vector<std::string> exactOdometrySettings() {
+  return {"sim.wheel_radius_left_error_fraction=0",
+          "sim.wheel_radius_right_error_fraction=0",
+          "sim.wheel_distance_error_m=0",
+          "sim.lever_error_x_m=0",
+          "sim.lever_error_y_m=0",
+          "sim.lever_error_z_m=0",
+          "sim.lidar_time_offset_ms=0"};
+}
+
 }  // namespace sweepmap

@@ -142,6 +142,11 @@ class MobilePath {
   double turn_per_lap_ = 0.0;
 };
 
+// The `sim.*` settings that switch a real build's odometry and lever errors off (the car's
+// odometry exact, as Miao 2022 takes it when it calibrates the mounting alone): the paper's
+// experiment and the benchmark of its single-parameter `calib mounting`.
+std::vector<std::string> exactOdometrySettings();
+
 struct TruthPose {
   int64_t utime;
   Pose2 pose;  // body in W

@@ -20,6 +20,7 @@
 #include "sweepmap/lidar_scan_t.hpp"
 #include "sweepmap/map_save_t.hpp"
 #include "sweepmap/map_stats_t.hpp"
+#include "sweepmap/map_update_t.hpp"
 #include "sweepmap/motor_state_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/process_status_t.hpp"
@@ -51,12 +52,13 @@ void expectFingerprint(const char* name) {
 }
 
 TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
-  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 22u);
+  EXPECT_EQ(LcmSchema::builtIn().structs().size(), 23u);
   expectFingerprint<cloud_chunk_t>("cloud_chunk_t");
   expectFingerprint<imu_t>("imu_t");
   expectFingerprint<lidar_scan_t>("lidar_scan_t");
   expectFingerprint<map_save_t>("map_save_t");
   expectFingerprint<map_stats_t>("map_stats_t");
+  expectFingerprint<map_update_t>("map_update_t");
   expectFingerprint<motor_state_t>("motor_state_t");
   expectFingerprint<pose2d_t>("pose2d_t");
   expectFingerprint<process_status_t>("process_status_t");
@@ -76,7 +78,8 @@ TEST(LcmSchema, EveryTypeHasLcmGensFingerprint) {
   expectFingerprint<wheel_ticks_t>("wheel_ticks_t");
 }
 
-std::vector<uint8_t> bytesOf(const auto& m) {
+template <class Msg>
+std::vector<uint8_t> bytesOf(const Msg& m) {
   std::vector<uint8_t> b(static_cast<size_t>(m.getEncodedSize()));
   m.encode(b.data(), 0, static_cast<int>(b.size()));
   return b;

@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "calib/mounting_calibration.hpp"
+#include "sim/mobile.hpp"
 #include "tools/bench/proc_stats.hpp"
 #include "tools/offline/calibrate_rig.hpp"
 #include "tools/offline/mobile_log.hpp"
@@ -24,13 +25,7 @@ using nlohmann::json;
 // The paper's setting for rig B's circle (tools/eval/eval_mobile.cpp): the car's odometry
 // exact, so the single-parameter `calib mounting` (which assumes it) is measured on what it
 // was measured on when its reference solver took 442 s (before the build errors existed).
-const std::vector<std::string> kExactOdometry = {"sim.wheel_radius_left_error_fraction=0",
-                                                 "sim.wheel_radius_right_error_fraction=0",
-                                                 "sim.wheel_distance_error_m=0",
-                                                 "sim.lever_error_x_m=0",
-                                                 "sim.lever_error_y_m=0",
-                                                 "sim.lever_error_z_m=0",
-                                                 "sim.lidar_time_offset_ms=0"};
+const std::vector<std::string> kExactOdometry = exactOdometrySettings();
 
 // `sweepmap sim --rig RIG ARGS --out LOG` as a child; false (said on `out`) if it failed.
 bool simulateLog(const CalibrationBenchOptions& o, const Rig& rig,

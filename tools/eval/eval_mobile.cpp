@@ -66,6 +66,9 @@ void measure(const EvalMobileOptions& o, const fs::path& out, MobileEvaluation* 
   writePcdAndPly((out / "cloud").string(), ev->cloud);
   eval::progressLine(o.progress, "RANSAC planes");
   ev->room = eval::measureRoom(ev->cloud);
+  ev->room.dims =
+      eval::refinedRoomDims(ev->log, ev->track(), ev->cloud, ev->scan_of_point, ev->mounting,
+                            ev->room.planes, o.rig.sim.range_sigma_fraction);
   if (o.before) {
     eval::progressLine(o.progress, "the same with the mounting before calibration");
     ev->before_mounting = *o.before;
@@ -107,13 +110,7 @@ std::string simulateRun(const MobileExperimentOptions& o, const std::string& nam
                         MobileLidarConfig* rig, SceneConfig* scene) {
   // The paper's setting: its car's odometry taken as exact (it calibrates the mounting alone),
   // so the build errors of a real car (sim/mobile.hpp) are off unless the caller sets them.
-  std::vector<std::string> overrides = {"sim.wheel_radius_left_error_fraction=0",
-                                        "sim.wheel_radius_right_error_fraction=0",
-                                        "sim.wheel_distance_error_m=0",
-                                        "sim.lever_error_x_m=0",
-                                        "sim.lever_error_y_m=0",
-                                        "sim.lever_error_z_m=0",
-                                        "sim.lidar_time_offset_ms=0"};
+  std::vector<std::string> overrides = exactOdometrySettings();
   overrides.insert(overrides.end(), o.overrides.begin(), o.overrides.end());
   overrides.push_back("sim.path=" + path);
   overrides.push_back("sim.duration_s=" + fixed(duration_s, 3));
@@ -174,6 +171,7 @@ std::optional<Eigen::AlignedBox3d> targetInWorld(const SceneConfig& scene,
 // `calibration`, and their figures (and a close-up of the target); returns the figures drawn.
 std::vector<Figures::Entry> circleDoubleWalls(const MobileExperimentOptions& o,
                                               const MobileLog& circle, const SceneConfig& scene,
+                                              double range_sigma_fraction,
                                               const LidarMounting& initial,
                                               const LidarMounting& calibrated,
                                               CircleCalibration* calibration) {
@@ -182,7 +180,8 @@ std::vector<Figures::Entry> circleDoubleWalls(const MobileExperimentOptions& o,
   Figures figures(o.out_dir, o.plots);
   for (const auto& [name, mounting] :
        {std::pair<std::string, LidarMounting>{"before", initial}, {"after", calibrated}}) {
-    const eval::HalfScanGhost g = eval::halfScanGhost(circle, circle.ekf, mounting);
+    const eval::HalfScanGhost g =
+        eval::halfScanGhost(circle, circle.ekf, mounting, range_sigma_fraction);
     calibration->double_walls[name] = g.walls;
     eval::circleGhostFigure(name, g, &figures);
     if (target_world) eval::targetGhostFigure(name, g, *target_world, &figures);
@@ -220,8 +219,8 @@ EvalMobileResult runMobilePaperExperiment(const MobileExperimentOptions& o) {
   calibrated.beta_rad = ours.beta_rad;
   calibrated.alpha_rad = ours.alpha_rad;
   writeMountingCalibrationFile(out, ours);
-  const std::vector<Figures::Entry> circle_figures =
-      circleDoubleWalls(o, circle, scene, initial, calibrated, &calibration);
+  const std::vector<Figures::Entry> circle_figures = circleDoubleWalls(
+      o, circle, scene, circle_rig.sim.range_sigma_fraction, initial, calibrated, &calibration);
 
   // The loop with our calibration, beside the mounting before it.
   EvalMobileOptions eo;

@@ -37,14 +37,6 @@ TrajectoryErrors trajectoryErrors(const PoseTrack& estimate, const PoseTrack& tr
 
 namespace {
 
-// The mean signed distance from `plane` of the inliers of `fit` (indices into `points`).
-double meanOffset(const WallPlaneFit& plane, const std::vector<Eigen::Vector3f>& points,
-                  const WallPlaneFit& fit) {
-  double sum = 0.0;
-  for (int i : fit.inlier_indices) sum += signedDistance(plane, points[size_t(i)].cast<double>());
-  return sum / double(fit.inlier_indices.size());
-}
-
 // Deviations (mm) of the points near each plane, for the histograms of Fig. 9.
 DeviationStats deviations(const std::vector<Eigen::Vector3f>& cloud,
                           const std::vector<WallPlaneFit>& planes, double edge_trim_m) {
@@ -234,6 +226,24 @@ void measurePassWalls(const std::vector<WallPlaneFit>& walls, const PassPoints& 
 
 }  // namespace
 
+RoomDims refinedRoomDims(const MobileLog& log, const PoseTrack& track,
+                         const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<int>& scan_of_point, const LidarMounting& mounting,
+                         const RoomPlanes& planes, double range_sigma_fraction) {
+  const auto origin = scanOrigins(log, track, mounting);
+  std::vector<Eigen::Vector3f> points, origins;
+  RangeNoise noise;
+  noise.fraction = range_sigma_fraction;
+  for (const Scan2D& s : log.scans) noise.range_max_m = std::max(noise.range_max_m, s.range_max_m);
+  for (size_t k = 0; k < cloud.size(); ++k) {
+    const auto& o = origin[size_t(scan_of_point[k])];
+    if (!o) continue;
+    points.push_back(cloud[k]);
+    origins.push_back(o->cast<float>());
+  }
+  return sweepmap::refinedRoomDims(planes, points, origins, noise);
+}
+
 LoopClosure loopClosure(const MobileLog& log, const PoseTrack& track,
                         const std::vector<Eigen::Vector3f>& cloud,
                         const std::vector<int>& scan_of_point, const LidarMounting& mounting,
@@ -273,36 +283,33 @@ Scan2D scanHalf(const Scan2D& scan, bool left) {
   return half;
 }
 
-// The wall refitted in one half's points: a band wide enough to hold both copies of a
-// doubled wall, then the half's own inliers; none with fewer than 100 points.
-std::optional<WallPlaneFit> refitInHalf(const std::vector<Eigen::Vector3f>& half,
-                                        const WallPlaneFit& w) {
-  const auto wide = refitWalls(half, {w}, 0.15);
-  if (wide.empty() || wide[0].inliers < 100) return std::nullopt;
-  const auto tight = refitWalls(half, wide, 0.03);
-  if (tight.empty() || tight[0].inliers < 100) return std::nullopt;
-  return tight[0];
-}
-
 }  // namespace
 
 HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track,
-                            const LidarMounting& mounting) {
+                            const LidarMounting& mounting, double range_sigma_fraction) {
   HalfScanGhost g;
   const Eigen::Isometry3d T_BL = mounting.T_BL();
-  for (const Scan2D& s : log.scans) {
+  const auto origin = scanOrigins(log, track, mounting);
+  PassPoints halves[2];  // left, right: each point with its scan's lidar origin
+  for (size_t j = 0; j < log.scans.size(); ++j) {
+    if (!origin[j]) continue;
     for (bool left : {true, false}) {
-      const auto pts = scanToWorld(scanHalf(s, left), track, T_BL);
-      auto& dst = left ? g.left : g.right;
-      dst.insert(dst.end(), pts.begin(), pts.end());
+      const auto pts = scanToWorld(scanHalf(log.scans[j], left), track, T_BL);
+      PassPoints& h = halves[left ? 0 : 1];
+      h.points.insert(h.points.end(), pts.begin(), pts.end());
+      h.origins.insert(h.origins.end(), pts.size(), *origin[j]);
     }
   }
-  // The walls of both halves together, then each wall refitted in each half on its own.
+  g.left = halves[0].points;
+  g.right = halves[1].points;
+  // The walls of both halves together (the circle sees the far walls only at grazing, noisy
+  // ranges: any large vertical plane will do, not necessarily four facing walls; a band of 6 cm
+  // catches both copies of a wall doubled by a few centimetres), then each half's copy as the
+  // loop's ghost measures a pass's: the median within +-3 sigma of each point's range noise.
+  // Not a plane refitted in each half in a fixed band: the lab's far wall, 9-11 m from the
+  // circle, has +-100 mm of noise, and a fixed band kept part of its seed's error.
   std::vector<Eigen::Vector3f> both = g.left;
   both.insert(both.end(), g.right.begin(), g.right.end());
-  // Vertical planes (the circle sees the far walls only at grazing, noisy ranges: any large
-  // vertical plane will do, not necessarily four facing walls). A band of 6 cm catches both
-  // copies of a wall doubled by a few centimetres.
   PlaneExtractionOptions po;
   po.orientation = PlaneExtractionOptions::Orientation::kVertical;
   po.distance_threshold_m = 0.06;
@@ -313,15 +320,10 @@ HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track,
     return g;
   }
   for (const WallPlaneFit& w : walls) {
-    const auto l = refitInHalf(g.left, w), r = refitInHalf(g.right, w);
-    if (!l || !r) continue;
-    // The two copies' offsets along the common normal (both halves' fit): each half's
-    // inliers averaged, so a far, sparse wall's noisy tilt does not reach the other copy
-    // over a lever of metres (as the distance of one half's plane from the other's
-    // centroid did: 16 mm on the lab's far wall, 10 m from the circle, after calibration).
-    const double d = std::abs(meanOffset(w, g.left, *l) - meanOffset(w, g.right, *r));
-    g.walls.wall_distance_m.push_back(d);
-    g.walls.max_m = std::max(g.walls.max_m.value_or(0.0), d);
+    const auto m = measureWall(w, halves[0], halves[1], range_sigma_fraction);
+    if (!m) continue;
+    g.walls.wall_distance_m.push_back(m->distance_m);
+    g.walls.max_m = std::max(g.walls.max_m.value_or(0.0), m->distance_m);
   }
   if (!g.walls.max_m) g.walls.reason = "no wall seen by both halves";
   return g;

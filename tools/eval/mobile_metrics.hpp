@@ -41,6 +41,17 @@ struct RoomMeasures {
 };
 RoomMeasures measureRoom(const std::vector<Eigen::Vector3f>& cloud);
 
+// The room's length, width and height from its planes refined against the lidar's range noise
+// (calib/room_planes.hpp refinedRoomDims, as calib rig measures them): each point's window and
+// weight from its own sigma (range_sigma_fraction x its lidar origin's distance from the
+// plane), not RANSAC's fixed window, which keeps part of a far wall's or the ceiling's start
+// error. `cloud` is assembleWorld's with `scan_of_point`; points of a scan without a pose at
+// its middle ray are left out.
+RoomDims refinedRoomDims(const MobileLog& log, const PoseTrack& track,
+                         const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<int>& scan_of_point, const LidarMounting& mounting,
+                         const RoomPlanes& planes, double range_sigma_fraction);
+
 // Where the drive comes back to a place it passed at least 30 s earlier (pose within 0.3 m
 // and heading within 0.35 rad): the scans of both passes, and how far apart each pass puts
 // the walls they both see there. A double wall is the ghost of Miao 2022 Fig. 11.
@@ -86,14 +97,16 @@ struct DoubleWalls {
 };
 
 // The double walls of a drive that sees each place with both halves of its scan (the
-// calibration circle): every wall fitted in the left halves' cloud and in the right halves',
-// and the distance between the two copies along the wall's normal. With the right mounting
-// the two coincide.
+// calibration circle): the vertical planes of both halves' clouds, each half's copy of each
+// measured as a pass's copy of a wall is for the loop's ghost (the median within +-3 sigma of
+// the range noise, sigma = `range_sigma_fraction` x the point's lidar origin's distance from
+// the wall), and the distance between the two copies along the wall's normal. With the right
+// mounting the two coincide.
 struct HalfScanGhost {
   std::vector<Eigen::Vector3f> left, right;
   DoubleWalls walls;
 };
 HalfScanGhost halfScanGhost(const MobileLog& log, const PoseTrack& track,
-                            const LidarMounting& mounting);
+                            const LidarMounting& mounting, double range_sigma_fraction);
 
 }  // namespace sweepmap::eval

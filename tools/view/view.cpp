@@ -412,8 +412,8 @@ int ViewApp::run() {
   http.join();
   // What the view took in, for the person or script that stopped it (the pages' status frames
   // can lag behind a page's backlog).
-  std::cout << "sweepmap view: stopped: "
-            << nlohmann::json::parse(boardJson())["view_model"].dump() << std::endl;
+  std::cout << "sweepmap view: stopped: " << nlohmann::json::parse(boardJson())["view_model"].dump()
+            << std::endl;
   return rc;
 }
 
