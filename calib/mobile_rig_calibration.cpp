@@ -357,6 +357,7 @@ FloorLever leverFromFloor(const PlacedCloud& all, const RoomPlanes& planes,
   double ss = 0.0;
   for (const auto& [cell, sum] : cells) ss += sum * sum;
   f.ok = cells.size() > 10;
+  if (!f.ok) return f;
   f.dz = -h;
   f.sigma = std::sqrt(ss * double(cells.size()) / double(cells.size() - 1)) / sw;
   return f;

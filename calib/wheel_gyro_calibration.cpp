@@ -91,8 +91,6 @@ bool solveRows(const std::vector<Row>& rows, const std::vector<char>& use, const
   return true;
 }
 
-}  // namespace
-
 // Each group's residual scatter over the rows in use (a group without rows keeps its sigma).
 void groupSigmas(const std::vector<Row>& rows, const std::vector<char>& use,
                  const Eigen::Vector3d& x, double sigma[2]) {
@@ -111,6 +109,8 @@ void groupSigmas(const std::vector<Row>& rows, const std::vector<char>& use,
     if (dof > 1.0 && ss[g] > 0) sigma[g] = std::sqrt(ss[g] / dof);
   }
 }
+
+}  // namespace
 
 WheelGyroResult calibrateWheelsAgainstGyro(const std::vector<WheelReading>& wheels,
                                            const std::vector<GyroReading>& gyro,

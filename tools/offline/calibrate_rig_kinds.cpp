@@ -211,15 +211,17 @@ int calibrateMobileLidarRig(const RigCalibRequest& o, const Rig& loaded) {
   } catch (const ConfigError& e) {
     std::cerr << kWhat << ": config error: " << e.what() << "\n";
     return kExitUsage;
-  } catch (const std::exception& e) {
-    std::cerr << kWhat << ": cannot read log '" << o.logs.at(0) << "': " << e.what() << "\n";
+  } catch (const LogError& e) {  // names the log and the offset
+    std::cerr << kWhat << ": cannot read log: " << e.what() << "\n";
+    return kExitBadInput;
+  } catch (const std::exception& e) {  // what the drive held could not be calibrated
+    std::cerr << kWhat << ": " << o.logs.at(0) << ": " << e.what() << "\n";
     return kExitBadInput;
   }
   c.seconds = seconds(Clock::now() - t0);  // reading, odometry re-runs and the solve
   c.rms_before *= 1e3;                     // m -> mm
   c.rms_after *= 1e3;
   c.residual_unit = "mm";
-  if (o.logs.size() > 1) c.warnings.push_back("only the first log is used (one drive)");
   addHandSetKeys(&c);
   return reportRigCalibration(o, loaded, 0.0, c, [&] { writeMountingFile(o, c); });
 }

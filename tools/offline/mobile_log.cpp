@@ -82,6 +82,9 @@ OdometryReadings loadOdometryReadings(const std::string& path) {
       out.gyro.push_back({t.utime, t.gyro_rad_s[2]});
   });
   player.play();
+  const auto by_time = [](const auto& a, const auto& b) { return a.utime < b.utime; };
+  std::stable_sort(out.wheels.begin(), out.wheels.end(), by_time);
+  std::stable_sort(out.gyro.begin(), out.gyro.end(), by_time);
   return out;
 }
 

@@ -37,8 +37,10 @@ struct MobileLog {
 // opened; a corrupt tail sets log_error/error and keeps what came before.
 MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig);
 
-// The raw encoder readings (WHEEL_TICKS) and gyro z rates (IMU) of a log, in log order, for
-// the wheels-against-gyro calibration. Throws LogError if the file cannot be opened.
+// The raw encoder readings (WHEEL_TICKS) and gyro z rates (IMU) of a log, each sorted by its
+// device time (a log is in arrival order, which a busy host can swap), for the
+// wheels-against-gyro calibration, which integrates the gyro between wheel readings. Throws
+// LogError if the file cannot be opened.
 struct OdometryReadings {
   std::vector<WheelReading> wheels;
   std::vector<GyroReading> gyro;

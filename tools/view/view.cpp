@@ -102,6 +102,7 @@ class ViewApp {
   };
   std::map<std::string, RawChannel> raw_channels_;  // LCM channel -> its Foxglove channel
   uint32_t next_channel_id_ = 1;
+  int64_t raw_refused_ = 0;  // messages not forwarded raw: unknown, invalid or of another type
   int64_t last_map_utime_ = 0;
   std::unique_ptr<ViewModel> model_;
   std::unique_ptr<ViewServer> server_;
@@ -169,6 +170,7 @@ std::string ViewApp::boardJson() {
                      {"thinned", c.thinned},
                      {"removed_sweeps", c.removed_sweeps},
                      {"receive_dropped", received_.dropped()},
+                     {"raw_refused", raw_refused_},
                      {"receive_queue_peak_mb", static_cast<double>(received_.peakBytes()) / 1e6}};
   return j.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
 }
@@ -204,7 +206,10 @@ void ViewApp::feed(const Message& m, int64_t now_utime) {
 void ViewApp::forwardRaw(const Message& m, int64_t now_utime) {
   const LcmSchema& schema = LcmSchema::builtIn();
   const LcmStruct* type = schema.typeOf(m.data.data(), m.data.size());
-  if (!type || !schema.validate(m.data.data(), m.data.size()).empty()) return;
+  if (!type || !schema.validate(m.data.data(), m.data.size()).empty()) {
+    ++raw_refused_;
+    return;
+  }
   auto it = raw_channels_.find(m.channel);
   if (it == raw_channels_.end()) {
     FoxgloveChannel c;
@@ -217,7 +222,10 @@ void ViewApp::forwardRaw(const Message& m, int64_t now_utime) {
     server_->addFoxgloveChannels({c});
     it = raw_channels_.emplace(m.channel, RawChannel{c.id, type}).first;
   }
-  if (it->second.type != type) return;
+  if (it->second.type != type) {  // the channel advertised another type: not decodable by it
+    ++raw_refused_;
+    return;
+  }
   server_->broadcastFoxglove(it->second.id, static_cast<uint64_t>(now_utime) * 1000,
                              std::string(m.data.begin(), m.data.end()));
 }
