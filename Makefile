@@ -42,7 +42,7 @@ SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt
 FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
 
 .PHONY: all setup setup-pi build demo test test-unit test-sanitize fuzz pi pi-build package \
-        format format-check bench bench-view docs clean
+        format format-check bench bench-view docs clean bench-calib-seeds
 
 all: build
 
@@ -136,6 +136,13 @@ bench: build
 # client (tools/bench/bench_view.sh; 4-6 minutes, root).
 bench-view: build
 	bash tools/bench/bench_view.sh $(BUILD)/bin $(BUILD)/bench/view
+
+# calib rig and the single-parameter commands on the same simulated logs of calib plan's
+# recording, per seed and rig kind: errors, |error|/sigma, targets met, plots
+# (tools/bench/calib_seeds.py; about 15 minutes for the three kinds and five seeds).
+SEEDS ?= 1,2,3,4,5
+bench-calib-seeds: build
+	python3 tools/bench/calib_seeds.py $(BUILD)/bin $(BUILD)/bench/calib_seeds --seeds $(SEEDS)
 
 clean:
 	rm -rf $(BUILD) $(SANITIZE_BUILD) $(PI_BUILD) out
