@@ -158,6 +158,17 @@ void finalizeRecurs(octomap::OcTree& tree, octomap::OcTreeNode* node, unsigned d
   node->updateOccupancyChildren();
 }
 
+// An OcTree key in one integer (z, y, x: 16 bits each), for hashing and sorting; unpackKey()
+// undoes it.
+uint64_t packKey(uint64_t x, uint64_t y, uint64_t z) { return (z << 32) | (y << 16) | x; }
+uint64_t packKey(const octomap::OcTreeKey& k) { return packKey(k[0], k[1], k[2]); }
+
+octomap::OcTreeKey unpackKey(uint64_t p) {
+  return octomap::OcTreeKey(static_cast<octomap::key_type>(p & 0xffff),
+                            static_cast<octomap::key_type>((p >> 16) & 0xffff),
+                            static_cast<octomap::key_type>(p >> 32));
+}
+
 // finalizeRecurs() over the parts of the tree an insertion touched. The tree is split into
 // regions, the subtrees of the nodes at kRegionDepth (32 voxels a side: 1.6 m at 5 cm); a
 // region none of whose voxels was updated since the last pass is unchanged (nodes change
@@ -172,7 +183,7 @@ class IncrementalFinalizer {
 
   void markDirty(const octomap::OcTreeKey& k) {
     const unsigned shift = 16 - kRegionDepth;  // OcTree keys have 16 levels
-    const uint64_t r = regionId(k[0] >> shift, k[1] >> shift, k[2] >> shift);
+    const uint64_t r = packKey(k[0] >> shift, k[1] >> shift, k[2] >> shift);
     if (r == last_marked_) return;
     last_marked_ = r;
     dirty_.insert(r);
@@ -191,7 +202,6 @@ class IncrementalFinalizer {
 
  private:
   static constexpr uint64_t kNone = ~uint64_t{0};
-  static uint64_t regionId(uint64_t x, uint64_t y, uint64_t z) { return x | (y << 16) | (z << 32); }
   static void add(LeafCounts* to, const LeafCounts& c) {
     to->occupied_voxels += c.occupied_voxels;
     to->free_voxels += c.free_voxels;
@@ -202,7 +212,7 @@ class IncrementalFinalizer {
   void recurs(octomap::OcTree& tree, octomap::OcTreeNode* node, unsigned depth, uint64_t x,
               uint64_t y, uint64_t z, LeafCounts* c) {
     if (depth == kRegionDepth) {
-      const uint64_t r = regionId(x, y, z);
+      const uint64_t r = packKey(x, y, z);
       if (!all_dirty_ && dirty_.count(r) == 0) {
         const auto it = cache_.find(r);
         if (it != cache_.end() && it->second.node == node) return add(c, it->second.counts);
@@ -236,10 +246,6 @@ class IncrementalFinalizer {
   uint64_t last_marked_ = kNone;
   bool all_dirty_ = true;
 };
-
-uint64_t packKey(const octomap::OcTreeKey& k) {
-  return (uint64_t{k[2]} << 32) | (uint64_t{k[1]} << 16) | k[0];
-}
 
 // Which full-depth voxels are occupied, kept beside the tree as the insertion updates it, and
 // each one's state at the last take(). OctoMap's own change detection notes every new leaf (a
@@ -276,6 +282,7 @@ class ChangeTracker {
     for (const uint64_t k : gone) set(k, false);
     for (const uint64_t k : occupied) set(k, true);
   }
+  const std::unordered_set<uint64_t>& occupied() const { return occupied_; }
   // The keys whose state differs from the last take(), as (key, occupied now); then forgets.
   std::vector<std::pair<uint64_t, bool>> take() {
     std::vector<std::pair<uint64_t, bool>> out;
@@ -319,15 +326,10 @@ void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::P
   for (size_t i = 0; i < cloud.size(); ++i) {
     octomap::OcTreeKey k;
     if (!tree.coordToKeyChecked(cloud[i], k)) continue;
-    packed.push_back((uint64_t{k[2]} << 32) | (uint64_t{k[1]} << 16) | k[0]);
+    packed.push_back(packKey(k));
   }
   std::sort(packed.begin(), packed.end());
   packed.erase(std::unique(packed.begin(), packed.end()), packed.end());
-  const auto unpack = [](uint64_t p) {
-    return octomap::OcTreeKey(static_cast<octomap::key_type>(p & 0xffff),
-                              static_cast<octomap::key_type>((p >> 16) & 0xffff),
-                              static_cast<octomap::key_type>(p >> 32));
-  };
   // Ray ends (range-limited) first, then the key box they and the origin span: the bitmaps
   // cover only what this cloud touches.
   struct RayEnd {
@@ -339,7 +341,7 @@ void insertDiscretized(octomap::OcTree& tree, double max_range, const octomap::P
   ends.reserve(packed.size());
   octomap::OcTreeKey lo = origin_key, hi = origin_key;
   for (const uint64_t p : packed) {
-    const octomap::OcTreeKey k = unpack(p);
+    const octomap::OcTreeKey k = unpackKey(p);
     octomap::point3d end = tree.keyToCoord(k);
     const double dist = (end - origin).norm();
     const bool occupied = dist <= max_range;
@@ -588,12 +590,6 @@ namespace {
 
 constexpr int32_t kKeyCentre = 32768;  // the key of index 0 (OcTree's tree_max_val, 16 levels)
 
-octomap::OcTreeKey unpackKey(uint64_t p) {
-  return octomap::OcTreeKey(static_cast<octomap::key_type>(p & 0xffff),
-                            static_cast<octomap::key_type>((p >> 16) & 0xffff),
-                            static_cast<octomap::key_type>(p >> 32));
-}
-
 VoxelIndex indexOf(const octomap::OcTreeKey& k) {
   return {int32_t{k[0]} - kKeyCentre, int32_t{k[1]} - kKeyCentre, int32_t{k[2]} - kKeyCentre};
 }
@@ -624,10 +620,19 @@ std::vector<uint64_t> OccupancyMap::Impl::occupiedKeys() const {
     for (int a = 0; a < 3; ++a) lo[a] = static_cast<uint64_t>(key[a] & ~(n - 1));
     for (uint64_t z = lo[2]; z < lo[2] + n; ++z) {
       for (uint64_t y = lo[1]; y < lo[1] + n; ++y) {
-        for (uint64_t x = lo[0]; x < lo[0] + n; ++x) out.push_back((z << 32) | (y << 16) | x);
+        for (uint64_t x = lo[0]; x < lo[0] + n; ++x) out.push_back(packKey(x, y, z));
       }
     }
   }
+  return out;
+}
+
+std::vector<VoxelIndex> OccupancyMap::trackedVoxels() const {
+  if (!impl_->changes.on()) return occupiedVoxels();
+  std::vector<VoxelIndex> out;
+  out.reserve(impl_->changes.occupied().size());
+  for (const uint64_t k : impl_->changes.occupied()) out.push_back(indexOf(unpackKey(k)));
+  std::sort(out.begin(), out.end());  // the hash set's order must not leak
   return out;
 }
 

@@ -109,6 +109,9 @@ class OccupancyMap {
   VoxelChanges takeChanges();
   // Every occupied full-depth voxel (a pruned block of 8^k voxels as its 8^k voxels), sorted.
   std::vector<VoxelIndex> occupiedVoxels() const;
+  // The same voxels from the change tracking's set, without walking the tree (what a full
+  // MAP_UPDATE sends); occupiedVoxels() when not tracking.
+  std::vector<VoxelIndex> trackedVoxels() const;
 
   // Centres of the occupied leaves [m] (a pruned block of occupied voxels: its centre), in the
   // tree's order (deterministic): what the report's 3D map picture draws.

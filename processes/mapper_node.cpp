@@ -217,7 +217,7 @@ void MapperNode::publishUpdate(int64_t now_utime, int64_t sweep_id, Outbox& out)
   header.utime = last_sweep_utime_;
   header.seq = ++update_seq_;
   header.full = (header.seq - 1) % kFullUpdateEvery == 0;  // a late viewer catches up
-  if (header.full) changes = VoxelChanges{map_->occupiedVoxels(), {}};
+  if (header.full) changes = VoxelChanges{map_->trackedVoxels(), {}};
   header.sweep_id = sweep_id;
   header.resolution_m = map_->config().resolution_m;
   header.occupied_voxels = map_->stats().occupied_voxels;

@@ -149,6 +149,7 @@ TEST(MapUpdate, ChangesFollowEveryInsertModeFromAnyStart) {
     for (const Voxel& v : c.freed) EXPECT_EQ(rebuilt.erase(v), 1u);
     freed += static_cast<int64_t>(c.freed.size());
     EXPECT_EQ(asVector(rebuilt), map.occupiedVoxels()) << "after insertion " << k;
+    EXPECT_EQ(map.trackedVoxels(), map.occupiedVoxels()) << "after insertion " << k;
   }
   EXPECT_GT(freed, 0);
   EXPECT_TRUE(map.takeChanges().occupied.empty());

@@ -68,28 +68,24 @@ ViewFrame voxelBulk(std::string data, bool binary) {
   return f;
 }
 
-// Packs a voxel's integer coordinates; false when outside +-2^20 voxels.
-bool voxelKey(const float* p, double res, uint64_t* key) {
+// Packs a voxel's integer coordinates (a map_update_t index, or a point's floor(p / res));
+// false when outside +-2^20 voxels.
+template <typename T>
+bool packIndex(const T& v, uint64_t* key) {
   uint64_t k = 0;
   for (int a = 0; a < 3; ++a) {
-    if (!std::isfinite(p[a])) return false;
-    const double v = std::floor(p[a] / res);
-    if (v < -kKeyOffset || v >= kKeyOffset) return false;
-    k |= (static_cast<uint64_t>(static_cast<int64_t>(v) + kKeyOffset) & kKeyMask) << (a * kKeyBits);
+    if (!(v[a] >= -kKeyOffset && v[a] < kKeyOffset)) return false;  // also NaN
+    k |= (static_cast<uint64_t>(static_cast<int64_t>(v[a]) + kKeyOffset) & kKeyMask)
+         << (a * kKeyBits);
   }
   *key = k;
   return true;
 }
 
-// A voxel index (map_update_t's) packed like voxelKey(); false when outside +-2^20 voxels.
-bool packIndex(const std::vector<int32_t>& v, uint64_t* key) {
-  uint64_t k = 0;
-  for (int a = 0; a < 3; ++a) {
-    if (v[a] < -kKeyOffset || v[a] >= kKeyOffset) return false;
-    k |= (static_cast<uint64_t>(int64_t{v[a]} + kKeyOffset) & kKeyMask) << (a * kKeyBits);
-  }
-  *key = k;
-  return true;
+// The key of the voxel a point falls in; false when it is not finite or outside +-2^20 voxels.
+bool voxelKey(const float* p, double res, uint64_t* key) {
+  const double v[3] = {std::floor(p[0] / res), std::floor(p[1] / res), std::floor(p[2] / res)};
+  return packIndex(v, key);
 }
 
 std::string voxelFrame(const std::vector<uint64_t>& keys, double res, uint32_t flags = 0) {
