@@ -78,10 +78,15 @@ std::string zeroNote(const RotatingProfileConfig& rig, const ProfileInputs& in,
            "every plate a plane; it turns the map, never its shape";
   }
   if (reference.empty()) {
+    const double reach_deg =
+        kReferenceToleranceDeg / std::sin(rig.turntable.reference.normal_tilt_deg * M_PI / 180.0);
     return "no sweep over the base's reference face (no plane within " +
            num(kReferenceToleranceDeg) +
-           " deg of turntable.reference's normal), and plate poses cannot fix the zero: a turn "
-           "of the whole cloud about the axis leaves every plate a plane";
+           " deg of turntable.reference's normal; one is recognised while the rig file's "
+           "encoder zero is within about " +
+           num(std::round(reach_deg)) +
+           " deg of the truth), and plate poses cannot fix the zero: a turn of the whole cloud "
+           "about the axis leaves every plate a plane";
   }
   std::string sweeps;
   for (const size_t k : reference) sweeps += (sweeps.empty() ? "" : ", ") + in.planes[k].source;
