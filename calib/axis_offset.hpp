@@ -140,9 +140,11 @@ struct AxisOffsetResult {
   bool observable = true;  // M and N both determined by the planes
   std::vector<std::string> warnings;
   std::vector<FittedPlane> planes;
-  double rms_before_mm = 0.0, rms_after_mm = 0.0;  // over every residual
-  double smallest_singular_value = 0.0;            // of the rig's reduced, column-scaled Jacobian
-  double largest_plane_angle_deg = 0.0;            // between any two fitted normals
+  // Over every residual; before: the initial geometry (its encoder zero turned to what the
+  // reference face shows, when the zero is fitted against one) with each plane fitted to it.
+  double rms_before_mm = 0.0, rms_after_mm = 0.0;
+  double smallest_singular_value = 0.0;  // of the rig's reduced, column-scaled Jacobian
+  double largest_plane_angle_deg = 0.0;  // between any two fitted normals
   int iterations = 0;
   bool converged = false;
   size_t residuals = 0;

@@ -232,6 +232,15 @@ TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
   }
   const auto& zero = j["parameters"]["geometry.encoder_zero_deg"];
   EXPECT_NE(zero["note"].get<std::string>().find("sweep 3"), std::string::npos) << zero;
+  // The single-parameter command finds the same zero with --encoder-zero.
+  ASSERT_EQ(runSplit({"calib", "axis-offset", "--rig", "rig_c", "--logs", log, "--out",
+                      (dir / "ao.yaml").string(), "--no-grid", "--encoder-zero", "--json"},
+                     dir / "ao.json", dir / "ao_err.txt"),
+            0)
+      << readAll(dir / "ao_err.txt");
+  const auto ours = nlohmann::json::parse(readAll(dir / "ao.json"))["ours"];
+  ASSERT_TRUE(ours["encoder_zero_estimated"].get<bool>()) << ours;
+  EXPECT_NEAR(ours["encoder_zero_deg"].get<double>(), zero["value"].get<double>(), 1e-9);
   // Without the face declared in the rig file the same log leaves the zero nominal.
   ASSERT_EQ(
       runSplit({"calib", "rig", "--rig", "rig_c", "--set", "turntable.reference.declared=false",

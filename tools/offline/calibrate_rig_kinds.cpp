@@ -14,6 +14,7 @@
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
+#include "tools/offline/calibrate_axis_offset.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/calibrate_logs.hpp"
 #include "tools/offline/mobile_rig_calibration.hpp"
@@ -31,11 +32,6 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr int kPlatePoses = 3;  // Zhao 2021's m = 3 non-parallel poses
 constexpr int kMaxPointsPerSweep = 20000;
 constexpr int kMinPointsPerSweep = 100;
-// A sweep whose plane (placed with the rig file's geometry) leans within this of the base's
-// reference face is a sweep over it: a nominal zero off by e moves the normal by e sin(tilt),
-// while the plan's plate poses lean 29 deg or more away from it.
-constexpr double kReferenceToleranceDeg = 5.0;
-
 std::string num(double v) {
   std::ostringstream s;
   s << std::setprecision(6) << v;
@@ -52,22 +48,6 @@ bool checkPaths(const RigCalibRequest& o) {
 // ---- rig C -------------------------------------------------------------------------------
 
 using ProfileInputs = PlateSweeps;
-
-// The sweeps over the base's reference face, when the rig file declares one; into the
-// solver's options (the face's azimuth and its construction sigma).
-std::vector<size_t> findReferenceSweeps(const RotatingProfileConfig& rig,
-                                        const std::vector<PlanePoints>& planes,
-                                        AxisOffsetOptions* options) {
-  const TurntableReference& ref = rig.turntable.reference;
-  if (!ref.declared) return {};
-  constexpr double kDegToRad = M_PI / 180.0;
-  options->reference_azimuth_rad = ref.normal_azimuth_deg * kDegToRad;
-  options->reference_azimuth_sigma_rad = ref.azimuth_sigma_deg * kDegToRad;
-  options->reference_planes =
-      findReferencePlanes(planes, options->initial, options->reference_azimuth_rad,
-                          ref.normal_tilt_deg * kDegToRad, kReferenceToleranceDeg * kDegToRad);
-  return options->reference_planes;
-}
 
 // Where the encoder zero came from, or why it is left nominal.
 std::string zeroNote(const RotatingProfileConfig& rig, const ProfileInputs& in,
@@ -231,7 +211,8 @@ int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
   options.initial = rig.geometry.toGeometry();
   options.estimate_tilt = true;
   options.estimate_encoder_zero = true;  // reported unobservable when the poses cannot fix it
-  const std::vector<size_t> reference = findReferenceSweeps(rig, in.planes, &options);
+  const std::vector<size_t> reference =
+      useReferenceFace(rig.turntable.reference, in.planes, &options);
   progress.stage("solving");
   AxisOffsetResult r;
   {
