@@ -3,6 +3,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -248,6 +249,79 @@ FittedPlane planeThrough(const PlanePoints& plane, const ProfileGeometry& g) {
   return f;
 }
 
+}  // namespace
+
+std::vector<size_t> findReferencePlanes(const std::vector<PlanePoints>& planes,
+                                        const ProfileGeometry& geometry, double azimuth_rad,
+                                        double tilt_rad, double tolerance_rad) {
+  const Eigen::Vector3d declared(std::sin(tilt_rad) * std::cos(azimuth_rad),
+                                 std::sin(tilt_rad) * std::sin(azimuth_rad), std::cos(tilt_rad));
+  std::vector<size_t> found;
+  for (size_t k = 0; k < planes.size(); ++k) {
+    if (planes[k].samples.size() < 3) continue;
+    const Eigen::Vector3d n = planeThrough(planes[k], geometry).normal;
+    if (std::acos(std::clamp(n.dot(declared), -1.0, 1.0)) <= tolerance_rad) found.push_back(k);
+  }
+  return found;
+}
+
+namespace {
+
+// A unit normal held in the vertical plane of a known azimuth (the base's reference face): it
+// turns only about the horizontal axis perpendicular to that plane. Ambient 3, tangent 1.
+class AzimuthNormalManifold : public ceres::Manifold {
+ public:
+  explicit AzimuthNormalManifold(double azimuth_rad)
+      : axis_(-std::sin(azimuth_rad), std::cos(azimuth_rad), 0.0) {}
+  int AmbientSize() const override { return 3; }
+  int TangentSize() const override { return 1; }
+  bool Plus(const double* x, const double* delta, double* x_plus_delta) const override {
+    const Eigen::Map<const Eigen::Vector3d> v(x);
+    Eigen::Map<Eigen::Vector3d> out(x_plus_delta);
+    out = v * std::cos(delta[0]) + axis_.cross(v) * std::sin(delta[0]);
+    return true;
+  }
+  bool PlusJacobian(const double* x, double* jacobian) const override {
+    Eigen::Map<Eigen::Vector3d> j(jacobian);
+    j = axis_.cross(Eigen::Vector3d(x[0], x[1], x[2]));
+    return true;
+  }
+  bool Minus(const double* y, const double* x, double* y_minus_x) const override {
+    const Eigen::Map<const Eigen::Vector3d> a(x), b(y);
+    y_minus_x[0] = std::atan2(a.cross(b).dot(axis_), a.dot(b));
+    return true;
+  }
+  bool MinusJacobian(const double* x, double* jacobian) const override {
+    Eigen::Map<Eigen::Vector3d> j(jacobian);
+    j = axis_.cross(Eigen::Vector3d(x[0], x[1], x[2]));
+    return true;
+  }
+  // n with its component along the axis removed: the nearest normal of that azimuth.
+  Eigen::Vector3d project(const Eigen::Vector3d& n) const {
+    return (n - n.dot(axis_) * axis_).normalized();
+  }
+
+ private:
+  Eigen::Vector3d axis_;
+};
+
+// The encoder zero that turns the reference planes' normals (placed with the initial
+// geometry) to the declared azimuth on average: the solver's start. A larger zero turns the
+// cloud clockwise, so the azimuth seen drops by the zero's excess.
+double zeroFromReference(const std::vector<PlanePoints>& planes, const AxisOffsetOptions& o) {
+  double sum = 0.0;
+  for (const size_t k : o.reference_planes) {
+    const Eigen::Vector3d n = planeThrough(planes.at(k), o.initial).normal;
+    sum += std::remainder(std::atan2(n.y(), n.x()) - o.reference_azimuth_rad, 2 * M_PI);
+  }
+  return o.initial.encoder_zero_rad + sum / static_cast<double>(o.reference_planes.size());
+}
+
+bool isReference(const AxisOffsetOptions& o, size_t plane) {
+  return std::find(o.reference_planes.begin(), o.reference_planes.end(), plane) !=
+         o.reference_planes.end();
+}
+
 // The problem's state: the rig's parameters and one (normal, distance) per plane.
 struct Problem {
   double mn[2], tilt, zero;
@@ -257,8 +331,13 @@ struct Problem {
   size_t residuals = 0;
 };
 
-void buildProblem(const std::vector<PlanePoints>& planes, const ProfileGeometry& g,
+// The reference planes' normals are held to their azimuth only while the zero is estimated
+// (with the zero held, the azimuth they show is the nominal zero's, not the face's).
+void buildProblem(const std::vector<PlanePoints>& planes, const AxisOffsetOptions& o,
                   bool estimate_tilt, bool estimate_zero, Problem* p) {
+  ProfileGeometry g = o.initial;
+  if (estimate_zero && !o.reference_planes.empty())
+    g.encoder_zero_rad = zeroFromReference(planes, o);
   p->mn[0] = g.m_mm;
   p->mn[1] = g.n_mm;
   p->tilt = g.laser_tilt_rad;
@@ -281,7 +360,13 @@ void buildProblem(const std::vector<PlanePoints>& planes, const ProfileGeometry&
                                    &p->tilt, &p->zero, p->normals[k].data(), &p->distances[k]);
       p->residuals += j - i;
     }
-    p->problem->SetManifold(p->normals[k].data(), new ceres::SphereManifold<3>());
+    if (estimate_zero && isReference(o, k)) {
+      auto* manifold = new AzimuthNormalManifold(o.reference_azimuth_rad);
+      p->normals[k] = manifold->project(p->normals[k]);
+      p->problem->SetManifold(p->normals[k].data(), manifold);
+    } else {
+      p->problem->SetManifold(p->normals[k].data(), new ceres::SphereManifold<3>());
+    }
   }
   if (!estimate_tilt) p->problem->SetParameterBlockConstant(&p->tilt);
   if (!estimate_zero) p->problem->SetParameterBlockConstant(&p->zero);
@@ -335,7 +420,7 @@ Observability solveHoldingUnobservable(const std::vector<PlanePoints>& planes,
   bool estimate_tilt = o.estimate_tilt, estimate_zero = o.estimate_encoder_zero;
   Observability obs;
   for (int attempt = 0; attempt < 3; ++attempt) {  // at most two parameters to drop
-    buildProblem(planes, o.initial, estimate_tilt, estimate_zero, p);
+    buildProblem(planes, o, estimate_tilt, estimate_zero, p);
     if (attempt == 0) r->rms_before_mm = rmsOf(p);
     ceres::Solver::Options so;
     so.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;  // 4 + 4m parameters
@@ -357,9 +442,13 @@ Observability solveHoldingUnobservable(const std::vector<PlanePoints>& planes,
       if (obs.singular_values(e) > kUnobservable) continue;
       for (size_t i = 2; i < names.size(); ++i) {
         if (std::fabs(obs.directions(static_cast<Eigen::Index>(i), e)) < 0.3) continue;
-        r->warnings.push_back(names[i] +
-                              " is not observable from these planes (a direction of "
-                              "the parameters they do not constrain); held at its initial value");
+        r->warnings.push_back(
+            names[i] +
+            " is not observable from these planes (a direction of the parameters they do not "
+            "constrain); held at its initial value" +
+            (names[i] == "encoder_zero" ? std::string(": only a sweep over the base's reference "
+                                                      "face, whose azimuth is known, fixes it")
+                                        : std::string()));
         (names[i] == "laser_tilt" ? estimate_tilt : estimate_zero) = false;
         dropped = true;
       }
@@ -386,7 +475,8 @@ void flagUnobservable(const Observability& obs, AxisOffsetResult* r) {
 }
 
 // r->covariance and the sigmas: rows M, N [mm], tilt, zero [deg].
-void fillCovariance(const Observability& obs, double variance, AxisOffsetResult* r) {
+void fillCovariance(const Observability& obs, double variance, double reference_sigma_rad,
+                    AxisOffsetResult* r) {
   const Eigen::MatrixXd unit = covarianceFromInformation(obs.information);
   if (!unit.allFinite()) {
     r->warnings.push_back("the covariance is singular: no standard deviations");
@@ -404,6 +494,12 @@ void fillCovariance(const Observability& obs, double variance, AxisOffsetResult*
                                                             scale(obs.names[b]);
     }
   }
+  if (r->zero_estimated) {
+    r->sigma_zero_fit_deg = std::sqrt(r->covariance(3, 3));
+    // The face's construction error moves the zero one for one and nothing else.
+    const double ref_deg = reference_sigma_rad * kRadToDeg;
+    r->covariance(3, 3) += ref_deg * ref_deg;
+  }
   const Eigen::Vector4d v = r->covariance.diagonal();
   r->sigma_m_mm = std::sqrt(v(0));
   r->sigma_n_mm = std::sqrt(v(1));
@@ -415,14 +511,14 @@ void fillCovariance(const Observability& obs, double variance, AxisOffsetResult*
 // eliminated (analyse(), calib/parameter_information.hpp), scaled by the residuals' variance;
 // NaN (with a warning) where it is singular.
 void standardDeviations(size_t plane_count, const Problem& p, const Observability& obs,
-                        AxisOffsetResult* r) {
+                        double reference_sigma_rad, AxisOffsetResult* r) {
   const double nan = std::numeric_limits<double>::quiet_NaN();
   r->sigma_m_mm = r->sigma_n_mm = r->sigma_tilt_deg = r->sigma_zero_deg = nan;
   if (!r->observable) return;
   const double dof = static_cast<double>(p.residuals) -
                      (2 + r->tilt_estimated + r->zero_estimated) - 3.0 * plane_count;
   const double variance = r->rms_after_mm * r->rms_after_mm * p.residuals / std::max(1.0, dof);
-  fillCovariance(obs, variance, r);
+  fillCovariance(obs, variance, reference_sigma_rad, r);
 }
 
 // Warnings for parameters whose standard deviation exceeds the options' limits; M or N that
@@ -490,7 +586,7 @@ AxisOffsetResult solveAxisOffset(const std::vector<PlanePoints>& planes,
   r.geometry = {p.mn[0], p.mn[1], p.tilt, p.zero};
   r.rms_after_mm = rmsOf(&p);
   r.residuals = p.residuals;
-  standardDeviations(planes.size(), p, obs, &r);
+  standardDeviations(planes.size(), p, obs, o.reference_azimuth_sigma_rad, &r);
   flagWeak(o, &r);
   reportPlanes(planes, p, o, &r);
   r.seconds = secondsSince(t0);

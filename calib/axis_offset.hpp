@@ -11,6 +11,12 @@
 //    — optionally with the laser plane's tilt and the encoder's zero — then each parameter's
 //    standard deviation from the covariance and an observability check of the parameters
 //    from the given planes (the reduced information matrix's spectrum).
+//  - The encoder zero: turning the whole cloud about the axis leaves every plane a plane, so
+//    planes of unknown pose never fix it. It is the turntable's angle against X_r, and X_r is
+//    only defined by something on the base: a reference face fixed to it (a fence) whose
+//    normal's azimuth is known by construction. That plane's normal is held in the vertical
+//    plane of its azimuth; the zero then follows from the data, its sigma the fit's and the
+//    construction's together.
 //
 // Angles of the samples are the encoder's (2 pi counts / cpr), before any encoder zero.
 #pragma once
@@ -95,7 +101,23 @@ struct AxisOffsetOptions {
   // N are reported as not determined (with parallel plates the laser tilt and M trade off;
   // measured on the default simulation: M 0.6 mm off while its sigma said 0.09 mm).
   double min_plane_angle_deg = 5.0;
+  // Planes of the base's reference face (indices into the planes, see findReferencePlanes),
+  // whose normal leans towards reference_azimuth_rad in O_r by construction. With the encoder
+  // zero estimated their normals are held in that azimuth's vertical plane, which fixes it;
+  // without any, the zero is not observable (held at its initial value, with a warning).
+  std::vector<size_t> reference_planes;
+  double reference_azimuth_rad = 0.0;
+  // How well construction fixes that azimuth: the zero's error from it, one for one, added in
+  // quadrature to the zero's sigma.
+  double reference_azimuth_sigma_rad = 0.0;
 };
+
+// The planes whose normal, their points placed by `geometry`, lies within `tolerance_rad` of
+// the reference face's (leaning `tilt_rad` from vertical towards `azimuth_rad`): the sweeps over
+// it. A nominal encoder zero off by e shifts the normal by about e sin(tilt).
+std::vector<size_t> findReferencePlanes(const std::vector<PlanePoints>& planes,
+                                        const ProfileGeometry& geometry, double azimuth_rad,
+                                        double tilt_rad, double tolerance_rad);
 
 struct FittedPlane {
   Eigen::Vector3d normal;  // unit, in O_r
@@ -109,15 +131,20 @@ struct AxisOffsetResult {
   // residuals' variance); NaN where a parameter was not estimated or the covariance is singular.
   double sigma_m_mm = 0.0, sigma_n_mm = 0.0, sigma_tilt_deg = 0.0, sigma_zero_deg = 0.0;
   bool tilt_estimated = false, zero_estimated = false;
+  // The zero's sigma from the fit alone (NaN when not estimated); sigma_zero_deg adds the
+  // reference face's construction sigma to it.
+  double sigma_zero_fit_deg = std::numeric_limits<double>::quiet_NaN();
   // Covariance of (M [mm], N [mm], laser tilt [deg], encoder zero [deg]), scaled like the
   // sigmas; NaN in the rows and columns of a parameter not estimated.
   Eigen::Matrix4d covariance = Eigen::Matrix4d::Constant(std::numeric_limits<double>::quiet_NaN());
   bool observable = true;  // M and N both determined by the planes
   std::vector<std::string> warnings;
   std::vector<FittedPlane> planes;
-  double rms_before_mm = 0.0, rms_after_mm = 0.0;  // over every residual
-  double smallest_singular_value = 0.0;            // of the rig's reduced, column-scaled Jacobian
-  double largest_plane_angle_deg = 0.0;            // between any two fitted normals
+  // Over every residual; before: the initial geometry (its encoder zero turned to what the
+  // reference face shows, when the zero is fitted against one) with each plane fitted to it.
+  double rms_before_mm = 0.0, rms_after_mm = 0.0;
+  double smallest_singular_value = 0.0;  // of the rig's reduced, column-scaled Jacobian
+  double largest_plane_angle_deg = 0.0;  // between any two fitted normals
   int iterations = 0;
   bool converged = false;
   size_t residuals = 0;

@@ -41,6 +41,19 @@ void ProfilerConfig::declare(ConfigSchema& s, const std::string& p) {
 
 double ProfilerConfig::fanHalfAngleRad() const { return std::atan(fov_far_mm / 2.0 / far_mm); }
 
+void TurntableReference::declare(ConfigSchema& s, const std::string& p) {
+  s.add(p + "declared", &declared, "",
+        "the base carries a flat reference face (a fence or stop) whose normal's azimuth is known "
+        "by construction; it defines X_r and so the encoder zero (false: no such face, the zero "
+        "is not observable)");
+  s.add(p + "normal_azimuth_deg", &normal_azimuth_deg, "deg",
+        "the face normal's horizontal direction, from X_r counter-clockwise seen from above");
+  s.add(p + "normal_tilt_deg", &normal_tilt_deg, "deg",
+        "the face normal from vertical, nominal (recognises the face's sweep)");
+  s.add(p + "azimuth_sigma_deg", &azimuth_sigma_deg, "deg",
+        "how well construction fixes the azimuth (added to the encoder zero's sigma)");
+}
+
 void TurntableConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "counts_per_revolution", &counts_per_revolution, "", "encoder counts per turn");
   s.add(p + "speed_deg_s", &speed_deg_s, "deg/s", "turning speed during a sweep");
@@ -48,6 +61,7 @@ void TurntableConfig::declare(ConfigSchema& s, const std::string& p) {
         "encoder angle (before its zero) where a sweep starts");
   s.add(p + "sweep_end_deg", &sweep_end_deg, "deg", "encoder angle where a sweep ends");
   s.add(p + "device", &device, "", "the turntable to open: sim (no real driver yet)");
+  reference.declare(s, p + "reference.");
 }
 
 void TestPieceConfig::declare(ConfigSchema& s, const std::string& p) {
@@ -83,6 +97,11 @@ void SimProfileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "plate_tilt_spread_deg", &plate_tilt_spread_deg, "deg",
         "the poses' tilt directions spread evenly over this angle (0: all plates parallel)");
   s.add(p + "pause_s", &pause_s, "s", "pause between sweeps (the plate is moved)");
+  s.add(p + "reference_sweep", &reference_sweep, "",
+        "the plate scene ends with a sweep over the base's reference face (turntable.reference)");
+  s.add(p + "reference_azimuth_deg", &reference_azimuth_deg, "deg",
+        "true azimuth of the reference face's normal (its construction error against "
+        "turntable.reference.normal_azimuth_deg)");
   test_piece.declare(s, p + "test_piece.");
 }
 
@@ -121,7 +140,25 @@ std::vector<PlatePose> platePoses(const SimProfileConfig& sim, const TurntableCo
     p.half_size_mm = sim.plate_size_mm / 2.0;
     poses.push_back(p);
   }
+  if (sim.reference_sweep) poses.push_back(referencePose(sim, turntable));
   return poses;
+}
+
+PlatePose referencePose(const SimProfileConfig& sim, const TurntableConfig& turntable) {
+  const ProfileGeometry truth = sim.trueGeometry();
+  const double mid = sweepMiddleRad(turntable);
+  PlatePose p;
+  p.centre = profilePointInRigFrame(truth, 0.0, -sim.plate_distance_mm, mid);
+  // In O_r itself, not in the sensor's heading: the face is fixed to the base.
+  const double azimuth = sim.reference_azimuth_deg * kDeg;
+  const double tilt = turntable.reference.normal_tilt_deg * kDeg;
+  p.normal = Eigen::Vector3d(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth),
+                             std::cos(tilt));
+  const SensorPose s = sensorPoseInRigFrame(truth, mid);
+  p.e1 = p.normal.cross(s.y_axis).normalized();
+  p.e2 = p.normal.cross(p.e1);
+  p.half_size_mm = sim.plate_size_mm / 2.0;
+  return p;
 }
 
 ProfileScene ProfileScene::plate(const PlatePose& pose) {

@@ -37,6 +37,18 @@ struct ProfilerConfig {
   double fanHalfAngleRad() const;
 };
 
+// A flat face fixed to the turntable's base (a fence or stop, or the plate laid against one)
+// whose normal's horizontal direction is known by construction: it defines the rig frame's
+// X_r, which the encoder zero is measured from. Its normal leans normal_tilt_deg from vertical
+// towards normal_azimuth_deg (from X_r, counter-clockwise seen from above).
+struct TurntableReference {
+  bool declared = true;             // false: the base has none (the zero is not observable)
+  double normal_azimuth_deg = 0.0;  // by construction
+  double normal_tilt_deg = 30.0;    // nominal; recognises the face's sweep
+  double azimuth_sigma_deg = 0.02;  // how well construction fixes the azimuth
+  void declare(ConfigSchema& s, const std::string& prefix);
+};
+
 // The turntable and its encoder, and the sweep it makes per recording.
 struct TurntableConfig {
   int counts_per_revolution = 262144;  // encoder counts per turn
@@ -44,6 +56,7 @@ struct TurntableConfig {
   double sweep_start_deg = -25.0;  // turntable angle (encoder, before its zero) of a sweep's start
   double sweep_end_deg = 25.0;
   std::string device = "sim";
+  TurntableReference reference;
   void declare(ConfigSchema& s, const std::string& prefix);
 };
 
@@ -79,6 +92,11 @@ struct SimProfileConfig {
   double plate_tilt_deg = 30.0;          // plate normal from vertical
   double plate_tilt_spread_deg = 360.0;  // tilt directions spread evenly over this; 0: parallel
   double pause_s = 1.0;                  // between sweeps (the plate is moved)
+  // The plate scene ends with a sweep over the base's reference face (turntable.reference),
+  // whose normal truly leans towards this azimuth (its construction error against the
+  // declared one); tilt and size as declared and as the plate's.
+  bool reference_sweep = false;
+  double reference_azimuth_deg = 0.01;
   TestPieceConfig test_piece;
   void declare(ConfigSchema& s, const std::string& prefix);
   ProfileGeometry trueGeometry() const;
@@ -91,8 +109,12 @@ struct PlatePose {
   double distance() const { return normal.dot(centre); }  // n . p = d on the plate
 };
 
-// The plate poses of sim.* (plate_count of them), each under the middle of the sweep.
+// The plate poses of sim.* (plate_count of them), each under the middle of the sweep, then
+// the base's reference face when sim.reference_sweep.
 std::vector<PlatePose> platePoses(const SimProfileConfig& sim, const TurntableConfig& turntable);
+// The base's reference face (turntable.reference) at its true azimuth
+// (sim.reference_azimuth_deg), under the middle of the sweep at the plate's distance.
+PlatePose referencePose(const SimProfileConfig& sim, const TurntableConfig& turntable);
 
 // What the laser meets: a set of plates or the test piece; distance along a ray.
 class ProfileScene {

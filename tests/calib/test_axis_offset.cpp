@@ -184,6 +184,69 @@ TEST(AxisOffsetOurs, EncoderZeroIsNotObservableFromPlanes) {
   EXPECT_LT(std::fabs(r.geometry.m_mm - 123.0), 0.1);
 }
 
+// The base's reference face (a fence whose normal's azimuth is known) defines X_r: with a
+// sweep over it the zero is determined, from the rig file's nominal 0 to the truth 0.5 deg.
+struct ReferenceRun {
+  std::vector<size_t> found;
+  AxisOffsetResult result;
+};
+ReferenceRun solveWithReference(const RotatingProfileConfig& rig, double azimuth_sigma_deg) {
+  const auto planes = simulatedPlates(rig, 2, 5000);
+  AxisOffsetOptions o;
+  o.initial = rig.geometry.toGeometry();  // encoder zero 0
+  o.estimate_encoder_zero = true;
+  o.reference_azimuth_rad = rig.turntable.reference.normal_azimuth_deg * kDeg;
+  o.reference_azimuth_sigma_rad = azimuth_sigma_deg * kDeg;
+  o.reference_planes =
+      findReferencePlanes(planes, o.initial, o.reference_azimuth_rad,
+                          rig.turntable.reference.normal_tilt_deg * kDeg, 5 * kDeg);
+  return {o.reference_planes, solveAxisOffset(planes, o)};
+}
+
+TEST(AxisOffsetOurs, EncoderZeroFromTheBasesReferenceFace) {
+  // The face exactly where the rig file says: what is left is the fit's own error.
+  const RotatingProfileConfig rig =
+      rigC({"sim.reference_sweep=true", "sim.reference_azimuth_deg=0"});
+  const ReferenceRun run = solveWithReference(rig, 0.0);
+  ASSERT_EQ(run.found, std::vector<size_t>{3});  // after the 3 plate poses, none of them
+  const AxisOffsetResult& r = run.result;
+  ASSERT_TRUE(r.zero_estimated) << (r.warnings.empty() ? "" : r.warnings.front());
+  EXPECT_FALSE(hasWarning(r, "not observable"));
+  const double zero_deg = r.geometry.encoder_zero_rad / kDeg;
+  EXPECT_GT(r.sigma_zero_deg, 0.0);
+  EXPECT_LT(r.sigma_zero_deg, 0.01);
+  EXPECT_LE(std::fabs(zero_deg - rig.sim.encoder_zero_deg), 3 * r.sigma_zero_deg) << zero_deg;
+  EXPECT_NEAR(r.sigma_zero_fit_deg, r.sigma_zero_deg, 1e-12);
+  EXPECT_LT(std::fabs(r.geometry.m_mm - rig.sim.offset_m_mm), 0.1);
+  EXPECT_LT(std::fabs(r.geometry.n_mm - rig.sim.offset_n_mm), 0.1);
+}
+
+TEST(AxisOffsetOurs, EncoderZeroIsMeasuredAgainstTheReferenceFace) {
+  // A fence 0.3 deg off square turns X_r with it: the zero follows one for one, and the
+  // construction's sigma is added to the fit's.
+  const RotatingProfileConfig rig =
+      rigC({"sim.reference_sweep=true", "sim.reference_azimuth_deg=0.3"});
+  const ReferenceRun run = solveWithReference(rig, 0.02);
+  const AxisOffsetResult& r = run.result;
+  ASSERT_TRUE(r.zero_estimated);
+  EXPECT_NEAR(r.geometry.encoder_zero_rad / kDeg, 0.5 + 0.3, 3 * r.sigma_zero_fit_deg);
+  EXPECT_NEAR(r.sigma_zero_deg, std::hypot(r.sigma_zero_fit_deg, 0.02), 1e-12);
+}
+
+TEST(AxisOffsetOurs, WithoutTheReferenceFaceTheZeroIsHeldNominal) {
+  // The same recording, the face's sweep not declared as one: just a fourth plane.
+  const RotatingProfileConfig rig = rigC({"sim.reference_sweep=true"});
+  AxisOffsetOptions o;
+  o.initial = rig.geometry.toGeometry();
+  o.estimate_encoder_zero = true;
+  const AxisOffsetResult r = solveAxisOffset(simulatedPlates(rig, 2, 5000), o);
+  EXPECT_FALSE(r.zero_estimated);
+  EXPECT_TRUE(hasWarning(r, "encoder_zero is not observable"));
+  EXPECT_TRUE(hasWarning(r, "reference face"));
+  EXPECT_EQ(r.geometry.encoder_zero_rad, 0.0);
+  EXPECT_LT(std::fabs(r.geometry.m_mm - rig.sim.offset_m_mm), 0.1);
+}
+
 // calib rig's correlations: the covariance's diagonal is the sigmas squared, it is symmetric,
 // and a parameter not estimated has NaN in its row (the encoder zero here).
 TEST(AxisOffsetOurs, CovarianceMatchesTheSigmas) {

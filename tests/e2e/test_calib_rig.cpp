@@ -16,6 +16,9 @@
 #include "rigs/rotating_lidar.hpp"
 #include "rigs/rotating_profile.hpp"
 #include "tests/e2e/test_support.hpp"
+#include "tools/eval/eval_profile_features.hpp"
+#include "tools/eval/eval_profile_report.hpp"
+#include "tools/offline/profile_log.hpp"
 
 namespace sweepmap {
 namespace test {
@@ -190,6 +193,95 @@ TEST(CalibRig, RigCEveryObservableParameterWithinThreeSigmaAndApplied) {
   const auto summary = nlohmann::json::parse(readAll(dir / "replay" / "summary.json"));
   EXPECT_NEAR(summary["geometry"]["m_mm"].get<double>(), rig.geometry.offset_m_mm, 1e-9);
   EXPECT_NEAR(summary["geometry"]["n_mm"].get<double>(), rig.geometry.offset_n_mm, 1e-9);
+}
+
+// calib plan's recording of rig C (calibrationRecordingSimArgs): three plate poses and the
+// base's reference face.
+std::string planLogC() {
+  return cachedSimLog("calib_rig_c_reference_seed4",
+                      {"--rig", "rig_c", "--set", "sim.scene=plate", "--set", "sim.plate_count=3",
+                       "--set", "sim.reference_sweep=true", "--seed", "4"});
+}
+
+// Rig C on calib plan's recording: the plate poses, then a sweep over the base's reference
+// face (its azimuth stated in the rig file, truly 0.01 deg off): the encoder zero too.
+TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
+  const fs::path dir = scratchDir("calib_rig_c_reference");
+  ASSERT_EQ(runSplit({"calib", "plan", "--rig", "rig_c"}, dir / "plan.txt", dir / "plan_err.txt"),
+            0);
+  EXPECT_NE(readAll(dir / "plan.txt").find("sim.reference_sweep=true"), std::string::npos);
+  EXPECT_NE(readAll(dir / "plan.txt").find("reference:"), std::string::npos);
+  const std::string log =
+      cachedSimLog("calib_rig_c_reference_seed4",
+                   {"--rig", "rig_c", "--set", "sim.scene=plate", "--set", "sim.plate_count=3",
+                    "--set", "sim.reference_sweep=true", "--seed", "4"});
+  ASSERT_EQ(runSplit({"calib", "rig", "--rig", "rig_c", "--logs", log, "--out",
+                      (dir / "c.yaml").string(), "--json"},
+                     dir / "out.json", dir / "err.txt"),
+            0)
+      << readAll(dir / "err.txt");
+  const auto j = nlohmann::json::parse(readAll(dir / "out.json"));
+  for (const char* key : {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg",
+                          "geometry.encoder_zero_deg"}) {
+    SCOPED_TRACE(key);
+    const auto& p = j["parameters"][key];
+    ASSERT_TRUE(p["observable"].get<bool>()) << p;
+    const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
+    EXPECT_GT(sigma, 0.0);
+    EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
+  }
+  const auto& zero = j["parameters"]["geometry.encoder_zero_deg"];
+  EXPECT_NE(zero["note"].get<std::string>().find("sweep 3"), std::string::npos) << zero;
+  // The single-parameter command finds the same zero with --encoder-zero.
+  ASSERT_EQ(runSplit({"calib", "axis-offset", "--rig", "rig_c", "--logs", log, "--out",
+                      (dir / "ao.yaml").string(), "--no-grid", "--encoder-zero", "--json"},
+                     dir / "ao.json", dir / "ao_err.txt"),
+            0)
+      << readAll(dir / "ao_err.txt");
+  const auto ours = nlohmann::json::parse(readAll(dir / "ao.json"))["ours"];
+  ASSERT_TRUE(ours["encoder_zero_estimated"].get<bool>()) << ours;
+  EXPECT_NEAR(ours["encoder_zero_deg"].get<double>(), zero["value"].get<double>(), 1e-9);
+  // Without the face declared in the rig file the same log leaves the zero nominal.
+  ASSERT_EQ(
+      runSplit({"calib", "rig", "--rig", "rig_c", "--set", "turntable.reference.declared=false",
+                "--logs", log, "--out", (dir / "d.yaml").string(), "--json"},
+               dir / "out2.json", dir / "err2.txt"),
+      0)
+      << readAll(dir / "err2.txt");
+  const auto held =
+      nlohmann::json::parse(readAll(dir / "out2.json"))["parameters"]["geometry.encoder_zero_deg"];
+  EXPECT_FALSE(held["observable"].get<bool>()) << held;
+  EXPECT_EQ(held["value"].get<double>(), held["nominal"].get<double>());
+}
+
+// What the calibration is for: Zhao 2021's test piece (Table 2) scanned after calib rig and
+// measured with its file, every feature within the 0.1 % of the true (CMM) sizes.
+TEST(CalibRig, RigCTestPieceWithinATenthOfAPercentWithCalibRigsFile) {
+  const fs::path dir = scratchDir("calib_rig_c_piece");
+  const fs::path calib = dir / "c.yaml";
+  ASSERT_EQ(
+      runSplit({"calib", "rig", "--rig", "rig_c", "--logs", planLogC(), "--out", calib.string()},
+               dir / "out.txt", dir / "err.txt"),
+      0)
+      << readAll(dir / "err.txt");
+  const std::string piece =
+      cachedSimLog("calib_rig_c_test_piece_seed104",
+                   {"--rig", "rig_c", "--set", "sim.scene=test_piece", "--seed", "104"});
+  const AxisOffsetCalibration c = loadAxisOffsetCalibration(calib.string());
+  constexpr double kDeg = M_PI / 180.0;
+  const ProfileGeometry g{c.m_mm, c.n_mm, c.laser_tilt_deg * kDeg, c.encoder_zero_deg * kDeg};
+  const ProfileLog log = readProfileLog(piece);
+  ASSERT_TRUE(log.test_piece.has_value());
+  ASSERT_EQ(log.sweeps.size(), 1u);
+  // The piece lies under the sweep's middle.
+  const TurntableConfig t = loadRotatingProfileConfig(sourcePath("config/rig_c.yaml")).turntable;
+  const double middle_rad = 0.5 * (t.sweep_start_deg + t.sweep_end_deg) * kDeg;
+  const eval::PieceMeasurement m = eval::measureTestPiece(log.sweeps[0].samples, g, middle_rad);
+  EXPECT_TRUE(m.problems.empty()) << m.problems.front();
+  for (int k = 0; k < eval::kPieceFeatureCount; ++k) {
+    const double truth = eval::trueSize(log.test_piece->sizes, k);
+    EXPECT_LE(std::fabs(m.size_mm[k] - truth) / truth * 100.0, 0.1) << eval::kPieceFeatures[k];
+  }
 }
 
 // Rig B: the command runs the joint calibration on the cached 120 s circle and reports each

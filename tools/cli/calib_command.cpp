@@ -158,7 +158,8 @@ const char* const kAxisOffsetFooter =
     "plane's tilt from the axis (unless --no-tilt) and, with --encoder-zero, the encoder's "
     "zero; each parameter's standard deviation from J^T J with the planes eliminated. A parameter "
     "the planes "
-    "do not determine is reported: the encoder zero never is (it turns the whole cloud about "
+    "do not determine is reported: the encoder zero is not unless a sweep over the base's "
+    "reference face (turntable.reference) is among the logs (it turns the whole cloud about "
     "the axis) and is then held at the rig's value; M and N are not with parallel or level "
     "plates, and then nothing is written.\n\n"
     "Writes OUT atomically (axis_offset.m_mm, n_mm, laser_tilt_deg, encoder_zero_deg + "
@@ -230,7 +231,8 @@ void addAxisOffsetProfileOptions(CLI::App* axis, std::shared_ptr<AxisOffsetCalib
       "ours: hold the laser plane's tilt at the rig's value");
   axis->add_flag(
       "--encoder-zero", a->estimate_encoder_zero,
-      "ours: also estimate the encoder's zero (planes alone cannot: expect the warning)");
+      "ours: also estimate the encoder's zero (only against a sweep over the base's reference "
+      "face, turntable.reference; else expect the warning)");
   axis->add_option("--max-points", a->max_points_per_sweep,
                    "points per sweep both methods use (evenly strided; 0 = all)")
       ->capture_default_str();
@@ -305,7 +307,9 @@ CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
       "(geometry.laser_tilt_deg) and the encoder zero (geometry.encoder_zero_deg) by the solver "
       "of `calib axis-offset` (Ceres over the four and every plate pose's plane; each turntable "
       "sweep is one pose). Plate poses cannot fix the encoder zero (a turn of the whole cloud "
-      "about the axis): it is reported not observable and kept. OUT has the format of `calib "
+      "about the axis); a sweep over the base's reference face does (turntable.reference: its "
+      "normal's azimuth is known by construction), recognised by its plane's normal. Without "
+      "it the zero is reported not observable and kept. OUT has the format of `calib "
       "axis-offset` (geometry.calibration_file applies it).\n\n"
       "mobile_lidar (rig B), in order: each wheel radius over the track and the gyro bias from "
       "the wheels against the gyro (straights, turns both ways, stops); then the distance "

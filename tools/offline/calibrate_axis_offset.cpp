@@ -178,6 +178,19 @@ nlohmann::json resultJson(const AxisOffsetCalibRequest& o, const Inputs& in,
 
 }  // namespace
 
+std::vector<size_t> useReferenceFace(const TurntableReference& ref,
+                                     const std::vector<PlanePoints>& planes,
+                                     AxisOffsetOptions* options) {
+  if (!ref.declared) return {};
+  constexpr double kDegToRad = M_PI / 180.0;
+  options->reference_azimuth_rad = ref.normal_azimuth_deg * kDegToRad;
+  options->reference_azimuth_sigma_rad = ref.azimuth_sigma_deg * kDegToRad;
+  options->reference_planes =
+      findReferencePlanes(planes, options->initial, options->reference_azimuth_rad,
+                          ref.normal_tilt_deg * kDegToRad, kReferenceToleranceDeg * kDegToRad);
+  return options->reference_planes;
+}
+
 std::string drawAxisOffsetSurface(const std::string& png, const GridSearchResult& g) {
   if (!gnuplotAvailable()) return "gnuplot is not installed";
   SurfacePlotOptions p;
@@ -225,6 +238,7 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   options.initial = rig.geometry.toGeometry();
   options.estimate_tilt = o.estimate_tilt;
   options.estimate_encoder_zero = o.estimate_encoder_zero;
+  if (o.estimate_encoder_zero) useReferenceFace(rig.turntable.reference, in.planes, &options);
   const AxisOffsetResult r = solveAxisOffset(in.planes, options);
   bool written = false;
   if (r.observable) {

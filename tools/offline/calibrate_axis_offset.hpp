@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "calib/axis_offset.hpp"
+#include "sim/profiler.hpp"
 
 namespace sweepmap {
 
@@ -32,6 +33,18 @@ struct AxisOffsetCalibRequest {
 // calibrated (no usable sweep, M or N not observable from the planes); 2 bad rig, log or
 // output path.
 int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& request);
+
+// A sweep whose plane (placed with the rig file's geometry) leans within this of the base's
+// reference face is a sweep over it: a nominal zero off by e moves the normal by e sin(tilt),
+// while calib plan's plate poses lean 29 deg or more away from it.
+constexpr double kReferenceToleranceDeg = 5.0;
+
+// The sweeps over the base's reference face, recognised among `planes` by their normals with
+// options->initial, when the rig file declares a face (`ref`); into options (those planes, the
+// face's azimuth and its construction sigma), so the encoder zero is fitted against it.
+std::vector<size_t> useReferenceFace(const TurntableReference& ref,
+                                     const std::vector<PlanePoints>& planes,
+                                     AxisOffsetOptions* options);
 
 // The paper's S(M, N) of a grid search drawn as its Fig. 6 (a surface with the minimum
 // marked) into `png`; returns "" when drawn, else why not (no gnuplot, gnuplot failed).

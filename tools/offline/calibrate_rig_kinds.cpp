@@ -14,6 +14,7 @@
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
+#include "tools/offline/calibrate_axis_offset.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/calibrate_logs.hpp"
 #include "tools/offline/mobile_rig_calibration.hpp"
@@ -31,7 +32,6 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 constexpr int kPlatePoses = 3;  // Zhao 2021's m = 3 non-parallel poses
 constexpr int kMaxPointsPerSweep = 20000;
 constexpr int kMinPointsPerSweep = 100;
-
 std::string num(double v) {
   std::ostringstream s;
   s << std::setprecision(6) << v;
@@ -49,18 +49,41 @@ bool checkPaths(const RigCalibRequest& o) {
 
 using ProfileInputs = PlateSweeps;
 
-// Why a parameter the solver did not determine is left nominal.
-std::string profileNote(size_t i, const AxisOffsetResult& r) {
-  if (i < 2) return "the plate poses do not determine M and N (see the warnings)";
-  if (i == 3 && !r.zero_estimated) {
-    return "plate poses cannot fix it: a turn of the whole cloud about the axis leaves every "
-           "plate a plane; it turns the map, never its shape";
+// Where the encoder zero came from, or why it is left nominal.
+std::string zeroNote(const RotatingProfileConfig& rig, const ProfileInputs& in,
+                     const std::vector<size_t>& reference) {
+  if (!rig.turntable.reference.declared) {
+    return "the rig file declares no reference face on the base (turntable.reference), and "
+           "plate poses cannot fix the zero: a turn of the whole cloud about the axis leaves "
+           "every plate a plane; it turns the map, never its shape";
   }
+  if (reference.empty()) {
+    const double reach_deg =
+        kReferenceToleranceDeg / std::sin(rig.turntable.reference.normal_tilt_deg * M_PI / 180.0);
+    return "no sweep over the base's reference face (no plane within " +
+           num(kReferenceToleranceDeg) +
+           " deg of turntable.reference's normal; one is recognised while the rig file's "
+           "encoder zero is within about " +
+           num(std::round(reach_deg)) +
+           " deg of the truth), and plate poses cannot fix the zero: a turn of the whole cloud "
+           "about the axis leaves every plate a plane";
+  }
+  std::string sweeps;
+  for (const size_t k : reference) sweeps += (sweeps.empty() ? "" : ", ") + in.planes[k].source;
+  return "fixed by the base's reference face (turntable.reference), seen in " + sweeps;
+}
+
+// Why a parameter the solver did not determine is left nominal.
+std::string profileNote(size_t i, const AxisOffsetResult& r, const std::string& zero_note) {
+  if (i < 2) return "the plate poses do not determine M and N (see the warnings)";
+  if (i == 3 && !r.zero_estimated) return zero_note;
+  if (i == 3) return "sigma above the limit (see the warnings); " + zero_note;
   return "sigma above the limit, or not determined by these poses (see the warnings)";
 }
 
 RigCalibration profileResult(const RotatingProfileConfig& rig, const ProfileInputs& in,
-                             const AxisOffsetResult& r, double max_sigma_deg) {
+                             const AxisOffsetResult& r, double max_sigma_deg,
+                             const std::string& zero_note) {
   const ProfileGeometryConfig& g = rig.geometry;
   const char* keys[] = {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg",
                         "geometry.encoder_zero_deg"};
@@ -80,7 +103,8 @@ RigCalibration profileResult(const RotatingProfileConfig& rig, const ProfileInpu
     p.observable = determined[i] && std::isfinite(sigma[i]);
     p.value = p.observable ? values[i] : nominal[i];
     p.sigma = p.observable ? sigma[i] : std::numeric_limits<double>::quiet_NaN();
-    if (!p.observable) p.note = profileNote(i, r);
+    if (!p.observable) p.note = profileNote(i, r, zero_note);
+    if (p.observable && i == 3) p.note = zero_note;
     if (in.truth) {
       const ProfileGeometry& t = in.truth->geometry;
       const double truth[] = {t.m_mm, t.n_mm, t.laser_tilt_rad * kRadToDeg,
@@ -115,6 +139,7 @@ void writeProfileFile(const RigCalibRequest& o, const RigCalibration& c) {
     f.source["sigma_" + name] = p.observable ? num(p.sigma) : "not observable (nominal kept)";
   }
   f.source["rms_after_mm"] = num(c.rms_after);
+  f.source["encoder_zero"] = c.parameters[3].note;
   f.logs = o.logs;
   writeAxisOffsetCalibration(o.out, f);
 }
@@ -186,6 +211,8 @@ int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
   options.initial = rig.geometry.toGeometry();
   options.estimate_tilt = true;
   options.estimate_encoder_zero = true;  // reported unobservable when the poses cannot fix it
+  const std::vector<size_t> reference =
+      useReferenceFace(rig.turntable.reference, in.planes, &options);
   progress.stage("solving");
   AxisOffsetResult r;
   {
@@ -193,7 +220,8 @@ int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
     r = solveAxisOffset(in.planes, options);
   }
   progress.finish();
-  const RigCalibration c = profileResult(rig, in, r, options.max_sigma_deg);
+  const RigCalibration c =
+      profileResult(rig, in, r, options.max_sigma_deg, zeroNote(rig, in, reference));
   return reportRigCalibration(o, loaded, in.read_s, c, [&] { writeProfileFile(o, c); });
 }
 
@@ -229,7 +257,9 @@ int calibrateMobileLidarRig(const RigCalibRequest& o, const Rig& loaded) {
 int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
   const RotatingProfileConfig& rig = std::get<RotatingProfileConfig>(loaded.config);
   const TurntableConfig& t = rig.turntable;
+  const TurntableReference& ref = t.reference;
   const double sweep_s = std::fabs(t.sweep_end_deg - t.sweep_start_deg) / t.speed_deg_s;
+  const int sweeps = kPlatePoses + 1;
   std::cout
       << "What to record for `sweepmap calib rig --rig " << rig_name << "` (rotating_profile):\n"
       << "  scene:    a flat plate (machined aluminium, 250 mm square or larger) under the "
@@ -239,13 +269,28 @@ int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
          "(0, 120, 240 deg) and at a different height; one turntable sweep per pose.\n"
       << "            Why: the plate's points lie on one plane only with the right M, N and "
          "laser-plane tilt (Zhao 2021 section 3); parallel poses let the tilt and M trade off, "
-         "so the poses must not be parallel. The encoder zero is not determined by any plate "
-         "poses (turning the whole cloud about the axis leaves every plate a plane): it is "
-         "reported unobservable and kept; it turns the map, not its shape.\n"
-      << "  sweeps:   " << kPlatePoses << " (one per pose), " << t.sweep_start_deg << " to "
-      << t.sweep_end_deg << " deg at " << t.speed_deg_s << " deg/s\n"
-      << "  duration: about " << std::fixed << std::setprecision(0)
-      << kPlatePoses * (sweep_s + 30.0) << " s (sweeps and moving the plate between them)\n"
+         "so the poses must not be parallel.\n"
+      << "  reference: then one sweep over the base's reference face (turntable.reference): "
+         "the plate on its "
+      << num(ref.normal_tilt_deg)
+      << " deg wedge laid against the fence fixed to the turntable's base, so its normal leans "
+         "towards azimuth "
+      << num(ref.normal_azimuth_deg)
+      << " deg from X_r (the rig file states it, and its squareness: +-"
+      << num(ref.azimuth_sigma_deg) << " deg).\n"
+      << "            Why: the encoder zero is the turntable's angle against X_r, and only "
+         "something fixed to the base defines X_r: free plate poses cannot fix it (turning the "
+         "whole cloud about the axis leaves every plate a plane). The face's known azimuth "
+         "does; without that sweep the zero is reported unobservable and kept (it turns the "
+         "map, not its shape)."
+      << (ref.declared ? ""
+                       : " This rig file declares no reference face (turntable.reference."
+                         "declared: false): the zero will not be calibrated.")
+      << "\n"
+      << "  sweeps:   " << sweeps << " (one per pose, then the reference), " << t.sweep_start_deg
+      << " to " << t.sweep_end_deg << " deg at " << t.speed_deg_s << " deg/s\n"
+      << "  duration: about " << std::fixed << std::setprecision(0) << sweeps * (sweep_s + 30.0)
+      << " s (sweeps and moving the plate between them)\n"
       << "  record:   lcm-logger calib.lcmlog while the rig sweeps each pose\n"
       << "  simulate: sweepmap sim --rig " << rig_name << " "
       << calibrationRecordingSimLine(RigKind::kRotatingProfile) << " --out calib.lcmlog\n"
@@ -294,8 +339,9 @@ std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
       return {"--set", "sim.path=figure8",  "--set", "sim.stop_interval_s=20",
               "--set", "sim.duration_s=120"};
     case RigKind::kRotatingProfile:
-      return {"--set", "sim.scene=plate", "--set",
-              "sim.plate_count=" + std::to_string(kPlatePoses)};
+      return {"--set", "sim.scene=plate",
+              "--set", "sim.plate_count=" + std::to_string(kPlatePoses),
+              "--set", "sim.reference_sweep=true"};
   }
   return {};
 }
