@@ -58,7 +58,7 @@ void takeSweep(const RigCalibRequest& o, const RotatingLidarConfig& rig, const s
   sweep.source = source;
   sweep.planes = segmentSweepPlanes(s.points_Op, rays, o.segmentation, source);
   if (sweep.planes.empty()) return reject("no plane found");
-  sweep.plate_rays = plateCandidateRays(rays, valuesOf(rig), PlateRegion::fromConfig(rig.plate));
+  takePlateCandidates(rays, valuesOf(rig), PlateRegion::fromConfig(rig.plate), &sweep);
   in->sweeps.push_back(std::move(sweep));
 }
 
