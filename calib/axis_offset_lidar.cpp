@@ -358,10 +358,6 @@ Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm
                                  ray.phi_rad, offset_mm);
 }
 
-namespace {
-
-// Each ray's scan (a new one where theta stops increasing: forEachSweepRay's order) and beam
-// (theta in steps of the smallest step between neighbouring rays of a scan).
 std::vector<std::pair<long, long>> scanBeamOf(const std::vector<SweepRay>& rays) {
   std::vector<std::pair<long, long>> at(rays.size());
   if (rays.empty()) return at;
@@ -379,6 +375,8 @@ std::vector<std::pair<long, long>> scanBeamOf(const std::vector<SweepRay>& rays)
   }
   return at;
 }
+
+namespace {
 
 // Takes out of `owner` every ray within `m` beams and scans of a valid ray that is not of
 // its plane (owner -1: no plane or an edge; another plane).

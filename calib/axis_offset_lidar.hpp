@@ -27,6 +27,7 @@
 #include <Eigen/Core>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "calib/sweep_assembly.hpp"
@@ -52,6 +53,10 @@ struct PlaneSegmentationOptions {
   // pixels) are not the plane, yet their first millimetres pass the gate. 0: kept.
   int depth_edge_rays = 0;
 };
+
+// Each ray's scan (a new one where theta stops increasing: forEachSweepRay's order) and beam
+// (theta in steps of the smallest step between neighbouring rays of a scan).
+std::vector<std::pair<long, long>> scanBeamOf(const std::vector<SweepRay>& rays);
 
 // The planes of one sweep: `points_Op` the cloud assembled with the nominal offset, `rays`
 // its rays in the same order (forEachSweepRay). A ray belongs to the plane whose crossing

@@ -90,53 +90,125 @@ std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& ra
 
 namespace {
 
-// The measured-minus-predicted centroid direction with the predicted coverage `cover(ray)`.
-template <class Cover>
+// The measured-minus-predicted centroid direction with the measured weight `hit(i, ray,
+// crossing)` and the predicted coverage `cover(ray)`.
+template <class Hit, class Cover>
 std::optional<double> centroidMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
-                                       const std::vector<char>* given, Cover&& cover) {
+                                       Hit&& hit, Cover&& cover) {
   Eigen::Vector2d measured = Eigen::Vector2d::Zero(), predicted = Eigen::Vector2d::Zero();
   double hits = 0.0, weight = 0.0;
   for (size_t i = 0; i < rays.size(); ++i) {
     const PlateRay& r = rays[i];
     const auto top = crossing(r.origin, r.direction, m.height_m);
     if (!top) continue;
-    const bool hit = given ? (*given)[i] != 0
-                           : std::fabs(r.range_m - (*top - r.origin).norm()) <= m.range_gate_m;
-    if (hit) {
-      measured += top->head<2>();
-      hits += 1.0;
-    }
+    const double h = hit(i, r, *top);
+    if (h < 0.0) continue;  // in neither centroid
+    measured += h * top->head<2>();
+    hits += h;
     const double w = cover(r);
     predicted += w * top->head<2>();
     weight += w;
   }
-  if (hits == 0.0 || !(weight > 0.0)) return std::nullopt;
+  if (!(hits > 0.0) || !(weight > 0.0)) return std::nullopt;
   // Both sums' directions: the weights' totals do not change them.
   return std::atan2(predicted.x() * measured.y() - predicted.y() * measured.x(),
                     predicted.dot(measured));
+}
+
+// Whether a ray's range agrees with its crossing of the upper surface.
+bool inGate(const PlateModel& m, const PlateRay& r, const Eigen::Vector3d& top) {
+  return std::fabs(r.range_m - (top - r.origin).norm()) <= m.range_gate_m;
 }
 
 }  // namespace
 
 std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
                                             double angle_rad, const std::vector<char>* given) {
-  return centroidMismatch(m, rays, given, [&](const PlateRay& r) {
-    return plateCoverage(m, r.origin, r.direction, angle_rad);
-  });
+  return centroidMismatch(
+      m, rays,
+      [&](size_t i, const PlateRay& r, const Eigen::Vector3d& top) {
+        return (given ? (*given)[i] != 0 : inGate(m, r, top)) ? 1.0 : 0.0;
+      },
+      [&](const PlateRay& r) { return plateCoverage(m, r.origin, r.direction, angle_rad); });
 }
 
 std::optional<double> plateSampledMismatch(const PlateModel& m, const std::vector<PlateRay>& rays,
-                                           double angle_rad, const std::vector<char>& hits) {
-  return centroidMismatch(m, rays, &hits, [&](const PlateRay& r) {
-    return plateCovers(m, r.origin, r.direction, angle_rad) ? 1.0 : 0.0;
-  });
+                                           double angle_rad, const std::vector<double>& weights) {
+  return centroidMismatch(
+      m, rays, [&](size_t i, const PlateRay&, const Eigen::Vector3d&) { return weights[i]; },
+      [&](const PlateRay& r) {
+        return plateCovers(m, r.origin, r.direction, angle_rad) ? 1.0 : 0.0;
+      });
 }
 
+std::vector<double> plateHitWeights(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                    const std::vector<PlateRayBeams>& beams) {
+  const std::vector<char> hits = plateHits(m, rays);
+  std::vector<double> w(hits.begin(), hits.end());
+  if (beams.size() != rays.size()) return w;
+  const double jump = m.edge_jump_m;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (!hits[i]) continue;
+    const double r0 = rays[i].range_m;
+    for (size_t side = 0; side < 2; ++side) {
+      const auto& r = beams[i].range[side];
+      const int j = beams[i].next[side];
+      // An edge past this hit, the next ray not a hit, the background known.
+      if (r[0] == 0.0f || !(std::fabs(r[0] - r0) > jump) || j < 0 || hits[size_t(j)] ||
+          r[2] == 0.0f) {
+        continue;
+      }
+      const double lo = std::min(r0, double(r[2])) + jump, hi = std::max(r0, double(r[2])) - jump;
+      const auto mixed = [&](float v) { return v > lo && v < hi; };
+      if (!mixed(r[0])) continue;
+      w[size_t(j)] = mixed(r[1]) ? 1.0 : -1.0;
+    }
+  }
+  return w;
+}
+
+namespace {
+
+// Where the step `mismatch(a) = v` that holds at `inside` ends towards `dir` (+-1): the first
+// angle with another value, to ~1e-12 rad (within ~1 rad; else 1 rad out).
+template <class F>
+double stepEnd(F&& mismatch, double inside, double dir) {
+  const auto v = mismatch(inside);
+  double in = inside, out = inside, step = 1e-6;
+  for (int i = 0; i < 20; ++i) {
+    out = inside + dir * step;
+    if (mismatch(out) != v) break;
+    in = out;
+    step *= 2.0;
+  }
+  for (int i = 0; i < 60 && std::fabs(out - in) > 1e-12; ++i) {
+    const double mid = 0.5 * (in + out);
+    (mismatch(mid) == v ? in : out) = mid;
+  }
+  return 0.5 * (in + out);
+}
+
+// The zero of a step function of the angle that jumps through 0 at `jump`: the zero of the
+// line through the middles of the two steps that meet there (the steps as samples of the
+// smooth mismatch). The jump itself lies where the model's next ray flips, which a measured
+// set that no model angle gives exactly (mixed pixels, the gate's noise) picks at random.
+template <class F>
+double secantThroughSteps(double jump, F&& mismatch) {
+  const double eps = 1e-10;
+  const auto before = mismatch(jump - eps), after = mismatch(jump + eps);
+  if (!before || !after || !(*before > 0.0) || !(*after < 0.0)) return jump;
+  const double m1 = 0.5 * (stepEnd(mismatch, jump - eps, -1.0) + jump);
+  const double m2 = 0.5 * (jump + stepEnd(mismatch, jump + eps, 1.0));
+  return m1 + (m2 - m1) * *before / (*before - *after);
+}
+
+}  // namespace
+
 std::optional<double> fitPlateSampled(const PlateModel& m, const std::vector<PlateRay>& rays,
-                                      const std::vector<char>& hits, double start_rad) {
+                                      const std::vector<double>& weights, double start_rad) {
   // sign(a) = +1 while the predicted centroid lies short of the measured one (mismatch > 0).
   const auto above = [&](double a, bool strict) -> std::optional<bool> {
-    const auto e = plateSampledMismatch(m, rays, a, hits);
+    const auto e = plateSampledMismatch(m, rays, a, weights);
     if (!e) return std::nullopt;
     return strict ? *e > 0.0 : *e >= 0.0;
   };
@@ -161,7 +233,10 @@ std::optional<double> fitPlateSampled(const PlateModel& m, const std::vector<Pla
     }
     return 0.5 * (l + h);
   };
-  return 0.5 * (edge(true) + edge(false));
+  const double first = edge(true), last = edge(false);
+  if (last - first > 1e-9) return 0.5 * (first + last);  // the model's rays are the measured
+  return secantThroughSteps(first,
+                            [&](double a) { return plateSampledMismatch(m, rays, a, weights); });
 }
 
 PlateModelFit fitPlateModel(const PlateModel& m, const std::vector<PlateRay>& rays, int min_hits) {

@@ -163,10 +163,10 @@ struct PlateCost {
 struct SweepState {
   double phi = 0.0;
   bool plate = false;
-  std::vector<char> plate_hits;
-  double beta = 0.0;            // the plate's angle in O' (PlateCost)
-  std::vector<int> wall_class;  // per plane: 0..3 a room wall (azimuth class * 90 deg), -1 free
-  std::vector<double> azimuth;  // per room wall [rad]
+  std::vector<double> plate_hits;  // the measured hits' weights (plateHitWeights)
+  double beta = 0.0;               // the plate's angle in O' (PlateCost)
+  std::vector<int> wall_class;     // per plane: 0..3 a room wall (azimuth class * 90 deg), -1 free
+  std::vector<double> azimuth;     // per room wall [rad]
   std::vector<std::array<double, 2>> wall;  // lean, distance
   std::vector<Eigen::Vector3d> normal;      // free planes
   std::vector<double> distance;
@@ -214,7 +214,7 @@ SweepState initSweep(const RigASweep& s, const RigASolveOptions& o, const State&
   if (fit.found) {
     ss.phi = st.alpha - fit.angle_rad;
     ss.beta = fit.angle_rad;
-    ss.plate_hits = plateHits(o.plate, pr);
+    ss.plate_hits = plateHitWeights(o.plate, pr, s.plate_beams);
   }
   const size_t n = s.planes.size();
   ss.wall_class.assign(n, -1);
@@ -550,19 +550,43 @@ Eigen::Matrix4d covariance(Built* b, State* st) {
 
 }  // namespace
 
-std::vector<SweepRay> plateCandidateRays(const std::vector<SweepRay>& rays, const RigAValues& v,
-                                         const PlateRegion& region) {
+void takePlateCandidates(const std::vector<SweepRay>& rays, const RigAValues& v,
+                         const PlateRegion& region, RigASweep* sweep) {
   const double g[3] = {v.offset_x_mm, v.tilt_deg * kDegToRad, v.mirror_deg * kDegToRad};
   const Eigen::Matrix3d R_L = rotating::lidarRotation(g[1], g[2]);
-  std::vector<SweepRay> out;
-  for (const SweepRay& r : rays) {
+  std::vector<size_t> taken;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const SweepRay& r = rays[i];
     const Eigen::Matrix3d Rz = rotating::rotZ(r.phi_rad);
     if (plateRayRange(Rz * Eigen::Vector3d(1e-3 * g[0], 0, 0),
                       Rz * R_L * rotating::pointInLidar(1.0, r.theta_rad), region)) {
-      out.push_back(r);
+      taken.push_back(i);
     }
   }
-  return out;
+  // Each ray by (scan, beam): its range, and its index among the candidates (-1: not one).
+  const auto at = scanBeamOf(rays);
+  long beams = 0;
+  for (const auto& sb : at) beams = std::max(beams, sb.second + 1);
+  std::vector<std::pair<float, int>> grid(size_t((at.empty() ? 0 : at.back().first + 1) * beams),
+                                          {0.0f, -1});
+  const auto cell = [&](long scan, long beam) { return size_t(scan * beams + beam); };
+  for (size_t i = 0; i < rays.size(); ++i)
+    grid[cell(at[i].first, at[i].second)].first = float(rays[i].range_m);
+  for (size_t k = 0; k < taken.size(); ++k)
+    grid[cell(at[taken[k]].first, at[taken[k]].second)].second = int(k);
+  for (const size_t i : taken) {
+    sweep->plate_rays.push_back(rays[i]);
+    PlateRayBeams b;
+    for (int side = 0; side < 2; ++side) {
+      for (long n = 1; n <= 3; ++n) {
+        const long beam = at[i].second + (side ? n : -n);
+        if (beam < 0 || beam >= beams) continue;
+        b.range[size_t(side)][size_t(n - 1)] = grid[cell(at[i].first, beam)].first;
+        if (n == 1) b.next[size_t(side)] = grid[cell(at[i].first, beam)].second;
+      }
+    }
+    sweep->plate_beams.push_back(b);
+  }
 }
 
 namespace {
@@ -612,11 +636,32 @@ Eigen::Matrix4d inUnits(const Eigen::Matrix4d& c) {
   return s.asDiagonal() * c * s.asDiagonal();
 }
 
+// The plates' measured hits again with a range gate of kPlateGateSigmas of the range noise (the
+// rig's gate if wider): with 12 mm of noise the rig's 30 mm gate left 1.2 % of the plate's
+// rays out at random, whose centroid then scattered by ~0.02 deg per sweep. The depth edges
+// of plateHitWeights' mixed pixels are judged with the same gate (a mixed pixel within it of
+// the plate or of the background reads as either, with equal chance for the plate's last ray
+// and the background's first).
+constexpr double kPlateGateSigmas = 5.0;
+
+void weighPlateHits(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
+  PlateModel m = o.plate;
+  m.range_gate_m = std::max(m.range_gate_m, kPlateGateSigmas * 1e-3 * st->sigma_mm);
+  m.edge_jump_m = m.range_gate_m;
+  for (size_t s = 0; s < st->sweeps.size(); ++s) {
+    SweepState& ss = st->sweeps[s];
+    if (!ss.plate) continue;
+    ss.plate_hits =
+        plateHitWeights(m, placePlateRays(sweeps[s].plate_rays, st->g), sweeps[s].plate_beams);
+  }
+}
+
 // Stage 2's weights: the points' robust sigma, the walls' clutter out, the plates' angles with
 // the walls' g and their scatter.
 void reweigh(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
   st->sigma_mm = robustSigma(keptResiduals(*st));
   removeClutter(o, st);
+  weighPlateHits(sweeps, o, st);
   placePlates(sweeps, o, st);
   const std::vector<double> m = plateMismatches(*st);
   // Their scatter about their mean (alpha takes the mean), robustly; Cauchy from now on.

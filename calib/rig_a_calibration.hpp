@@ -45,11 +45,14 @@
 namespace sweepmap {
 
 // One sweep's observations: its planes' rays (calib/axis_offset_lidar.hpp segmentSweepPlanes)
-// and the rays that meet the plate's surface in the semi-ring region (with the rig's values).
+// and the rays that meet the plate's surface in the semi-ring region (with the rig's values),
+// with their neighbours along their scans (for the mixed pixels at the plate's edges; empty:
+// none taken into account).
 struct RigASweep {
   std::string source;
   std::vector<LidarPlaneRays> planes;
   std::vector<SweepRay> plate_rays;
+  std::vector<PlateRayBeams> plate_beams;
 };
 
 struct RigAValues {
@@ -84,9 +87,10 @@ struct RigASolveOptions {
 // Throws std::invalid_argument when no sweep has planes.
 RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOptions& options);
 
-// The rays of `rays` whose crossing of the plate's surface, placed with `values`, lies in the
-// region (the plate's candidates).
-std::vector<SweepRay> plateCandidateRays(const std::vector<SweepRay>& rays,
-                                         const RigAValues& values, const PlateRegion& region);
+// The rays of `rays` (a sweep's, forEachSweepRay's order) whose crossing of the plate's surface,
+// placed with `values`, lies in the region (the plate's candidates), into sweep->plate_rays,
+// and their neighbours along their scans into sweep->plate_beams.
+void takePlateCandidates(const std::vector<SweepRay>& rays, const RigAValues& values,
+                         const PlateRegion& region, RigASweep* sweep);
 
 }  // namespace sweepmap

@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <iostream>
 #include <random>
 
 #include "calib/plate.hpp"
@@ -270,7 +271,8 @@ TEST(PlateModel, SampledFitFindsTheAngleOnAFullTurnsRayGrid) {
   for (const double alpha_deg : {29.3598, 30.1, 31.77, -12.3}) {
     SCOPED_TRACE(alpha_deg);
     const auto rays = fullTurnPlateRays(m, region, alpha_deg * kDeg);
-    const auto hits = plateHits(m, rays);
+    const auto hit = plateHits(m, rays);
+    const std::vector<double> hits(hit.begin(), hit.end());
     const PlateModelFit smooth = fitPlateModel(m, rays, 30);
     ASSERT_TRUE(smooth.found);
     EXPECT_NEAR(smooth.angle_rad / kDeg, alpha_deg, 0.05);  // the start
@@ -285,7 +287,92 @@ TEST(PlateModel, SampledFitWithoutAHitIsNotFound) {
   PlateConfig c;
   const PlateModel m = PlateModel::fromConfig(c);
   const auto rays = fullTurnPlateRays(m, PlateRegion::fromConfig(c), 0.5);
-  EXPECT_FALSE(fitPlateSampled(m, rays, std::vector<char>(rays.size(), 0), 0.5).has_value());
+  EXPECT_FALSE(fitPlateSampled(m, rays, std::vector<double>(rays.size(), 0.0), 0.5).has_value());
+}
+
+// A full turn's scans (as fullTurnPlateRays) with the simulator's mixed pixels
+// (sim/artefacts.hpp): a ray whose neighbour's range differs by more than 50 mm takes, with
+// probability 0.5, a range uniformly between the two. The rays that cross the plate's plane in
+// the region, with their neighbours along the scan.
+struct MixedTurn {
+  std::vector<PlateRay> rays;
+  std::vector<PlateRayBeams> beams;
+};
+
+MixedTurn mixedFullTurn(const PlateModel& m, const PlateRegion& region, double alpha,
+                        uint64_t seed) {
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDeg, 0.2 * kDeg);
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  MixedTurn turn;
+  for (int k = 0; k < 640; ++k) {
+    const Eigen::Matrix3d Rz = rotating::rotZ(k * 0.5625 * kDeg);
+    const Eigen::Vector3d o = Rz * Eigen::Vector3d(0.0139, 0, 0);
+    std::vector<Eigen::Vector3d> dirs;
+    std::vector<double> range;  // the plate's, or 1 m past the plate's plane (the floor)
+    for (int i = 0; i < 1081; ++i) {
+      dirs.push_back(Rz * R_L * rotating::pointInLidar(1.0, (-135 + 0.25 * i) * kDeg));
+      const double t = dirs.back().z() < -1e-3 ? (m.height_m - o.z()) / dirs.back().z() : 3.0;
+      range.push_back(plateCovers(m, o, dirs.back(), alpha) ? t : t + 1.0);
+    }
+    std::vector<double> mixed = range;
+    for (size_t i = 1; i + 1 < range.size(); ++i) {
+      for (const size_t j : {i - 1, i + 1}) {
+        if (std::fabs(range[j] - range[i]) > 0.05 && u(rng) < 0.5) {
+          mixed[i] = range[i] + u(rng) * (range[j] - range[i]);
+          break;
+        }
+      }
+    }
+    std::vector<int> index(range.size(), -1);
+    for (size_t i = 0; i < range.size(); ++i) {
+      if (!plateRayRange(o, dirs[i], region)) continue;
+      index[i] = int(turn.rays.size());
+      turn.rays.push_back({o, dirs[i], mixed[i]});
+    }
+    for (size_t i = 0; i < range.size(); ++i) {
+      if (index[i] < 0) continue;
+      PlateRayBeams b;
+      for (int side = 0; side < 2; ++side) {
+        for (int n = 1; n <= 3; ++n) {
+          const long j = long(i) + (side ? n : -n);
+          if (j < 0 || j >= long(range.size())) continue;
+          b.range[size_t(side)][size_t(n - 1)] = float(mixed[size_t(j)]);
+          if (n == 1) b.next[size_t(side)] = index[size_t(j)];
+        }
+      }
+      turn.beams.push_back(b);
+    }
+  }
+  return turn;
+}
+
+// Mixed pixels at the plate's edges take ~half of its edge rays out of the range gate at
+// random (~200 per full turn), always on the plate's side: the hits alone then differ from the
+// rays the plate covers at its true angle by those. plateHitWeights counts a mixed pixel past a
+// run of hits as the plate's when the ray after it is mixed too, and leaves a lone one (the
+// plate's last ray or the background's first, with equal chance) out of both centroids: what
+// is left to differ is the few mixed pixels that fell within the gate of either surface.
+TEST(PlateModel, MixedPixelsAtThePlatesEdgesAreCountedOrLeftOut) {
+  PlateConfig c;
+  const PlateModel m = PlateModel::fromConfig(c);
+  const PlateRegion region = PlateRegion::fromConfig(c);
+  const double alpha = 29.3598 * kDeg;
+  for (const uint64_t seed : {1, 2, 3}) {
+    SCOPED_TRACE(seed);
+    const MixedTurn t = mixedFullTurn(m, region, alpha, seed);
+    const auto hits = plateHits(m, t.rays);
+    const auto w = plateHitWeights(m, t.rays, t.beams);
+    int by_hits = 0, by_weights = 0;
+    for (size_t i = 0; i < t.rays.size(); ++i) {
+      const bool covered = plateCovers(m, t.rays[i].origin, t.rays[i].direction, alpha);
+      by_hits += covered != (hits[i] != 0);
+      if (w[i] < 0.0) continue;  // in neither centroid
+      by_weights += covered != (w[i] > 0.0);
+    }
+    EXPECT_GT(by_hits, 150);
+    EXPECT_LT(by_weights, by_hits / 5);
+  }
 }
 
 }  // namespace
