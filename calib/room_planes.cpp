@@ -4,6 +4,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 namespace sweepmap {
 
@@ -66,25 +67,49 @@ RoomDims roomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud
 
 namespace {
 
-// The points of `plane`'s window (each within window_sigmas of its sigma, its ray's predicted
-// range clear of range_max_m), with their weights.
+// The range at which the ray from o along `ray` (any length) meets the plane (n, d), if it runs
+// towards it.
+std::optional<double> predictedRange(const Eigen::Vector3d& n, double d, const Eigen::Vector3d& o,
+                                     const Eigen::Vector3d& ray) {
+  const double h = n.dot(o) + d;  // the origin's signed distance from the plane
+  const double along = n.dot(ray);
+  if (!(along * h < 0)) return std::nullopt;
+  return -h / along * ray.norm();
+}
+
+// Whether the ray o -> p is one of the plane's own by the ranges the planes predict: it runs
+// towards the plane, clear of range_max_m and of every `nearer` plane (see refinePlane).
+bool ownRay(const Eigen::Vector3d& n, double d, const Eigen::Vector3d& o, const Eigen::Vector3d& p,
+            const RangeNoise& noise, const std::vector<PlaneEquation>& nearer) {
+  if (noise.range_max_m <= 0 && nearer.empty()) return true;
+  const Eigen::Vector3d ray = p - o;
+  const std::optional<double> r = predictedRange(n, d, o, ray);
+  if (!r) return false;
+  if (noise.range_max_m > 0 &&
+      *r > noise.range_max_m * (1.0 - noise.window_sigmas * noise.fraction))
+    return false;
+  const double margin = noise.window_sigmas * std::hypot(noise.fraction * *r, noise.floor_m);
+  for (const PlaneEquation& q : nearer) {
+    const std::optional<double> rq = predictedRange(q.normal, q.offset, o, ray);
+    if (rq && *rq < *r + margin) return false;
+  }
+  return true;
+}
+
+// The points of `plane`'s window (each within window_sigmas of its sigma, its own ray by
+// ownRay), with their weights.
 void planeWindow(const std::vector<Eigen::Vector3f>& cloud,
                  const std::vector<Eigen::Vector3f>& origins, const Eigen::Vector3d& n, double d,
-                 const RangeNoise& noise, std::vector<int>* idx, std::vector<double>* w) {
+                 const RangeNoise& noise, const std::vector<PlaneEquation>& nearer,
+                 std::vector<int>* idx, std::vector<double>* w) {
   idx->clear();
   w->clear();
-  const double r_lim = noise.range_max_m * (1.0 - noise.window_sigmas * noise.fraction);
   for (size_t i = 0; i < cloud.size(); ++i) {
     const Eigen::Vector3d p = cloud[i].cast<double>(), o = origins[i].cast<double>();
     const double h = n.dot(o) + d;  // the origin's signed distance from the plane
     const double s = std::hypot(noise.fraction * h, noise.floor_m);
     if (!(std::abs(n.dot(p) + d) <= noise.window_sigmas * s)) continue;
-    if (noise.range_max_m > 0) {
-      const Eigen::Vector3d ray = p - o;
-      const double along = n.dot(ray);  // the ray's approach to the plane per unit of ray
-      if (!(along * h < 0)) continue;   // the ray does not run towards the plane
-      if (-h / along * ray.norm() > r_lim) continue;
-    }
+    if (!ownRay(n, d, o, p, noise, nearer)) continue;
     idx->push_back(int(i));
     w->push_back(1.0 / (s * s));
   }
@@ -94,7 +119,7 @@ void planeWindow(const std::vector<Eigen::Vector3f>& cloud,
 
 RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
-                         const RangeNoise& noise) {
+                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer) {
   RefinedPlane r;
   r.normal = start.normal.normalized();
   r.offset = start.offset / std::max(1e-12, start.normal.norm());
@@ -102,7 +127,7 @@ RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
   for (int it = 0; it < noise.iterations; ++it) {
     std::vector<int> idx;
     std::vector<double> w;
-    planeWindow(cloud, origins, r.normal, r.offset, noise, &idx, &w);
+    planeWindow(cloud, origins, r.normal, r.offset, noise, nearer, &idx, &w);
     if (idx.size() < 10) {
       r.ok = false;
       return r;
@@ -140,22 +165,36 @@ double refinedDistance(const RefinedPlane& a, const RefinedPlane& b) {
 
 RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise) {
-  RoomDims d;
-  const auto distance = [&](const WallPlaneFit& a, const WallPlaneFit& b) -> std::optional<double> {
-    const RefinedPlane ra = refinePlane(cloud, origins, a, noise);
-    const RefinedPlane rb = refinePlane(cloud, origins, b, noise);
-    if (!ra.ok || !rb.ok) return std::nullopt;
-    return refinedDistance(ra, rb);
+  // The planes in this order: the four walls (extractWalls' order), the floor, the ceiling.
+  std::vector<WallPlaneFit> start;
+  if (p.walls.size() == 4) start = p.walls;
+  if (p.floor && p.ceiling) start.insert(start.end(), {*p.floor, *p.ceiling});
+  std::vector<RefinedPlane> alone;
+  for (const WallPlaneFit& s : start) alone.push_back(refinePlane(cloud, origins, s, noise));
+  std::vector<RefinedPlane> refined;
+  for (size_t i = 0; i < alone.size(); ++i) {
+    std::vector<PlaneEquation> nearer;
+    for (size_t j = 0; j < alone.size(); ++j) {
+      if (j != i && alone[j].ok) nearer.push_back({alone[j].normal, alone[j].offset});
+    }
+    refined.push_back(alone[i].ok ? refinePlane(cloud, origins, start[i], noise, nearer)
+                                  : alone[i]);
+  }
+  const auto distance = [&](size_t a, size_t b) -> std::optional<double> {
+    if (!refined[a].ok || !refined[b].ok) return std::nullopt;
+    return refinedDistance(refined[a], refined[b]);
   };
-  if (p.walls.size() == 4) {
-    const std::optional<double> y = distance(p.walls[0], p.walls[2]);
-    const std::optional<double> x = distance(p.walls[1], p.walls[3]);
+  RoomDims d;
+  const size_t f = p.walls.size() == 4 ? 4 : 0;  // the floor's index
+  if (f == 4) {
+    const std::optional<double> y = distance(0, 2);
+    const std::optional<double> x = distance(1, 3);
     if (x && y) {
       d.L1 = std::max(*x, *y);
       d.L2 = std::min(*x, *y);
     }
   }
-  if (p.floor && p.ceiling) d.L3 = distance(*p.floor, *p.ceiling);
+  if (p.floor && p.ceiling) d.L3 = distance(f, f + 1);
   return d;
 }
 
