@@ -42,8 +42,8 @@ def axis_offset_profile(j):
 
 
 def mounting(j):
-    return [("mounting." + k + "_rad", e * 1e-3, None, "rad", None)
-            for k, e in zip(("gamma", "beta", "alpha"), j["error_mrad"])]
+    return [("mounting." + k + "_rad", j["error_mrad"][k] * 1e-3, None, "rad", None)
+            for k in ("gamma", "beta", "alpha")]
 
 
 # The issue's targets (issue 23): |error| within the limit; "%" limits are relative to the truth.
