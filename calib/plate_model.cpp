@@ -146,22 +146,19 @@ std::vector<double> plateHitWeights(const PlateModel& m, const std::vector<Plate
   const std::vector<char> hits = plateHits(m, rays);
   std::vector<double> w(hits.begin(), hits.end());
   if (beams.size() != rays.size()) return w;
-  const double jump = m.edge_jump_m;
   for (size_t i = 0; i < rays.size(); ++i) {
-    if (!hits[i]) continue;
-    const double r0 = rays[i].range_m;
+    const auto& b = beams[i];
+    if (!hits[i]) {
+      // Beside a beam that gave no return: its neighbour on the plate may have dropped out.
+      if (b.range[0][0] == 0.0f || b.range[1][0] == 0.0f) w[i] = -1.0;
+      continue;
+    }
     for (size_t side = 0; side < 2; ++side) {
-      const auto& r = beams[i].range[side];
-      const int j = beams[i].next[side];
-      // An edge past this hit, the next ray not a hit, the background known.
-      if (r[0] == 0.0f || !(std::fabs(r[0] - r0) > jump) || j < 0 || hits[size_t(j)] ||
-          r[2] == 0.0f) {
-        continue;
-      }
-      const double lo = std::min(r0, double(r[2])) + jump, hi = std::max(r0, double(r[2])) - jump;
-      const auto mixed = [&](float v) { return v > lo && v < hi; };
-      if (!mixed(r[0])) continue;
-      w[size_t(j)] = mixed(r[1]) ? 1.0 : -1.0;
+      const int j = b.next[side];
+      // The run goes on, or no return next to it (no depth edge to mix at); else the ray past
+      // it is the plate's last or the background's first.
+      if (b.range[side][0] == 0.0f || (j >= 0 && hits[size_t(j)])) continue;
+      if (j >= 0) w[size_t(j)] = -1.0;
     }
   }
   return w;

@@ -33,9 +33,6 @@ struct PlateModel {
   double base_distance_m = 0.05475;
   double edge_m = 0.002;  // width of the coverage's smooth edge
   double range_gate_m = 0.03;
-  // A depth edge along a scan: neighbouring rays' ranges differ by more than this (where a
-  // lidar returns mixed pixels).
-  double edge_jump_m = 0.05;
   static PlateModel fromConfig(const PlateConfig& plate);
 };
 
@@ -77,16 +74,19 @@ struct PlateRayBeams {
   std::array<int, 2> next{-1, -1};
 };
 
-// The rays that count as measured hits, with weights: plateHits' rays (1), and at each depth
-// edge where a run of hits along a scan ends, the mixed pixels. A lidar's ray at a depth edge
-// may return a range between the plate's and the background's (a mixed pixel): the plate's
-// last ray then falls out of the gate, or the first ray past the plate reads between. Past a
-// run's last hit, the next ray (range between the plate's and the background's, 3 beams out,
-// with edge_jump_m to spare on each side) is a mixed pixel; if the ray after it is one too,
-// the first was the plate's (weight 1); if it is the only one, it is the plate's last ray or
-// the background's first with equal chance whatever the chance of mixing (each ray mixes on
-// its own): weight -1, in neither centroid. Without this ~2 % of the plate's rays, all at its
-// edges, fell out at random. `beams` empty: plateHits' rays alone.
+// The rays that count as measured hits, with weights: plateHits' rays (1), less those whose
+// side of a depth edge is not knowable (-1, in neither centroid). A lidar's ray at a depth edge
+// may return a range anywhere between the plate's and the background's (a mixed pixel): the
+// plate's last ray may fall out of the gate, or the background's first read between. Behind
+// the plate's edges the background is the floor at grazing incidence, whose range climbs by
+// tens of millimetres a beam, so no range tells a mixed pixel from the background's first ray:
+// the ray past a run of hits along a scan is the plate's last or the background's first, and
+// is left out whatever its range. So is a ray that is not a hit beside a beam that gave no
+// return (the plate's hypotenuse face drops glancing rays; the ray may be the plate's, mixed).
+// A rule that judged mixed pixels by their range against the background 3 beams out counted
+// floor rays 2 m away as the plate's and turned seed 3 of the plan's recording by -0.024 deg.
+// What is left: a background's mixed pixel within the plate's gate counts as a hit (~1 in 60
+// edges). `beams` empty: plateHits' rays alone.
 std::vector<double> plateHitWeights(const PlateModel& m, const std::vector<PlateRay>& rays,
                                     const std::vector<PlateRayBeams>& beams);
 

@@ -638,16 +638,12 @@ Eigen::Matrix4d inUnits(const Eigen::Matrix4d& c) {
 
 // The plates' measured hits again with a range gate of kPlateGateSigmas of the range noise (the
 // rig's gate if wider): with 12 mm of noise the rig's 30 mm gate left 1.2 % of the plate's
-// rays out at random, whose centroid then scattered by ~0.02 deg per sweep. The depth edges
-// of plateHitWeights' mixed pixels are judged with the same gate (a mixed pixel within it of
-// the plate or of the background reads as either, with equal chance for the plate's last ray
-// and the background's first).
+// rays out at random, whose centroid then scattered by ~0.02 deg per sweep.
 constexpr double kPlateGateSigmas = 5.0;
 
 void weighPlateHits(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
   PlateModel m = o.plate;
   m.range_gate_m = std::max(m.range_gate_m, kPlateGateSigmas * 1e-3 * st->sigma_mm);
-  m.edge_jump_m = m.range_gate_m;
   for (size_t s = 0; s < st->sweeps.size(); ++s) {
     SweepState& ss = st->sweeps[s];
     if (!ss.plate) continue;

@@ -111,9 +111,12 @@ TEST(CalibRig, FullTurnsSeparateThePlateAngleFromTheOffset) {
 }
 
 // Without range noise or artefacts the rays that hit the plate are exactly the sharp-edged
-// model's at the true angle, so alpha comes out exact but for the ray grid's resolution (a
-// few 1e-4 deg per sweep). The smooth edge's prediction missed each sweep by the grid's
-// sampling of the edges, 0.007 deg on average on these three sweeps.
+// model's at the true angle, so alpha comes out exact but for the ray grid's resolution. The
+// ray past each edge of the plate along a scan is in neither centroid (plateHitWeights: on a
+// real recording it may be a mixed pixel), so each edge is known to two rays' spacing, not
+// one: -0.0023 deg on these three sweeps, where the edge's ray kept gave a few 1e-4. The
+// smooth edge's prediction missed each sweep by the grid's sampling of the edges, 0.007 deg
+// on average.
 TEST(CalibRig, NoiseFreeFullTurnsGiveThePlateAngleExactly) {
   const fs::path dir = scratchDir("calib_rig_noise_free");
   const std::string log = cachedSimLog("calib_rig_full_turns_noise_free",
@@ -134,7 +137,7 @@ TEST(CalibRig, NoiseFreeFullTurnsGiveThePlateAngleExactly) {
             0)
       << readAll(dir / "err.txt");
   const auto a = nlohmann::json::parse(readAll(dir / "out.json"))["parameters"]["plate.alpha_deg"];
-  EXPECT_NEAR(a["value"].get<double>(), a["truth"].get<double>(), 0.002) << a;
+  EXPECT_NEAR(a["value"].get<double>(), a["truth"].get<double>(), 0.003) << a;
 }
 
 // Rig C: the plan's plate poses (3, non-parallel), every build error at its default (M, N a
