@@ -192,7 +192,7 @@ def plot(out, kind, by_seed):
               f"set output '{out}/calib_seeds_{kind}.png'\n"
               f"set title '{kind}: calib rig, |error| / sigma per seed'\n"
               f"set xtics rotate by 30 right ({tics})\nset xrange [-0.5:{len(keys) - 0.5}]\n"
-              f"set yrange [0:{top}]\nset ylabel '|error| / sigma'\nset key top right\n"
+              f"set yrange [0:{top}]\nset ylabel '|error| / sigma'\nset key outside top center horizontal\nset lmargin 14\nset bmargin 8\n"
               f"plot '{data}' using 1:2 with points pt 7 title 'a seed', "
               "3 with lines dt 2 lc 'red' title '3 sigma'\n")
     subprocess.run(["gnuplot"], input=script, text=True, check=False)
