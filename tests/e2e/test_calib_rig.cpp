@@ -39,6 +39,20 @@ std::string readAll(const fs::path& p) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// `sweepmap calib rig --rig RIG --logs LOG --out DIR/OUT --json`: its JSON, or null (and a test
+// failure naming its stderr) when it did not exit 0.
+nlohmann::json calibRigJson(const std::string& rig, const std::string& log, const fs::path& dir,
+                            const std::string& out = "c.yaml") {
+  const int status = runSplit(
+      {"calib", "rig", "--rig", rig, "--logs", log, "--out", (dir / out).string(), "--json"},
+      dir / "out.json", dir / "err.txt");
+  if (status != 0) {
+    ADD_FAILURE() << "calib rig exited " << status << ": " << readAll(dir / "err.txt");
+    return nullptr;
+  }
+  return nlohmann::json::parse(readAll(dir / "out.json"));
+}
+
 // 3 mode-7 sweeps (the plan's 10 take longer; their figures are in the explanation).
 std::string realisticLog() {
   return cachedSimLog("calib_rig_mode7x3", {"--rig", kRig, "--mode", "7", "--sweeps", "3", "--seed",
@@ -48,12 +62,8 @@ std::string realisticLog() {
 TEST(CalibRig, EveryParameterOfARealisticBuildWithinThreeSigmaAndApplied) {
   const fs::path dir = scratchDir("calib_rig");
   const fs::path calib = dir / "rig_calibration.yaml";
-  ASSERT_EQ(runSplit({"calib", "rig", "--rig", kRig, "--logs", realisticLog(), "--out",
-                      calib.string(), "--json"},
-                     dir / "out.json", dir / "err.txt"),
-            0)
-      << readAll(dir / "err.txt");
-  const auto j = nlohmann::json::parse(readAll(dir / "out.json"));
+  const auto j = calibRigJson(kRig, realisticLog(), dir, calib.filename().string());
+  ASSERT_FALSE(j.is_null());
   for (const char* key : {"plate.alpha_deg", "geometry.lidar_offset_x_mm",
                           "geometry.scan_plane_tilt_deg", "geometry.mirror_offset_deg"}) {
     SCOPED_TRACE(key);
@@ -131,12 +141,9 @@ TEST(CalibRig, NoiseFreeFullTurnsGiveThePlateAngleExactly) {
                                         "--set",    "sim.dropout_glancing_probability=0",
                                         "--set",    "sim.people=0",
                                         "--set",    "sim.whiteboard_proud_mm=0"});
-  ASSERT_EQ(runSplit({"calib", "rig", "--rig", kRig, "--logs", log, "--out",
-                      (dir / "c.yaml").string(), "--json"},
-                     dir / "out.json", dir / "err.txt"),
-            0)
-      << readAll(dir / "err.txt");
-  const auto a = nlohmann::json::parse(readAll(dir / "out.json"))["parameters"]["plate.alpha_deg"];
+  const auto j = calibRigJson(kRig, log, dir);
+  ASSERT_FALSE(j.is_null());
+  const auto& a = j["parameters"]["plate.alpha_deg"];
   EXPECT_NEAR(a["value"].get<double>(), a["truth"].get<double>(), 0.003) << a;
 }
 
@@ -163,7 +170,9 @@ TEST(CalibRig, RigCEveryObservableParameterWithinThreeSigmaAndApplied) {
     const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
     EXPECT_GT(sigma, 0.0);
     EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
-    if (std::string(key) != "geometry.laser_tilt_deg") EXPECT_LE(std::fabs(value - truth), 0.1);
+    if (std::string(key) != "geometry.laser_tilt_deg") {
+      EXPECT_LE(std::fabs(value - truth), 0.1);
+    }
   }
   // Plate poses cannot fix the encoder zero: reported, left at the rig file's value.
   const auto& zero = j["parameters"]["geometry.encoder_zero_deg"];
@@ -218,12 +227,8 @@ TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
       cachedSimLog("calib_rig_c_reference_seed4",
                    {"--rig", "rig_c", "--set", "sim.scene=plate", "--set", "sim.plate_count=3",
                     "--set", "sim.reference_sweep=true", "--seed", "4"});
-  ASSERT_EQ(runSplit({"calib", "rig", "--rig", "rig_c", "--logs", log, "--out",
-                      (dir / "c.yaml").string(), "--json"},
-                     dir / "out.json", dir / "err.txt"),
-            0)
-      << readAll(dir / "err.txt");
-  const auto j = nlohmann::json::parse(readAll(dir / "out.json"));
+  const auto j = calibRigJson("rig_c", log, dir);
+  ASSERT_FALSE(j.is_null());
   for (const char* key : {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg",
                           "geometry.encoder_zero_deg"}) {
     SCOPED_TRACE(key);
@@ -293,12 +298,8 @@ TEST(CalibRig, RigBRunsAndReportsEveryParameter) {
   const fs::path dir = scratchDir("calib_rig_b");
   const std::string log =
       cachedSimLog("calib_rig_b_circle30", {"--rig", "rig_b", "--set", "sim.duration_s=30"});
-  ASSERT_EQ(runSplit({"calib", "rig", "--rig", "rig_b", "--logs", log, "--out",
-                      (dir / "mounting.yaml").string(), "--json"},
-                     dir / "out.json", dir / "err.txt"),
-            0)
-      << readAll(dir / "err.txt");
-  const auto j = nlohmann::json::parse(readAll(dir / "out.json"));
+  const auto j = calibRigJson("rig_b", log, dir, "mounting.yaml");
+  ASSERT_FALSE(j.is_null());
   for (const char* key : {"mounting.gamma_rad", "mounting.beta_rad", "mounting.alpha_rad",
                           "odometry.wheel_radius_m", "lidar.time_offset_s"}) {
     ASSERT_TRUE(j["parameters"].contains(key)) << key;
