@@ -1,6 +1,8 @@
 #include "calib/plate_model.hpp"
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace sweepmap {
 namespace {
@@ -145,19 +147,22 @@ std::vector<double> plateHitWeights(const PlateModel& m, const std::vector<Plate
                                     const std::vector<PlateRayBeams>& beams) {
   const std::vector<char> hits = plateHits(m, rays);
   std::vector<double> w(hits.begin(), hits.end());
-  if (beams.size() != rays.size()) return w;
+  if (beams.empty()) return w;
+  if (beams.size() != rays.size())
+    throw std::invalid_argument("plateHitWeights: " + std::to_string(beams.size()) +
+                                " neighbour records for " + std::to_string(rays.size()) + " rays");
   for (size_t i = 0; i < rays.size(); ++i) {
     const auto& b = beams[i];
     if (!hits[i]) {
       // Beside a beam that gave no return: its neighbour on the plate may have dropped out.
-      if (b.range[0][0] == 0.0f || b.range[1][0] == 0.0f) w[i] = -1.0;
+      if (b.range[0] == 0.0f || b.range[1] == 0.0f) w[i] = -1.0;
       continue;
     }
     for (size_t side = 0; side < 2; ++side) {
       const int j = b.next[side];
       // The run goes on, or no return next to it (no depth edge to mix at); else the ray past
       // it is the plate's last or the background's first.
-      if (b.range[side][0] == 0.0f || (j >= 0 && hits[size_t(j)])) continue;
+      if (b.range[side] == 0.0f || (j >= 0 && hits[size_t(j)])) continue;
       if (j >= 0) w[size_t(j)] = -1.0;
     }
   }

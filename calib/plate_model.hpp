@@ -66,11 +66,11 @@ std::optional<double> plateCentroidMismatch(const PlateModel& m, const std::vect
 // Which rays' ranges agree with their crossing of the upper surface (within the gate).
 std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& rays);
 
-// A plate ray's neighbours along its scan: the ranges [m] of the 1st, 2nd and 3rd beam before
-// it (side 0) and after it (side 1), 0 where there is no return; and the index among the plate
-// rays of the beam next to it on each side, -1 if that ray is not one.
+// A plate ray's neighbours along its scan: the range [m] of the beam next to it before (side 0)
+// and after it (side 1), 0 where there is no return (or the scan ends); and that beam's index
+// among the plate rays, -1 if it is not one.
 struct PlateRayBeams {
-  std::array<std::array<float, 3>, 2> range{};
+  std::array<float, 2> range{};
   std::array<int, 2> next{-1, -1};
 };
 

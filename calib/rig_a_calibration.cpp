@@ -578,12 +578,10 @@ void takePlateCandidates(const std::vector<SweepRay>& rays, const RigAValues& v,
     sweep->plate_rays.push_back(rays[i]);
     PlateRayBeams b;
     for (int side = 0; side < 2; ++side) {
-      for (long n = 1; n <= 3; ++n) {
-        const long beam = at[i].second + (side ? n : -n);
-        if (beam < 0 || beam >= beams) continue;
-        b.range[size_t(side)][size_t(n - 1)] = grid[cell(at[i].first, beam)].first;
-        if (n == 1) b.next[size_t(side)] = grid[cell(at[i].first, beam)].second;
-      }
+      const long beam = at[i].second + (side ? 1 : -1);
+      if (beam < 0 || beam >= beams) continue;
+      b.range[size_t(side)] = grid[cell(at[i].first, beam)].first;
+      b.next[size_t(side)] = grid[cell(at[i].first, beam)].second;
     }
     sweep->plate_beams.push_back(b);
   }
@@ -758,7 +756,7 @@ void propagateToAlpha(const std::vector<RigASweep>& sweeps, const RigASolveOptio
   Eigen::RowVector3d J = Eigen::RowVector3d::Zero();
   for (int i = 0; i < 3; ++i) {
     if (st.held[i + 1]) continue;
-    double gp[3], gm[3];
+    double gp[3] = {}, gm[3] = {};
     std::copy(st.g, st.g + 3, gp);
     std::copy(st.g, st.g + 3, gm);
     gp[i] += steps[i];

@@ -62,7 +62,8 @@ void validate(const std::string& path, const RotatingProfileConfig& rig) {
   require(t.device == "sim", "turntable.device", "must be sim (no real turntable driver yet)");
   // A level face has no azimuth: its normal must lean visibly.
   require(t.reference.normal_tilt_deg >= 5 && t.reference.normal_tilt_deg < 80,
-          "turntable.reference.normal_tilt_deg", "must be 5..80 (a level face has no azimuth)");
+          "turntable.reference.normal_tilt_deg",
+          "must be in [5, 80) (a level face has no azimuth)");
   require(t.reference.azimuth_sigma_deg >= 0, "turntable.reference.azimuth_sigma_deg",
           "must be >= 0");
   require(rig.mapper.resolution_m >= 0.0005, "mapper.resolution_m", "must be >= 0.0005");

@@ -223,10 +223,7 @@ TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
             0);
   EXPECT_NE(readAll(dir / "plan.txt").find("sim.reference_sweep=true"), std::string::npos);
   EXPECT_NE(readAll(dir / "plan.txt").find("reference:"), std::string::npos);
-  const std::string log =
-      cachedSimLog("calib_rig_c_reference_seed4",
-                   {"--rig", "rig_c", "--set", "sim.scene=plate", "--set", "sim.plate_count=3",
-                    "--set", "sim.reference_sweep=true", "--seed", "4"});
+  const std::string log = planLogC();
   const auto j = calibRigJson("rig_c", log, dir);
   ASSERT_FALSE(j.is_null());
   for (const char* key : {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg",

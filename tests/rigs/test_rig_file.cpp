@@ -98,6 +98,14 @@ TEST(RigFile, RigCIsARotatingProfileWithoutALidar) {
   EXPECT_NE(e.find("has no 2D lidar"), std::string::npos) << e;
   const std::string scene = configError([] { loadRig("rig_c", {"sim.scene=room"}); });
   EXPECT_NE(scene.find("sim.scene"), std::string::npos) << scene;
+  // The reference face's normal must lean (a level face has no azimuth), its sigma be >= 0.
+  for (const char* bad :
+       {"turntable.reference.normal_tilt_deg=0", "turntable.reference.normal_tilt_deg=80",
+        "turntable.reference.azimuth_sigma_deg=-1"}) {
+    const std::string e = configError([&] { loadRig("rig_c", {bad}); });
+    const std::string key = std::string(bad).substr(0, std::string(bad).find('='));
+    EXPECT_NE(e.find(key), std::string::npos) << bad << ": " << e;
+  }
 }
 
 TEST(RigFile, RigCReadsItsAxisOffsetCalibrationFile) {

@@ -105,9 +105,15 @@ def rows_of_rig(j):
 
 def one_seed(bin_dir, out, kind, seed, sim_args):
     log = f"{out}/{kind}_{seed}.lcmlog"
-    if not os.path.exists(log):
-        run([f"{bin_dir}/sweepmap", "sim"] + sim_args + ["--seed", str(seed), "--out", log],
-            log + ".sim.txt")
+    # A log is reused only when made by the same sim arguments (the plan may have changed)
+    # and whole (written to .tmp first, renamed when sim exited 0).
+    args = sim_args + ["--seed", str(seed)]
+    stamp = log + ".args"
+    if not (os.path.exists(log) and os.path.exists(stamp) and open(stamp).read() == repr(args)):
+        run([f"{bin_dir}/sweepmap", "sim"] + args + ["--out", log + ".tmp"], log + ".sim.txt")
+        os.replace(log + ".tmp", log)
+        with open(stamp, "w") as f:
+            f.write(repr(args))
     results = {}
     t0 = time.monotonic()
     j = json.loads(run([f"{bin_dir}/sweepmap", "calib", "rig", "--rig", kind, "--logs", log,
@@ -139,7 +145,7 @@ def cell(key, error, sigma, unit, truth):
 
 
 def table(kind, by_seed):
-    lines = [f"### {kind}", "", "| seed | command | parameter | error (|error|/σ) | wall s |",
+    lines = [f"### {kind}", "", "| seed | command | parameter | error (abs(error)/σ) | wall s |",
              "|---|---|---|---|---|"]
     for seed, results in by_seed.items():
         for command, (rows, wall) in results.items():

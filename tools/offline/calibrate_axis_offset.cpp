@@ -185,10 +185,14 @@ std::vector<size_t> useReferenceFace(const TurntableReference& ref,
   constexpr double kDegToRad = M_PI / 180.0;
   options->reference_azimuth_rad = ref.normal_azimuth_deg * kDegToRad;
   options->reference_azimuth_sigma_rad = ref.azimuth_sigma_deg * kDegToRad;
-  options->reference_planes =
+  const std::vector<size_t> found =
       findReferencePlanes(planes, options->initial, options->reference_azimuth_rad,
                           ref.normal_tilt_deg * kDegToRad, kReferenceToleranceDeg * kDegToRad);
-  return options->reference_planes;
+  // Two sweeps that look like the face: a plate pose laid like it cannot be told from it, and
+  // holding a hand-placed pose to the face's azimuth would move the zero by that pose's error
+  // while its sigma stayed the fence's. Neither is used.
+  if (found.size() == 1) options->reference_planes = found;
+  return found;
 }
 
 std::string drawAxisOffsetSurface(const std::string& png, const GridSearchResult& g) {

@@ -40,8 +40,9 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& request);
 constexpr double kReferenceToleranceDeg = 5.0;
 
 // The sweeps over the base's reference face, recognised among `planes` by their normals with
-// options->initial, when the rig file declares a face (`ref`); into options (those planes, the
-// face's azimuth and its construction sigma), so the encoder zero is fitted against it.
+// options->initial, when the rig file declares a face (`ref`). Exactly one: into options (that
+// plane, the face's azimuth and its construction sigma), so the encoder zero is fitted against
+// it. More than one: none is used (a plate pose laid like the face cannot be told from it).
 std::vector<size_t> useReferenceFace(const TurntableReference& ref,
                                      const std::vector<PlanePoints>& planes,
                                      AxisOffsetOptions* options);

@@ -70,14 +70,25 @@ std::string zeroNote(const RotatingProfileConfig& rig, const ProfileInputs& in,
   }
   std::string sweeps;
   for (const size_t k : reference) sweeps += (sweeps.empty() ? "" : ", ") + in.planes[k].source;
+  if (reference.size() > 1) {
+    return "sweeps " + sweeps +
+           " all look like the base's reference face (turntable.reference): a plate pose laid "
+           "like the face cannot be told from it, so none is used; record one sweep over the "
+           "face and lay the plate poses away from its direction (calib plan)";
+  }
   return "fixed by the base's reference face (turntable.reference), seen in " + sweeps;
 }
 
 // Why a parameter the solver did not determine is left nominal.
 std::string profileNote(size_t i, const AxisOffsetResult& r, const std::string& zero_note) {
   if (i < 2) return "the plate poses do not determine M and N (see the warnings)";
-  if (i == 3 && !r.zero_estimated) return zero_note;
-  if (i == 3) return "sigma above the limit (see the warnings); " + zero_note;
+  if (i == 3 && !r.zero_estimated) {
+    return zero_note.rfind("fixed by", 0) == 0
+               ? "the base's reference face was seen, but these sweeps did not determine the "
+                 "zero (see the warnings)"
+               : zero_note;
+  }
+  if (i == 3) return "sigma above the limit (see the warnings)";
   return "sigma above the limit, or not determined by these poses (see the warnings)";
 }
 
@@ -266,7 +277,9 @@ int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
          "sensor at its working distance, in "
       << kPlatePoses
       << " or more poses, each tilted about 30 deg from level towards a different direction "
-         "(0, 120, 240 deg) and at a different height; one turntable sweep per pose.\n"
+         "(60, 180 and 300 deg from the reference face's below, never towards the face's own: "
+         "such a pose is taken for the face) and at a different height; one turntable sweep "
+         "per pose.\n"
       << "            Why: the plate's points lie on one plane only with the right M, N and "
          "laser-plane tilt (Zhao 2021 section 3); parallel poses let the tilt and M trade off, "
          "so the poses must not be parallel.\n"
