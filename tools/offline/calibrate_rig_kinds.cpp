@@ -277,7 +277,8 @@ int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
          "sensor at its working distance, in "
       << kPlatePoses
       << " or more poses, each tilted about 30 deg from level towards a different direction "
-         "(60, 180 and 300 deg from the reference face's below, never towards the face's own: "
+         "(60, 180 and 300 deg of azimuth from the reference face's direction, below; never "
+         "towards it: "
          "such a pose is taken for the face) and at a different height; one turntable sweep "
          "per pose.\n"
       << "            Why: the plate's points lie on one plane only with the right M, N and "
