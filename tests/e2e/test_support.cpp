@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -118,6 +119,28 @@ TrackError trackError(const std::vector<pose2d_t>& track, const std::vector<pose
   }
   if (e.compared > 0) e.rms_m = std::sqrt(sum2 / double(e.compared));
   return e;
+}
+
+double pathErrorMax(const std::vector<pose2d_t>& track, const std::vector<pose2d_t>& truth,
+                    int64_t window_us) {
+  const auto before = [](const pose2d_t& t, int64_t u) { return t.utime < u; };
+  double worst = 0.0;
+  for (const pose2d_t& p : track) {
+    auto it = std::lower_bound(truth.begin(), truth.end(), p.utime - window_us, before);
+    const auto end = std::lower_bound(truth.begin(), truth.end(), p.utime + window_us, before);
+    if (it == end) continue;
+    double best = std::numeric_limits<double>::infinity();
+    for (; it != end; ++it) {
+      const pose2d_t& a = *it;
+      const pose2d_t& b = (it + 1 == truth.end()) ? *it : *(it + 1);
+      const double dx = b.x_m - a.x_m, dy = b.y_m - a.y_m, l2 = dx * dx + dy * dy;
+      const double f =
+          l2 > 0 ? std::clamp(((p.x_m - a.x_m) * dx + (p.y_m - a.y_m) * dy) / l2, 0.0, 1.0) : 0.0;
+      best = std::min(best, std::hypot(p.x_m - (a.x_m + f * dx), p.y_m - (a.y_m + f * dy)));
+    }
+    worst = std::max(worst, best);
+  }
+  return worst;
 }
 
 double rmsToTruePlane(const std::string& log, const fs::path& pcd, int sweep) {

@@ -47,6 +47,11 @@ struct TrackError {
   double final_m = 0.0;  // at the last compared pose
 };
 TrackError trackError(const std::vector<pose2d_t>& track, const std::vector<pose2d_t>& truth);
+// The largest distance [m] of a track's positions from the truth's path near them (its segments
+// within +-window_us of each pose's time): the cross-track error, blind to a pose stamped late
+// along the path (a live host's scheduling), which trackError() counts as error.
+double pathErrorMax(const std::vector<pose2d_t>& track, const std::vector<pose2d_t>& truth,
+                    int64_t window_us);
 
 // Rig C: the RMS distance [mm] of a sweep's cloud (a PCD in metres, frame O_r) from the plate's
 // true plane in the log's TRUTH_PROFILE_RIG of that sweep; -1 if the log has none.
