@@ -5,10 +5,10 @@
 #include <sys/wait.h>
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <sstream>
 
 #include "core/event_log.hpp"
