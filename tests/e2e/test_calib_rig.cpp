@@ -53,6 +53,19 @@ nlohmann::json calibRigJson(const std::string& rig, const std::string& log, cons
   return nlohmann::json::parse(readAll(dir / "out.json"));
 }
 
+// A calib rig JSON parameter: observable, sigma > 0, the truth within 3 sigma; false (a test
+// failure) when not observable.
+bool observableWithinThreeSigma(const nlohmann::json& p) {
+  if (!p["observable"].get<bool>()) {
+    ADD_FAILURE() << "not observable: " << p;
+    return false;
+  }
+  const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
+  EXPECT_GT(sigma, 0.0);
+  EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
+  return true;
+}
+
 // 3 mode-7 sweeps (the plan's 10 take longer; their figures are in the explanation).
 std::string realisticLog() {
   return cachedSimLog("calib_rig_mode7x3", {"--rig", kRig, "--mode", "7", "--sweeps", "3", "--seed",
@@ -68,10 +81,7 @@ TEST(CalibRig, EveryParameterOfARealisticBuildWithinThreeSigmaAndApplied) {
                           "geometry.scan_plane_tilt_deg", "geometry.mirror_offset_deg"}) {
     SCOPED_TRACE(key);
     const auto& p = j["parameters"][key];
-    ASSERT_TRUE(p["observable"].get<bool>()) << p;
-    const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
-    EXPECT_GT(sigma, 0.0);
-    EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
+    ASSERT_TRUE(observableWithinThreeSigma(p));
   }
   // The rig file's calibration_file applies every key (relative to the rig file's folder).
   std::string rig_text = readAll(kRig);
@@ -166,12 +176,9 @@ TEST(CalibRig, RigCEveryObservableParameterWithinThreeSigmaAndApplied) {
        {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg"}) {
     SCOPED_TRACE(key);
     const auto& p = j["parameters"][key];
-    ASSERT_TRUE(p["observable"].get<bool>()) << p;
-    const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
-    EXPECT_GT(sigma, 0.0);
-    EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
+    ASSERT_TRUE(observableWithinThreeSigma(p));
     if (std::string(key) != "geometry.laser_tilt_deg") {
-      EXPECT_LE(std::fabs(value - truth), 0.1);
+      EXPECT_LE(std::fabs(p["value"].get<double>() - p["truth"].get<double>()), 0.1);
     }
   }
   // Plate poses cannot fix the encoder zero: reported, left at the rig file's value.
@@ -230,10 +237,7 @@ TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
                           "geometry.encoder_zero_deg"}) {
     SCOPED_TRACE(key);
     const auto& p = j["parameters"][key];
-    ASSERT_TRUE(p["observable"].get<bool>()) << p;
-    const double value = p["value"], sigma = p["sigma"], truth = p["truth"];
-    EXPECT_GT(sigma, 0.0);
-    EXPECT_LE(std::fabs(value - truth), 3.0 * sigma) << p;
+    ASSERT_TRUE(observableWithinThreeSigma(p));
   }
   const auto& zero = j["parameters"]["geometry.encoder_zero_deg"];
   EXPECT_NE(zero["note"].get<std::string>().find("sweep 3"), std::string::npos) << zero;
