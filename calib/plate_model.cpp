@@ -81,11 +81,20 @@ bool plateCovers(const PlateModel& m, const Eigen::Vector3d& o, const Eigen::Vec
   return e && e->x() >= 0.0 && e->y() >= 0.0 && e->z() >= 0.0;
 }
 
+namespace {
+
+// Whether a ray's range agrees with its crossing of the upper surface.
+bool inGate(const PlateModel& m, const PlateRay& r, const Eigen::Vector3d& top) {
+  return std::fabs(r.range_m - (top - r.origin).norm()) <= m.range_gate_m;
+}
+
+}  // namespace
+
 std::vector<char> plateHits(const PlateModel& m, const std::vector<PlateRay>& rays) {
   std::vector<char> hits(rays.size(), 0);
   for (size_t i = 0; i < rays.size(); ++i) {
     const auto top = crossing(rays[i].origin, rays[i].direction, m.height_m);
-    hits[i] = top && std::fabs(rays[i].range_m - (*top - rays[i].origin).norm()) <= m.range_gate_m;
+    hits[i] = top && inGate(m, rays[i], *top);
   }
   return hits;
 }
@@ -115,11 +124,6 @@ std::optional<double> centroidMismatch(const PlateModel& m, const std::vector<Pl
   // Both sums' directions: the weights' totals do not change them.
   return std::atan2(predicted.x() * measured.y() - predicted.y() * measured.x(),
                     predicted.dot(measured));
-}
-
-// Whether a ray's range agrees with its crossing of the upper surface.
-bool inGate(const PlateModel& m, const PlateRay& r, const Eigen::Vector3d& top) {
-  return std::fabs(r.range_m - (top - r.origin).norm()) <= m.range_gate_m;
 }
 
 }  // namespace

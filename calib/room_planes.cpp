@@ -177,8 +177,11 @@ RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>
     for (size_t j = 0; j < alone.size(); ++j) {
       if (j != i && alone[j].ok) nearer.push_back({alone[j].normal, alone[j].offset});
     }
-    refined.push_back(alone[i].ok ? refinePlane(cloud, origins, start[i], noise, nearer)
-                                  : alone[i]);
+    // From the plane refined alone: the others' rays leave only its edges, so it starts near.
+    WallPlaneFit from;
+    from.normal = alone[i].normal;
+    from.offset = alone[i].offset;
+    refined.push_back(alone[i].ok ? refinePlane(cloud, origins, from, noise, nearer) : alone[i]);
   }
   const auto distance = [&](size_t a, size_t b) -> std::optional<double> {
     if (!refined[a].ok || !refined[b].ok) return std::nullopt;

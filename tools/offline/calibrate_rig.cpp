@@ -3,10 +3,13 @@
 #include "tools/offline/calibrate_rig.hpp"
 
 #include <algorithm>
+#include <condition_variable>
+#include <deque>
 #include <exception>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -78,30 +81,76 @@ void takeSweep(const RigCalibRequest& o, const RotatingLidarConfig& rig, SweepJo
   job->error = std::current_exception();
 }
 
-// The sweeps segmented at a time, each on its own thread (a sweep's planes depend on its rays
-// alone: the same result whatever the threads): the segmentation is ~80 % of reading.
-constexpr size_t kSweepThreads = 2;
+// The sweeps segmented on two workers while the logs are read (a sweep's planes depend on its
+// rays alone: the same result whatever the threads): the segmentation is ~80 % of reading.
+// At most kSweepWorkers sweeps wait, so a log's rays are never all in memory at once.
+constexpr size_t kSweepWorkers = 2;
 
-// The jobs' sweeps, one thread each, into in->sweeps or in->rejected in the logs' order.
-void takeSweeps(const RigCalibRequest& o, const RotatingLidarConfig& rig,
-                std::vector<SweepJob>* jobs, RigAInputs* in) {
-  std::vector<std::thread> threads;
-  for (size_t k = 1; k < jobs->size(); ++k) {
-    threads.emplace_back([&o, &rig, job = &(*jobs)[k]] { takeSweep(o, rig, job); });
+class SweepPool {
+ public:
+  SweepPool(const RigCalibRequest& o, const RotatingLidarConfig& rig) : o_(o), rig_(rig) {
+    for (size_t k = 0; k < kSweepWorkers; ++k) workers_.emplace_back([this] { work(); });
   }
-  if (!jobs->empty()) takeSweep(o, rig, &jobs->front());
-  for (auto& t : threads) t.join();
-  for (SweepJob& job : *jobs) {
-    if (job.error) std::rethrow_exception(job.error);
-    if (job.taken) {
-      in->sweeps.push_back(std::move(*job.taken));
-      continue;
+  ~SweepPool() { stop(); }
+
+  // Queues a sweep; waits while kSweepWorkers sweeps wait already.
+  void push(SweepJob job) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    room_.wait(lock, [&] { return next_ + kSweepWorkers > jobs_.size(); });
+    jobs_.push_back(std::move(job));
+    ready_.notify_one();
+  }
+
+  // Every sweep into in->sweeps or in->rejected, in the logs' order; rethrows a worker's error.
+  void finish(RigAInputs* in) {
+    stop();
+    for (SweepJob& job : jobs_) {
+      if (job.error) std::rethrow_exception(job.error);
+      if (job.taken) {
+        in->sweeps.push_back(std::move(*job.taken));
+        continue;
+      }
+      in->rejected.push_back(job.source + ": " + job.rejected);
+      if (!o_.json) std::cerr << "  " << job.source << ": rejected: " << job.rejected << "\n";
     }
-    in->rejected.push_back(job.source + ": " + job.rejected);
-    if (!o.json) std::cerr << "  " << job.source << ": rejected: " << job.rejected << "\n";
+    jobs_.clear();
   }
-  jobs->clear();
-}
+
+ private:
+  void work() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    for (;;) {
+      ready_.wait(lock, [&] { return done_ || next_ < jobs_.size(); });
+      if (next_ == jobs_.size()) return;  // done_ and nothing left
+      SweepJob* job = &jobs_[next_++];    // a deque's elements stay where they are
+      room_.notify_one();
+      lock.unlock();
+      takeSweep(o_, rig_, job);
+      job->scans = {};  // the rays are in job->taken now
+      job->sweep = {};
+      lock.lock();
+    }
+  }
+
+  void stop() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    ready_.notify_all();
+    for (auto& t : workers_) t.join();
+    workers_.clear();
+  }
+
+  const RigCalibRequest& o_;
+  const RotatingLidarConfig& rig_;
+  std::mutex mutex_;
+  std::condition_variable ready_, room_;
+  std::deque<SweepJob> jobs_;
+  size_t next_ = 0;  // the first job no worker has taken
+  bool done_ = false;
+  std::vector<std::thread> workers_;
+};
 
 void takeTruth(const LogReadResult& r, RigATruth* t) {
   if (r.alpha_true_rad) t->alpha_deg = *r.alpha_true_rad * kRadToDeg;
@@ -115,16 +164,15 @@ bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress
               RigAInputs* in) {
   const auto t0 = Clock::now();
   LidarLogReading r;
-  std::vector<SweepJob> jobs;
+  SweepPool pool(o, rig);
   r.take_sweep = [&](const std::string& log, const AssembledSweep& s,
                      const std::vector<Scan2D>& scans) {
-    jobs.push_back({log + " sweep " + std::to_string(s.window.sweep_id), s, scans, {}, {}, {}});
-    if (jobs.size() == kSweepThreads) takeSweeps(o, rig, &jobs, in);
+    pool.push({log + " sweep " + std::to_string(s.window.sweep_id), s, scans, {}, {}, {}});
   };
   r.took_log = [&](const LogReadResult& l) { takeTruth(l, &in->truth); };
   r.progress = &progress;
   if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) return false;
-  takeSweeps(o, rig, &jobs, in);
+  pool.finish(in);
   in->read_s = seconds(Clock::now() - t0);
   return true;
 }

@@ -50,43 +50,52 @@ bool checkPaths(const RigCalibRequest& o) {
 using ProfileInputs = PlateSweeps;
 
 // Where the encoder zero came from, or why it is left nominal.
-std::string zeroNote(const RotatingProfileConfig& rig, const ProfileInputs& in,
-                     const std::vector<size_t>& reference) {
+struct ZeroSource {
+  bool reference_used = false;  // exactly one sweep over the base's reference face
+  std::string note;
+};
+
+// Why plate poses alone never give the zero (said in each note that holds it nominal).
+constexpr const char* kPlatesCannotFixZero =
+    "plate poses cannot fix the zero: a turn of the whole cloud about the axis leaves every "
+    "plate a plane";
+
+ZeroSource zeroSource(const RotatingProfileConfig& rig, const ProfileInputs& in,
+                      const std::vector<size_t>& reference) {
   if (!rig.turntable.reference.declared) {
-    return "the rig file declares no reference face on the base (turntable.reference), and "
-           "plate poses cannot fix the zero: a turn of the whole cloud about the axis leaves "
-           "every plate a plane; it turns the map, never its shape";
+    return {false, std::string("the rig file declares no reference face on the base "
+                               "(turntable.reference), and ") +
+                       kPlatesCannotFixZero + "; it turns the map, never its shape"};
   }
   if (reference.empty()) {
     const double reach_deg =
         kReferenceToleranceDeg / std::sin(rig.turntable.reference.normal_tilt_deg * M_PI / 180.0);
-    return "no sweep over the base's reference face (no plane within " +
-           num(kReferenceToleranceDeg) +
-           " deg of turntable.reference's normal; one is recognised while the rig file's "
-           "encoder zero is within about " +
-           num(std::round(reach_deg)) +
-           " deg of the truth), and plate poses cannot fix the zero: a turn of the whole cloud "
-           "about the axis leaves every plate a plane";
+    return {false, "no sweep over the base's reference face (no plane within " +
+                       num(kReferenceToleranceDeg) +
+                       " deg of turntable.reference's normal; one is recognised while the rig "
+                       "file's encoder zero is within about " +
+                       num(std::round(reach_deg)) + " deg of the truth), and " +
+                       kPlatesCannotFixZero};
   }
   std::string sweeps;
   for (const size_t k : reference) sweeps += (sweeps.empty() ? "" : ", ") + in.planes[k].source;
   if (reference.size() > 1) {
-    return "sweeps " + sweeps +
-           " all look like the base's reference face (turntable.reference): a plate pose laid "
-           "like the face cannot be told from it, so none is used; record one sweep over the "
-           "face and lay the plate poses away from its direction (calib plan)";
+    return {false, "sweeps " + sweeps +
+                       " all look like the base's reference face (turntable.reference): a plate "
+                       "pose laid like the face cannot be told from it, so none is used; record "
+                       "one sweep over the face and lay the plate poses away from its direction "
+                       "(calib plan)"};
   }
-  return "fixed by the base's reference face (turntable.reference), seen in " + sweeps;
+  return {true, "fixed by the base's reference face (turntable.reference), seen in " + sweeps};
 }
 
 // Why a parameter the solver did not determine is left nominal.
-std::string profileNote(size_t i, const AxisOffsetResult& r, const std::string& zero_note) {
+std::string profileNote(size_t i, const AxisOffsetResult& r, const ZeroSource& zero) {
   if (i < 2) return "the plate poses do not determine M and N (see the warnings)";
   if (i == 3 && !r.zero_estimated) {
-    return zero_note.rfind("fixed by", 0) == 0
-               ? "the base's reference face was seen, but these sweeps did not determine the "
-                 "zero (see the warnings)"
-               : zero_note;
+    return zero.reference_used ? "the base's reference face was seen, but these sweeps did not "
+                                 "determine the zero (see the warnings)"
+                               : zero.note;
   }
   if (i == 3) return "sigma above the limit (see the warnings)";
   return "sigma above the limit, or not determined by these poses (see the warnings)";
@@ -94,7 +103,7 @@ std::string profileNote(size_t i, const AxisOffsetResult& r, const std::string& 
 
 RigCalibration profileResult(const RotatingProfileConfig& rig, const ProfileInputs& in,
                              const AxisOffsetResult& r, double max_sigma_deg,
-                             const std::string& zero_note) {
+                             const ZeroSource& zero) {
   const ProfileGeometryConfig& g = rig.geometry;
   const char* keys[] = {"geometry.offset_m_mm", "geometry.offset_n_mm", "geometry.laser_tilt_deg",
                         "geometry.encoder_zero_deg"};
@@ -114,8 +123,8 @@ RigCalibration profileResult(const RotatingProfileConfig& rig, const ProfileInpu
     p.observable = determined[i] && std::isfinite(sigma[i]);
     p.value = p.observable ? values[i] : nominal[i];
     p.sigma = p.observable ? sigma[i] : std::numeric_limits<double>::quiet_NaN();
-    if (!p.observable) p.note = profileNote(i, r, zero_note);
-    if (p.observable && i == 3) p.note = zero_note;
+    if (!p.observable) p.note = profileNote(i, r, zero);
+    if (p.observable && i == 3) p.note = zero.note;
     if (in.truth) {
       const ProfileGeometry& t = in.truth->geometry;
       const double truth[] = {t.m_mm, t.n_mm, t.laser_tilt_rad * kRadToDeg,
@@ -232,7 +241,7 @@ int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
   }
   progress.finish();
   const RigCalibration c =
-      profileResult(rig, in, r, options.max_sigma_deg, zeroNote(rig, in, reference));
+      profileResult(rig, in, r, options.max_sigma_deg, zeroSource(rig, in, reference));
   return reportRigCalibration(o, loaded, in.read_s, c, [&] { writeProfileFile(o, c); });
 }
 
