@@ -361,6 +361,11 @@ Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm
 std::vector<std::pair<long, long>> scanBeamOf(const std::vector<SweepRay>& rays) {
   std::vector<std::pair<long, long>> at(rays.size());
   if (rays.empty()) return at;
+  if (std::all_of(rays.begin(), rays.end(),
+                  [](const SweepRay& r) { return r.scan >= 0 && r.beam >= 0; })) {
+    for (size_t i = 0; i < rays.size(); ++i) at[i] = {rays[i].scan, rays[i].beam};
+    return at;
+  }
   double step = std::numeric_limits<double>::infinity(), lowest = rays[0].theta_rad;
   for (size_t i = 0; i < rays.size(); ++i) {
     lowest = std::min(lowest, rays[i].theta_rad);

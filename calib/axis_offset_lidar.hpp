@@ -54,8 +54,10 @@ struct PlaneSegmentationOptions {
   int depth_edge_rays = 0;
 };
 
-// Each ray's scan (a new one where theta stops increasing: forEachSweepRay's order) and beam
-// (theta in steps of the smallest step between neighbouring rays of a scan).
+// Each ray's scan and beam: those forEachSweepRay recorded (SweepRay::scan, beam); for rays
+// made without them, a new scan where theta stops increasing and the beam from theta in steps
+// of the smallest step between neighbouring rays (which joins two scans when the first's last
+// rays and the second's first rays gave no return).
 std::vector<std::pair<long, long>> scanBeamOf(const std::vector<SweepRay>& rays);
 
 // The planes of one sweep: `points_Op` the cloud assembled with the nominal offset, `rays`

@@ -52,6 +52,10 @@ struct SweepRay {
   double range_m = 0.0;
   double theta_rad = 0.0;
   float intensity = 0.0f;  // the device's reading; 0 when its scan has no intensities
+  // Where the ray was measured (forEachSweepRay): its scan's index in the window and its index
+  // in that scan; -1 when not known (rays made by hand).
+  int32_t scan = -1;
+  int32_t beam = -1;
 };
 
 // Calls f(ray) for every valid ray of `scans` (a window's scans in time order, the first
@@ -61,7 +65,8 @@ template <class F>
 void forEachSweepRay(const std::vector<Scan2D>& scans, double omega_rad_s, F&& f) {
   if (scans.empty()) return;
   const int64_t first_ray_utime = scans.front().utime;
-  for (const auto& scan : scans) {
+  for (size_t k = 0; k < scans.size(); ++k) {
+    const Scan2D& scan = scans[k];
     const double t_ray_s = 1e-9 * static_cast<double>(scan.time_increment_ns);
     const double phi0 = rotating::motorAngleFromTime(scan.utime, first_ray_utime, omega_rad_s);
     for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
@@ -70,7 +75,7 @@ void forEachSweepRay(const std::vector<Scan2D>& scans, double omega_rad_s, F&& f
       // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
       const float intensity = i < scan.intensities.size() ? scan.intensities[i] : 0.0f;
       f(SweepRay{phi0 + omega_rad_s * t_ray_s * static_cast<double>(i), r, scan.rayAngle(i),
-                 intensity});
+                 intensity, static_cast<int32_t>(k), static_cast<int32_t>(i)});
     }
   }
 }

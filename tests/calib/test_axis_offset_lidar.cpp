@@ -8,7 +8,9 @@
 #include <random>
 
 #include "calib/axis_offset_lidar.hpp"
+#include "calib/rig_a_calibration.hpp"
 #include "calib/rotating_geometry.hpp"
+#include "calib/sweep_assembly.hpp"
 
 namespace sweepmap {
 namespace {
@@ -227,6 +229,76 @@ TEST(LidarAxisOffset, RejectsEmptyInput) {
   tiny.source = "tiny";
   tiny.rays.resize(2);
   EXPECT_THROW(solveLidarAxisOffset({tiny}, {}), std::invalid_argument);
+}
+
+// Two scans of five rays: the first's last two and the second's first three gave no return
+// (range 0). forEachSweepRay records where each ray was measured, so the second scan's rays
+// keep their scan and beam; told from theta alone (rays made by hand), its first ray lies above
+// the first scan's last and the two scans run together.
+TEST(ScanBeamOf, ARayKeepsItsScanAndBeamWhenTheScansEndsGaveNoReturn) {
+  std::vector<Scan2D> scans(2);
+  for (Scan2D& s : scans) {
+    s.angle_min_rad = -0.2;
+    s.angle_increment_rad = 0.1;
+    s.time_increment_ns = 25000;
+    s.range_min_m = 0.1;
+    s.range_max_m = 10.0;
+  }
+  scans[0].ranges_m = {1.0f, 1.1f, 1.2f, 0.0f, 0.0f};
+  scans[1].utime = 25000;
+  scans[1].ranges_m = {0.0f, 0.0f, 0.0f, 1.4f, 1.5f};
+  std::vector<SweepRay> rays;
+  forEachSweepRay(scans, 0.1, [&](const SweepRay& r) { rays.push_back(r); });
+  ASSERT_EQ(rays.size(), 5u);
+  const std::vector<std::pair<long, long>> expected = {{0, 0}, {0, 1}, {0, 2}, {1, 3}, {1, 4}};
+  EXPECT_EQ(scanBeamOf(rays), expected);
+
+  for (SweepRay& r : rays) r.scan = r.beam = -1;
+  const auto by_theta = scanBeamOf(rays);
+  EXPECT_EQ(by_theta[3].first, 0) << "the fallback's documented limit";
+}
+
+// The plate's candidates keep their neighbours along the scan: the next candidate's index and
+// range, or range 0 where the neighbour gave no return or the scan ends there (plateHitWeights
+// then leaves a non-hit beside it out of both centroids).
+TEST(TakePlateCandidates, ANeighbourWithoutReturnOrPastTheScansEndHasRangeZero) {
+  Scan2D scan;
+  scan.angle_min_rad = -135 * M_PI / 180;
+  scan.angle_increment_rad = 0.25 * M_PI / 180;
+  scan.time_increment_ns = 25000;
+  scan.range_min_m = 0.02;
+  scan.range_max_m = 10.0;
+  scan.ranges_m.assign(1081, 1.0f);
+  const auto candidates = [&](const Scan2D& s) {
+    std::vector<SweepRay> rays;
+    forEachSweepRay({s}, 0.0, [&](const SweepRay& r) { rays.push_back(r); });
+    RigASweep sweep;
+    takePlateCandidates(rays, RigAValues{}, PlateRegion::fromConfig(PlateConfig{}), &sweep);
+    EXPECT_EQ(sweep.plate_rays.size(), sweep.plate_beams.size());
+    return sweep;
+  };
+  const RigASweep all = candidates(scan);
+  ASSERT_GT(all.plate_rays.size(), 3u) << "the scan crosses the plate's region";
+  const int first = all.plate_rays.front().beam;
+  EXPECT_EQ(all.plate_beams[0].range[1], 1.0f);
+  EXPECT_EQ(all.plate_beams[0].next[1], 1);
+  EXPECT_EQ(all.plate_beams[0].range[0], 1.0f) << "a ray before the region, not a candidate";
+  EXPECT_EQ(all.plate_beams[0].next[0], -1);
+
+  Scan2D dropped = scan;
+  dropped.ranges_m[size_t(first - 1)] = 0.0f;  // no return before the first candidate
+  const RigASweep d = candidates(dropped);
+  EXPECT_EQ(d.plate_beams[0].range[0], 0.0f);
+  EXPECT_EQ(d.plate_beams[0].next[0], -1);
+
+  Scan2D cut = scan;  // the scan starts at the first candidate's beam
+  cut.angle_min_rad += first * cut.angle_increment_rad;
+  cut.ranges_m.erase(cut.ranges_m.begin(), cut.ranges_m.begin() + first);
+  const RigASweep c = candidates(cut);
+  ASSERT_FALSE(c.plate_rays.empty());
+  EXPECT_EQ(c.plate_rays.front().beam, 0);
+  EXPECT_EQ(c.plate_beams[0].range[0], 0.0f);
+  EXPECT_EQ(c.plate_beams[0].next[0], -1);
 }
 
 }  // namespace
