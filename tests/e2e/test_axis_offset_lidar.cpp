@@ -109,6 +109,8 @@ TEST(CalibAxisOffsetRigA, FindsTheTrueOffsetAndReplayUsesIt) {
       j.at("observability").at("z").get<double>());
   EXPECT_DOUBLE_EQ(j.at("truth_x_mm").get<double>(), 16.0);
   EXPECT_NEAR(x, 16.0, 1.0);
+  // Only the offset is off (the paper's model): calib rig's joint model agrees, no warning.
+  EXPECT_EQ(j.at("warnings").dump().find("joint model"), std::string::npos) << j.at("warnings");
   EXPECT_LT(j.at("sigma_x_mm").get<double>(), 0.5);
   EXPECT_TRUE(j.at("observable").get<bool>());
   EXPECT_EQ(j.at("sweeps_used").get<int>(), kSweeps) << j.at("sweeps_rejected").dump();

@@ -130,6 +130,27 @@ TEST(CalibRig, FullTurnsSeparateThePlateAngleFromTheOffset) {
       << a;
 }
 
+// `calib axis-offset` alone on a realistic build (the scan plane tilted, the mirror offset,
+// clutter on the walls) takes them into the offset; it says so, with what calib rig's joint
+// model finds on the same sweeps, and points to `calib rig`.
+TEST(CalibRig, AxisOffsetAloneSaysWhenTheJointModelFindsAnotherParameterOff) {
+  const fs::path dir = scratchDir("calib_rig_axis_offset_alone");
+  const std::string log =
+      cachedSimLog("calib_rig_mode7x3_full_turns",
+                   {"--rig", kRig, "--mode", "7", "--sweeps", "3", "--seed", "3", "--set",
+                    "sim.lidar_offset_x_mm=16", "--set", "motor.sweep_angle_deg=360"});
+  ASSERT_EQ(runSplit({"calib", "axis-offset", "--rig", kRig, "--logs", log, "--out",
+                      (dir / "offset.yaml").string(), "--json"},
+                     dir / "offset.json", dir / "offset.err"),
+            0)
+      << readAll(dir / "offset.err");
+  const auto j = nlohmann::json::parse(readAll(dir / "offset.json"));
+  const std::string warnings = j["warnings"].dump();
+  EXPECT_NE(warnings.find("joint model"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("geometry.scan_plane_tilt_deg"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("run `sweepmap calib rig`"), std::string::npos) << warnings;
+}
+
 // Without range noise or artefacts the rays that hit the plate are exactly the sharp-edged
 // model's at the true angle, so alpha comes out exact but for the ray grid's resolution. The
 // ray past each edge of the plate along a scan is in neither centroid (plateHitWeights: on a

@@ -379,13 +379,11 @@ Runner addCalibCommand(CLI::App& app) {
   CLI::App* mount = addMounting(calib, m);
   auto a = std::make_shared<AxisOffsetCalibRequest>();
   auto l = std::make_shared<LidarAxisOffsetCalibRequest>();
+  l->segmentation.depth_edge_rays = kRigCalibDepthEdgeRays;
   CLI::App* axis = addAxisOffset(calib, a, l);
   auto r = std::make_shared<RigCalibRequest>();
-  r->segmentation.max_rays_per_plane = 2000;
-  // Rays within 2 beams and scans of a depth edge out of the planes: a door's jamb, a table's
-  // edge and mixed pixels there passed the gate, leaned the mirror offset by ~2.5 sigma under
-  // range noise (their weight under the Cauchy loss grows with the noise) and moved the offset.
-  r->segmentation.depth_edge_rays = 2;
+  r->segmentation.max_rays_per_plane = kRigCalibPlaneRays;
+  r->segmentation.depth_edge_rays = kRigCalibDepthEdgeRays;
   CLI::App* rig = addRig(calib, r);
   auto p = std::make_shared<PlanRequest>();
   CLI::App* plan = addPlan(calib, p);

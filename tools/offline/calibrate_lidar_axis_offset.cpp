@@ -15,6 +15,7 @@
 #include "core/exit_codes.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/calibrate_logs.hpp"
+#include "tools/offline/calibrate_rig.hpp"
 #include "tools/offline/log_sweeps.hpp"
 
 namespace sweepmap {
@@ -27,11 +28,15 @@ const std::string kWhat = "calib axis-offset";
 
 struct Inputs {
   std::vector<LidarPlaneRays> planes;
+  // Per sweep used, the joint check's plate rays (its planes are in `planes`, plane_counts
+  // of them each, in order).
+  std::vector<RigASweep> sweeps;
+  std::vector<size_t> plane_counts;
   int sweeps_used = 0;
   std::vector<std::string> rejected;    // "LOG sweep ID: why"
   std::vector<std::string> log_errors;  // corrupt tails (the sweeps before them are used)
   std::optional<double> truth_x_mm;     // TRUTH_RIG (simulated logs)
-  double read_s = 0.0, segment_s = 0.0;
+  double read_s = 0.0, segment_s = 0.0, joint_s = 0.0;
 };
 
 bool checkInputs(const LidarAxisOffsetCalibRequest& o, RotatingLidarConfig* rig) {
@@ -44,8 +49,9 @@ bool checkInputs(const LidarAxisOffsetCalibRequest& o, RotatingLidarConfig* rig)
 
 // One sweep: its rays placed again (the scans it came from) and its planes into in->planes,
 // or why not into in->rejected; a line on stderr either way.
-void takeSweep(const LidarAxisOffsetCalibRequest& o, const std::string& log,
-               const AssembledSweep& s, const std::vector<Scan2D>& scans, Inputs* in) {
+void takeSweep(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
+               const std::string& log, const AssembledSweep& s, const std::vector<Scan2D>& scans,
+               Inputs* in) {
   const std::string source = log + " sweep " + std::to_string(s.window.sweep_id);
   const auto reject = [&](const std::string& why) {
     in->rejected.push_back(source + ": " + why);
@@ -68,6 +74,11 @@ void takeSweep(const LidarAxisOffsetCalibRequest& o, const std::string& log,
   std::cerr << "  " << source << ": " << s.points_Op.size() << " points, " << planes.size()
             << " planes, " << used << " rays used\n";
   ++in->sweeps_used;
+  RigASweep sweep;
+  sweep.source = source;
+  takePlateCandidates(rays, rigAValuesOf(rig), PlateRegion::fromConfig(rig.plate), &sweep);
+  in->sweeps.push_back(std::move(sweep));
+  in->plane_counts.push_back(planes.size());
   for (auto& p : planes) in->planes.push_back(std::move(p));
 }
 
@@ -77,7 +88,7 @@ bool readLogs(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& r
   const auto t0 = Clock::now();
   LidarLogReading r;
   r.take_sweep = [&](const std::string& log, const AssembledSweep& s,
-                     const std::vector<Scan2D>& scans) { takeSweep(o, log, s, scans, in); };
+                     const std::vector<Scan2D>& scans) { takeSweep(o, rig, log, s, scans, in); };
   r.took_log = [&](const LogReadResult& l) {
     if (l.lidar_offset_x_true_m && !in->truth_x_mm) in->truth_x_mm = *l.lidar_offset_x_true_m * 1e3;
   };
@@ -102,7 +113,9 @@ void writeCalibration(const LidarAxisOffsetCalibRequest& o, const RotatingLidarC
   c.source["nominal_mm"] = num(rig.geometry.lidar_offset_x_mm);
   c.source["sigma_mm"] = num(r.sigma_x_mm);
   c.source["sweeps"] = std::to_string(in.sweeps_used);
-  c.source["planes"] = std::to_string(in.planes.size());
+  size_t planes = 0;
+  for (const size_t n : in.plane_counts) planes += n;
+  c.source["planes"] = std::to_string(planes);
   c.source["wall_rms_before_mm"] = num(r.wall_rms_before_mm);
   c.source["wall_rms_after_mm"] = num(r.wall_rms_after_mm);
   c.logs = o.logs;
@@ -136,7 +149,8 @@ void reportHuman(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig
               << r.offset_mm.x() - *in.truth_x_mm << " mm\n";
   }
   std::cerr << std::setprecision(2) << "  time: sweep assembly " << in.read_s
-            << " s, plane segmentation " << in.segment_s << " s, solve " << r.seconds << " s\n"
+            << " s, plane segmentation " << in.segment_s << " s, solve " << r.seconds
+            << " s, calib rig's joint model (the check) " << in.joint_s << " s\n"
             << "  " << (written ? "wrote " + o.out : std::string("nothing written")) << "\n";
   std::cerr.unsetf(std::ios::floatfield);
 }
@@ -187,8 +201,10 @@ nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLi
     j["truth_x_mm"] = *in.truth_x_mm;
     j["offset_error_mm"] = r.offset_mm.x() - *in.truth_x_mm;
   }
-  j["timing_s"] = {
-      {"sweep_assembly", in.read_s}, {"segmentation", in.segment_s}, {"solve", r.seconds}};
+  j["timing_s"] = {{"sweep_assembly", in.read_s},
+                   {"segmentation", in.segment_s},
+                   {"solve", r.seconds},
+                   {"joint_check", in.joint_s}};
   j["out"] = written ? nlohmann::json(o.out) : nullptr;
   return j;
 }
@@ -215,6 +231,55 @@ void checkWalls(const Inputs& in, LidarAxisOffsetResult* r) {
   if (!w.empty()) r->warnings.push_back(w);
 }
 
+// The offset `calib rig`'s joint model gives on the same sweeps (the scan-plane tilt, the
+// mirror offset and the plate angle solved with it, clutter on the walls left out): when it
+// differs from this fit's by more than 3 sigma, another parameter is off or the walls carry
+// clutter that this fit took for them, and a warning into r says so. Takes in->planes.
+void checkAgainstJointModel(const RotatingLidarConfig& rig, Inputs* in, LidarAxisOffsetResult* r) {
+  size_t next = 0;
+  for (size_t k = 0; k < in->sweeps.size(); ++k) {
+    for (size_t j = 0; j < in->plane_counts[k]; ++j) {
+      LidarPlaneRays& p = in->planes[next++];
+      // As many rays as calib rig keeps (evenly strided): its model at its cost.
+      const size_t stride = (p.rays.size() + kRigCalibPlaneRays - 1) / kRigCalibPlaneRays;
+      std::vector<SweepRay> kept;
+      for (size_t i = 0; i < p.rays.size(); i += std::max<size_t>(1, stride))
+        kept.push_back(p.rays[i]);
+      p.rays = std::move(kept);
+      in->sweeps[k].planes.push_back(std::move(p));
+    }
+  }
+  in->planes.clear();
+  const auto t0 = Clock::now();
+  const RigCalibration c = solveRigA(in->sweeps, rigASolveOptions(rig));
+  in->joint_s = seconds(Clock::now() - t0);
+  const auto find = [&](const std::string& key) {
+    for (const CalibParameter& p : c.parameters) {
+      if (p.key == key && p.observable) return std::optional<CalibParameter>(p);
+    }
+    return std::optional<CalibParameter>();
+  };
+  const auto x = find("geometry.lidar_offset_x_mm");
+  if (!x) return;
+  const double sigma = std::hypot(x->sigma, r->sigma_x_mm);
+  const double z = std::abs(x->value - r->offset_mm.x()) / sigma;
+  if (!(z > 3.0)) return;
+  std::ostringstream w;
+  w << std::fixed << std::setprecision(3) << "calib rig's joint model on these sweeps puts the "
+    << "offset at " << x->value << " +- " << x->sigma << " mm, " << std::setprecision(1) << z
+    << " sigma from this fit's: another parameter of the rig is off or the walls carry clutter "
+       "that this fit took for them";
+  for (const char* key : {"geometry.scan_plane_tilt_deg", "geometry.mirror_offset_deg"}) {
+    const auto p = find(key);
+    if (p && std::abs(p->value - p->nominal) > 3.0 * p->sigma) {
+      w << std::setprecision(3) << " (" << key << " " << p->value << " +- " << p->sigma
+        << ", the rig's " << p->nominal << ")";
+    }
+  }
+  w << "; run `sweepmap calib rig`";
+  r->warnings.push_back(w.str());
+}
+
 int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   RotatingLidarConfig rig;
   if (!checkInputs(o, &rig)) return kExitUsage;
@@ -233,6 +298,7 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   options.estimate_y = o.estimate_y;
   LidarAxisOffsetResult r = solveLidarAxisOffset(in.planes, options);
   checkWalls(in, &r);
+  if (r.observable) checkAgainstJointModel(rig, &in, &r);
   bool written = false;
   if (r.observable) {
     try {

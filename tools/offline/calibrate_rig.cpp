@@ -43,11 +43,6 @@ struct RigAInputs {
   double read_s = 0.0;
 };
 
-RigAValues valuesOf(const RotatingLidarConfig& rig) {
-  return {rig.plate.alpha_deg, rig.geometry.lidar_offset_x_mm, rig.geometry.scan_plane_tilt_deg,
-          rig.geometry.mirror_offset_deg};
-}
-
 // A sweep read from a log, waiting for its planes and plate rays (takeSweep).
 struct SweepJob {
   std::string source;
@@ -75,7 +70,7 @@ void takeSweep(const RigCalibRequest& o, const RotatingLidarConfig& rig, SweepJo
     job->rejected = "no plane found";
     return;
   }
-  takePlateCandidates(rays, valuesOf(rig), PlateRegion::fromConfig(rig.plate), &sweep);
+  takePlateCandidates(rays, rigAValuesOf(rig), PlateRegion::fromConfig(rig.plate), &sweep);
   job->taken = std::move(sweep);
 } catch (...) {
   job->error = std::current_exception();
@@ -226,12 +221,8 @@ int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
                 << "\n";
     return 1;
   }
-  RigASolveOptions so;
-  so.nominal = valuesOf(rig);
+  RigASolveOptions so = rigASolveOptions(rig);
   so.truth = in.truth;
-  so.plate = PlateModel::fromConfig(rig.plate);
-  so.region = PlateRegion::fromConfig(rig.plate);
-  so.min_plate_hits = rig.plate.min_points;
   progress.stage("solving");
   RigCalibration c;
   {
@@ -356,6 +347,20 @@ int printCalibrationPlan(const std::string& rig_name, const std::vector<std::str
   if (rig.kind() == RigKind::kMobileLidar) return printMobileLidarRigPlan(rig_name, rig);
   printRigAPlan(rig_name, std::get<RotatingLidarConfig>(rig.config));
   return 0;
+}
+
+RigAValues rigAValuesOf(const RotatingLidarConfig& rig) {
+  return {rig.plate.alpha_deg, rig.geometry.lidar_offset_x_mm, rig.geometry.scan_plane_tilt_deg,
+          rig.geometry.mirror_offset_deg};
+}
+
+RigASolveOptions rigASolveOptions(const RotatingLidarConfig& rig) {
+  RigASolveOptions so;
+  so.nominal = rigAValuesOf(rig);
+  so.plate = PlateModel::fromConfig(rig.plate);
+  so.region = PlateRegion::fromConfig(rig.plate);
+  so.min_plate_hits = rig.plate.min_points;
+  return so;
 }
 
 }  // namespace sweepmap

@@ -9,9 +9,19 @@
 #include <vector>
 
 #include "calib/axis_offset_lidar.hpp"
+#include "calib/rig_a_calibration.hpp"
 #include "rigs/rig_kind.hpp"
+#include "rigs/rotating_lidar.hpp"
 
 namespace sweepmap {
+
+// Rig A's planes as `calib rig` segments them: at most this many rays per plane and sweep
+// (evenly strided), and the rays within this many beams and scans of a depth edge left out (a
+// door's jamb, a table's edge and mixed pixels there passed the gate, leaned the mirror offset
+// by ~2.5 sigma under range noise, their weight under the Cauchy loss growing with the noise,
+// and moved the offset). `calib axis-offset` leaves the depth edges out too.
+constexpr int kRigCalibPlaneRays = 2000;
+constexpr int kRigCalibDepthEdgeRays = 2;
 
 struct RigCalibRequest {
   std::vector<std::string> logs;
@@ -31,6 +41,11 @@ int calibrateRigFromLogs(const RigCalibRequest& request);
 // What to record for `rig`'s calibration and why, with the `sweepmap sim` command that makes
 // that recording in simulation, on stdout. Returns the exit status (2: bad rig).
 int printCalibrationPlan(const std::string& rig, const std::vector<std::string>& sets);
+
+// Rig A's joint solve as `calib rig` sets it up for `rig` (its values as the start and the
+// nominal, its plate's model and region); the truth left empty.
+RigAValues rigAValuesOf(const RotatingLidarConfig& rig);
+RigASolveOptions rigASolveOptions(const RotatingLidarConfig& rig);
 
 // The recommended recording of rig A, for the plan and the tests: sweeps of a full turn, so
 // that the lidar sees the plate and the room from both sides of its scan plane.
