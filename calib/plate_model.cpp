@@ -1,5 +1,6 @@
 #include "calib/plate_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -243,6 +244,86 @@ std::optional<double> fitPlateSampled(const PlateModel& m, const std::vector<Pla
   if (last - first > 1e-9) return 0.5 * (first + last);  // the model's rays are the measured
   return secantThroughSteps(first,
                             [&](double a) { return plateSampledMismatch(m, rays, a, weights); });
+}
+
+namespace {
+
+// The angle where ray (o, d) flips in or out of the sharp plate between lo (covered: `in_lo`)
+// and hi, which differ in coverage: bisection to ~1e-12 rad.
+double flipAngle(const PlateModel& m, const PlateRay& r, double lo, double hi, bool in_lo) {
+  for (int i = 0; i < 50 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (plateCovers(m, r.origin, r.direction, mid) == in_lo ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// The disagreements of the counted rays with the sharp plate over [lo, hi]: their count at lo
+// and the angles where it steps (+1 / -1), in order. Coverage is sampled every `grid` rad; a
+// ray is taken to flip at most once between two samples (0.05 deg moves the plate's edge by
+// 0.1 mm, a fraction of the rays' spacing).
+struct Disagreements {
+  int at_lo = 0;
+  std::vector<std::pair<double, int>> steps;
+};
+
+Disagreements disagreements(const PlateModel& m, const std::vector<PlateRay>& rays,
+                            const std::vector<double>& weights, double lo, double hi) {
+  const int n = std::max(1, int(std::ceil((hi - lo) / (0.05 * M_PI / 180.0))));
+  Disagreements d;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (weights[i] < 0.0) continue;
+    const bool hit = weights[i] > 0.0;
+    const PlateRay& r = rays[i];
+    bool prev = plateCovers(m, r.origin, r.direction, lo);
+    d.at_lo += prev != hit;
+    for (int k = 1; k <= n; ++k) {
+      const double a0 = lo + (hi - lo) * (k - 1) / n, a1 = lo + (hi - lo) * k / n;
+      const bool now = plateCovers(m, r.origin, r.direction, a1);
+      if (now == prev) continue;
+      d.steps.emplace_back(flipAngle(m, r, a0, a1, prev), now == hit ? -1 : +1);
+      prev = now;
+    }
+  }
+  std::sort(d.steps.begin(), d.steps.end());
+  return d;
+}
+
+// The first and last angle of [lo, hi] where the disagreements are fewest (steps at the same
+// angle taken together).
+std::pair<double, double> fewestDisagreements(const Disagreements& d, double lo, double hi) {
+  int count = d.at_lo, best = d.at_lo;
+  double first = lo, last = hi;
+  bool in_best = true;  // the count is the fewest from the last step on
+  for (size_t i = 0; i < d.steps.size();) {
+    const double angle = d.steps[i].first;
+    if (in_best) last = angle;
+    for (; i < d.steps.size() && d.steps[i].first == angle; ++i) count += d.steps[i].second;
+    if (count < best) {
+      best = count;
+      first = angle;
+    }
+    in_best = count == best;
+  }
+  if (in_best) last = hi;
+  return {first, last};
+}
+
+}  // namespace
+
+std::optional<double> fitPlateAgreeing(const PlateModel& m, const std::vector<PlateRay>& rays,
+                                       const std::vector<double>& weights, double start_rad,
+                                       double window_rad) {
+  if (std::none_of(weights.begin(), weights.end(), [](double w) { return w > 0.0; }))
+    return std::nullopt;
+  double centre = start_rad;
+  for (int i = 0; i < 8; ++i) {
+    const double lo = centre - window_rad, hi = centre + window_rad;
+    const auto [first, last] = fewestDisagreements(disagreements(m, rays, weights, lo, hi), lo, hi);
+    if (first > lo && last < hi) return 0.5 * (first + last);
+    centre = first <= lo ? lo + 0.5 * window_rad : hi - 0.5 * window_rad;
+  }
+  return std::nullopt;
 }
 
 PlateModelFit fitPlateModel(const PlateModel& m, const std::vector<PlateRay>& rays, int min_hits) {

@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -143,11 +144,11 @@ std::vector<PlateRay> placePlateRays(const std::vector<SweepRay>& rays, const do
 }
 
 // The plate of one sweep: parameters alpha (1), phi_s (1). Its angle in O' (`beta`) is the
-// sampled estimator's (calib/plate_model.hpp fitPlateSampled) with the rays placed with g as the
-// walls determined it (a snapshot, refreshed with each new g): one centroid per sweep cannot
-// tell the offset from alpha (a sideways shift of the lidar turns the plate's centroid by
-// ~0.7 deg/mm), so the plates do not move g; g's uncertainty reaches alpha by propagation. The
-// sampled estimator is a step function of the geometry, so the plate is a fixed angle here.
+// agreeing estimator's (calib/plate_model.hpp fitPlateAgreeing) with the rays placed with g as
+// the walls determined it, the offset shifted to where the plate's two views agree (a snapshot,
+// refreshed with each new g, placePlates): the plates do not move g (their views cannot tell
+// the offset from the plate's height); g's uncertainty reaches alpha by propagation. The
+// estimator is a step function of the geometry, so the plate is a fixed angle here.
 struct PlateCost {
   const double* beta;
   double inv_sigma;
@@ -176,7 +177,9 @@ struct SweepState {
 
 struct State {
   double g[3];
-  double g_plate[3];  // g as the plates see it (the walls' last solution)
+  double g_plate[3];  // g as the plates see it (the walls' last solution, plate_shift_mm on x)
+  double plate_shift_mm = 0.0;    // where the plate's two views agree, from the walls' x
+  double views_per_offset = 0.0;  // d (view 0 - view 1) / d x [rad/mm], once known
   double alpha;
   std::vector<SweepState> sweeps;
   double sigma_mm = 10.0;
@@ -589,15 +592,126 @@ void takePlateCandidates(const std::vector<SweepRay>& rays, const RigAValues& v,
 
 namespace {
 
-// The plates seen with the walls' g: g_plate <- g and each sweep's plate angle in O' again.
+// A sweep's plate rays placed with g, split by the side of the scan plane they leave the lidar
+// on (the sign of sin theta): in a full turn each part of the plate is seen once from each
+// side, and an offset or tilt error turns the two views opposite ways. With each ray its
+// weight (plateHitWeights, given; empty: none).
+struct PlateView {
+  std::vector<PlateRay> rays;
+  std::vector<double> weights;
+  int hits = 0;
+};
+
+std::array<PlateView, 2> plateViews(const RigASweep& sweep, const std::vector<double>& weights,
+                                    const double* g) {
+  const std::vector<PlateRay> placed = placePlateRays(sweep.plate_rays, g);
+  std::array<PlateView, 2> views;
+  for (size_t i = 0; i < placed.size(); ++i) {
+    PlateView& v = views[std::sin(sweep.plate_rays[i].theta_rad) < 0.0 ? 1 : 0];
+    v.rays.push_back(placed[i]);
+    if (weights.empty()) continue;
+    v.weights.push_back(weights[i]);
+    v.hits += weights[i] > 0.0;
+  }
+  return views;
+}
+
+// Each sweep's two views' angles in O' (fitPlateAgreeing) with the rays placed with g; nullopt
+// for a view with fewer than min_plate_hits hits or no fit.
+std::vector<std::array<std::optional<double>, 2>> viewAngles(const std::vector<RigASweep>& sweeps,
+                                                             const RigASolveOptions& o,
+                                                             const State& st, const double* g) {
+  std::vector<std::array<std::optional<double>, 2>> out(st.sweeps.size());
+  for (size_t s = 0; s < st.sweeps.size(); ++s) {
+    const SweepState& ss = st.sweeps[s];
+    if (!ss.plate) continue;
+    const auto views = plateViews(sweeps[s], ss.plate_hits, g);
+    for (size_t v = 0; v < 2; ++v) {
+      if (views[v].hits < o.min_plate_hits) continue;
+      out[s][v] = fitPlateAgreeing(o.plate, views[v].rays, views[v].weights, st.alpha - ss.phi);
+    }
+  }
+  return out;
+}
+
+// The mean over the sweeps that show both views of view 0's angle minus view 1's by the smooth
+// model (fitPlateModel, for its derivative); nullopt when no sweep shows both.
+std::optional<double> viewDisagreement(const std::vector<RigASweep>& sweeps,
+                                       const RigASolveOptions& o, const State& st,
+                                       const double* g) {
+  double sum = 0.0;
+  int n = 0;
+  for (size_t s = 0; s < st.sweeps.size(); ++s) {
+    if (!st.sweeps[s].plate) continue;
+    const auto views = plateViews(sweeps[s], st.sweeps[s].plate_hits, g);
+    if (views[0].hits < o.min_plate_hits || views[1].hits < o.min_plate_hits) continue;
+    const PlateModelFit f0 = fitPlateModel(o.plate, views[0].rays, o.min_plate_hits);
+    const PlateModelFit f1 = fitPlateModel(o.plate, views[1].rays, o.min_plate_hits);
+    if (!f0.found || !f1.found) continue;
+    sum += f0.angle_rad - f1.angle_rad;
+    ++n;
+  }
+  if (n == 0) return std::nullopt;
+  return sum / n;
+}
+
+// How the views' disagreement moves with the offset [rad/mm] (~ -2 / 78 mm: each view turns by
+// the offset over the plate's distance, the two opposite ways), by central differences of the
+// smooth model; 0 when the sweeps do not show both views.
+double viewsPerOffset(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
+                      const State& st, const double* g) {
+  const double step = 0.01;  // mm
+  double gp[3], gm[3];
+  std::copy(g, g + 3, gp);
+  std::copy(g, g + 3, gm);
+  gp[0] += step;
+  gm[0] -= step;
+  const auto p = viewDisagreement(sweeps, o, st, gp), m = viewDisagreement(sweeps, o, st, gm);
+  return p && m ? (*p - *m) / (2 * step) : 0.0;
+}
+
+// The plates seen with the walls' g, the offset shifted to where the plate's two views agree:
+// g_plate <- g (+ the shift) and each sweep's plate angle in O' again (fitPlateAgreeing, all
+// its rays). In a full turn each part of the plate is seen from both sides of the scan plane;
+// an offset error turns the two views opposite ways (so would an error of the plate's height,
+// by the offset over its depth below the lidar: 1 mm of height ~0.3 mm of offset), so the
+// plate's angle does not move with it to first order, but each view's angle moves by the steps
+// at which its rays flip (0.57-0.94 deg/mm on seed 3, the mean 0.72): with the walls' 0.1 mm
+// offset error the mean of the two views scattered by 0.011 deg per sweep, at the true offset
+// by 0.004 deg. The views agree within 0.001 mm of the true offset on seed 3 of the plan's
+// recording, but cannot tell an offset from a height error: the shift serves the plate only, the
+// walls alone give the offset.
 void placePlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
   std::copy(st->g, st->g + 3, st->g_plate);
+  st->g_plate[0] += st->plate_shift_mm;
+  auto angles = viewAngles(sweeps, o, *st, st->g_plate);
+  for (int i = 0; i < 3; ++i) {
+    double sum = 0.0;
+    int n = 0;
+    for (const auto& a : angles) {
+      if (a[0] && a[1]) sum += *a[0] - *a[1], ++n;
+    }
+    if (n == 0) break;
+    if (st->views_per_offset == 0.0)
+      st->views_per_offset = viewsPerOffset(sweeps, o, *st, st->g_plate);
+    if (!(std::fabs(st->views_per_offset) > 1e-6)) break;
+    const double shift = -(sum / n) / st->views_per_offset;
+    if (std::fabs(shift) < 1e-3) break;
+    st->plate_shift_mm += shift;
+    st->g_plate[0] += shift;
+    angles = viewAngles(sweeps, o, *st, st->g_plate);
+  }
   for (size_t s = 0; s < st->sweeps.size(); ++s) {
     SweepState& ss = st->sweeps[s];
     if (!ss.plate) continue;
-    const auto beta = fitPlateSampled(o.plate, placePlateRays(sweeps[s].plate_rays, st->g_plate),
-                                      ss.plate_hits, st->alpha - ss.phi);
-    if (beta) ss.beta = *beta;
+    const auto& a = angles[s];
+    const double start = a[0] && a[1] ? 0.5 * (*a[0] + *a[1])
+                         : a[0]       ? *a[0]
+                         : a[1]       ? *a[1]
+                                      : st->alpha - ss.phi;
+    const auto beta = fitPlateAgreeing(o.plate, placePlateRays(sweeps[s].plate_rays, st->g_plate),
+                                       ss.plate_hits, start);
+    if (beta || a[0] || a[1]) ss.beta = beta ? *beta : start;
   }
 }
 
@@ -728,19 +842,21 @@ void warnOneSidedPlate(RigCalibration* r) {
 }
 
 // alpha as the plates give it with the rays placed with g, the sweeps' attitudes held: the
-// mean of phi_s + the plate's angle in O'. By the smooth model (fitPlateModel): its angle moves
-// with g as the plate's does, where the sampled estimator's steps would make the difference
-// quotient below noise.
+// mean of phi_s + the plate's angle in O' (the offset shifted to where its views agree, as
+// placePlates). By the smooth model (fitPlateModel): its angle moves with g as the plate's does,
+// where the agreeing estimator's steps would make the difference quotient below noise.
 double alphaFromPlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o,
                        const State& st, const double* g) {
   double sum = 0.0;
   int n = 0;
   for (size_t s = 0; s < st.sweeps.size(); ++s) {
-    if (!st.sweeps[s].plate) continue;
+    const SweepState& ss = st.sweeps[s];
+    if (!ss.plate) continue;
+    const double gs[3] = {g[0] + st.plate_shift_mm, g[1], g[2]};
     const PlateModelFit f =
-        fitPlateModel(o.plate, placePlateRays(sweeps[s].plate_rays, g), o.min_plate_hits);
+        fitPlateModel(o.plate, placePlateRays(sweeps[s].plate_rays, gs), o.min_plate_hits);
     if (!f.found) continue;
-    sum += st.sweeps[s].phi + f.angle_rad;
+    sum += ss.phi + f.angle_rad;
     ++n;
   }
   return n ? sum / n : st.alpha;

@@ -13,15 +13,16 @@
 //    normal (cos a_k cos lean, sin a_k cos lean, sin lean) with a_k fixed, lean and distance
 //    free per sweep: they fix phi_s and bend with x, tilt and mirror;
 //  - every ray of any other plane (floor, ceiling, furniture) against a free plane in O';
-//  - per sweep, the plate (calib/plate_model.hpp): its angle beta_s in O', where the measured
-//    centroid of the rays that hit it meets the centroid the sharp-edged model plate predicts
-//    for the same rays (fitPlateSampled: on a noise-free sweep the model's hits at the true
-//    angle are exactly the measured ones; the smooth edge's prediction missed each sweep by
-//    0.004-0.025 deg, its sampling of the edges by the fixed ray grid), against alpha - phi_s.
-//    This is the only residual alpha enters, through phi_s. In a half turn each part of the plate
-//    is seen from one side of the scan plane, where an offset error turns it like alpha (0.73
-//    deg/mm, correlation 0.99); a full turn (sweep_angle 360) sees it from both sides, where
-//    the offset turns the two views opposite ways, and separates them.
+//  - per sweep, the plate (calib/plate_model.hpp): its angle beta_s in O', the angle whose
+//    sharp-edged model plate disagrees with the fewest of the rays that meet it (fitPlateAgreeing:
+//    on a noise-free sweep the model's hits at the true angle are exactly the measured ones, and
+//    the few rays a real sweep gets wrong, mixed pixels in the plate's gate, cannot move it as
+//    they moved the centroid), against alpha - phi_s. This is the only residual alpha enters,
+//    through phi_s. In a half turn each part of the plate is seen from one side of the scan
+//    plane, where an offset error turns it like alpha (0.73 deg/mm, correlation 0.99); a full
+//    turn (sweep_angle 360) sees it from both sides, where the offset turns the two views
+//    opposite ways, and separates them. The plate is placed with the offset at which its two
+//    views agree (for the plate only: an error of its height turns them as an offset does).
 // The planes' rays leave out depth edges (PlaneSegmentationOptions::depth_edge_rays): a jamb's
 // or a table edge's first millimetres pass the plane's gate, and under the Cauchy loss, whose
 // scale follows the noise, they leaned the mirror offset.

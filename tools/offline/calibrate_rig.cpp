@@ -265,7 +265,7 @@ void printRigAPlan(const std::string& rig_name, const RotatingLidarConfig& rig_a
          "lidar-to-axis offset turns it by ~0.73 deg (it sits 55-111 mm from the axis): alpha "
          "is then only as good as the offset the walls give (10 sweeps: sigma ~0.15 mm, so "
          "alpha ~0.11 deg). Seen from both sides, the offset turns the plate's two views "
-         "opposite ways and doubles each wall: alpha's sigma falls to 0.005-0.014 deg (~0.008 "
+         "opposite ways and doubles each wall: alpha's sigma falls to 0.002-0.007 deg (~0.0035 "
          "deg typical), the offset's to ~0.1 mm, from 10 sweeps (both fall as 1/sqrt(sweeps)). "
          "Half turns (the rig's "
          "sweep angle) still calibrate, with those larger sigmas.\n"
