@@ -47,8 +47,6 @@ constexpr double kClusterM = 0.5;
 // encoders' noise, a slip, the gyro's drift), wherever they lie: two-way with time windows of
 // this length (0.6 m at the plan's 0.2 m/s, about a cube).
 constexpr double kClusterS = 3.0;
-// The wheels' k = r / T are determined when their relative sigma is below this.
-constexpr double kMaxWheelRatioSigma = 0.01;
 
 MobileWheelParameters scaled(MobileWheelParameters w, double factor) {
   w.radius_left_m *= factor;
@@ -415,15 +413,6 @@ void wheelsAgainstGyro(const MobileRigCalibrationInput& in, Solution* s) {
   s->wg = calibrateWheelsAgainstGyro(in.wheel_readings, in.gyro_readings, in.wheel_gyro);
   if (!s->wg.ok) return;
   const double T0 = in.wheels.wheel_distance_m;
-  for (int k = 0; k < 2; ++k) {
-    if (!(std::sqrt(s->wg.covariance(k, k)) <= kMaxWheelRatioSigma * std::abs(s->wg.x(k)))) {
-      s->wg.ok = false;
-      s->wg.reason = "the drive determines the wheels' ratio to the track only to " +
-                     std::to_string(std::sqrt(s->wg.covariance(k, k)) / std::abs(s->wg.x(k))) +
-                     " (relative)";
-      return;
-    }
-  }
   s->wheels = true;
   s->w.radius_left_m = s->wg.x(0) * T0;
   s->w.radius_right_m = s->wg.x(1) * T0;

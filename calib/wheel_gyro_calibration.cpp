@@ -143,6 +143,16 @@ WheelGyroResult calibrateWheelsAgainstGyro(const std::vector<WheelReading>& whee
     out.reason = "too few windows left after trimming the outliers";
     return out;
   }
+  out.covariance = N.inverse();
+  for (int k = 0; k < 2; ++k) {
+    const double relative = std::sqrt(out.covariance(k, k)) / std::abs(out.x(k));
+    if (!(relative <= o.max_relative_sigma)) {
+      out.reason = "the drive determines the wheels' ratio to the track only to " +
+                   std::to_string(relative) +
+                   " (relative; turns both ways, straights and stops needed)";
+      return out;
+    }
+  }
   out.ok = true;
   for (size_t i = 0; i < rows.size(); ++i) {
     out.rows += use[i];
@@ -150,7 +160,6 @@ WheelGyroResult calibrateWheelsAgainstGyro(const std::vector<WheelReading>& whee
   }
   out.trimmed = int(rows.size()) - out.rows;
   out.sigma_rad = sigma[0];
-  out.covariance = N.inverse();
   return out;
 }
 

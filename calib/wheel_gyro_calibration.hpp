@@ -38,6 +38,11 @@ struct WheelGyroOptions {
   double trim_sigma = 4.0;       // rows beyond this many sigma are dropped (slip)
   int trim_iterations = 6;
   double rest_rad = 1e-9;  // both wheels turned less than this: the car stood still
+  // k_L and k_R count as determined when each one's sigma is below this fraction of it. On a
+  // drive whose wheels keep one ratio (a circle) the windows' rows are nearly parallel, and
+  // least squares with the encoders' noise in the rows shrinks both k towards 0 with a small
+  // absolute sigma (regression dilution): relative to k, that sigma is large.
+  double max_relative_sigma = 0.01;
 };
 
 struct WheelGyroResult {

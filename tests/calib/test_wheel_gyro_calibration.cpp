@@ -63,14 +63,16 @@ TEST(WheelGyroCalibration, FigureEightWithStopsDeterminesBothWheelsAndTheBias) {
 }
 
 // A circle at constant speed turns one way at one rate: both wheels always in the same
-// ratio, so k_L, k_R and the bias trade off (only the ramps at the ends differ).
+// ratio, so k_L, k_R and the bias trade off (only the ramps at the ends differ). Least squares
+// still returns an answer, both k shrunk towards 0 by the encoders' noise in the rows, with a
+// small absolute sigma (on a 120 s circle: k 99.6 % low at 0.4 % of the nominal k): relative to
+// k, that sigma is large, and the result is not ok.
 TEST(WheelGyroCalibration, CircleDoesNotSeparateTheWheels) {
   const Drive d = simulate("circle", 0.0, 1);
   const WheelGyroResult r = calibrateWheelsAgainstGyro(d.wheels, d.gyro, WheelGyroOptions{});
-  const bool determined = r.ok && std::sqrt(r.covariance(0, 0)) < 1e-3 * d.k_left &&
-                          std::sqrt(r.covariance(1, 1)) < 1e-3 * d.k_right;
-  EXPECT_FALSE(determined) << r.x.transpose() << " sigma "
-                           << r.covariance.diagonal().cwiseSqrt().transpose();
+  EXPECT_FALSE(r.ok) << r.x.transpose() << " sigma "
+                     << r.covariance.diagonal().cwiseSqrt().transpose();
+  EXPECT_NE(r.reason.find("relative"), std::string::npos) << r.reason;
 }
 
 // Bad input never crashes: no readings, one reading, a gyro that stops early.

@@ -198,6 +198,8 @@ TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
     EXPECT_NEAR(j.at(a).get<double>(), truth.at(a).get<double>(), 1e-3) << a;
   }
   EXPECT_LT(j.at("residual_after_m").get<double>(), j.at("residual_before_m").get<double>());
+  // The wheels are the rig file's (a perfect build): nothing else is off.
+  EXPECT_TRUE(j.at("warnings").empty()) << j.at("warnings");
   // The paper's method is reported beside ours.
   const nlohmann::json paper = j.at("paper");
   EXPECT_EQ(paper.at("method"), "paper_points");

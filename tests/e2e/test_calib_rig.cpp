@@ -130,6 +130,29 @@ TEST(CalibRig, FullTurnsSeparateThePlateAngleFromTheOffset) {
       << a;
 }
 
+// `sweepmap calib ARGS --out DIR/out.yaml --json`, which must calibrate: its warnings (JSON).
+std::string singleCommandWarnings(std::vector<std::string> args, const fs::path& dir) {
+  args.insert(args.begin(), "calib");
+  args.insert(args.end(), {"--out", (dir / "out.yaml").string(), "--json"});
+  const int status = runSplit(args, dir / "out.json", dir / "out.err");
+  EXPECT_EQ(status, 0) << readAll(dir / "out.err");
+  if (status != 0) return "";
+  return nlohmann::json::parse(readAll(dir / "out.json"))["warnings"].dump();
+}
+
+// `calib mounting` alone on the plan's drive of a realistic build (the wheel radii 1-3 % off
+// the rig file's): the wheels disagree with the gyro, and it says so and points to `calib rig`.
+TEST(CalibRig, MountingAloneSaysWhenTheWheelsDisagreeWithTheGyro) {
+  const fs::path dir = scratchDir("calib_rig_mounting_alone");
+  const std::string log = cachedSimLog("calib_rig_b_figure8_40s",
+                                       {"--rig", "rig_b", "--set", "sim.path=figure8", "--set",
+                                        "sim.stop_interval_s=20", "--set", "sim.duration_s=40"});
+  const std::string warnings =
+      singleCommandWarnings({"mounting", "--rig", "rig_b", "--logs", log, "--no-paper"}, dir);
+  EXPECT_NE(warnings.find("the wheels disagree with the gyro"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("run `sweepmap calib rig`"), std::string::npos) << warnings;
+}
+
 // `calib axis-offset` alone on a realistic build (the scan plane tilted, the mirror offset,
 // clutter on the walls) takes them into the offset; it says so, with what calib rig's joint
 // model finds on the same sweeps, and points to `calib rig`.
@@ -139,13 +162,8 @@ TEST(CalibRig, AxisOffsetAloneSaysWhenTheJointModelFindsAnotherParameterOff) {
       cachedSimLog("calib_rig_mode7x3_full_turns",
                    {"--rig", kRig, "--mode", "7", "--sweeps", "3", "--seed", "3", "--set",
                     "sim.lidar_offset_x_mm=16", "--set", "motor.sweep_angle_deg=360"});
-  ASSERT_EQ(runSplit({"calib", "axis-offset", "--rig", kRig, "--logs", log, "--out",
-                      (dir / "offset.yaml").string(), "--json"},
-                     dir / "offset.json", dir / "offset.err"),
-            0)
-      << readAll(dir / "offset.err");
-  const auto j = nlohmann::json::parse(readAll(dir / "offset.json"));
-  const std::string warnings = j["warnings"].dump();
+  const std::string warnings =
+      singleCommandWarnings({"axis-offset", "--rig", kRig, "--logs", log}, dir);
   EXPECT_NE(warnings.find("joint model"), std::string::npos) << warnings;
   EXPECT_NE(warnings.find("geometry.scan_plane_tilt_deg"), std::string::npos) << warnings;
   EXPECT_NE(warnings.find("run `sweepmap calib rig`"), std::string::npos) << warnings;

@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "calib/wheel_gyro_calibration.hpp"
 #include "core/calibration_file.hpp"
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
@@ -132,6 +133,42 @@ bool timeOffsetAtBound(const MountingCalibRequest& o, const MethodRuns& runs) {
   return at_bound;
 }
 
+// The other parameters the drive shows off, as warnings: each wheel's radius over the track
+// against the gyro (calib rig's first step; the turn rates they give disagree with the gyro's
+// when a radius or the track is off, and the track the mounting was fitted on bends with
+// them). Said on stderr too.
+std::vector<std::string> othersOff(const MountingCalibRequest& o, const MobileLidarConfig& rig) {
+  const OdometryReadings readings = loadOdometryReadings(o.log);
+  WheelGyroOptions options;
+  options.ticks_per_revolution = rig.odometry.ticks_per_revolution;
+  const WheelGyroResult wg = calibrateWheelsAgainstGyro(readings.wheels, readings.gyro, options);
+  std::vector<std::string> warnings;
+  if (!wg.ok) return warnings;
+  const double r_right = rig.odometry.wheel_radius_right_m > 0 ? rig.odometry.wheel_radius_right_m
+                                                               : rig.odometry.wheel_radius_m;
+  const double nominal[2] = {rig.odometry.wheel_radius_m / rig.odometry.ekf.wheel_distance_m,
+                             r_right / rig.odometry.ekf.wheel_distance_m};
+  std::ostringstream w;
+  w << std::fixed << std::setprecision(2);
+  bool off = false;
+  for (int k = 0; k < 2; ++k) {
+    const double sigma = std::sqrt(std::max(0.0, wg.covariance(k, k)));
+    const double d = wg.x(k) - nominal[k];
+    if (!(std::abs(d) > 3.0 * sigma)) continue;
+    w << (off ? ", " : "") << (k ? "right" : "left") << " " << 100.0 * d / nominal[k] << " +- "
+      << 100.0 * sigma / nominal[k] << " %";
+    off = true;
+  }
+  if (off) {
+    warnings.push_back(
+        "the wheels disagree with the gyro: radius over track off the rig file's by " + w.str() +
+        " (the turn rates they give are not the gyro's), so the odometry track this fit used "
+        "is biased; run `sweepmap calib rig`, which calibrates the wheels with the mounting");
+  }
+  for (const auto& text : warnings) std::cerr << kWhat << ": warning: " << text << "\n";
+  return warnings;
+}
+
 // The JSON report without its timing: ours at the top, the paper's under "paper", the truth.
 nlohmann::json resultJson(const MountingCalibRequest& o, const MobileLog& log,
                           const MethodRuns& runs, const std::optional<LidarMounting>& truth,
@@ -212,6 +249,7 @@ int calibrateMountingFromLog(const MountingCalibRequest& o) {
   reportMethod(o, runs.ours, runs.ours_s, truth);
   if (runs.paper) reportMethod(o, *runs.paper, runs.paper_s, truth);
   nlohmann::json j = resultJson(o, log, runs, truth, timeOffsetAtBound(o, runs));
+  j["warnings"] = othersOff(o, rig);
 
   if (!runs.ours.ok) {
     std::cerr << kWhat << ": nothing calibrated: " << runs.ours.reason << "\n";
