@@ -289,6 +289,11 @@ TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
   const auto ours = nlohmann::json::parse(readAll(dir / "ao.json"))["ours"];
   ASSERT_TRUE(ours["encoder_zero_estimated"].get<bool>()) << ours;
   EXPECT_NEAR(ours["encoder_zero_deg"].get<double>(), zero["value"].get<double>(), 1e-9);
+  // Without --encoder-zero it keeps the rig file's zero and says that the face shows another.
+  const std::string warnings =
+      singleCommandWarnings({"axis-offset", "--rig", "rig_c", "--logs", log, "--no-grid"}, dir);
+  EXPECT_NE(warnings.find("puts the encoder zero at"), std::string::npos) << warnings;
+  EXPECT_NE(warnings.find("run `sweepmap calib rig`"), std::string::npos) << warnings;
   // Without the face declared in the rig file the same log leaves the zero nominal.
   ASSERT_EQ(
       runSplit({"calib", "rig", "--rig", "rig_c", "--set", "turntable.reference.declared=false",

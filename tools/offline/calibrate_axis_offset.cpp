@@ -214,6 +214,32 @@ std::string drawAxisOffsetSurface(const std::string& png, const GridSearchResult
   return "";
 }
 
+namespace {
+
+// Without --encoder-zero: when the logs hold the base's reference face (one sweep, as calib
+// rig recognises it), the zero calib rig would find there; a warning into r when it is more
+// than 3 sigma from the rig file's (the cloud is turned by the difference about the axis).
+void checkEncoderZero(const RotatingProfileConfig& rig, const Inputs& in,
+                      const AxisOffsetOptions& used, AxisOffsetResult* r) {
+  AxisOffsetOptions options = used;
+  options.estimate_encoder_zero = true;
+  const std::vector<size_t> face = useReferenceFace(rig.turntable.reference, in.planes, &options);
+  if (face.size() != 1) return;
+  const AxisOffsetResult z = solveAxisOffset(in.planes, options);
+  if (!z.zero_estimated || !(z.sigma_zero_deg > 0)) return;
+  const double zero_deg = z.geometry.encoder_zero_rad * 180.0 / M_PI;
+  if (!(std::abs(zero_deg - rig.geometry.encoder_zero_deg) > 3.0 * z.sigma_zero_deg)) return;
+  std::ostringstream w;
+  w << std::fixed << std::setprecision(3) << "the base's reference face ("
+    << in.planes[face[0]].source << ") puts the encoder zero at " << zero_deg << " +- "
+    << z.sigma_zero_deg << " deg, the rig file's " << rig.geometry.encoder_zero_deg
+    << " deg: the cloud is turned by the difference about the axis; run `sweepmap calib rig` "
+       "(or this command with --encoder-zero)";
+  r->warnings.push_back(w.str());
+}
+
+}  // namespace
+
 int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   RotatingProfileConfig rig;
   if (!checkInputs(o, &rig)) return kExitUsage;
@@ -243,7 +269,8 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   options.estimate_tilt = o.estimate_tilt;
   options.estimate_encoder_zero = o.estimate_encoder_zero;
   if (o.estimate_encoder_zero) useReferenceFace(rig.turntable.reference, in.planes, &options);
-  const AxisOffsetResult r = solveAxisOffset(in.planes, options);
+  AxisOffsetResult r = solveAxisOffset(in.planes, options);
+  if (!o.estimate_encoder_zero && r.observable) checkEncoderZero(rig, in, options, &r);
   bool written = false;
   if (r.observable) {
     try {

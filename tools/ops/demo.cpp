@@ -54,9 +54,16 @@ struct DemoRun {
     int failures = 0;
     for (size_t i = 0; i < pids_grace.size(); ++i) {
       if (i > 0) pause(pause_ms);
-      failures += procs.stop(pids_grace[i].first, pids_grace[i].second) != 0;
+      failures += stop(pids_grace[i].first, pids_grace[i].second);
     }
     return failures;
+  }
+  // Stops one process; 1 (after saying how it ended and where its log is) unless it exited 0.
+  int stop(pid_t pid, double grace_s) {
+    if (procs.stop(pid, grace_s) == 0) return 0;
+    std::cerr << "demo: " << procs.name(pid) << " ended with " << procs.describeExit(pid)
+              << "; see its log in " << (out / "logs").string() << "\n";
+    return 1;
   }
   // Every channel into the log, through sweepmap's own validating receive path and writer
   // (`sweepmap record`), not lcm-logger: liblcm 1.3.1's receive code dies on one bad datagram.
@@ -149,10 +156,12 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   int failures = motor_rc != 0;
   failures +=
       run.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 400);
-  if (emulator > 0) failures += run.procs.stop(emulator, 5.0) != 0;
+  if (emulator > 0) failures += run.stop(emulator, 5.0);
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.sweeps != o.sweeps;
+  if (r.sweeps != o.sweeps)
+    std::cerr << "demo: " << r.sweeps << " of " << o.sweeps << " sweeps in the recorded log\n";
   std::cout << "\ndemo: done (" << r.summary << ")\n"
             << "  recorded log     " << run.log << "\n"
             << "  per-sweep clouds " << (run.out / "sweeps").string() << "/sweep_*.pcd, *.ply\n"
@@ -270,10 +279,11 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
   failures += run.stopInOrder(
       {{car->lidar, 5.0}, {car->odometry, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}},
       300);
-  if (car->emulator > 0) failures += run.procs.stop(car->emulator, 5.0) != 0;
+  if (car->emulator > 0) failures += run.stop(car->emulator, 5.0);
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.scans == 0;
+  if (r.scans == 0) std::cerr << "demo: the recorded log holds no scan\n";
   std::cout << "\ndemo: done (" << r.summary << ")\n"
             << "  recorded log     " << run.log << "\n"
             << "  world cloud      " << (run.out / "cloud.pcd").string() << "\n"
@@ -314,6 +324,8 @@ int profileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::str
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.sweeps != sweeps;
+  if (r.sweeps != sweeps)
+    std::cerr << "demo: " << r.sweeps << " of " << sweeps << " sweeps in the recorded log\n";
   std::cout << "\ndemo: done (" << r.summary << ")\n"
             << "  recorded log     " << run.log << "\n"
             << "  cloud (O_r)      " << (run.out / "cloud.pcd").string() << "\n"
