@@ -23,15 +23,15 @@ constexpr size_t kRaysPerBlock = 64;
 
 // A ray in the form the residual needs: cos, sin of phi and p_L [mm].
 struct PreRay {
-  double c, s, py, pz;  // p_L = (0, py, pz)
+  double c, s, px, py, pz;  // R_L p_L = (px, py, pz) [mm]
 };
 
-PreRay pre(const SweepRay& r) {
-  return {std::cos(r.phi_rad), std::sin(r.phi_rad), 1e3 * r.range_m * std::sin(r.theta_rad),
-          1e3 * r.range_m * std::cos(r.theta_rad)};
+PreRay pre(const SweepRay& r, const Eigen::Matrix3d& R_L) {
+  const Eigen::Vector3d p = R_L * rotating::pointInLidar(1e3 * r.range_m, r.theta_rad);
+  return {std::cos(r.phi_rad), std::sin(r.phi_rad), p.x(), p.y(), p.z()};
 }
 
-// Up to kRaysPerBlock rays of one plane: residual sqrt(w_i) (n . Rz(phi_i) (t + p_L,i) - d)
+// Up to kRaysPerBlock rays of one plane: residual sqrt(w_i) (n . Rz(phi_i) (t + R_L p_L,i) - d)
 // [mm] each, the weights w_i (Cauchy, iteratively reweighted) read from `weights`, analytic
 // Jacobians. Parameters: t 3 [mm], unit normal 3, distance 1 [mm].
 class RaysOnPlaneCost : public ceres::CostFunction {
@@ -50,7 +50,7 @@ class RaysOnPlaneCost : public ceres::CostFunction {
     for (size_t i = 0; i < count_; ++i) {
       const PreRay& r = rays_[i];
       const double sw = std::sqrt(weights_[i]);
-      const double qx = t[0], qy = t[1] + r.py, qz = t[2] + r.pz;
+      const double qx = t[0] + r.px, qy = t[1] + r.py, qz = t[2] + r.pz;
       const double px = r.c * qx - r.s * qy, py = r.s * qx + r.c * qy;
       residuals[i] = sw * (n[0] * px + n[1] * py + n[2] * qz - d);
       if (!jacobians) continue;
@@ -84,13 +84,14 @@ struct PlaneFit {
   bool ok = false;
 };
 
-PlaneFit fitPlaneTo(const std::vector<SweepRay>& rays, const Eigen::Vector3d& t_mm) {
+PlaneFit fitPlaneTo(const std::vector<SweepRay>& rays, const Eigen::Vector3d& t_mm,
+                    const Eigen::Matrix3d& R_L) {
   std::vector<Eigen::Vector3f> pts;  // metres: what fitPlaneLeastSquares is made for
   pts.reserve(rays.size());
   std::vector<int> idx;
   for (const auto& r : rays) {
     idx.push_back(static_cast<int>(pts.size()));
-    pts.push_back((placeRayMm(r, t_mm) * 1e-3).cast<float>());
+    pts.push_back((placeRayMm(r, t_mm, R_L) * 1e-3).cast<float>());
   }
   PlaneFit f;
   double offset_m = 0.0;
@@ -98,7 +99,7 @@ PlaneFit fitPlaneTo(const std::vector<SweepRay>& rays, const Eigen::Vector3d& t_
   f.distance_mm = -1e3 * offset_m;
   double ss = 0.0;
   for (const auto& r : rays) {
-    const double e = f.normal.dot(placeRayMm(r, t_mm)) - f.distance_mm;
+    const double e = f.normal.dot(placeRayMm(r, t_mm, R_L)) - f.distance_mm;
     ss += e * e;
   }
   f.rms_mm = std::sqrt(ss / static_cast<double>(rays.size()));
@@ -129,10 +130,10 @@ void buildProblem(const std::vector<LidarPlaneRays>& planes, const LidarAxisOffs
   p->rays.resize(planes.size());
   p->weights.resize(planes.size());
   for (size_t k = 0; k < planes.size(); ++k) {
-    const PlaneFit f = fitPlaneTo(planes[k].rays, o.initial_offset_mm);
+    const PlaneFit f = fitPlaneTo(planes[k].rays, o.initial_offset_mm, o.lidar_rotation);
     p->normals[k] = f.ok ? f.normal : Eigen::Vector3d::UnitZ();
     p->distances[k] = f.distance_mm;
-    for (const auto& r : planes[k].rays) p->rays[k].push_back(pre(r));
+    for (const auto& r : planes[k].rays) p->rays[k].push_back(pre(r, o.lidar_rotation));
     p->weights[k].assign(p->rays[k].size(), 1.0);
     for (size_t i = 0; i < p->rays[k].size(); i += kRaysPerBlock) {
       const size_t count = std::min(kRaysPerBlock, p->rays[k].size() - i);
@@ -154,7 +155,7 @@ std::vector<double> residualsOf(const Problem& p) {
   for (size_t k = 0; k < p.rays.size(); ++k) {
     const Eigen::Vector3d& n = p.normals[k];
     for (const PreRay& r : p.rays[k]) {
-      const double qx = p.t[0], qy = p.t[1] + r.py, qz = p.t[2] + r.pz;
+      const double qx = p.t[0] + r.px, qy = p.t[1] + r.py, qz = p.t[2] + r.pz;
       out.push_back(n.x() * (r.c * qx - r.s * qy) + n.y() * (r.s * qx + r.c * qy) + n.z() * qz -
                     p.distances[k]);
     }
@@ -207,7 +208,7 @@ TObservability analyse(const Problem& p) {
     for (Eigen::Index i = 0; i < rows; ++i) {
       const PreRay& r = p.rays[k][static_cast<size_t>(i)];
       const double sw = std::sqrt(p.weights[k][static_cast<size_t>(i)]);
-      const double qx = p.t[0], qy = p.t[1] + r.py, qz = p.t[2] + r.pz;
+      const double qx = p.t[0] + r.px, qy = p.t[1] + r.py, qz = p.t[2] + r.pz;
       const Eigen::Vector3d pt(r.c * qx - r.s * qy, r.s * qx + r.c * qy, qz);
       j.row(i) << sw * e1.dot(pt), sw * e2.dot(pt), -sw, sw * (r.c * n.x() + r.s * n.y()),
           sw * (-r.s * n.x() + r.c * n.y()), sw * n.z();
@@ -327,8 +328,8 @@ void reportPlanes(const std::vector<LidarPlaneRays>& planes, const Problem& p,
     f.distance_mm = p.distances[k];
     f.rays = planes[k].rays.size();
     f.wall = std::fabs(f.normal.z()) <= o.wall_max_normal_z;
-    f.rms_before_mm = fitPlaneTo(planes[k].rays, o.initial_offset_mm).rms_mm;
-    f.rms_after_mm = fitPlaneTo(planes[k].rays, r->offset_mm).rms_mm;
+    f.rms_before_mm = fitPlaneTo(planes[k].rays, o.initial_offset_mm, o.lidar_rotation).rms_mm;
+    f.rms_after_mm = fitPlaneTo(planes[k].rays, r->offset_mm, o.lidar_rotation).rms_mm;
     before.add(f.rms_before_mm, f.rays, f.wall);
     after.add(f.rms_after_mm, f.rays, f.wall);
     std::vector<SweepRay> inliers;
@@ -336,8 +337,10 @@ void reportPlanes(const std::vector<LidarPlaneRays>& planes, const Problem& p,
       if (std::fabs(e[next++]) <= r->cauchy_scale_mm) inliers.push_back(ray);
     }
     if (inliers.size() >= 3) {
-      in_before.add(fitPlaneTo(inliers, o.initial_offset_mm).rms_mm, inliers.size(), f.wall);
-      in_after.add(fitPlaneTo(inliers, r->offset_mm).rms_mm, inliers.size(), f.wall);
+      in_before.add(fitPlaneTo(inliers, o.initial_offset_mm, o.lidar_rotation).rms_mm,
+                    inliers.size(), f.wall);
+      in_after.add(fitPlaneTo(inliers, r->offset_mm, o.lidar_rotation).rms_mm, inliers.size(),
+                   f.wall);
     }
     if (f.wall) ++r->walls;
     r->planes.push_back(f);
@@ -353,8 +356,9 @@ void reportPlanes(const std::vector<LidarPlaneRays>& planes, const Problem& p,
 
 }  // namespace
 
-Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm) {
-  return rotating::lidarToOPrime(rotating::pointInLidar(1e3 * ray.range_m, ray.theta_rad),
+Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm,
+                           const Eigen::Matrix3d& R_L) {
+  return rotating::lidarToOPrime(R_L * rotating::pointInLidar(1e3 * ray.range_m, ray.theta_rad),
                                  ray.phi_rad, offset_mm);
 }
 

@@ -70,11 +70,16 @@ std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f
                                                const PlaneSegmentationOptions& options,
                                                const std::string& source);
 
-// A ray placed with the offset t [mm]: Rz(phi) (t + r (0, sin theta, cos theta)) [mm].
-Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm);
+// A ray placed with the offset t [mm]: Rz(phi) (t + R_L r (0, sin theta, cos theta)) [mm],
+// R_L the scan plane's tilt and mirror offset (rotating::lidarRotation; I: the paper's model).
+Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm,
+                           const Eigen::Matrix3d& R_L = Eigen::Matrix3d::Identity());
 
 struct LidarAxisOffsetOptions {
   Eigen::Vector3d initial_offset_mm{13.9, 0.0, 0.0};  // the rig's nominal t_L^O'
+  // The rig's scan-plane tilt and mirror offset (rotating::lidarRotation), held: the rest of
+  // the rig as its file says.
+  Eigen::Matrix3d lidar_rotation = Eigen::Matrix3d::Identity();
   bool estimate_y = false;  // y is not in the rig's model: estimated only when asked
   // Cauchy loss scale; 0: 2.3849 (95 % efficiency) x the residuals' robust sigma (MAD) at
   // the start.

@@ -159,8 +159,9 @@ std::string wallsDisagreeWarning(double rms_mm, double limit_mm) {
   if (!(rms_mm > limit_mm)) return "";
   return "the walls disagree with their planes by " + num(rms_mm, 3) +
          " mm RMS over 0.5 m cells, more than the noise (" + num(limit_mm, 3) +
-         " mm): another parameter of the rig is off (scan-plane tilt, mirror offset, offset); run "
-         "`sweepmap calib rig`";
+         " mm): another parameter of the rig is off (scan-plane tilt, mirror offset, offset), or "
+         "something stands proud of a wall (a whiteboard, a shelf); run `sweepmap calib rig`, "
+         "which solves them all and leaves such cells out";
 }
 
 std::string rigCalibrationReport(const RigCalibration& c) {

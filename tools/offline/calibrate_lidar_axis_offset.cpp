@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "calib/rig_calibration.hpp"
+#include "calib/rotating_geometry.hpp"
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
@@ -211,9 +212,20 @@ nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLi
 
 }  // namespace
 
+namespace {
+
+// The rig file's scan-plane tilt and mirror offset, which this command holds.
+Eigen::Matrix3d lidarRotationOf(const RotatingLidarConfig& rig) {
+  constexpr double kDeg = M_PI / 180.0;
+  return rotating::lidarRotation(rig.geometry.scan_plane_tilt_deg * kDeg,
+                                 rig.geometry.mirror_offset_deg * kDeg);
+}
+
+}  // namespace
+
 // The walls' flatness with the estimated offset: their rays' cell medians against their
 // planes; a warning into r when they bend more than noise does.
-void checkWalls(const Inputs& in, LidarAxisOffsetResult* r) {
+void checkWalls(const RotatingLidarConfig& rig, const Inputs& in, LidarAxisOffsetResult* r) {
   std::vector<double> medians;
   for (size_t k = 0; k < in.planes.size() && k < r->planes.size(); ++k) {
     if (!r->planes[k].wall) continue;
@@ -221,7 +233,7 @@ void checkWalls(const Inputs& in, LidarAxisOffsetResult* r) {
     std::vector<int> idx;
     for (const SweepRay& ray : in.planes[k].rays) {
       idx.push_back(static_cast<int>(pts.size()));
-      pts.push_back((1e-3 * placeRayMm(ray, r->offset_mm)).cast<float>());
+      pts.push_back((1e-3 * placeRayMm(ray, r->offset_mm, lidarRotationOf(rig))).cast<float>());
     }
     const auto m = planeCellMediansMm(pts, idx, r->planes[k].normal,
                                       -1e-3 * r->planes[k].distance_mm, 0.5, 100);
@@ -295,9 +307,10 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   }
   LidarAxisOffsetOptions options;
   options.initial_offset_mm = Eigen::Vector3d(rig.geometry.lidar_offset_x_mm, 0.0, 0.0);
+  options.lidar_rotation = lidarRotationOf(rig);
   options.estimate_y = o.estimate_y;
   LidarAxisOffsetResult r = solveLidarAxisOffset(in.planes, options);
-  checkWalls(in, &r);
+  checkWalls(rig, in, &r);
   if (r.observable) checkAgainstJointModel(rig, &in, &r);
   bool written = false;
   if (r.observable) {
