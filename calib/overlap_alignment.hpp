@@ -79,9 +79,9 @@ struct OverlapOptions {
   // one residual against the patch's plane, the plane (offset and tilt) eliminated, so each
   // point's noise enters once. Point-to-plane compares every query with the local plane of
   // the other pass's k nearest points: their noise enters every query that leans on them.
-  // Off: on rig B's plan drive it halves the sigmas in a fifth of the CPU time, but leaves
-  // the time offset -0.8 ms off and five true values beyond 3 sigma on nine seeds
-  // (docs/explanation/results.md, rig B).
+  // Off: on rig B's plan drive it halves the sigmas in a fifth of the CPU time, but alpha and
+  // the time offset move with patch_m by more than their sigmas (the track's error, which the
+  // time clusters no longer cover): docs/explanation/results.md, rig B.
   bool patch_residuals = false;
   double patch_m = 0.25;
   // Rounds whose parameter change is below this re-linearise without a new search.
