@@ -80,8 +80,8 @@ struct OverlapOptions {
   // point's noise enters once. Point-to-plane compares every query with the local plane of
   // the other pass's k nearest points: their noise enters every query that leans on them.
   // Off: on rig B's plan drive it halves the sigmas in a fifth of the CPU time, but alpha and
-  // the time offset move with patch_m by more than their sigmas (the track's error, which the
-  // time clusters no longer cover): docs/explanation/results.md, rig B.
+  // the time offset move with patch_m by more than their sigmas (the EKF track's error, which
+  // they do not cover): docs/explanation/results.md, rig B.
   bool patch_residuals = false;
   double patch_m = 0.25;
   // Rounds whose parameter change is below this re-linearise without a new search.
