@@ -270,6 +270,7 @@ struct Residual {
   bool keep;
   Eigen::Vector3f at;   // the query's world point (its cluster for the sandwich covariance)
   double t_a_s, t_b_s;  // the query's and its neighbours' (mean) times [s], likewise
+  double dof = 1.0;     // its share of the degrees of freedom (less a patch's plane's)
 };
 
 Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& model,
@@ -327,17 +328,480 @@ std::vector<Residual> formResiduals(const std::vector<OverlapRay>& rays, const O
   return out;
 }
 
+// ------------------------------------------------------------------ plane adjustment
+// The patches of a search: the rays of each cube of patch_m whose points lie on one plane
+// seen by both passes, patch by patch.
+struct Patches {
+  std::vector<int> members;
+  std::vector<size_t> begin;  // patch k: members[begin[k], begin[k + 1])
+  size_t count() const { return begin.empty() ? 0 : begin.size() - 1; }
+};
+
+// One patch's points at the current estimate and its plane: the weighted centroid, the
+// normal and the in-plane axes, and each point's range noise along the normal (that of the
+// range the plane predicts for its ray, as flatPatch says).
+struct PatchFit {
+  std::vector<Eigen::Vector3d> p;
+  std::vector<double> sigma, w2;
+  Eigen::Vector3d mean, n, u, v;
+  Eigen::Vector3d ev;  // the weighted scatter's eigenvalues, ascending
+};
+
+// The weighted plane of the points with w2 > 0 (w2 their weights); false with fewer than 3.
+bool weightedPlane(PatchFit* f) {
+  double W = 0.0;
+  Eigen::Vector3d m = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < f->p.size(); ++i) {
+    W += f->w2[i];
+    m += f->w2[i] * f->p[i];
+  }
+  if (W <= 0.0) return false;
+  m /= W;
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+  for (size_t i = 0; i < f->p.size(); ++i)
+    S += f->w2[i] * (f->p[i] - m) * (f->p[i] - m).transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(S / W);
+  f->mean = m;
+  f->ev = es.eigenvalues();
+  f->n = es.eigenvectors().col(0);
+  int big = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::abs(f->n(k)) > std::abs(f->n(big))) big = k;
+  }
+  if (f->n(big) < 0) f->n = -f->n;
+  f->u = es.eigenvectors().col(2);
+  f->v = f->n.cross(f->u);
+  return true;
+}
+
+// Fits the patch of rays idx[0..count) at the points `pts` (dirs: the rays' world directions):
+// unweighted first, then weighted by each point's range noise from that plane.
+void fitPatch(const std::vector<OverlapRay>& rays, const int* idx, size_t count,
+              const Eigen::Vector3d* pts, const Eigen::Vector3d* dirs,
+              const MountingCalibrationOptions& o, PatchFit* f) {
+  f->p.assign(pts, pts + count);
+  f->w2.assign(count, 1.0);
+  f->sigma.assign(count, 0.0);
+  for (int pass = 0; pass < 2; ++pass) {
+    weightedPlane(f);
+    for (size_t i = 0; i < count; ++i) {
+      const Eigen::Vector3d origin = pts[i] - rays[size_t(idx[i])].range_m * dirs[i];
+      f->sigma[i] = o.range_noise_fraction * std::abs(f->n.dot(f->mean - origin));
+      f->w2[i] = 1.0 / (f->sigma[i] * f->sigma[i] + o.model_sigma_m * o.model_sigma_m);
+    }
+  }
+  weightedPlane(f);
+}
+
+using CubeKey = std::array<int64_t, 3>;
+
+CubeKey cubeOf(const Eigen::Vector3d& p, double size) {
+  return {int64_t(std::floor(p.x() / size)), int64_t(std::floor(p.y() / size)),
+          int64_t(std::floor(p.z() / size))};
+}
+
+// The rays `rays_in` grouped by the cube of `at(ray)`: rays in the cubes' key order, and each
+// cube's range of them.
+template <class At>
+void groupByCube(const std::vector<int>& rays_in, double size, At at, std::vector<CubeKey>* keys,
+                 std::vector<int>* rays_out, std::vector<size_t>* begin) {
+  std::vector<std::pair<CubeKey, int>> keyed;
+  keyed.reserve(rays_in.size());
+  for (int i : rays_in) keyed.push_back({cubeOf(at(i), size), i});
+  std::sort(keyed.begin(), keyed.end());
+  keys->clear();
+  rays_out->clear();
+  begin->assign(1, 0);
+  for (size_t i = 0; i < keyed.size(); ++i) {
+    rays_out->push_back(keyed[i].second);
+    if (i + 1 == keyed.size() || keyed[i + 1].first != keyed[i].first) {
+      keys->push_back(keyed[i].first);
+      begin->push_back(i + 1);
+    }
+  }
+}
+
+// A patch's points farther from its plane than this many sigmas of their own range noise are
+// not its (the room's planes use the same window).
+constexpr double kPatchWindowSigmas = 3.0;
+
+// The rays idx[0..count) of a half seen at least min_pass_gap_s from some ray of the other half
+// (those within it of every one see the surface at the same moment as the other pass).
+std::vector<int> passGated(const std::vector<OverlapRay>& rays, const int* idx, size_t count,
+                           double min_pass_gap_s) {
+  int64_t lo[2] = {INT64_MAX, INT64_MAX}, hi[2] = {INT64_MIN, INT64_MIN};
+  for (size_t i = 0; i < count; ++i) {
+    const OverlapRay& r = rays[size_t(idx[i])];
+    lo[r.left] = std::min(lo[r.left], r.utime);
+    hi[r.left] = std::max(hi[r.left], r.utime);
+  }
+  const double gap_us = min_pass_gap_s * 1e6;
+  std::vector<int> kept;
+  for (size_t i = 0; i < count; ++i) {
+    const OverlapRay& r = rays[size_t(idx[i])];
+    const int other = r.left ? 0 : 1;
+    if (lo[other] == INT64_MAX) continue;
+    if (double(r.utime - lo[other]) < gap_us && double(hi[other] - r.utime) < gap_us) continue;
+    kept.push_back(idx[i]);
+  }
+  return kept;
+}
+
+// Whether the rays idx[0..count) (one cube's) form a patch: both halves (the passes, as
+// passGated keeps them) hold min_neighbours points not grazing the plane, flat to within
+// their noise, and each half's own plane agrees with the patch's. Returns the kept.
+std::vector<int> patchMembers(const std::vector<OverlapRay>& rays, const Cloud& c, const int* idx,
+                              size_t count, const MountingCalibrationOptions& o) {
+  std::vector<int> kept = passGated(rays, idx, count, o.min_pass_gap_s);
+  int per_half[2] = {0, 0};
+  for (int i : kept) ++per_half[rays[size_t(i)].left];
+  if (std::min(per_half[0], per_half[1]) < o.min_neighbours) return {};
+  std::vector<Eigen::Vector3d> pts, dirs;
+  PatchFit f;
+  // The patch's plane, twice without the points beyond the window of their own noise (of
+  // another surface: at a corner the floor's or the ceiling's points measured into a wall's
+  // cube, which the wall's far, noisy rays' trim would keep).
+  for (int pass = 0; pass < 3; ++pass) {
+    if (pass > 0) {
+      std::vector<int> in;
+      for (size_t i = 0; i < kept.size(); ++i) {
+        if (std::abs(f.n.dot(pts[i] - f.mean)) <= kPatchWindowSigmas * f.sigma[i] + 1e-3)
+          in.push_back(kept[i]);
+      }
+      kept.swap(in);
+      if (int(kept.size()) < 2 * o.min_neighbours) return {};
+    }
+    pts.clear();
+    dirs.clear();
+    for (int i : kept) {
+      pts.push_back(c.p[size_t(i)]);
+      dirs.push_back(c.dir[size_t(i)]);
+    }
+    fitPatch(rays, kept.data(), kept.size(), pts.data(), dirs.data(), o, &f);
+  }
+  per_half[0] = per_half[1] = 0;
+  for (int i : kept) ++per_half[rays[size_t(i)].left];
+  if (std::min(per_half[0], per_half[1]) < o.min_neighbours) return {};
+  double noise = 0.0, chi2 = 0.0;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    noise += f.sigma[i] * f.sigma[i] / double(kept.size());
+    chi2 += std::pow(f.n.dot(pts[i] - f.mean), 2) * f.w2[i];
+  }
+  // Flat (the scatter along the normal within twice the noise's, the noise taken out of the
+  // ratio) and two-dimensional (a tenth of the cube across at least).
+  if (chi2 > 2.0 * double(kept.size())) return {};
+  if (f.ev(1) < std::max(4.0 * noise, std::pow(0.1 * o.plane_radius_m, 2))) return {};
+  if (std::max(0.0, f.ev(0) - noise) > o.max_planarity_ratio * f.ev(1)) return {};
+  std::vector<int> out;
+  for (size_t i = 0; i < kept.size(); ++i) {
+    if (o.max_incidence_rad < 0.5 * M_PI &&
+        std::abs(dirs[i].dot(f.n)) < std::cos(o.max_incidence_rad))
+      continue;
+    out.push_back(kept[i]);
+  }
+  if (!o.check_own_plane) return out;
+  for (int h = 0; h < 2; ++h) {
+    std::vector<Eigen::Vector3d> hp;
+    for (int i : out) {
+      if (int(rays[size_t(i)].left) == h) hp.push_back(c.p[size_t(i)]);
+    }
+    Eigen::Vector3d m, n;
+    if (int(hp.size()) < o.min_neighbours ||
+        !fitPcaPlane(hp.data(), int(hp.size()), 1.0, 1e300, &m, &n) ||
+        std::abs(n.dot(f.n)) < std::cos(o.max_normal_angle_rad)) {
+      return {};
+    }
+  }
+  return out;
+}
+
+// Where each ray meets the plane of its cube's surface, fitted to the cube and its two
+// neighbours along the cube's normal (the surface's whole noise band, wherever the cubes'
+// faces cut it); the ray's own point where there is none. Patches are cut by these points,
+// not by the measured ones: cut by the measured points, a surface near a cube's face splits
+// by the sign of each point's noise, and the two passes' shares of it, of unequal noise, have
+// their means pulled apart.
+std::vector<Eigen::Vector3d> surfacePoints(const std::vector<OverlapRay>& rays, const Cloud& c,
+                                           const std::vector<int>& eligible, double size,
+                                           int threads) {
+  std::vector<CubeKey> keys;
+  std::vector<int> idx;
+  std::vector<size_t> begin;
+  groupByCube(
+      eligible, size, [&](int i) { return c.p[size_t(i)]; }, &keys, &idx, &begin);
+  std::vector<Eigen::Vector3d> out(rays.size(), Eigen::Vector3d::Zero());
+  const auto cubePoints = [&](const CubeKey& k, std::vector<Eigen::Vector3d>* pts) {
+    const auto it = std::lower_bound(keys.begin(), keys.end(), k);
+    if (it == keys.end() || *it != k) return;
+    const size_t j = size_t(it - keys.begin());
+    for (size_t m = begin[j]; m < begin[j + 1]; ++m) pts->push_back(c.p[size_t(idx[m])]);
+  };
+  forChunks(keys.size(), threads, [&](size_t, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      std::vector<Eigen::Vector3d> pts;
+      cubePoints(keys[k], &pts);
+      Eigen::Vector3d mean, n;
+      bool ok = fitPcaPlane(pts.data(), int(pts.size()), 1.0, 1e300, &mean, &n);
+      if (ok) {
+        int axis = 0;
+        for (int a = 1; a < 3; ++a) {
+          if (std::abs(n(a)) > std::abs(n(axis))) axis = a;
+        }
+        for (int side : {-1, 1}) {
+          CubeKey nb = keys[k];
+          nb[size_t(axis)] += side;
+          cubePoints(nb, &pts);
+        }
+        ok = fitPcaPlane(pts.data(), int(pts.size()), 1.0, 1e300, &mean, &n);
+      }
+      for (size_t m = begin[k]; m < begin[k + 1]; ++m) {
+        const size_t i = size_t(idx[m]);
+        out[i] = c.p[i];
+        const double cos_inc = ok ? n.dot(c.dir[i]) : 0.0;
+        if (std::abs(cos_inc) < 0.1) continue;
+        const Eigen::Vector3d origin = c.p[i] - rays[i].range_m * c.dir[i];
+        out[i] = origin + c.dir[i] * (n.dot(mean - origin) / cos_inc);
+      }
+    }
+  });
+  return out;
+}
+
+// Joins the cubes of one surface that lie behind one another along its normal (a surface
+// near a cube's face, its points' surface points on either side of it by a hair): each cube
+// with the next along the largest axis of its normal when their planes agree (within
+// max_normal_angle_rad, offsets within half a cube). A joined patch keeps the first cube's key.
+void mergeAlongNormals(const Cloud& c, double size, std::vector<CubeKey>* keys,
+                       std::vector<int>* idx, std::vector<size_t>* begin) {
+  const size_t K = keys->size();
+  std::vector<Eigen::Vector3d> mean(K), n(K);
+  std::vector<char> ok(K, 0);
+  for (size_t k = 0; k < K; ++k) {
+    std::vector<Eigen::Vector3d> pts;
+    for (size_t m = (*begin)[k]; m < (*begin)[k + 1]; ++m) pts.push_back(c.p[size_t((*idx)[m])]);
+    ok[k] = fitPcaPlane(pts.data(), int(pts.size()), 1.0, 1e300, &mean[k], &n[k]);
+  }
+  std::vector<size_t> root(K);
+  for (size_t k = 0; k < K; ++k) root[k] = k;
+  const auto find = [&](size_t k) {
+    while (root[k] != k) k = root[k] = root[root[k]];
+    return k;
+  };
+  for (size_t k = 0; k < K; ++k) {
+    if (!ok[k]) continue;
+    int axis = 0;
+    for (int a = 1; a < 3; ++a) {
+      if (std::abs(n[k](a)) > std::abs(n[k](axis))) axis = a;
+    }
+    CubeKey next = (*keys)[k];
+    next[size_t(axis)] += 1;
+    const auto it = std::lower_bound(keys->begin(), keys->end(), next);
+    if (it == keys->end() || *it != next) continue;
+    const size_t j = size_t(it - keys->begin());
+    if (!ok[j] || std::abs(n[k].dot(n[j])) < std::cos(0.26) ||
+        std::abs(n[k].dot(mean[j] - mean[k])) > 0.5 * size)
+      continue;
+    const size_t a = find(k), b = find(j);
+    root[std::max(a, b)] = std::min(a, b);
+  }
+  std::vector<std::vector<size_t>> groups(K);
+  for (size_t k = 0; k < K; ++k) groups[find(k)].push_back(k);
+  std::vector<CubeKey> out_keys;
+  std::vector<int> out_idx;
+  std::vector<size_t> out_begin = {0};
+  for (size_t g = 0; g < K; ++g) {
+    if (groups[g].empty()) continue;
+    for (size_t k : groups[g])
+      out_idx.insert(out_idx.end(), idx->begin() + long((*begin)[k]),
+                     idx->begin() + long((*begin)[k + 1]));
+    out_keys.push_back((*keys)[g]);
+    out_begin.push_back(out_idx.size());
+  }
+  *keys = std::move(out_keys);
+  *idx = std::move(out_idx);
+  *begin = std::move(out_begin);
+}
+
+// The patches of the covered rays within the query ranges, by cube of patch_m of their
+// surfacePoints (in the cubes' key order; each cube tested on all cores in fixed chunks).
+Patches searchPatches(const std::vector<OverlapRay>& rays, const Cloud& c, const OverlapOptions& oo,
+                      int threads) {
+  const MountingCalibrationOptions& o = oo.base;
+  std::vector<int> eligible;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    if (c.covered[i] && rays[i].range_m >= o.min_range_m && rays[i].range_m <= o.max_range_m)
+      eligible.push_back(int(i));
+  }
+  const std::vector<Eigen::Vector3d> surface =
+      surfacePoints(rays, c, eligible, oo.patch_m, threads);
+  std::vector<CubeKey> keys;
+  std::vector<int> idx;
+  std::vector<size_t> cube;
+  groupByCube(
+      eligible, oo.patch_m, [&](int i) { return surface[size_t(i)]; }, &keys, &idx, &cube);
+  mergeAlongNormals(c, oo.patch_m, &keys, &idx, &cube);
+  std::vector<std::vector<int>> kept(keys.size());
+  forChunks(kept.size(), threads, [&](size_t, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k)
+      kept[k] = patchMembers(rays, c, &idx[cube[k]], cube[k + 1] - cube[k], o);
+  });
+  Patches out;
+  out.begin.push_back(0);
+  for (const auto& m : kept) {
+    if (m.empty()) continue;
+    out.members.insert(out.members.end(), m.begin(), m.end());
+    out.begin.push_back(out.members.size());
+  }
+  return out;
+}
+
+// Where each ray meets the patch's plane (s), and dp/dx there: the plane's fit takes its
+// in-plane coordinates from s, not from the point, whose coordinates hold its range noise's
+// share along the plane, which correlates with its residual (a ray measured long lies further
+// out along the plane as well as behind it) and tilts the fit towards each pass's line of
+// sight. The Jacobians are s's for the same reason: the point's grow with its range (a
+// rotation moves it by its range times the angle), and a Jacobian that grows with the
+// residual's own noise pulls the solution.
+void surfaceJacobians(const std::vector<OverlapRay>& rays, const OverlapModel& model,
+                      const int* idx, size_t count, const PatchFit& f,
+                      std::vector<Eigen::Vector3d>* pts, std::vector<Eigen::Vector3d>* dirs,
+                      std::vector<Eigen::Vector3d>* s, std::vector<OverlapJacobian>* J) {
+  s->resize(count);
+  J->resize(count);
+  for (size_t i = 0; i < count; ++i) {
+    const size_t ray = size_t(idx[i]);
+    const Eigen::Vector3d origin = (*pts)[i] - rays[ray].range_m * (*dirs)[i];
+    const double cos_inc = f.n.dot((*dirs)[i]);
+    const double range = std::abs(cos_inc) > 1e-3 ? f.n.dot(f.mean - origin) / cos_inc : 0.0;
+    if (range > 0.0) {
+      (*s)[i] = origin + (*dirs)[i] * range;
+      model.jacobianAtRange(ray, range, &(*J)[i]);
+    } else {
+      (*s)[i] = (*pts)[i];
+      model.point(ray, &(*pts)[i], &(*dirs)[i], &(*J)[i]);
+    }
+  }
+}
+
+// One patch's residuals into out[0..count): each point's distance from the patch's plane with
+// the plane's offset and tilt eliminated (its weighted least-squares fit to the points, and to
+// their Jacobians, subtracted: the Schur complement of the plane), weighted by its range noise.
+// With `trim`, points beyond trim_noise_sigmas of their noise are dropped first.
+void formCoveredPatch(const std::vector<OverlapRay>& rays, const OverlapModel& model,
+                      const int* idx, size_t count, bool trim, const MountingCalibrationOptions& o,
+                      Residual* out) {
+  std::vector<Eigen::Vector3d> pts(count), dirs(count);
+  std::vector<OverlapJacobian> J;
+  for (size_t i = 0; i < count; ++i) model.point(size_t(idx[i]), &pts[i], &dirs[i], nullptr);
+  PatchFit f;
+  fitPatch(rays, idx, count, pts.data(), dirs.data(), o, &f);
+  std::vector<char> keep(count, 1);
+  if (trim) {
+    for (size_t i = 0; i < count; ++i) {
+      keep[i] = std::abs(f.n.dot(pts[i] - f.mean)) <=
+                std::max(o.min_trim_m, o.trim_noise_sigmas * f.sigma[i]);
+      if (!keep[i]) f.w2[i] = 0.0;
+    }
+    weightedPlane(&f);
+  }
+  // The plane's weighted fit: a = (1, u.(s - mean), v.(s - mean)), A = sum w2 a a^T, s and the
+  // Jacobians as surfaceJacobians says.
+  std::vector<Eigen::Vector3d> s;
+  surfaceJacobians(rays, model, idx, count, f, &pts, &dirs, &s, &J);
+  Eigen::Matrix3d A = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d ay = Eigen::Vector3d::Zero();
+  Eigen::Matrix<double, 3, kMaxOverlapParameters> aJ = decltype(aJ)::Zero();
+  std::vector<Eigen::Vector3d> a(count);
+  std::vector<Eigen::Matrix<double, 1, kMaxOverlapParameters>> nJ(count);
+  double t_side[2] = {0.0, 0.0}, n_side[2] = {0.0, 0.0};
+  int kept = 0;
+  for (size_t i = 0; i < count; ++i) {
+    const Eigen::Vector3d d = s[i] - f.mean;
+    a[i] = Eigen::Vector3d(1.0, f.u.dot(d), f.v.dot(d));
+    nJ[i] = f.n.transpose() * J[i];
+    if (!keep[i]) continue;
+    ++kept;
+    A += f.w2[i] * a[i] * a[i].transpose();
+    ay += f.w2[i] * a[i] * f.n.dot(pts[i] - f.mean);
+    aJ += f.w2[i] * a[i] * nJ[i];
+    const OverlapRay& r = rays[size_t(idx[i])];
+    t_side[r.left] += 1e-6 * double(r.utime - rays.front().utime);
+    n_side[r.left] += 1.0;
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(A);
+  const bool solvable = kept > 3 && ldlt.info() == Eigen::Success && ldlt.rcond() > 1e-12;
+  const Eigen::Vector3d cy = solvable ? Eigen::Vector3d(ldlt.solve(ay)) : Eigen::Vector3d::Zero();
+  const Eigen::Matrix<double, 3, kMaxOverlapParameters> cJ =
+      solvable ? decltype(aJ)(ldlt.solve(aJ)) : aJ;
+  for (size_t i = 0; i < count; ++i) {
+    Residual& res = out[i];
+    const OverlapRay& r = rays[size_t(idx[i])];
+    res.r = f.n.dot(pts[i] - f.mean) - a[i].dot(cy);
+    res.J = nJ[i] - a[i].transpose() * cJ;
+    res.at = f.mean.cast<float>();
+    res.t_a_s = 1e-6 * double(r.utime - rays.front().utime);
+    const int other = r.left ? 0 : 1;
+    res.t_b_s = n_side[other] > 0 ? t_side[other] / n_side[other] : res.t_a_s;
+    res.w = o.noise_weighting ? std::sqrt(f.w2[i] > 0 ? f.w2[i]
+                                                      : 1.0 / (f.sigma[i] * f.sigma[i] +
+                                                               o.model_sigma_m * o.model_sigma_m))
+                              : 1.0;
+    res.scale =
+        o.noise_weighting ? std::max(o.loss_scale_sigmas, o.loss_scale_m * res.w) : o.loss_scale_m;
+    res.keep = solvable && keep[i];
+    res.dof = 1.0 - 3.0 / double(std::max(4, kept));
+  }
+}
+
+// formCoveredPatch over the rays of the patch that the track covers at the current estimate
+// (a time offset moves the ends of the track); the others' residuals dropped.
+void formPatch(const std::vector<OverlapRay>& rays, const OverlapModel& model, const int* idx,
+               size_t count, bool trim, const MountingCalibrationOptions& o, Residual* out) {
+  std::vector<int> covered;
+  std::vector<size_t> slot;
+  Eigen::Vector3d p, d;
+  for (size_t i = 0; i < count; ++i) {
+    out[i].r = 0.0;
+    out[i].w = out[i].scale = 1.0;
+    out[i].J.setZero();
+    out[i].keep = false;
+    out[i].at.setZero();
+    out[i].t_a_s = out[i].t_b_s = out[i].dof = 0.0;
+    if (!model.point(size_t(idx[i]), &p, &d, nullptr)) continue;
+    covered.push_back(idx[i]);
+    slot.push_back(i);
+  }
+  if (covered.size() < 4) return;
+  std::vector<Residual> part(covered.size());
+  formCoveredPatch(rays, model, covered.data(), covered.size(), trim, o, part.data());
+  for (size_t j = 0; j < slot.size(); ++j) out[slot[j]] = part[j];
+}
+
+std::vector<Residual> formPatchResiduals(const std::vector<OverlapRay>& rays,
+                                         const OverlapModel& model, const Patches& patches,
+                                         bool trim, const MountingCalibrationOptions& o,
+                                         int threads) {
+  std::vector<Residual> out(patches.members.size());
+  forChunks(patches.count(), threads, [&](size_t, size_t b, size_t e) {
+    for (size_t k = b; k < e; ++k) {
+      const size_t at = patches.begin[k];
+      formPatch(rays, model, &patches.members[at], patches.begin[k + 1] - at, trim, o, &out[at]);
+    }
+  });
+  return out;
+}
+
 using Normal = Eigen::Matrix<double, kMaxOverlapParameters, kMaxOverlapParameters>;
 using Gradient = Eigen::Matrix<double, kMaxOverlapParameters, 1>;
 
 // The reweighted normal equations at the change dx (chunk sums reduced in order).
 void normalEquations(const std::vector<Residual>& rs, const Gradient& dx, int threads, Normal* H,
-                     Gradient* g, double* chi2, int* used) {
+                     Gradient* g, double* chi2, double* used) {
   const size_t chunks = (rs.size() + kChunk - 1) / kChunk;
   std::vector<Normal> Hs(chunks, Normal::Zero());
   std::vector<Gradient> gs(chunks, Gradient::Zero());
   std::vector<double> cs(chunks, 0.0);
-  std::vector<int> us(chunks, 0);
+  std::vector<double> us(chunks, 0.0);
   forChunks(rs.size(), threads, [&](size_t c, size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
       const Residual& r = rs[i];
@@ -348,13 +812,13 @@ void normalEquations(const std::vector<Residual>& rs, const Gradient& dx, int th
       Hs[c].noalias() += rho1 * wj.transpose() * wj;
       gs[c].noalias() += rho1 * ei * wj.transpose();
       cs[c] += rho1 * ei * ei;
-      ++us[c];
+      us[c] += r.dof;
     }
   });
   H->setZero();
   g->setZero();
   *chi2 = 0.0;
-  *used = 0;
+  *used = 0.0;
   for (size_t c = 0; c < chunks; ++c) {
     *H += Hs[c];
     *g += gs[c];
@@ -377,7 +841,7 @@ Gradient solveRound(const std::vector<Residual>& rs, const Eigen::VectorXd& x, i
     Normal H;
     Gradient g;
     double chi2 = 0.0;
-    int used = 0;
+    double used = 0.0;
     normalEquations(rs, dx, threads, &H, &g, &chi2, &used);
     Eigen::MatrixXd Hf(F, F);
     Eigen::VectorXd gf(F);
@@ -395,7 +859,7 @@ Gradient solveRound(const std::vector<Residual>& rs, const Eigen::VectorXd& x, i
     const double moved = (next - dx).cwiseAbs().maxCoeff();
     dx = next;
     *H_out = H;
-    *chi2_dof = chi2 / std::max(1, used - F);
+    *chi2_dof = chi2 / std::max(1.0, used - F);
     if (moved < 1e-12) break;
   }
   return dx;
@@ -568,6 +1032,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
   res.x = x0;
   Cloud cloud;
   std::vector<Correspondence> corrs;
+  Patches patches;
   double change = 1e300;
   Normal H = Normal::Zero();
   double chi2_dof = 0.0;
@@ -578,15 +1043,21 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
     model.linearise(res.x);
     computePoints(rays, model, threads, &cloud);
     if (round <= 1 || change > oo.research_change) {
-      buildTrees(rays, oo.plane_voxel_m, &cloud);
-      if (cloud.half_index[0].size() + cloud.half_index[1].size() < 100) {
+      if (std::count(cloud.covered.begin(), cloud.covered.end(), 1) < 100) {
         res.reason = "the pose track covers too few lidar rays";
         return res;
       }
-      corrs = search(rays, cloud, oo, threads);
+      if (oo.patch_residuals) {
+        patches = searchPatches(rays, cloud, oo, threads);
+      } else {
+        buildTrees(rays, oo.plane_voxel_m, &cloud);
+        corrs = search(rays, cloud, oo, threads);
+      }
       ++res.searches;
     }
-    const std::vector<Residual> rs = formResiduals(rays, model, corrs, round > 0, o, threads);
+    const std::vector<Residual> rs =
+        oo.patch_residuals ? formPatchResiduals(rays, model, patches, round > 0, o, threads)
+                           : formResiduals(rays, model, corrs, round > 0, o, threads);
     const int kept =
         int(std::count_if(rs.begin(), rs.end(), [](const Residual& r) { return r.keep; }));
     if (kept < o.min_correspondences) {
@@ -695,9 +1166,20 @@ void MobileOverlapModel::linearise(const Eigen::VectorXd& x) {
 
 bool MobileOverlapModel::point(size_t i, Eigen::Vector3d* p, Eigen::Vector3d* direction,
                                OverlapJacobian* J) const {
+  return scaledPoint(i, 1.0, p, direction, J);
+}
+
+bool MobileOverlapModel::jacobianAtRange(size_t i, double range_m, OverlapJacobian* J) const {
+  Eigen::Vector3d p, d;
+  return scaledPoint(i, range_m / std::max(1e-9, rays_[i].range_m), &p, &d, J);
+}
+
+bool MobileOverlapModel::scaledPoint(size_t i, double scale, Eigen::Vector3d* p,
+                                     Eigen::Vector3d* direction, OverlapJacobian* J) const {
   const RayPose& P = poses_[i];
   if (!P.covered) return false;
   const OverlapRay& ray = rays_[i];
+  const Eigen::Vector3d q = scale * ray.q;
   const size_t S = sens_.size();
   // The odometry parameters' entries of x are changes from the track's parameters.
   double px = P.x, py = P.y, th = P.th;
@@ -709,7 +1191,7 @@ bool MobileOverlapModel::point(size_t i, Eigen::Vector3d* p, Eigen::Vector3d* di
     th += d[2] * xk;
   }
   const Eigen::Vector3d lever(x_(kLeverX), x_(kLeverY), x_(kLeverZ));
-  const Eigen::Vector3d rq = R_ * ray.q;
+  const Eigen::Vector3d rq = R_ * q;
   const Eigen::Vector3d b = rq + t_BL_ + lever;
   const double c = std::cos(th), s = std::sin(th);
   const double tau = (double(ray.utime) - t_mid_us_) * 1e-6;
@@ -725,7 +1207,7 @@ bool MobileOverlapModel::point(size_t i, Eigen::Vector3d* p, Eigen::Vector3d* di
   const auto rotZ = [&](const Eigen::Vector3d& v) {
     return Eigen::Vector3d(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
   };
-  for (int k = 0; k < 3; ++k) J->col(kGamma + k) = rotZ(dR_[k] * ray.q);
+  for (int k = 0; k < 3; ++k) J->col(kGamma + k) = rotZ(dR_[k] * q);
   const Eigen::Vector3d dth(-rb.y(), rb.x(), 0.0);  // d p / d theta
   J->col(kTimeOffset) = Eigen::Vector3d(P.vx, P.vy, 0.0) + dth * P.vth;
   J->col(kDriftX) = Eigen::Vector3d(-tau, 0.0, 0.0);

@@ -47,6 +47,13 @@ class OverlapModel {
   // the ray's time. Thread-safe (const).
   virtual bool point(size_t i, Eigen::Vector3d* p, Eigen::Vector3d* direction,
                      OverlapJacobian* J) const = 0;
+  // dp/dx of ray i at `range_m` instead of its measured range (the Jacobian of the point the
+  // ray meets its surface at, free of its own range noise); by default the measured one's.
+  virtual bool jacobianAtRange(size_t i, double range_m, OverlapJacobian* J) const {
+    Eigen::Vector3d p, d;
+    (void)range_m;
+    return point(i, &p, &d, J);
+  }
 };
 
 struct OverlapOptions {
@@ -67,6 +74,16 @@ struct OverlapOptions {
   // each residual's query and neighbours fall in (the track's error between two stretches of
   // the drive is common to all their residuals, wherever they lie).
   double cluster_s = 0.0;
+  // Plane adjustment instead of point-to-plane: the points of each cube of patch_m (both
+  // passes' within min_pass_gap_s of the other's, flat to within their range noise) each give
+  // one residual against the patch's plane, the plane (offset and tilt) eliminated, so each
+  // point's noise enters once. Point-to-plane compares every query with the local plane of
+  // the other pass's k nearest points: their noise enters every query that leans on them.
+  // Off: on rig B's plan drive it halves the sigmas in a fifth of the CPU time, but alpha and
+  // the time offset move with patch_m by more than their sigmas (the EKF track's error, which
+  // they do not cover): docs/explanation/results.md, rig B.
+  bool patch_residuals = false;
+  double patch_m = 0.25;
   // Rounds whose parameter change is below this re-linearise without a new search.
   double research_change = 2e-4;
   std::function<void(double)> progress;  // fraction of the rounds done (may be empty)
@@ -123,6 +140,7 @@ class MobileOverlapModel : public OverlapModel {
   void linearise(const Eigen::VectorXd& x) override;
   bool point(size_t i, Eigen::Vector3d* p, Eigen::Vector3d* direction,
              OverlapJacobian* J) const override;
+  bool jacobianAtRange(size_t i, double range_m, OverlapJacobian* J) const override;
   // The base track (re-linearising the odometry: a new track and its sensitivities, about
   // parameters that the caller then takes as x's origin for those entries).
   void setTrack(const PoseTrack& track, std::vector<Sensitivity> sensitivities);
@@ -141,6 +159,9 @@ class MobileOverlapModel : public OverlapModel {
   Eigen::Matrix3d R_, dR_[3];
   std::vector<RayPose> poses_;
   std::vector<double> dpose_;  // per ray, per sensitivity: d(x, y, th)/d x_k
+  // Ray i's point with its lidar-frame point scaled by `scale` (1: as measured).
+  bool scaledPoint(size_t i, double scale, Eigen::Vector3d* p, Eigen::Vector3d* direction,
+                   OverlapJacobian* J) const;
 };
 
 // Least-squares plane (PCA) of pts[0..count): false if they are not flat (the smallest
