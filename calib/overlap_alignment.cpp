@@ -571,8 +571,9 @@ std::vector<Eigen::Vector3d> surfacePoints(const std::vector<OverlapRay>& rays, 
 // near a cube's face, its points' surface points on either side of it by a hair): each cube
 // with the next along the largest axis of its normal when their planes agree (within
 // max_normal_angle_rad, offsets within half a cube). A joined patch keeps the first cube's key.
-void mergeAlongNormals(const Cloud& c, double size, std::vector<CubeKey>* keys,
-                       std::vector<int>* idx, std::vector<size_t>* begin) {
+void mergeAlongNormals(const Cloud& c, double size, double max_normal_angle_rad,
+                       std::vector<CubeKey>* keys, std::vector<int>* idx,
+                       std::vector<size_t>* begin) {
   const size_t K = keys->size();
   std::vector<Eigen::Vector3d> mean(K), n(K);
   std::vector<char> ok(K, 0);
@@ -598,7 +599,7 @@ void mergeAlongNormals(const Cloud& c, double size, std::vector<CubeKey>* keys,
     const auto it = std::lower_bound(keys->begin(), keys->end(), next);
     if (it == keys->end() || *it != next) continue;
     const size_t j = size_t(it - keys->begin());
-    if (!ok[j] || std::abs(n[k].dot(n[j])) < std::cos(0.26) ||
+    if (!ok[j] || std::abs(n[k].dot(n[j])) < std::cos(max_normal_angle_rad) ||
         std::abs(n[k].dot(mean[j] - mean[k])) > 0.5 * size)
       continue;
     const size_t a = find(k), b = find(j);
@@ -639,7 +640,7 @@ Patches searchPatches(const std::vector<OverlapRay>& rays, const Cloud& c, const
   std::vector<size_t> cube;
   groupByCube(
       eligible, oo.patch_m, [&](int i) { return surface[size_t(i)]; }, &keys, &idx, &cube);
-  mergeAlongNormals(c, oo.patch_m, &keys, &idx, &cube);
+  mergeAlongNormals(c, oo.patch_m, oo.base.max_normal_angle_rad, &keys, &idx, &cube);
   std::vector<std::vector<int>> kept(keys.size());
   forChunks(kept.size(), threads, [&](size_t, size_t b, size_t e) {
     for (size_t k = b; k < e; ++k)

@@ -314,6 +314,9 @@ std::pair<double, double> fewestDisagreements(const Disagreements& d, double lo,
 std::optional<double> fitPlateAgreeing(const PlateModel& m, const std::vector<PlateRay>& rays,
                                        const std::vector<double>& weights, double start_rad,
                                        double window_rad) {
+  if (weights.size() != rays.size())
+    throw std::invalid_argument("fitPlateAgreeing: " + std::to_string(weights.size()) +
+                                " weights for " + std::to_string(rays.size()) + " rays");
   if (std::none_of(weights.begin(), weights.end(), [](double w) { return w > 0.0; }))
     return std::nullopt;
   double centre = start_rad;

@@ -90,22 +90,24 @@ struct PlateRayBeams {
 std::vector<double> plateHitWeights(const PlateModel& m, const std::vector<PlateRay>& rays,
                                     const std::vector<PlateRayBeams>& beams);
 
-// The angle whose predicted centroid points where the measured one does (fixed-point
-// iteration from the measured centroid's direction). Not found with fewer than `min_hits`.
 // The agreeing estimator: the angle whose sharp plate (plateCovers) disagrees with the fewest
-// measured rays (`weights` > 0 a hit, 0 not, < 0 in neither), the middle of the angles that do,
-// searched within `window_rad` of `start_rad` (re-centred while the fewest lie at its end).
-// Each ray is in or out, and a few are wrong whatever the angle (a background's mixed pixel in
-// the plate's gate, ~1 in 60 edges; a mixed pixel where a scan clips a corner of the plate): the
-// centroid moves with each of them, and the sampled centroid's mismatch, flat where no counted
-// ray flips (the ray past each run of hits is in neither), turned 4 spurious hits of one view's
-// 4 900 into a 0.14 deg error (seed 3 of the plan's recording). Counting disagreements is what
-// the rays say when a few of them can be wrong: one spurious hit cannot win against the
-// rays the plate's edge would flip to reach it. nullopt when no counted ray is a hit.
+// measured rays (`weights` > 0 a hit, 0 not, < 0 in neither): the middle between the first and
+// the last angle with the fewest (when the fewest come in separate ranges, the middle of their
+// whole span, which may lie between them), searched within `window_rad` of `start_rad` (re-centred
+// while the fewest lie at its end). Each ray is in or out, and a few are wrong whatever the angle
+// (a background's mixed pixel in the plate's gate, ~1 in 60 edges; a mixed pixel where a scan clips
+// a corner of the plate): the centroid moves with each of them, and the sampled centroid's
+// mismatch, flat where no counted ray flips (the ray past each run of hits is in neither), turned 4
+// spurious hits of one view's 4 900 into a 0.14 deg error (seed 3 of the plan's recording).
+// Counting disagreements is what the rays say when a few of them can be wrong: one spurious hit
+// cannot win against the rays the plate's edge would flip to reach it. nullopt when no counted ray
+// is a hit; throws std::invalid_argument when `weights` and `rays` differ in size.
 std::optional<double> fitPlateAgreeing(const PlateModel& m, const std::vector<PlateRay>& rays,
                                        const std::vector<double>& weights, double start_rad,
                                        double window_rad = 0.01);
 
+// The angle whose predicted centroid points where the measured one does (fixed-point
+// iteration from the measured centroid's direction). Not found with fewer than `min_hits`.
 PlateModelFit fitPlateModel(const PlateModel& m, const std::vector<PlateRay>& rays, int min_hits);
 
 // The sampled estimator: the smooth edge stands for the mean over where the edges fall between

@@ -570,8 +570,9 @@ void takePlateCandidates(const std::vector<SweepRay>& rays, const RigAValues& v,
   const auto at = scanBeamOf(rays);
   long beams = 0;
   for (const auto& sb : at) beams = std::max(beams, sb.second + 1);
-  std::vector<std::pair<float, int>> grid(size_t((at.empty() ? 0 : at.back().first + 1) * beams),
-                                          {0.0f, -1});
+  long scans = 0;
+  for (const auto& sb : at) scans = std::max(scans, sb.first + 1);
+  std::vector<std::pair<float, int>> grid(size_t(scans * beams), {0.0f, -1});
   const auto cell = [&](long scan, long beam) { return size_t(scan * beams + beam); };
   for (size_t i = 0; i < rays.size(); ++i)
     grid[cell(at[i].first, at[i].second)].first = float(rays[i].range_m);
@@ -681,6 +682,10 @@ double viewsPerOffset(const std::vector<RigASweep>& sweeps, const RigASolveOptio
 // by 0.004 deg. The views agree within 0.001 mm of the true offset on seed 3 of the plan's
 // recording, but cannot tell an offset from a height error: the shift serves the plate only, the
 // walls alone give the offset.
+// The most the plate's views may move the offset they are placed with [mm]: 20 sigma of the
+// walls' offset on the plan's recording; beyond, the model lacks something (warnPlateShift).
+constexpr double kMaxPlateShiftMm = 2.0;
+
 void placePlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o, State* st) {
   std::copy(st->g, st->g + 3, st->g_plate);
   st->g_plate[0] += st->plate_shift_mm;
@@ -695,7 +700,9 @@ void placePlates(const std::vector<RigASweep>& sweeps, const RigASolveOptions& o
     if (st->views_per_offset == 0.0)
       st->views_per_offset = viewsPerOffset(sweeps, o, *st, st->g_plate);
     if (!(std::fabs(st->views_per_offset) > 1e-6)) break;
-    const double shift = -(sum / n) / st->views_per_offset;
+    const double shift = std::clamp(st->plate_shift_mm - (sum / n) / st->views_per_offset,
+                                    -kMaxPlateShiftMm, kMaxPlateShiftMm) -
+                         st->plate_shift_mm;
     if (std::fabs(shift) < 1e-3) break;
     st->plate_shift_mm += shift;
     st->g_plate[0] += shift;
@@ -827,6 +834,19 @@ void checkResiduals(const RigASolveOptions& o, State* st, RigCalibration* r) {
 
 // A warning when alpha moves with the offset (each plate seen from one side of the scan
 // plane: half turns), naming what separates them.
+// The plate's two views agree at an offset the walls do not give (beyond 3 sigma of theirs,
+// or at the clamp): the plate's height, thickness or the offset differ from the model.
+void warnPlateShift(const State& st, double offset_sigma_mm, RigCalibration* r) {
+  if (!(std::fabs(st.plate_shift_mm) > 3.0 * offset_sigma_mm)) return;
+  std::ostringstream w;
+  w << "the plate's two views agree at an offset " << st.plate_shift_mm
+    << " mm from the walls' (sigma " << offset_sigma_mm
+    << " mm): the plate's height or thickness in the rig file, or the offset, differs from the "
+       "model; alpha is placed with the views' offset"
+    << (std::fabs(st.plate_shift_mm) >= kMaxPlateShiftMm ? " (held at its limit)" : "");
+  r->warnings.push_back(w.str());
+}
+
 void warnOneSidedPlate(RigCalibration* r) {
   if (r->correlation.rows() < 2 || !r->parameters[0].observable || !r->parameters[1].observable) {
     return;
@@ -953,6 +973,7 @@ RigCalibration solveRigA(const std::vector<RigASweep>& sweeps, const RigASolveOp
   r.rms_after = inlierRms(keptResiduals(st), st.sigma_mm);
   checkResiduals(o, &st, &r);
   warnOneSidedPlate(&r);
+  warnPlateShift(st, std::sqrt(cov(1, 1)), &r);
   r.sweeps_used = int(sweeps.size());
   r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return r;

@@ -151,6 +151,21 @@ TEST(CalibRig, MountingAloneSaysWhenTheWheelsDisagreeWithTheGyro) {
       singleCommandWarnings({"mounting", "--rig", "rig_b", "--logs", log, "--no-paper"}, dir);
   EXPECT_NE(warnings.find("the wheels disagree with the gyro"), std::string::npos) << warnings;
   EXPECT_NE(warnings.find("run `sweepmap calib rig`"), std::string::npos) << warnings;
+  // The same drive of a build whose wheels are the rig file's: no such warning.
+  std::vector<std::string> perfect = {"--rig", "rig_b",
+                                      "--set", "sim.path=figure8",
+                                      "--set", "sim.stop_interval_s=20",
+                                      "--set", "sim.duration_s=40"};
+  for (const char* kv :
+       {"sim.wheel_radius_left_error_fraction=0", "sim.wheel_radius_right_error_fraction=0",
+        "sim.wheel_distance_error_m=0"}) {
+    perfect.insert(perfect.end(), {"--set", kv});
+  }
+  const std::string clean = singleCommandWarnings(
+      {"mounting", "--rig", "rig_b", "--logs",
+       cachedSimLog("calib_rig_b_figure8_40s_true_wheels", perfect), "--no-paper"},
+      dir);
+  EXPECT_EQ(clean.find("wheels"), std::string::npos) << clean;
 }
 
 // `calib axis-offset` alone on a realistic build (the scan plane tilted, the mirror offset,

@@ -127,8 +127,7 @@ def one_seed(bin_dir, out, kind, seed, sim_args):
         results["calib " + name] = (reader(j), time.monotonic() - t0)
         # Whether it said that another parameter is off (its warnings point to calib rig).
         warned.append(any("calib rig" in w for w in j.get("warnings", [])))
-    results["warned"] = warned
-    return results
+    return results, warned
 
 
 def shown(error, unit, truth, relative):
@@ -151,23 +150,18 @@ def table(kind, by_seed):
     lines = [f"### {kind}", "", "| seed | command | parameter | error (abs(error)/σ) | wall s |",
              "|---|---|---|---|---|"]
     for seed, results in by_seed.items():
-        for command, (rows, wall) in commands(results):
+        for command, (rows, wall) in results.items():
             for i, (key, error, sigma, unit, truth) in enumerate(rows):
                 lines.append(f"| {seed} | {command} | {key} | {cell(key, error, sigma, unit, truth)} | "
                              + (f"{wall:.1f}" if i == 0 else "") + " |")
     return "\n".join(lines) + "\n"
 
 
-def commands(results):
-    """A seed's (command, (rows, wall)) pairs."""
-    return [(c, r) for c, r in results.items() if c != "warned"]
-
-
-def warnings_line(kind, by_seed):
+def warnings_line(kind, warned_by_seed):
     """How often each single-parameter command said that another parameter is off."""
     names = [name for name, _, _ in SINGLES[kind]]
-    counts = [sum(r["warned"][i] for r in by_seed.values()) for i in range(len(names))]
-    return "\n" + "; ".join(f"`calib {n}` pointed to `calib rig` on {c}/{len(by_seed)} seeds"
+    counts = [sum(w[i] for w in warned_by_seed.values()) for i in range(len(names))]
+    return "\n" + "; ".join(f"`calib {n}` pointed to `calib rig` on {c}/{len(warned_by_seed)} seeds"
                             for n, c in zip(names, counts)) + "\n"
 
 
@@ -178,7 +172,7 @@ def summary(by_seed):
              "|---|---|---|---|---|"]
     cells = {}
     for results in by_seed.values():
-        for command, (rows, _) in commands(results):
+        for command, (rows, _) in results.items():
             for key, error, sigma, unit, truth in rows:
                 if key in TARGETS:
                     cells.setdefault((command, key), []).append((error, sigma, unit, truth))
@@ -233,11 +227,11 @@ def main():
         if kind not in SINGLES:
             ap.error(f"--kinds: {kind} is not rig_a, rig_b or rig_c")
         sim_args = plan_sim_args(o.bin, kind)
-        by_seed = {}
+        by_seed, warned = {}, {}
         for seed in o.seeds.split(","):
             print(f"calib_seeds: {kind} seed {seed}", file=sys.stderr, flush=True)
-            by_seed[seed] = one_seed(o.bin, o.out, kind, int(seed), sim_args)
-        report.append(table(kind, by_seed) + summary(by_seed) + warnings_line(kind, by_seed))
+            by_seed[seed], warned[seed] = one_seed(o.bin, o.out, kind, int(seed), sim_args)
+        report.append(table(kind, by_seed) + summary(by_seed) + warnings_line(kind, warned))
         plot(o.out, kind, by_seed)
         print(report[-1], flush=True)
     with open(f"{o.out}/calib_seeds.md", "w") as f:

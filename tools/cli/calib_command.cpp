@@ -90,7 +90,7 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       "paper's result under \"paper\", warnings and, for simulated logs, the truth and "
       "error_mrad. Warns when the wheels disagree with the gyro (each radius over the track "
       "against the rig file's, beyond 3 sigma): the odometry track is then biased, and calib "
-      "rig calibrates them together.\n\n"
+      "rig calibrates them together; and when the drive cannot check them (a steady circle).\n\n"
       "Exit status: 0 calibrated; 1 not calibrated (a corrupt log, too little data, no overlap); "
       "2 bad option or rig, a missing log, or an output folder that does not exist; 4 OUT cannot "
       "be written.\n"

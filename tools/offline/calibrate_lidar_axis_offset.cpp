@@ -227,13 +227,14 @@ Eigen::Matrix3d lidarRotationOf(const RotatingLidarConfig& rig) {
 // planes; a warning into r when they bend more than noise does.
 void checkWalls(const RotatingLidarConfig& rig, const Inputs& in, LidarAxisOffsetResult* r) {
   std::vector<double> medians;
+  const Eigen::Matrix3d R_L = lidarRotationOf(rig);
   for (size_t k = 0; k < in.planes.size() && k < r->planes.size(); ++k) {
     if (!r->planes[k].wall) continue;
     std::vector<Eigen::Vector3f> pts;
     std::vector<int> idx;
     for (const SweepRay& ray : in.planes[k].rays) {
       idx.push_back(static_cast<int>(pts.size()));
-      pts.push_back((1e-3 * placeRayMm(ray, r->offset_mm, lidarRotationOf(rig))).cast<float>());
+      pts.push_back((1e-3 * placeRayMm(ray, r->offset_mm, R_L)).cast<float>());
     }
     const auto m = planeCellMediansMm(pts, idx, r->planes[k].normal,
                                       -1e-3 * r->planes[k].distance_mm, 0.5, 100);
@@ -273,6 +274,8 @@ void checkAgainstJointModel(const RotatingLidarConfig& rig, Inputs* in, LidarAxi
   };
   const auto x = find("geometry.lidar_offset_x_mm");
   if (!x) return;
+  // As if independent: both come from the same walls, so the difference's sigma is smaller and
+  // this errs towards saying nothing.
   const double sigma = std::hypot(x->sigma, r->sigma_x_mm);
   const double z = std::abs(x->value - r->offset_mm.x()) / sigma;
   if (!(z > 3.0)) return;

@@ -138,12 +138,20 @@ bool timeOffsetAtBound(const MountingCalibRequest& o, const MethodRuns& runs) {
 // when a radius or the track is off, and the track the mounting was fitted on bends with
 // them). Said on stderr too.
 std::vector<std::string> othersOff(const MountingCalibRequest& o, const MobileLidarConfig& rig) {
+  std::vector<std::string> warnings;
+  if (o.track == "truth") return warnings;  // the true track: the wheels do not enter
   const OdometryReadings readings = loadOdometryReadings(o.log);
   WheelGyroOptions options;
   options.ticks_per_revolution = rig.odometry.ticks_per_revolution;
   const WheelGyroResult wg = calibrateWheelsAgainstGyro(readings.wheels, readings.gyro, options);
-  std::vector<std::string> warnings;
-  if (!wg.ok) return warnings;
+  if (!wg.ok) {
+    warnings.push_back("this drive cannot check the wheels against the gyro (" + wg.reason +
+                       "), so the mounting assumes the rig file's wheel radii and track; drive "
+                       "the figure-eight `sweepmap calib plan` asks for, or run "
+                       "`sweepmap calib rig` on it, to check them");
+    for (const auto& text : warnings) std::cerr << kWhat << ": warning: " << text << "\n";
+    return warnings;
+  }
   const double r_right = rig.odometry.wheel_radius_right_m > 0 ? rig.odometry.wheel_radius_right_m
                                                                : rig.odometry.wheel_radius_m;
   const double nominal[2] = {rig.odometry.wheel_radius_m / rig.odometry.ekf.wheel_distance_m,

@@ -78,7 +78,8 @@ void takeSweep(const RigCalibRequest& o, const RotatingLidarConfig& rig, SweepJo
 
 // The sweeps segmented on two workers while the logs are read (a sweep's planes depend on its
 // rays alone: the same result whatever the threads): the segmentation is ~80 % of reading.
-// At most kSweepWorkers sweeps wait, so a log's rays are never all in memory at once.
+// At most one sweep waits while the workers segment theirs (and the reader holds the next),
+// so a log's rays are never all in memory at once.
 constexpr size_t kSweepWorkers = 2;
 
 class SweepPool {
@@ -88,10 +89,10 @@ class SweepPool {
   }
   ~SweepPool() { stop(); }
 
-  // Queues a sweep; waits while kSweepWorkers sweeps wait already.
+  // Queues a sweep; waits while one waits already.
   void push(SweepJob job) {
     std::unique_lock<std::mutex> lock(mutex_);
-    room_.wait(lock, [&] { return next_ + kSweepWorkers > jobs_.size(); });
+    room_.wait(lock, [&] { return next_ == jobs_.size(); });
     jobs_.push_back(std::move(job));
     ready_.notify_one();
   }
