@@ -472,15 +472,18 @@ std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f
     LidarPlaneRays& p = planes[k];
     if (p.rays.size() < 3) continue;
     p.source = source + " plane " + std::to_string(k);
-    if (o.max_rays_per_plane > 0 && p.rays.size() > static_cast<size_t>(o.max_rays_per_plane)) {
-      const size_t stride = (p.rays.size() + o.max_rays_per_plane - 1) / o.max_rays_per_plane;
-      std::vector<SweepRay> kept;
-      for (size_t i = 0; i < p.rays.size(); i += stride) kept.push_back(p.rays[i]);
-      p.rays = std::move(kept);
-    }
+    if (o.max_rays_per_plane > 0) stridePlaneRays(size_t(o.max_rays_per_plane), &p);
     out.push_back(std::move(p));
   }
   return out;
+}
+
+void stridePlaneRays(size_t max_rays, LidarPlaneRays* plane) {
+  if (max_rays == 0 || plane->rays.size() <= max_rays) return;
+  const size_t stride = (plane->rays.size() + max_rays - 1) / max_rays;
+  std::vector<SweepRay> kept;
+  for (size_t i = 0; i < plane->rays.size(); i += stride) kept.push_back(plane->rays[i]);
+  plane->rays = std::move(kept);
 }
 
 LidarAxisOffsetResult solveLidarAxisOffset(const std::vector<LidarPlaneRays>& planes,

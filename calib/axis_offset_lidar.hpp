@@ -70,6 +70,9 @@ std::vector<LidarPlaneRays> segmentSweepPlanes(const std::vector<Eigen::Vector3f
                                                const PlaneSegmentationOptions& options,
                                                const std::string& source);
 
+// Every n-th of the plane's rays, n the smallest that leaves at most `max_rays` (0: all kept).
+void stridePlaneRays(size_t max_rays, LidarPlaneRays* plane);
+
 // A ray placed with the offset t [mm]: Rz(phi) (t + R_L r (0, sin theta, cos theta)) [mm],
 // R_L the scan plane's tilt and mirror offset (rotating::lidarRotation; I: the paper's model).
 Eigen::Vector3d placeRayMm(const SweepRay& ray, const Eigen::Vector3d& offset_mm,

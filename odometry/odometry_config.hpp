@@ -14,6 +14,10 @@ struct OdometryConfig {
   // The right wheel's radius when it differs from the left's (wheel_radius_m); 0: the same.
   // Set by rig B's joint calibration (calib/mobile_rig_calibration.hpp), not a rig-file key.
   double wheel_radius_right_m = 0.0;
+  // The right wheel's radius: wheel_radius_right_m, or wheel_radius_m when that is 0.
+  double rightWheelRadius() const {
+    return wheel_radius_right_m > 0 ? wheel_radius_right_m : wheel_radius_m;
+  }
   double ticks_per_revolution = 4000.0;  // BreezySLAM's Mines rover: 180 deg per 2000 ticks
   bool use_imu = true;
   EkfConfig ekf;

@@ -146,9 +146,7 @@ void OdometryNode::onTicks(const Message& msg, Outbox& out) {
   const double dt = 1e-6 * static_cast<double>(m.utime - last_ticks_->utime);
   const double per_tick = 2.0 * M_PI * config_.wheel_radius_m / config_.ticks_per_revolution;
   const double per_tick_right =
-      config_.wheel_radius_right_m > 0
-          ? 2.0 * M_PI * config_.wheel_radius_right_m / config_.ticks_per_revolution
-          : per_tick;
+      2.0 * M_PI * config_.rightWheelRadius() / config_.ticks_per_revolution;
   const double vl = static_cast<double>(m.left_ticks - last_ticks_->left) * per_tick / dt;
   const double vr = static_cast<double>(m.right_ticks - last_ticks_->right) * per_tick_right / dt;
   if (!std::isfinite(vl) || !std::isfinite(vr) || std::abs(vl) > config_.ekf.max_speed_m_s ||

@@ -378,6 +378,15 @@ TEST(PlateModel, MixedPixelsAtThePlatesEdgesAreCountedOrLeftOut) {
   }
 }
 
+// The default plate with calib rig's gate for the simulator's 12 mm of range noise (5 sigma),
+// at the plan's recording's true angle.
+struct NoisyPlate {
+  PlateModel model = PlateModel::fromConfig(PlateConfig{});
+  PlateRegion region = PlateRegion::fromConfig(PlateConfig{});
+  double alpha = 29.3598 * kDeg;
+  NoisyPlate() { model.range_gate_m = 5 * 0.012; }
+};
+
 // The rays behind the plate's edges graze the floor, whose range climbs by tens of millimetres a
 // beam there, and every range has the simulator's 12 mm of noise (the gate 5 sigma): the
 // background's first rays then read "between" the plate and the background three beams out,
@@ -387,11 +396,10 @@ TEST(PlateModel, MixedPixelsAtThePlatesEdgesAreCountedOrLeftOut) {
 // still differs from the plate's rays at the true angle is the background's mixed pixels that
 // fell within the plate's gate (~1 in 60 edges).
 TEST(PlateModel, MixedPixelsBeforeAGrazedFloorAreNotCountedAsThePlates) {
-  PlateConfig c;
-  PlateModel m = PlateModel::fromConfig(c);
-  m.range_gate_m = 5 * 0.012;
-  const PlateRegion region = PlateRegion::fromConfig(c);
-  const double alpha = 29.3598 * kDeg;
+  const NoisyPlate p;
+  const PlateModel& m = p.model;
+  const PlateRegion& region = p.region;
+  const double alpha = p.alpha;
   for (const uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE(seed);
     const MixedTurn t = mixedFullTurn(m, region, alpha, seed, true, 0.012);
@@ -412,11 +420,10 @@ TEST(PlateModel, MixedPixelsBeforeAGrazedFloorAreNotCountedAsThePlates) {
 // recording, because its mismatch is flat wherever no counted ray flips. The angle that
 // disagrees with the fewest rays is not moved by them.
 TEST(PlateModel, AgreeingFitIsNotMovedByAFewWrongRays) {
-  PlateConfig c;
-  PlateModel m = PlateModel::fromConfig(c);
-  m.range_gate_m = 5 * 0.012;
-  const PlateRegion region = PlateRegion::fromConfig(c);
-  const double alpha = 29.3598 * kDeg;
+  const NoisyPlate p;
+  const PlateModel& m = p.model;
+  const PlateRegion& region = p.region;
+  const double alpha = p.alpha;
   double worst = 0.0, worst_sampled = 0.0;
   for (const uint64_t seed : {1, 2, 3, 4, 5, 6}) {
     SCOPED_TRACE(seed);

@@ -253,12 +253,7 @@ void checkAgainstJointModel(const RotatingLidarConfig& rig, Inputs* in, LidarAxi
   for (size_t k = 0; k < in->sweeps.size(); ++k) {
     for (size_t j = 0; j < in->plane_counts[k]; ++j) {
       LidarPlaneRays& p = in->planes[next++];
-      // As many rays as calib rig keeps (evenly strided): its model at its cost.
-      const size_t stride = (p.rays.size() + kRigCalibPlaneRays - 1) / kRigCalibPlaneRays;
-      std::vector<SweepRay> kept;
-      for (size_t i = 0; i < p.rays.size(); i += std::max<size_t>(1, stride))
-        kept.push_back(p.rays[i]);
-      p.rays = std::move(kept);
+      stridePlaneRays(kRigCalibPlaneRays, &p);  // as many rays as calib rig keeps
       in->sweeps[k].planes.push_back(std::move(p));
     }
   }

@@ -152,8 +152,7 @@ std::vector<std::string> othersOff(const MountingCalibRequest& o, const MobileLi
     for (const auto& text : warnings) std::cerr << kWhat << ": warning: " << text << "\n";
     return warnings;
   }
-  const double r_right = rig.odometry.wheel_radius_right_m > 0 ? rig.odometry.wheel_radius_right_m
-                                                               : rig.odometry.wheel_radius_m;
+  const double r_right = rig.odometry.rightWheelRadius();
   const double nominal[2] = {rig.odometry.wheel_radius_m / rig.odometry.ekf.wheel_distance_m,
                              r_right / rig.odometry.ekf.wheel_distance_m};
   std::ostringstream w;

@@ -54,9 +54,7 @@ RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
   in.scans = log.scans;
   in.nominal = rig.mounting.toMounting();
   in.wheels.radius_left_m = rig.odometry.wheel_radius_m;
-  in.wheels.radius_right_m = rig.odometry.wheel_radius_right_m > 0
-                                 ? rig.odometry.wheel_radius_right_m
-                                 : rig.odometry.wheel_radius_m;
+  in.wheels.radius_right_m = rig.odometry.rightWheelRadius();
   in.wheels.wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
   in.truth = truthOf(log);
   if (log.truth_mounting) in.room_truth_m = simulatedRoom(*log.truth_mounting);
