@@ -232,8 +232,9 @@ RigCalibration report(const MobileRigCalibrationInput& in, const Solution& s) {
       {"odometry.wheel_radius_m", "m", s.w.radius_left_m, w0.radius_left_m, scale},
       {"odometry.wheel_radius_right_m", "m", s.w.radius_right_m, w0.radius_right_m, scale},
       {"odometry.wheel_distance_m", "m", s.w.wheel_distance_m, w0.wheel_distance_m, scale},
-      {"lidar.time_offset_s", "s", -x(M::kTimeOffset), 0.0, s.free[M::kTimeOffset]},
-      {"odometry.gyro_bias_rad_s", "rad/s", s.wg.x(2), 0.0, s.wheels},
+      {"lidar.time_offset_s", "s", in.time_offset_s - x(M::kTimeOffset), in.time_offset_s,
+       s.free[M::kTimeOffset]},
+      {"odometry.gyro_bias_rad_s", "rad/s", s.wg.x(2), in.gyro_bias_rad_s, s.wheels},
   };
   const Eigen::MatrixXd cov = reportedCovariance(s);
   for (int i = 0; i < kReported; ++i) {

@@ -49,7 +49,11 @@ using MobileOdometryReplay = std::function<MobileOdometryRun(const MobileWheelPa
 
 struct MobileRigCalibrationInput {
   std::vector<Scan2D> scans;
-  LidarMounting nominal;          // the rig file's mounting (the start)
+  LidarMounting nominal;  // the rig file's mounting (the start)
+  // The rig file's lidar.time_offset_s, by which `scans` are already on the odometry's clock:
+  // the estimate is this plus the drive's remaining offset.
+  double time_offset_s = 0.0;
+  double gyro_bias_rad_s = 0.0;   // the rig file's odometry.gyro_bias_rad_s (reported beside)
   MobileWheelParameters wheels;   // the rig file's wheels (the start)
   MobileOdometryReplay odometry;  // required
   // The drive's raw encoder and gyro readings (step 1); empty: the wheels and the gyro bias

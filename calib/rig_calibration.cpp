@@ -123,7 +123,7 @@ RigCalibrationFile rigCalibrationFile(const RigCalibration& c, const std::string
     f.source["sigma." + p.key] = num(p.sigma);
   }
   f.source["tool"] = tool;
-  f.source["sweeps"] = std::to_string(c.sweeps_used);
+  if (c.sweeps_used > 0) f.source["sweeps"] = std::to_string(c.sweeps_used);
   f.source["rms_before_" + c.residual_unit] = num(c.rms_before);
   f.source["rms_after_" + c.residual_unit] = num(c.rms_after);
   f.logs = logs;

@@ -19,6 +19,7 @@ OdometryEkf::OdometryEkf(const EkfConfig& config, int64_t start_utime)
     : config_(config), utime_(start_utime) {
   cov_.diagonal() << 0.0, 0.0, 0.0, 1.0, 1.0,
       config.initial_bias_sigma_rad_s * config.initial_bias_sigma_rad_s;
+  state_(kBias) = config.initial_bias_rad_s;
   base_state_ = state_;
   base_cov_ = cov_;
   base_utime_ = utime_;

@@ -40,6 +40,7 @@ struct EkfConfig {
   double accel_psd = 0.5;                    // (m/s^2)^2/Hz, random-walk acceleration
   double turn_accel_psd = 1.0;               // (rad/s^2)^2/Hz
   double bias_psd = 1e-7;                    // (rad/s)^2/s, gyro bias random walk
+  double initial_bias_rad_s = 0.0;  // the gyro bias the filter starts from (then estimates)
   double initial_bias_sigma_rad_s = 0.02;
   double gate_chi2_wheels = 13.82;  // 2 dof, p = 0.999
   double gate_chi2_gyro = 10.83;    // 1 dof, p = 0.999

@@ -3,7 +3,11 @@
 namespace sweepmap {
 
 void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
-  s.add(p + "wheel_radius_m", &wheel_radius_m, "m", "wheel radius");
+  s.add(p + "wheel_radius_m", &wheel_radius_m, "m",
+        "wheel radius (the left wheel's when they differ)");
+  s.add(p + "wheel_radius_right_m", &wheel_radius_right_m, "m",
+        "the right wheel's radius when it differs from the left's (sweepmap calib rig measures "
+        "both); 0: wheel_radius_m");
   s.add(p + "ticks_per_revolution", &ticks_per_revolution, "", "encoder counts per wheel turn");
   s.add(p + "use_imu", &use_imu, "", "fuse the IMU gyro (false: wheels alone)");
   s.add(p + "wheel_distance_m", &ekf.wheel_distance_m, "m", "distance between the wheels");
@@ -16,6 +20,9 @@ void OdometryConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "turn_accel_psd", &ekf.turn_accel_psd, "(rad/s^2)^2/Hz",
         "random-walk turn acceleration");
   s.add(p + "bias_psd", &ekf.bias_psd, "(rad/s)^2/s", "gyro bias random walk");
+  s.add(p + "gyro_bias_rad_s", &ekf.initial_bias_rad_s, "rad/s",
+        "the gyro's z bias the EKF starts from; it goes on estimating it (sweepmap calib rig "
+        "measures it)");
   s.add(p + "initial_bias_sigma_rad_s", &ekf.initial_bias_sigma_rad_s, "rad/s",
         "prior on the gyro bias");
   s.add(p + "gate_chi2_wheels", &ekf.gate_chi2_wheels, "", "Mahalanobis gate, wheels (2 dof)");

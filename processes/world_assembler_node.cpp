@@ -31,6 +31,7 @@ void WorldAssemblerNode::handle(const Message& msg, Outbox& out) {
       reportError("invalid", "scan " + std::to_string(scan.seq) + " dropped: " + why);
       return;
     }
+    config_.toOdometryClock(&scan);
     if (!pending_.empty() && scan.utime <= pending_.back().utime) {
       reportError("dropped", "scan " + std::to_string(scan.seq) + " out of order, dropped");
       return;

@@ -1,7 +1,8 @@
 // The assembler in rig-B mode: every lidar scan goes to the world frame with the pose
 // interpolated at each ray's own time (deskewing) and the mounting T_BL (Miao 2022
 // Eq. 11-14), and is published as one self-describing chunk on SWEEP_CLOUD (frame
-// "world", sensor origin = the lidar's position mid-scan) for the mapper. A scan waits
+// "world", sensor origin = the lidar's position mid-scan) for the mapper. Scans are put on the
+// odometry's clock first (the rig's lidar.time_offset_s), their chunks stamped so. A scan waits
 // until the pose stream has passed its last ray (or max_pose_wait_s); rays without a
 // pose are dropped and counted.
 #pragma once

@@ -46,7 +46,13 @@ void WorldAssemblerConfig::declare(ConfigSchema& s, const std::string& p) {
 
 void MobileLidarConfig::declare(ConfigSchema& s) {
   s.add("rig", &rig, "", "rig kind: mobile_lidar (a 2D lidar on a moving base, Miao 2022)");
+  s.add("calibration_file", &calibration_file, "",
+        "calibration YAML (relative to the rig file) of sweepmap calib rig, whose rig-file keys "
+        "replace these values (before mounting.calibration_file); empty: none");
   lidar.declare(s, "lidar.");
+  s.add("lidar.time_offset_s", &assembler.lidar_time_offset_s, "s",
+        "the lidar's stamps minus the odometry's clock: a ray stamped t is placed with the pose "
+        "at t minus this (sweepmap calib rig measures it)");
   odometry.declare(s, "odometry.");
   s.add("imu.device", &imu_device, "",
         "the IMU sweepmap-odometry opens: sim | hi219:///dev/PORT[?baud=N] (HiPNUC HI219)");
@@ -72,6 +78,7 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   s.loadFile(path);
   for (const auto& o : overrides) s.set(o);
   checkRigKind(path, c.rig, "mobile_lidar");
+  if (!c.calibration_file.empty()) applyRigCalibration(path, c.calibration_file, &s);
   c.lidar.validate(path, "lidar.");
   const auto device = [&](const std::string& key, const std::string& value, DeviceProtocol p) {
     try {
@@ -86,6 +93,15 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
       !(c.odometry.ekf.wheel_distance_m > 0)) {
     throw ConfigError(
         path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
+  }
+  if (!(c.odometry.wheel_radius_right_m >= 0)) {
+    throw ConfigError(path + ": key 'odometry.wheel_radius_right_m' must be >= 0 (0: the left's)");
+  }
+  if (!(std::abs(c.odometry.ekf.initial_bias_rad_s) <= 1.0)) {
+    throw ConfigError(path + ": key 'odometry.gyro_bias_rad_s' must be within +-1 rad/s");
+  }
+  if (!(std::abs(c.assembler.lidar_time_offset_s) <= 1.0)) {
+    throw ConfigError(path + ": key 'lidar.time_offset_s' must be within +-1 s");
   }
   if (!(c.mapper.batch_s >= 0.0 && c.mapper.batch_s <= 3600.0)) {
     throw ConfigError(path + ": key 'mapper.batch_s' must be in [0, 3600]");

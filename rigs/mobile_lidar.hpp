@@ -3,12 +3,15 @@
 // assembler and the mapper, from one strictly loaded YAML file (config/rig_b.yaml).
 #pragma once
 
+#include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
 #include "core/config.hpp"
 #include "core/mounting.hpp"
 #include "core/rig_components.hpp"
+#include "core/scan.hpp"
 #include "odometry/odometry_config.hpp"
 #include "sim/mobile.hpp"
 
@@ -36,11 +39,21 @@ struct WorldAssemblerConfig {
   int beam_count = 0;                          // expected rays per scan; 0 = any
   double max_pose_wait_s =
       2.0;  // a scan whose pose does not come within this is assembled with what is there
+  // The lidar's stamps minus the odometry's clock (rig key lidar.time_offset_s; sweepmap calib
+  // rig measures it): a ray stamped t is placed with the pose at t - lidar_time_offset_s.
+  double lidar_time_offset_s = 0.0;
   void declare(ConfigSchema& s, const std::string& prefix);
+  // Puts a scan stamped by the lidar on the odometry's clock.
+  void toOdometryClock(Scan2D* scan) const {
+    scan->utime -= static_cast<int64_t>(std::llround(lidar_time_offset_s * 1e6));
+  }
 };
 
 struct MobileLidarConfig {
   std::string rig = "mobile_lidar";  // the kind, checked on load
+  // sweepmap calib rig's file (relative to the rig file; "" = none): its keys replace the rig
+  // file's (rigs/rig_kind.hpp applyRigCalibration), before mounting.calibration_file.
+  std::string calibration_file;
   LidarConfig lidar;  // the lidar as its driver sees it (360° scanners: a uniform ray grid)
   OdometryConfig odometry;
   // The odometry process's devices (core/device_uri.hpp); `sweepmap-odometry --imu-device /
@@ -56,7 +69,8 @@ struct MobileLidarConfig {
 };
 
 // Loads a rig file strictly (its `rig` key must say mobile_lidar), then applies `key=value`
-// overrides; a mounting calibration file the rig names replaces the mounting angles.
+// overrides; a rig calibration file the rig names replaces its keys, then a mounting
+// calibration file the rig names replaces the mounting angles.
 // Throws ConfigError naming the file and the key.
 MobileLidarConfig loadMobileLidarConfig(const std::string& path,
                                         const std::vector<std::string>& overrides = {});

@@ -5,7 +5,10 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <iomanip>
+#include <sstream>
 
+#include "core/calibration_file.hpp"
 #include "core/config.hpp"
 
 namespace sweepmap {
@@ -77,6 +80,25 @@ void throwBesideRigError(const std::string& rig_path, const std::string& key,
   }
   throw ConfigError(rig_path + ": key '" + key + "' names '" + file + "' (" + where +
                     "): " + error);
+}
+
+void applyRigCalibration(const std::string& rig_path, const std::string& file,
+                         ConfigSchema* schema) {
+  const RigCalibrationFile c =
+      loadFileBesideRig(rig_path, "calibration_file", file, loadRigCalibration);
+  const std::string where = pathBesideRig(rig_path, file);
+  for (const auto& [key, value] : c.parameters) {
+    if (key == "rig" || key.find("calibration_file") != std::string::npos) {
+      throw ConfigError(where + ": key 'parameters." + key + "' cannot be calibrated");
+    }
+    std::ostringstream v;
+    v << std::setprecision(17) << value;
+    try {
+      schema->set(key + "=" + v.str());
+    } catch (const ConfigError& e) {
+      throw ConfigError(where + ": key 'parameters." + key + "': " + e.what());
+    }
+  }
 }
 
 fs::path configDir() {

@@ -11,6 +11,8 @@
 
 namespace sweepmap {
 
+class ConfigSchema;
+
 enum class RigKind {
   kRotatingLidar,    // rig A: 2D lidar turned by a stepper, plate correction (Yuan 2021)
   kMobileLidar,      // rig B: 2D lidar on a differential-drive car, odometry + IMU (Miao 2022)
@@ -45,6 +47,13 @@ std::string pathBesideRig(const std::string& rig_path, const std::string& file);
 // RESOLVED): ERROR".
 [[noreturn]] void throwBesideRigError(const std::string& rig_path, const std::string& key,
                                       const std::string& file, const std::string& error);
+
+// A rig calibration file (sweepmap calib rig; core/calibration_file.hpp) that the rig file
+// names in its top-level `calibration_file` key, applied over the loaded `schema`: each of its
+// keys replaces the rig file's value. Throws ConfigError naming the file and the key for a
+// key the schema does not have, or one that cannot be calibrated (the kind, a calibration file).
+void applyRigCalibration(const std::string& rig_path, const std::string& file,
+                         ConfigSchema* schema);
 
 template <class Load>
 auto loadFileBesideRig(const std::string& rig_path, const std::string& key, const std::string& file,

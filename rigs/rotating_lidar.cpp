@@ -1,8 +1,6 @@
 #include "rigs/rotating_lidar.hpp"
 
 #include <filesystem>
-#include <iomanip>
-#include <sstream>
 
 #include "core/calibration_file.hpp"
 #include "rigs/rig_kind.hpp"
@@ -23,31 +21,6 @@ void RotatingLidarConfig::declare(ConfigSchema& s) {
   network.declare(s, "network.");
   sim.declare(s, "sim.");
 }
-
-namespace {
-
-// The keys of a rig calibration file over the loaded rig: any key of the schema but the kind
-// and the calibration files.
-void applyRigCalibration(const std::string& rig_path, const std::string& file,
-                         ConfigSchema* schema) {
-  const RigCalibrationFile c =
-      loadFileBesideRig(rig_path, "calibration_file", file, loadRigCalibration);
-  const std::string where = pathBesideRig(rig_path, file);
-  for (const auto& [key, value] : c.parameters) {
-    if (key == "rig" || key.find("calibration_file") != std::string::npos) {
-      throw ConfigError(where + ": key 'parameters." + key + "' cannot be calibrated");
-    }
-    std::ostringstream v;
-    v << std::setprecision(17) << value;
-    try {
-      schema->set(key + "=" + v.str());
-    } catch (const ConfigError& e) {
-      throw ConfigError(where + ": key 'parameters." + key + "': " + e.what());
-    }
-  }
-}
-
-}  // namespace
 
 RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
                                             const std::vector<std::string>& overrides) {

@@ -213,9 +213,9 @@ TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
   EXPECT_NEAR(c.gamma_rad, j.at("gamma_rad").get<double>(), 1e-12);  // 12 digits in the file
   EXPECT_EQ(c.source.at("tool"), "sweepmap calib mounting");
   std::string rig = readFile(kRigB);
-  const std::string from = "calibration_file: \"\"";
+  const std::string from = "  calibration_file: \"\"";  // mounting's, not the top-level one
   ASSERT_NE(rig.find(from), std::string::npos);
-  rig.replace(rig.find(from), from.size(), "calibration_file: mounting_calibration.yaml");
+  rig.replace(rig.find(from), from.size(), "  calibration_file: mounting_calibration.yaml");
   std::ofstream(dir / "rig_b.yaml") << rig;
   const MobileLidarConfig loaded = loadMobileLidarConfig((dir / "rig_b.yaml").string());
   EXPECT_DOUBLE_EQ(loaded.mounting.gamma_rad, c.gamma_rad);

@@ -7,12 +7,15 @@
 // plate poses, rig B (mobile_lidar) on a short circle.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "core/calibration_file.hpp"
+#include "rigs/mobile_lidar.hpp"
+#include "rigs/rig_file.hpp"
 #include "rigs/rotating_lidar.hpp"
 #include "rigs/rotating_profile.hpp"
 #include "tests/e2e/test_support.hpp"
@@ -366,9 +369,20 @@ TEST(CalibRig, RigBRunsAndReportsEveryParameter) {
     EXPECT_TRUE(j["parameters"][key].contains("truth")) << key;
   }
   EXPECT_TRUE(j["parameters"]["mounting.gamma_rad"]["observable"].get<bool>());
-  const MountingCalibration m = loadMountingCalibration((dir / "mounting.yaml").string());
-  EXPECT_NEAR(m.gamma_rad, j["parameters"]["mounting.gamma_rad"]["value"], 1e-9);
-  EXPECT_NE(readAll(dir / "err.txt").find("mounting.calibration_file"), std::string::npos);
+  // Every observable key is in the file, and a rig file naming it loads with those values.
+  const RigCalibrationFile f = loadRigCalibration((dir / "mounting.yaml").string());
+  for (const auto& [key, p] : j["parameters"].items()) {
+    const bool in_file = std::any_of(f.parameters.begin(), f.parameters.end(), [&](const auto& kv) {
+      return kv.first == key && std::abs(kv.second - p["value"].get<double>()) < 1e-9;
+    });
+    EXPECT_EQ(in_file, p["observable"].get<bool>()) << key;
+  }
+  EXPECT_NE(readAll(dir / "err.txt").find("set calibration_file: "), std::string::npos);
+  const MobileLidarConfig rig = loadMobileLidarConfig(
+      resolveRigFile("rig_b"), {"calibration_file=" + (dir / "mounting.yaml").string()});
+  EXPECT_NEAR(rig.mounting.gamma_rad, j["parameters"]["mounting.gamma_rad"]["value"], 1e-12);
+  EXPECT_NEAR(rig.assembler.lidar_time_offset_s, j["parameters"]["lidar.time_offset_s"]["value"],
+              1e-12);
 }
 
 TEST(CalibRig, PlanPrintsTheRecordingAndItsSimCommand) {

@@ -70,7 +70,7 @@ TEST(ConfigLocation, ACopiedTreeReadsItsOwnConfig) {
   EXPECT_NE(readFile(a_out).find(rig_a), std::string::npos) << readFile(a_out);
   EXPECT_NE(readFile(a_out).find("no_such_key_in_the_copy"), std::string::npos) << readFile(a_out);
 
-  replaceIn(config / "rig_b.yaml", "calibration_file: \"\"", "calibration_file: mounting.yaml");
+  replaceIn(config / "rig_b.yaml", "  calibration_file: \"\"", "  calibration_file: mounting.yaml");
   std::ofstream(cwd / "mounting.yaml") << "not: a calibration\n";  // must not be read
   const fs::path b_out = dir / "b.txt";
   EXPECT_EQ(runIn(cwd, sweepmap + " sim --rig rig_b --set sim.duration_s=1 --out b.lcmlog", b_out),

@@ -462,9 +462,9 @@ TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
   std::stringstream text;
   text << in.rdbuf();
   std::string rig = text.str();
-  const std::string from = "calibration_file: \"\"";
+  const std::string from = "  calibration_file: \"\"";  // mounting's, not the top-level one
   ASSERT_NE(rig.find(from), std::string::npos);
-  rig.replace(rig.find(from), from.size(), "calibration_file: mounting.yaml");
+  rig.replace(rig.find(from), from.size(), "  calibration_file: mounting.yaml");
   std::ofstream(dir_ / "rig_b.yaml") << rig;
   const MobileLidarConfig b = loadMobileLidarConfig((dir_ / "rig_b.yaml").string());
   EXPECT_NEAR(b.mounting.gamma_rad, c.gamma_rad, 1e-12);

@@ -51,8 +51,9 @@ std::vector<cloud_chunk_t> feed(WorldAssemblerNode& node, const std::vector<Mess
   return out;
 }
 
-WorldAssemblerNode horizontal() {
+WorldAssemblerNode horizontal(double lidar_time_offset_s = 0.0) {
   WorldAssemblerConfig c;
+  c.lidar_time_offset_s = lidar_time_offset_s;
   LidarMounting m;
   m.nominal_rpy_rad = Eigen::Vector3d(0, M_PI / 2, 0);
   m.t_BL_m = Eigen::Vector3d(0.1, 0, 0.2);
@@ -73,6 +74,17 @@ TEST(WorldAssemblerNode, WaitsForPosesThenPublishesWorldChunks) {
   EXPECT_NEAR(c.xyz_m[1][2], 0.2, 1e-6);
   EXPECT_NEAR(c.sensor_origin_m[0], 0.3, 1e-9);
   EXPECT_EQ(c.nintensities, 0);  // the scan had none
+}
+
+// lidar.time_offset_s: the lidar's stamps run 4 ms ahead of the odometry's clock, so the middle
+// ray stamped 6 ms was taken at 2 ms, where the robot was at x = 0.2 m (as in the test above),
+// not 0.6 m; the chunk is stamped on the odometry's clock.
+TEST(WorldAssemblerNode, PlacesEachRayWithThePoseAtItsStampLessTheLidarsTimeOffset) {
+  WorldAssemblerNode node = horizontal(0.004);
+  const auto chunks = feed(node, {pose(0, 0.0), scan(5000), pose(10000, 1.0)});
+  ASSERT_EQ(chunks.size(), 1u);
+  EXPECT_NEAR(chunks[0].xyz_m[1][0], 0.2 + 0.1 + 2.0, 1e-5);
+  EXPECT_EQ(chunks[0].utime, 1000);
 }
 
 TEST(WorldAssemblerNode, ChunksCarryTheScansIntensities) {

@@ -86,7 +86,9 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       "Writes OUT atomically (mounting.gamma_rad/beta_rad/alpha_rad + provenance); set "
       "mounting.calibration_file in the rig file to use it. The search starts from the rig's "
       "mounting. Human report on stderr; --json prints gamma_rad, beta_rad, alpha_rad, "
-      "time_offset_s, residual_before_m, residual_after_m (RMS), correspondences, method, the "
+      "time_offset_s (with --time-offset: each pose's time minus its ray's, on top of the rig's "
+      "lidar.time_offset_s), residual_before_m, residual_after_m (RMS), correspondences, method, "
+      "the "
       "paper's result under \"paper\", warnings and, for simulated logs, the truth and "
       "error_mrad. Warns when the wheels disagree with the gyro (each radius over the track "
       "against the rig file's, beyond 3 sigma): the odometry track is then biased, and calib "
@@ -297,8 +299,8 @@ CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
   auto* rig = calib->add_subcommand(
       "rig",
       "calibrate every parameter of the rig that its logs make observable, jointly, into one "
-      "calibration file the rig file points to (calibration_file, geometry.calibration_file or "
-      "mounting.calibration_file by kind)");
+      "calibration file the rig file points to (calibration_file, or geometry.calibration_file "
+      "for rotating_profile)");
   rig->footer(
       "rotating_lidar (rig A): the plate angle alpha (plate.alpha_deg), the lidar-to-axis "
       "offset (geometry.lidar_offset_x_mm), the scan plane's tilt against the axis "
@@ -327,11 +329,11 @@ CLI::App* addRig(CLI::App* calib, std::shared_ptr<RigCalibRequest> r) {
       "lidar-odometry time offset in one least squares over the drive's passes over the same "
       "walls, the odometry re-run with the corrected wheels; the lever arm's z from the floor; "
       "the room's length, width and height from its planes in the calibrated cloud (measures "
-      "in --json). OUT holds the mounting angles (mounting.calibration_file applies it); the "
-      "other calibrated keys are listed to set in the rig file by hand. One drive: the first "
-      "log.\n\n"
-      "Writes OUT atomically (rig A: parameters: rig-file keys; source: sigmas, residuals, logs) "
-      "and "
+      "in --json). OUT holds every calibrated key (calibration_file applies it; the lidar's time "
+      "offset is lidar.time_offset_s, the gyro bias the EKF starts from "
+      "odometry.gyro_bias_rad_s). One drive: the first log.\n\n"
+      "Writes OUT atomically (rigs A and B: parameters: rig-file keys; source: sigmas, "
+      "residuals, logs) and "
       "prints the calibration_file line for the rig file, relative to its folder. The rig's "
       "plate.beta_method should be model so the assembler finds the plate as the calibration "
       "did. Human report and progress on stderr; --json prints {\"parameters\": {KEY: {value, "

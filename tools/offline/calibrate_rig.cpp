@@ -176,7 +176,6 @@ bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress
 // The rig file's key that applies the file `calib rig` writes for the kind.
 std::string calibrationFileKey(RigKind kind) {
   if (kind == RigKind::kRotatingProfile) return "geometry.calibration_file";
-  if (kind == RigKind::kMobileLidar) return "mounting.calibration_file";
   return "calibration_file";
 }
 
@@ -233,11 +232,8 @@ int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
   progress.finish();
   c.rejected = in.rejected;
   for (const auto& e : in.log_errors) c.warnings.push_back(e);
-  return reportRigCalibration(o, loaded, in.read_s, c, [&] {
-    RigCalibrationFile f = rigCalibrationFile(c, "sweepmap calib rig", o.logs);
-    f.source["rig"] = loaded.path;
-    writeRigCalibration(o.out, f);
-  });
+  return reportRigCalibration(o, loaded, in.read_s, c,
+                              [&] { writeRigCalibrationOf(o, loaded, c); });
 }
 
 // Rig A's plan: the recording and why.

@@ -164,51 +164,13 @@ void writeProfileFile(const RigCalibRequest& o, const RigCalibration& c) {
   writeAxisOffsetCalibration(o.out, f);
 }
 
-// ---- rig B -------------------------------------------------------------------------------
-
-const CalibParameter* findParameter(const RigCalibration& c, const std::string& key) {
-  for (const auto& p : c.parameters) {
-    if (p.key == key) return &p;
-  }
-  return nullptr;
-}
-
-// The mounting angles in the format mounting.calibration_file applies (each at the rig file's
-// value when not observable).
-void writeMountingFile(const RigCalibRequest& o, const RigCalibration& c) {
-  MountingCalibration f;
-  double* angles[] = {&f.gamma_rad, &f.beta_rad, &f.alpha_rad};
-  const char* keys[] = {"mounting.gamma_rad", "mounting.beta_rad", "mounting.alpha_rad"};
-  for (size_t i = 0; i < 3; ++i) {
-    const CalibParameter* p = findParameter(c, keys[i]);
-    if (!p) throw std::runtime_error(std::string("no result for ") + keys[i]);
-    *angles[i] = p->value;
-    f.source[std::string("sigma_") + (keys[i] + 9)] =
-        p->observable ? num(p->sigma) : "not observable (rig file's value kept)";
-  }
-  f.source["tool"] = "sweepmap calib rig";
-  f.logs = o.logs;
-  writeMountingCalibration(o.out, f);
-}
-
-// The rig file has no calibration file for the other keys: a warning lists them to set.
-void addHandSetKeys(RigCalibration* c) {
-  std::string keys;
-  for (const auto& p : c->parameters) {
-    const bool angle = p.key.rfind("mounting.", 0) == 0 && p.key.find("_rad") != std::string::npos;
-    if (!p.observable || angle) continue;
-    if (p.key == "odometry.gyro_bias_rad_s") continue;  // the EKF estimates it while driving
-    keys += (keys.empty() ? "" : ", ") + p.key + ": " + num(p.value);
-  }
-  if (!keys.empty()) {
-    c->warnings.push_back(
-        "the calibration file holds the mounting angles only; set these in the "
-        "rig file by hand: " +
-        keys);
-  }
-}
-
 }  // namespace
+
+void writeRigCalibrationOf(const RigCalibRequest& o, const Rig& loaded, const RigCalibration& c) {
+  RigCalibrationFile f = rigCalibrationFile(c, "sweepmap calib rig", o.logs);
+  f.source["rig"] = loaded.path;
+  writeRigCalibration(o.out, f);
+}
 
 int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
   const RotatingProfileConfig& rig = std::get<RotatingProfileConfig>(loaded.config);
@@ -270,8 +232,7 @@ int calibrateMobileLidarRig(const RigCalibRequest& o, const Rig& loaded) {
   c.rms_before *= 1e3;                     // m -> mm
   c.rms_after *= 1e3;
   c.residual_unit = "mm";
-  addHandSetKeys(&c);
-  return reportRigCalibration(o, loaded, 0.0, c, [&] { writeMountingFile(o, c); });
+  return reportRigCalibration(o, loaded, 0.0, c, [&] { writeRigCalibrationOf(o, loaded, c); });
 }
 
 int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
@@ -324,29 +285,27 @@ int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
 }
 
 int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
-  std::cout
-      << "What to record for `sweepmap calib rig --rig " << rig_name << "` (mobile_lidar):\n"
-      << "  scene:    a room with plain walls within the lidar's range on every side (the "
-         "lab), with 4.5 x 2 m of free floor for the car.\n"
-      << "  path:     a figure-eight: two lobes of 0.8 m radius 2.4 m apart, joined by two "
-         "straights that cross in the middle, at 0.2 m/s, stopping for 3 s after every 20 s "
-         "of driving.\n"
-      << "            Why: the gyro measures the turn rate whatever the wheels are; the "
-         "straights fix the ratio of the two radii, the turns both ways fix each radius "
-         "against the track, the stops fix the gyro's bias. The distance driven (the radii's "
-         "and the track's common scale) no turn rate shows: the lidar measures it, seeing "
-         "the same walls from near and far. The lobes turn the scan plane through every "
-         "heading both ways, so the passes over the same walls separate the mounting's "
-         "yaw alpha from the wheels; Miao 2022's circle cannot (it turns one way at one "
-         "rate: alpha and the wheels trade off).\n"
-      << "  duration: 120 s (about two laps)\n"
-      << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
-      << "  simulate: sweepmap sim --rig " << rig_name << " "
-      << calibrationRecordingSimLine(RigKind::kMobileLidar) << " --out calib.lcmlog\n"
-      << "  then:     sweepmap calib rig --rig " << rig_name
-      << " --logs calib.lcmlog --out mounting_calibration.yaml\n"
-      << "            and set mounting.calibration_file: mounting_calibration.yaml in the rig "
-         "file; the other calibrated keys are listed to set by hand\n";
+  std::cout << "What to record for `sweepmap calib rig --rig " << rig_name << "` (mobile_lidar):\n"
+            << "  scene:    a room with plain walls within the lidar's range on every side (the "
+               "lab), with 4.5 x 2 m of free floor for the car.\n"
+            << "  path:     a figure-eight: two lobes of 0.8 m radius 2.4 m apart, joined by two "
+               "straights that cross in the middle, at 0.2 m/s, stopping for 3 s after every 20 s "
+               "of driving.\n"
+            << "            Why: the gyro measures the turn rate whatever the wheels are; the "
+               "straights fix the ratio of the two radii, the turns both ways fix each radius "
+               "against the track, the stops fix the gyro's bias. The distance driven (the radii's "
+               "and the track's common scale) no turn rate shows: the lidar measures it, seeing "
+               "the same walls from near and far. The lobes turn the scan plane through every "
+               "heading both ways, so the passes over the same walls separate the mounting's "
+               "yaw alpha from the wheels; Miao 2022's circle cannot (it turns one way at one "
+               "rate: alpha and the wheels trade off).\n"
+            << "  duration: 120 s (about two laps)\n"
+            << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
+            << "  simulate: sweepmap sim --rig " << rig_name << " "
+            << calibrationRecordingSimLine(RigKind::kMobileLidar) << " --out calib.lcmlog\n"
+            << "  then:     sweepmap calib rig --rig " << rig_name
+            << " --logs calib.lcmlog --out rig_calibration.yaml\n"
+            << "            and set calibration_file: rig_calibration.yaml in the rig file\n";
   return 0;
 }
 

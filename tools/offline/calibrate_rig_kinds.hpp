@@ -4,9 +4,9 @@
 //    solveAxisOffset: M, N, the laser-plane tilt and the encoder zero in one Ceres problem
 //    over plate poses), written in the format `calib axis-offset` writes, which the rig's
 //    geometry.calibration_file applies;
-//  - rig B: runMobileRigCalibration (tools/offline/mobile_rig_calibration.hpp), the mounting
-//    angles written in the format the rig's mounting.calibration_file applies; the other
-//    calibrated keys are printed for the rig file (it has no file for them).
+//  - rig B: runMobileRigCalibration (tools/offline/mobile_rig_calibration.hpp), every
+//    calibrated key written as rig A's are (writeRigCalibrationOf), which the rig's
+//    calibration_file applies.
 #pragma once
 
 #include <functional>
@@ -23,6 +23,11 @@ namespace sweepmap {
 // exit status of calibrateRigFromLogs.
 int reportRigCalibration(const RigCalibRequest& request, const Rig& rig, double read_s,
                          const RigCalibration& result, const std::function<void()>& write);
+
+// Writes the observable parameters of `result` as rig-file keys (core/calibration_file.hpp
+// RigCalibrationFile) to request.out: the file a rig's top-level calibration_file applies.
+void writeRigCalibrationOf(const RigCalibRequest& request, const Rig& rig,
+                           const RigCalibration& result);
 
 int calibrateProfileRig(const RigCalibRequest& request, const Rig& rig);
 int calibrateMobileLidarRig(const RigCalibRequest& request, const Rig& rig);

@@ -47,6 +47,7 @@ MobileLog loadMobileLog(const std::string& path, const MobileLidarConfig& rig) {
       ++log.invalid_scans;
       return;
     }
+    rig.assembler.toOdometryClock(&scan);
     log.scans.push_back(std::move(scan));
   });
   player.handle(channels::kTruthPose, [&](const Message& m) { addPose(m, &log.truth); });

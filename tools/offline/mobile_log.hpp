@@ -19,7 +19,9 @@
 namespace sweepmap {
 
 struct MobileLog {
-  std::vector<Scan2D> scans;                       // valid scans (validateScan), in log order
+  // Valid scans (validateScan), in log order, on the odometry's clock (their stamps less the
+  // rig's lidar.time_offset_s).
+  std::vector<Scan2D> scans;
   PoseTrack ekf;                                   // ODOMETRY_POSE, replayed
   PoseTrack wheels;                                // WHEEL_ODOMETRY, replayed
   PoseTrack truth;                                 // TRUTH_POSE from the log (simulation only)

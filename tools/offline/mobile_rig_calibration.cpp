@@ -53,6 +53,8 @@ RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
   MobileRigCalibrationInput in;
   in.scans = log.scans;
   in.nominal = rig.mounting.toMounting();
+  in.time_offset_s = rig.assembler.lidar_time_offset_s;
+  in.gyro_bias_rad_s = rig.odometry.ekf.initial_bias_rad_s;
   in.wheels.radius_left_m = rig.odometry.wheel_radius_m;
   in.wheels.radius_right_m = rig.odometry.rightWheelRadius();
   in.wheels.wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
