@@ -17,13 +17,14 @@ void prepareSimMobileConfig(const std::string& rig_path, MobileLidarConfig* rig)
 
 std::unique_ptr<SimMobile> makeSimCar(const MobileLidarConfig& rig, const Scene& scene,
                                       uint64_t seed, int64_t start_utime) {
+  const MobileLidarConfig::Build built = rig.build();
   WheelGeometry wheels;
-  wheels.radius_m = rig.odometry.wheel_radius_m;
+  wheels.radius_m = built.wheel_radius_m;
   wheels.ticks_per_revolution = rig.odometry.ticks_per_revolution;
-  wheels.wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
+  wheels.wheel_distance_m = built.wheel_distance_m;
   const LidarMounting nominal = rig.mounting.toMounting();
-  return std::make_unique<SimMobile>(rig.sim, wheels, nominal.nominal_rpy_rad, nominal.t_BL_m,
-                                     scene, seed, start_utime);
+  return std::make_unique<SimMobile>(rig.sim, wheels, nominal.nominal_rpy_rad, built.t_BL_m, scene,
+                                     seed, start_utime);
 }
 
 truth_mounting_t truthMountingMessage(const MobileLidarConfig& rig, const SceneConfig& scene,
@@ -57,12 +58,12 @@ truth_mobile_rig_t truthMobileRigMessage(const MobileLidarConfig& rig, const Sim
   m.wheel_radius_left_m = car.nominalWheels().radiusOf(false, c);
   m.wheel_radius_right_m = car.nominalWheels().radiusOf(true, c);
   m.wheel_distance_m = car.trueWheelDistance();
-  m.nominal_wheel_radius_m = rig.odometry.wheel_radius_m;
-  m.nominal_wheel_distance_m = rig.odometry.ekf.wheel_distance_m;
-  const LidarMounting nominal = rig.mounting.toMounting();
+  const MobileLidarConfig::Build built = rig.build();
+  m.nominal_wheel_radius_m = built.wheel_radius_m;
+  m.nominal_wheel_distance_m = built.wheel_distance_m;
   for (int k = 0; k < 3; ++k) {
     m.t_BL_true_m[k] = car.trueT_BL().translation()[k];
-    m.t_BL_nominal_m[k] = nominal.t_BL_m[k];
+    m.t_BL_nominal_m[k] = built.t_BL_m[k];
   }
   m.lidar_time_offset_s = c.lidar_time_offset_ms * 1e-3;
   m.gyro_bias_z_rad_s = c.gyro_bias_z_rad_s;

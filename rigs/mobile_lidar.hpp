@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,6 +66,19 @@ struct MobileLidarConfig {
   MapperConfig mapper;
   NetworkConfig network;  // every live process: its receive queue and datagram reassembly
   SimMobileConfig sim;    // `sweepmap sim` only: the simulated car's truth and noise
+  // The car as built: the rig file's wheels and lidar position before its calibration_file.
+  // The simulated car is these plus its sim.* errors, so a calibrated rig file simulates the
+  // same car as the file it calibrated. Unset (a config not loaded from a file): the values
+  // above.
+  struct Build {
+    double wheel_radius_m, wheel_distance_m;
+    Eigen::Vector3d t_BL_m;
+  };
+  std::optional<Build> as_built;
+  Build build() const {
+    return as_built.value_or(Build{odometry.wheel_radius_m, odometry.ekf.wheel_distance_m,
+                                   mounting.toMounting().t_BL_m});
+  }
   void declare(ConfigSchema& s);
 };
 

@@ -11,12 +11,14 @@
 #include "core/config.hpp"
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
+#include "processes/sim_car.hpp"
 #include "rigs/mobile_lidar.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
 #include "sweepmap/process_status_t.hpp"
 #include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
+#include "tests/sim/hand_scene.hpp"
 
 namespace sweepmap {
 namespace {
@@ -447,12 +449,18 @@ TEST(OdometryNode, ShippedConfigLoads) {
   EXPECT_FALSE(c.use_imu);
 }
 
+// A new empty folder under the temporary directory.
+std::filesystem::path emptyTempDir(const std::string& name) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / name;
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
 // mounting.calibration_file (relative to the rig file) replaces the rig's gamma/beta/alpha_rad.
 TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
   namespace fs = std::filesystem;
-  const fs::path dir_ = fs::temp_directory_path() / "sweepmap_rig_b_mounting_file";
-  fs::remove_all(dir_);
-  fs::create_directories(dir_);
+  const fs::path dir_ = emptyTempDir("sweepmap_rig_b_mounting_file");
   MountingCalibration c;
   c.gamma_rad = 0.0355123456789;
   c.beta_rad = 0.0126;
@@ -482,6 +490,49 @@ TEST(MobileLidarConfig, MountingCalibrationFileReplacesTheAngles) {
     EXPECT_NE(std::string(e.what()).find("mounting.yaml"), std::string::npos) << e.what();
   }
   fs::remove_all(dir_);
+}
+
+// The top-level calibration_file (sweepmap calib rig's) replaces any key it holds, the new
+// rig B keys among them; the simulated car stays the one the rig file describes (its own
+// wheels and lidar position plus the sim.* errors), so a calibrated rig file simulates the
+// car it was calibrated on.
+TEST(MobileLidarConfig, RigCalibrationFileReplacesItsKeysButNotTheSimulatedCar) {
+  const std::filesystem::path dir = emptyTempDir("sweepmap_rig_b_rig_calibration");
+  RigCalibrationFile f;
+  f.parameters = {{"mounting.x_m", 0.1031},
+                  {"odometry.wheel_radius_m", 0.0328},
+                  {"odometry.wheel_radius_right_m", 0.0321},
+                  {"odometry.wheel_distance_m", 0.204},
+                  {"lidar.time_offset_s", 0.003},
+                  {"odometry.gyro_bias_rad_s", 0.01}};
+  writeRigCalibration((dir / "rig_calibration.yaml").string(), f);
+  const std::string rig_b = std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml";
+  const MobileLidarConfig plain = loadMobileLidarConfig(rig_b);
+  const MobileLidarConfig c =
+      loadMobileLidarConfig(rig_b, {"calibration_file=" + (dir / "rig_calibration.yaml").string()});
+  EXPECT_DOUBLE_EQ(c.mounting.x_m, 0.1031);
+  EXPECT_DOUBLE_EQ(c.odometry.wheel_radius_m, 0.0328);
+  EXPECT_DOUBLE_EQ(c.odometry.rightWheelRadius(), 0.0321);
+  EXPECT_DOUBLE_EQ(c.odometry.ekf.wheel_distance_m, 0.204);
+  EXPECT_DOUBLE_EQ(c.assembler.lidar_time_offset_s, 0.003);
+  EXPECT_DOUBLE_EQ(c.odometry.ekf.initial_bias_rad_s, 0.01);
+  EXPECT_DOUBLE_EQ(plain.odometry.rightWheelRadius(), plain.odometry.wheel_radius_m);
+  const Scene scene(testing_scene::handScene(), PlateConfig{});
+  const auto car = makeSimCar(c, scene, 1, 0), plain_car = makeSimCar(plain, scene, 1, 0);
+  EXPECT_TRUE(car->trueT_BL().isApprox(plain_car->trueT_BL(), 1e-15));
+  EXPECT_DOUBLE_EQ(car->trueWheelDistance(), plain_car->trueWheelDistance());
+  EXPECT_DOUBLE_EQ(car->nominalWheels().radius_m, plain.odometry.wheel_radius_m);
+  // A key the rig file does not have is refused, naming the calibration file.
+  f.parameters = {{"odometry.no_such_key", 1.0}};
+  writeRigCalibration((dir / "rig_calibration.yaml").string(), f);
+  try {
+    loadMobileLidarConfig(rig_b, {"calibration_file=" + (dir / "rig_calibration.yaml").string()});
+    FAIL();
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("parameters.odometry.no_such_key"), std::string::npos)
+        << e.what();
+  }
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace
