@@ -138,8 +138,9 @@ bench-view: build
 	bash tools/bench/bench_view.sh $(BUILD)/bin $(BUILD)/bench/view
 
 # calib rig and the single-parameter commands on the same simulated logs of calib plan's
-# recording, per seed and rig kind: errors, |error|/sigma, targets met, plots
-# (tools/bench/calib_seeds.py; about 15 minutes for the three kinds and five seeds).
+# recording, per seed and rig kind: errors, |error|/sigma, targets met, plots; rig B also
+# evaluated on a lap of the loop with its calibrated rig file (tools/bench/calib_seeds.py;
+# about 20 minutes for the three kinds and five seeds).
 SEEDS ?= 1,2,3,4,5
 bench-calib-seeds: build
 	python3 tools/bench/calib_seeds.py $(BUILD)/bin $(BUILD)/bench/calib_seeds --seeds $(SEEDS)

@@ -79,7 +79,7 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   for (const auto& o : overrides) s.set(o);
   checkRigKind(path, c.rig, "mobile_lidar");
   c.as_built = c.build();
-  if (!c.calibration_file.empty()) applyRigCalibration(path, c.calibration_file, &s);
+  if (!c.calibration_file.empty()) applyRigCalibration(path, c.calibration_file, overrides, &s);
   c.lidar.validate(path, "lidar.");
   const auto device = [&](const std::string& key, const std::string& value, DeviceProtocol p) {
     try {

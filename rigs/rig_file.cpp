@@ -83,7 +83,7 @@ void throwBesideRigError(const std::string& rig_path, const std::string& key,
 }
 
 void applyRigCalibration(const std::string& rig_path, const std::string& file,
-                         ConfigSchema* schema) {
+                         const std::vector<std::string>& overrides, ConfigSchema* schema) {
   const RigCalibrationFile c =
       loadFileBesideRig(rig_path, "calibration_file", file, loadRigCalibration);
   const std::string where = pathBesideRig(rig_path, file);
@@ -99,6 +99,7 @@ void applyRigCalibration(const std::string& rig_path, const std::string& file,
       throw ConfigError(where + ": key 'parameters." + key + "': " + e.what());
     }
   }
+  for (const auto& o : overrides) schema->set(o);
 }
 
 fs::path configDir() {

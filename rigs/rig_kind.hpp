@@ -50,10 +50,11 @@ std::string pathBesideRig(const std::string& rig_path, const std::string& file);
 
 // A rig calibration file (sweepmap calib rig; core/calibration_file.hpp) that the rig file
 // names in its top-level `calibration_file` key, applied over the loaded `schema`: each of its
-// keys replaces the rig file's value. Throws ConfigError naming the file and the key for a
-// key the schema does not have, or one that cannot be calibrated (the kind, a calibration file).
+// keys replaces the rig file's value, then the command line's `key=value` overrides are
+// applied again (they win). Throws ConfigError naming the file and the key for a key the
+// schema does not have, or one that cannot be calibrated (the kind, a calibration file).
 void applyRigCalibration(const std::string& rig_path, const std::string& file,
-                         ConfigSchema* schema);
+                         const std::vector<std::string>& overrides, ConfigSchema* schema);
 
 template <class Load>
 auto loadFileBesideRig(const std::string& rig_path, const std::string& key, const std::string& file,

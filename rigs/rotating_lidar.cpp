@@ -30,7 +30,8 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
   schema.loadFile(path);
   for (const auto& o : overrides) schema.set(o);
   checkRigKind(path, rig.rig, "rotating_lidar");
-  if (!rig.calibration_file.empty()) applyRigCalibration(path, rig.calibration_file, &schema);
+  if (!rig.calibration_file.empty())
+    applyRigCalibration(path, rig.calibration_file, overrides, &schema);
   // Calibration files are named relative to the rig file.
   if (!rig.plate.calibration_file.empty()) {
     rig.plate.alpha_deg = loadFileBesideRig(path, "plate.calibration_file",

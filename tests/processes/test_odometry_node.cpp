@@ -517,6 +517,12 @@ TEST(MobileLidarConfig, RigCalibrationFileReplacesItsKeysButNotTheSimulatedCar) 
   EXPECT_DOUBLE_EQ(c.assembler.lidar_time_offset_s, 0.003);
   EXPECT_DOUBLE_EQ(c.odometry.ekf.initial_bias_rad_s, 0.01);
   EXPECT_DOUBLE_EQ(plain.odometry.rightWheelRadius(), plain.odometry.wheel_radius_m);
+  // A --set of a calibrated key still wins.
+  EXPECT_DOUBLE_EQ(
+      loadMobileLidarConfig(rig_b, {"calibration_file=" + (dir / "rig_calibration.yaml").string(),
+                                    "lidar.time_offset_s=0.001"})
+          .assembler.lidar_time_offset_s,
+      0.001);
   const Scene scene(testing_scene::handScene(), PlateConfig{});
   const auto car = makeSimCar(c, scene, 1, 0), plain_car = makeSimCar(plain, scene, 1, 0);
   EXPECT_TRUE(car->trueT_BL().isApprox(plain_car->trueT_BL(), 1e-15));

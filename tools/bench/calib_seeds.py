@@ -8,6 +8,11 @@ kind (error and error/sigma of every parameter with a truth, the room's errors f
 time), writes them as Markdown (OUT/calib_seeds.md) and draws |error|/sigma per parameter and
 seed (OUT/calib_seeds_<kind>.png, gnuplot), so a reader sees whether the sigmas are honest.
 
+Rig B also goes through the user's check: a copy of the installed rig file pointed at calib
+rig's file (its calibration_file), then `eval` on an independent lap of the lab loop (seed
++1000, Miao 2022's room measurement) with it and with the rig file alone: the room's length,
+width and height against the scene's.
+
 usage: calib_seeds.py BIN OUT [--kinds rig_a,rig_b,rig_c] [--seeds 1,2,3,4,5]
 Exit status: 0 done; 1 a command failed (named with its log); 2 bad usage.
 """
@@ -103,22 +108,56 @@ def rows_of_rig(j):
     return rows
 
 
-def one_seed(bin_dir, out, kind, seed, sim_args):
-    log = f"{out}/{kind}_{seed}.lcmlog"
-    # A log is reused only when made by the same sim arguments (the plan may have changed)
-    # and whole (written to .tmp first, renamed when sim exited 0).
-    args = sim_args + ["--seed", str(seed)]
+def simulated(bin_dir, log, args):
+    """`sweepmap sim ARGS --out LOG`, unless LOG was made by the same arguments (the plan may
+    have changed) and is whole (written to .tmp first, renamed when sim exited 0)."""
     stamp = log + ".args"
     if not (os.path.exists(log) and os.path.exists(stamp) and open(stamp).read() == repr(args)):
         run([f"{bin_dir}/sweepmap", "sim"] + args + ["--out", log + ".tmp"], log + ".sim.txt")
         os.replace(log + ".tmp", log)
         with open(stamp, "w") as f:
             f.write(repr(args))
+    return log
+
+
+def loop_rooms(bin_dir, out, seed, calibration):
+    """Rig B: the room measured by `eval` on a lap of the loop, with the rig file pointed at
+    `calibration` (calib rig's file, in `out`) and with the rig file alone."""
+    log = simulated(bin_dir, f"{out}/rig_b_{seed}_loop.lcmlog",
+                    ["--rig", "rig_b", "--set", "sim.path=loop", "--set", "sim.duration_s=140",
+                     "--seed", str(seed + 1000)])
+    installed = f"{bin_dir}/../share/sweepmap/config/rig_b.yaml"
+    text = open(installed).read()
+    empty = '\ncalibration_file: ""'
+    if empty not in text:
+        sys.exit(f"calib_seeds: {installed} has no top-level calibration_file")
+    rig = f"{out}/rig_b_{seed}_calibrated.yaml"
+    with open(rig, "w") as f:
+        f.write(text.replace(empty, f"\ncalibration_file: {os.path.basename(calibration)}", 1))
+    results = {}
+    for name, rig_arg in (("eval loop, calibrated", rig), ("eval loop, rig file", "rig_b")):
+        t0 = time.monotonic()
+        report = f"{out}/rig_b_{seed}_loop_{'calibrated' if rig_arg == rig else 'rig'}"
+        run([f"{bin_dir}/sweepmap", "eval", "--logs", log, "--rig", rig_arg, "--out", report,
+             "--force", "--no-plots", "--quiet"], report + ".txt")
+        j = json.load(open(f"{report}/report.json"))
+        err, truth = j["room_dims_error_mm"], j["room_dims_truth_m"]
+        rows = [(key, err[L] * 1e-3, None, "m", truth[L])
+                for key, L in (("room.length_m", "L1"), ("room.width_m", "L2"),
+                               ("room.height_m", "L3")) if err.get(L) is not None]
+        results[name] = (rows, time.monotonic() - t0)
+    return results
+
+
+def one_seed(bin_dir, out, kind, seed, sim_args):
+    log = simulated(bin_dir, f"{out}/{kind}_{seed}.lcmlog", sim_args + ["--seed", str(seed)])
     results, warned = {}, []
     t0 = time.monotonic()
     j = json.loads(run([f"{bin_dir}/sweepmap", "calib", "rig", "--rig", kind, "--logs", log,
                         "--out", f"{out}/{kind}_{seed}_rig.yaml", "--json"], log + ".rig.txt"))
     results["calib rig"] = (rows_of_rig(j), time.monotonic() - t0)
+    if kind == "rig_b":
+        results.update(loop_rooms(bin_dir, out, seed, f"{out}/{kind}_{seed}_rig.yaml"))
     for name, extra, reader in SINGLES[kind]:
         t0 = time.monotonic()
         j = json.loads(run([f"{bin_dir}/sweepmap", "calib", name, "--rig", kind, "--logs", log,

@@ -232,6 +232,13 @@ int calibrateMobileLidarRig(const RigCalibRequest& o, const Rig& loaded) {
   c.rms_before *= 1e3;                     // m -> mm
   c.rms_after *= 1e3;
   c.residual_unit = "mm";
+  const std::string& angles_file =
+      std::get<MobileLidarConfig>(loaded.config).mounting.calibration_file;
+  if (!angles_file.empty()) {
+    c.warnings.push_back("the rig file's mounting.calibration_file (" + angles_file +
+                         ") replaces the mounting angles of its calibration_file: clear it to "
+                         "use the angles calibrated here");
+  }
   return reportRigCalibration(o, loaded, 0.0, c, [&] { writeRigCalibrationOf(o, loaded, c); });
 }
 
