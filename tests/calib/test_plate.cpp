@@ -449,6 +449,8 @@ TEST(PlateModel, AgreeingFitIsNotMovedByAFewWrongRays) {
   std::printf("largest error: agreeing %.4f deg, sampled centroid %.4f deg\n", worst,
               worst_sampled);
   EXPECT_LT(worst, 0.01);
+  // The case is one the sampled-centroid fit misses (by up to 0.049 deg), or it shows nothing.
+  EXPECT_GT(worst_sampled, 0.01);
 }
 
 TEST(PlateModel, AgreeingFitWithoutAHitIsNotFound) {

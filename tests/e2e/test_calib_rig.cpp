@@ -11,7 +11,9 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "core/calibration_file.hpp"
 #include "rigs/mobile_lidar.hpp"
@@ -312,6 +314,14 @@ TEST(CalibRig, RigCEncoderZeroFromTheReferenceFaceOfThePlansRecording) {
       singleCommandWarnings({"axis-offset", "--rig", "rig_c", "--logs", log, "--no-grid"}, dir);
   EXPECT_NE(warnings.find("puts the encoder zero at"), std::string::npos) << warnings;
   EXPECT_NE(warnings.find("run `sweepmap calib rig`"), std::string::npos) << warnings;
+  // With the rig file's zero where the face puts it, it stays quiet.
+  std::ostringstream at;
+  at << std::setprecision(17) << zero["value"].get<double>();
+  const std::string quiet =
+      singleCommandWarnings({"axis-offset", "--rig", "rig_c", "--logs", log, "--no-grid", "--set",
+                             "geometry.encoder_zero_deg=" + at.str()},
+                            dir);
+  EXPECT_EQ(quiet.find("encoder zero"), std::string::npos) << quiet;
   // Without the face declared in the rig file the same log leaves the zero nominal.
   ASSERT_EQ(
       runSplit({"calib", "rig", "--rig", "rig_c", "--set", "turntable.reference.declared=false",

@@ -89,6 +89,16 @@ class SweepPool {
   }
   ~SweepPool() { stop(); }
 
+  // Stops without segmenting the sweeps still queued (a log could not be read: they are not
+  // used).
+  void cancel() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      cancelled_ = true;
+    }
+    stop();
+  }
+
   // Queues a sweep; waits while one waits already.
   void push(SweepJob job) {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -116,9 +126,9 @@ class SweepPool {
   void work() {
     std::unique_lock<std::mutex> lock(mutex_);
     for (;;) {
-      ready_.wait(lock, [&] { return done_ || next_ < jobs_.size(); });
-      if (next_ == jobs_.size()) return;  // done_ and nothing left
-      SweepJob* job = &jobs_[next_++];    // a deque's elements stay where they are
+      ready_.wait(lock, [&] { return done_ || cancelled_ || next_ < jobs_.size(); });
+      if (cancelled_ || next_ == jobs_.size()) return;  // cancelled, or done_ and nothing left
+      SweepJob* job = &jobs_[next_++];                  // a deque's elements stay where they are
       room_.notify_one();
       lock.unlock();
       takeSweep(o_, rig_, job);
@@ -145,6 +155,7 @@ class SweepPool {
   std::deque<SweepJob> jobs_;
   size_t next_ = 0;  // the first job no worker has taken
   bool done_ = false;
+  bool cancelled_ = false;
   std::vector<std::thread> workers_;
 };
 
@@ -167,7 +178,10 @@ bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress
   };
   r.took_log = [&](const LogReadResult& l) { takeTruth(l, &in->truth); };
   r.progress = &progress;
-  if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) return false;
+  if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) {
+    pool.cancel();
+    return false;
+  }
   pool.finish(in);
   in->read_s = seconds(Clock::now() - t0);
   return true;
