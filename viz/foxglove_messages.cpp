@@ -165,7 +165,8 @@ struct FoxgloveConverter::State {
   double resolution_m = 0.05;
   double lidar_offset_x_m = 0.0;                                   // rig A: t_L^O'
   Eigen::Isometry3d T_body_lidar = Eigen::Isometry3d::Identity();  // rig B
-  ProfileGeometry profile_geometry;                                // rig C
+  int64_t lidar_time_offset_us = 0;  // rig B: scans go on the poses' clock (lidar.time_offset_s)
+  ProfileGeometry profile_geometry;  // rig C
   bool static_sent = false;
   double last_phi_offset = NAN;
   std::set<std::tuple<int, int, int>> voxels;
@@ -208,6 +209,7 @@ FoxgloveConverter::FoxgloveConverter(const Rig& rig) : state_(std::make_unique<S
           state_->lidar_offset_x_m = c.geometry.lidar_offset_x_mm * 1e-3;
         } else if constexpr (std::is_same_v<T, MobileLidarConfig>) {
           state_->T_body_lidar = c.mounting.toMounting().T_BL();
+          state_->lidar_time_offset_us = std::llround(c.assembler.lidar_time_offset_s * 1e6);
         } else {
           state_->profile_geometry = c.geometry.toGeometry();
         }
@@ -333,9 +335,10 @@ void FoxgloveConverter::State::scan(const lidar_scan_t& s, int64_t t_ns,
       values.insert(values.end(), {0.0f, r * std::sin(a), r * std::cos(a),
                                    have_intensity ? s.intensities[i] : 0.0f});
     }
-    out->push_back(message("/lidar_points", kPointCloud,
-                           pointCloudJson(s.utime, "L", {"x", "y", "z", "intensity"}, values),
-                           t_ns));
+    out->push_back(message(
+        "/lidar_points", kPointCloud,
+        pointCloudJson(s.utime - lidar_time_offset_us, "L", {"x", "y", "z", "intensity"}, values),
+        t_ns));
     return;
   }
   json ranges = json::array(), intensities = json::array();
@@ -344,7 +347,7 @@ void FoxgloveConverter::State::scan(const lidar_scan_t& s, int64_t t_ns,
     if (have_intensity) intensities.push_back(finite(s.intensities[i]));
   }
   const double end = s.angle_min_rad + s.angle_increment_rad * std::max(s.nranges - 1, 0);
-  json j = {{"timestamp", timeJson(s.utime)},
+  json j = {{"timestamp", timeJson(s.utime - lidar_time_offset_us)},
             {"frame_id", "L"},
             {"pose", poseJson(laserScanPoseInL())},
             {"start_angle", finite(s.angle_min_rad)},
