@@ -289,24 +289,41 @@ Disagreements disagreements(const PlateModel& m, const std::vector<PlateRay>& ra
   return d;
 }
 
-// The first and last angle of [lo, hi] where the disagreements are fewest (steps at the same
-// angle taken together).
-std::pair<double, double> fewestDisagreements(const Disagreements& d, double lo, double hi) {
+// Where the disagreements over [lo, hi] are fewest (steps at the same angle taken together):
+// the first and last such angle, and the widest range of them (of equally wide, the first).
+struct Fewest {
+  double first, last;
+  std::pair<double, double> widest;
+};
+Fewest fewestDisagreements(const Disagreements& d, double lo, double hi) {
   int count = d.at_lo, best = d.at_lo;
-  double first = lo, last = hi;
-  bool in_best = true;  // the count is the fewest from the last step on
+  double start = lo;  // where the current run at the fewest began
+  bool in_best = true, have = false;
+  Fewest f{lo, hi, {lo, hi}};
+  const auto close = [&](double end) {
+    if (!have || end - start > f.widest.second - f.widest.first) f.widest = {start, end};
+    if (!have) f.first = start;
+    f.last = end;
+    have = true;
+  };
   for (size_t i = 0; i < d.steps.size();) {
     const double angle = d.steps[i].first;
-    if (in_best) last = angle;
     for (; i < d.steps.size() && d.steps[i].first == angle; ++i) count += d.steps[i].second;
-    if (count < best) {
+    if (count < best) {  // a new fewest: the runs before are no longer the fewest
       best = count;
-      first = angle;
+      have = false;
+      in_best = true;
+      start = angle;
+    } else if (count == best && !in_best) {
+      in_best = true;
+      start = angle;
+    } else if (count != best && in_best) {
+      close(angle);
+      in_best = false;
     }
-    in_best = count == best;
   }
-  if (in_best) last = hi;
-  return {first, last};
+  if (in_best) close(hi);
+  return f;
 }
 
 }  // namespace
@@ -322,9 +339,9 @@ std::optional<double> fitPlateAgreeing(const PlateModel& m, const std::vector<Pl
   double centre = start_rad;
   for (int i = 0; i < 8; ++i) {
     const double lo = centre - window_rad, hi = centre + window_rad;
-    const auto [first, last] = fewestDisagreements(disagreements(m, rays, weights, lo, hi), lo, hi);
-    if (first > lo && last < hi) return 0.5 * (first + last);
-    centre = first <= lo ? lo + 0.5 * window_rad : hi - 0.5 * window_rad;
+    const Fewest f = fewestDisagreements(disagreements(m, rays, weights, lo, hi), lo, hi);
+    if (f.first > lo && f.last < hi) return 0.5 * (f.widest.first + f.widest.second);
+    centre = f.first <= lo ? lo + 0.5 * window_rad : hi - 0.5 * window_rad;
   }
   return std::nullopt;
 }

@@ -91,10 +91,10 @@ std::vector<double> plateHitWeights(const PlateModel& m, const std::vector<Plate
                                     const std::vector<PlateRayBeams>& beams);
 
 // The agreeing estimator: the angle whose sharp plate (plateCovers) disagrees with the fewest
-// measured rays (`weights` > 0 a hit, 0 not, < 0 in neither): the middle between the first and
-// the last angle with the fewest (when the fewest come in separate ranges, the middle of their
-// whole span, which may lie between them), searched within `window_rad` of `start_rad` (re-centred
-// while the fewest lie at its end). Each ray is in or out, and a few are wrong whatever the angle
+// measured rays (`weights` > 0 a hit, 0 not, < 0 in neither): the middle of the widest range of
+// angles with the fewest (when the fewest come in separate ranges, the widest of them, never
+// the gap between), searched within `window_rad` of `start_rad` (re-centred while that range
+// lies at its end). Each ray is in or out, and a few are wrong whatever the angle
 // (a background's mixed pixel in the plate's gate, ~1 in 60 edges; a mixed pixel where a scan clips
 // a corner of the plate): the centroid moves with each of them, and the sampled centroid's
 // mismatch, flat where no counted ray flips (the ray past each run of hits is in neither), turned 4

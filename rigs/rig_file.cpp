@@ -91,6 +91,10 @@ void applyRigCalibration(const std::string& rig_path, const std::string& file,
     if (key == "rig" || key.find("calibration_file") != std::string::npos) {
       throw ConfigError(where + ": key 'parameters." + key + "' cannot be calibrated");
     }
+    if (!schema->has(key)) {
+      throw ConfigError(where + ": key 'parameters." + key + "' is not a key of the rig file " +
+                        rig_path + " (a calibration of another kind of rig?)");
+    }
     std::ostringstream v;
     v << std::setprecision(17) << value;
     try {
