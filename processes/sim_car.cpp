@@ -20,6 +20,7 @@ std::unique_ptr<SimMobile> makeSimCar(const MobileLidarConfig& rig, const Scene&
   const MobileLidarConfig::Build built = rig.build();
   WheelGeometry wheels;
   wheels.radius_m = built.wheel_radius_m;
+  wheels.radius_right_m = built.wheel_radius_right_m;
   wheels.ticks_per_revolution = rig.odometry.ticks_per_revolution;
   wheels.wheel_distance_m = built.wheel_distance_m;
   const LidarMounting nominal = rig.mounting.toMounting();

@@ -71,13 +71,13 @@ struct MobileLidarConfig {
   // same car as the file it calibrated. Unset (a config not loaded from a file): the values
   // above.
   struct Build {
-    double wheel_radius_m, wheel_distance_m;
+    double wheel_radius_m, wheel_radius_right_m, wheel_distance_m;
     Eigen::Vector3d t_BL_m;
   };
   std::optional<Build> as_built;
   Build build() const {
-    return as_built.value_or(Build{odometry.wheel_radius_m, odometry.ekf.wheel_distance_m,
-                                   mounting.toMounting().t_BL_m});
+    return as_built.value_or(Build{odometry.wheel_radius_m, odometry.rightWheelRadius(),
+                                   odometry.ekf.wheel_distance_m, mounting.toMounting().t_BL_m});
   }
   void declare(ConfigSchema& s);
 };

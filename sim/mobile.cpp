@@ -90,7 +90,8 @@ void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "wheel_radius_left_error_fraction", &wheel_radius_left_error_fraction, "",
         "true left wheel radius = odometry.wheel_radius_m (1 + this)");
   s.add(p + "wheel_radius_right_error_fraction", &wheel_radius_right_error_fraction, "",
-        "true right wheel radius = odometry.wheel_radius_m (1 + this)");
+        "true right wheel radius = odometry.wheel_radius_right_m (or wheel_radius_m when that "
+        "is 0) (1 + this)");
   s.add(p + "wheel_distance_error_m", &wheel_distance_error_m, "m",
         "true track width = odometry.wheel_distance_m + this");
   s.add(p + "lever_error_x_m", &lever_error_x_m, "m", "true lidar centre = mounting.x_m + this");

@@ -160,12 +160,14 @@ struct SlipEvent {
 
 struct WheelGeometry {
   double radius_m = 0.0325;
+  double radius_right_m = 0.0;  // the right wheel's nominal radius; 0: radius_m
   double ticks_per_revolution = 2000;
   double wheel_distance_m = 0.2;
   // The true wheels of a simulated car: the nominal geometry with its build errors.
   double radiusOf(bool right, const SimMobileConfig& c) const {
-    return radius_m * (1.0 + (right ? c.wheel_radius_right_error_fraction
-                                    : c.wheel_radius_left_error_fraction));
+    const double nominal = right && radius_right_m > 0.0 ? radius_right_m : radius_m;
+    return nominal * (1.0 + (right ? c.wheel_radius_right_error_fraction
+                                   : c.wheel_radius_left_error_fraction));
   }
 };
 

@@ -528,6 +528,13 @@ TEST(MobileLidarConfig, RigCalibrationFileReplacesItsKeysButNotTheSimulatedCar) 
   EXPECT_TRUE(car->trueT_BL().isApprox(plain_car->trueT_BL(), 1e-15));
   EXPECT_DOUBLE_EQ(car->trueWheelDistance(), plain_car->trueWheelDistance());
   EXPECT_DOUBLE_EQ(car->nominalWheels().radius_m, plain.odometry.wheel_radius_m);
+  EXPECT_DOUBLE_EQ(car->nominalWheels().radiusOf(true, c.sim),
+                   plain_car->nominalWheels().radiusOf(true, plain.sim));
+  // A right wheel the rig file itself gives is the simulated car's.
+  const MobileLidarConfig right =
+      loadMobileLidarConfig(rig_b, {"odometry.wheel_radius_right_m=0.033"});
+  EXPECT_DOUBLE_EQ(makeSimCar(right, scene, 1, 0)->nominalWheels().radiusOf(true, right.sim),
+                   0.033 * (1.0 + right.sim.wheel_radius_right_error_fraction));
   // A key the rig file does not have is refused, naming the calibration file.
   f.parameters = {{"odometry.no_such_key", 1.0}};
   writeRigCalibration((dir / "rig_calibration.yaml").string(), f);
