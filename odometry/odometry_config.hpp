@@ -12,7 +12,7 @@ namespace sweepmap {
 struct OdometryConfig {
   double wheel_radius_m = 0.077;
   // The right wheel's radius when it differs from the left's (wheel_radius_m); 0: the same.
-  // Set by rig B's joint calibration (calib/mobile_rig_calibration.hpp), not a rig-file key.
+  // Rig key odometry.wheel_radius_right_m; sweepmap calib rig measures it.
   double wheel_radius_right_m = 0.0;
   // The right wheel's radius: wheel_radius_right_m, or wheel_radius_m when that is 0.
   double rightWheelRadius() const {

@@ -44,10 +44,11 @@ struct WorldAssemblerConfig {
   // rig measures it): a ray stamped t is placed with the pose at t - lidar_time_offset_s.
   double lidar_time_offset_s = 0.0;
   void declare(ConfigSchema& s, const std::string& prefix);
-  // Puts a scan stamped by the lidar on the odometry's clock.
-  void toOdometryClock(Scan2D* scan) const {
-    scan->utime -= static_cast<int64_t>(std::llround(lidar_time_offset_s * 1e6));
+  int64_t lidarTimeOffsetUs() const {
+    return static_cast<int64_t>(std::llround(lidar_time_offset_s * 1e6));
   }
+  // Puts a scan stamped by the lidar on the odometry's clock.
+  void toOdometryClock(Scan2D* scan) const { scan->utime -= lidarTimeOffsetUs(); }
 };
 
 struct MobileLidarConfig {

@@ -209,7 +209,7 @@ FoxgloveConverter::FoxgloveConverter(const Rig& rig) : state_(std::make_unique<S
           state_->lidar_offset_x_m = c.geometry.lidar_offset_x_mm * 1e-3;
         } else if constexpr (std::is_same_v<T, MobileLidarConfig>) {
           state_->T_body_lidar = c.mounting.toMounting().T_BL();
-          state_->lidar_time_offset_us = std::llround(c.assembler.lidar_time_offset_s * 1e6);
+          state_->lidar_time_offset_us = c.assembler.lidarTimeOffsetUs();
         } else {
           state_->profile_geometry = c.geometry.toGeometry();
         }
