@@ -70,16 +70,10 @@ void MobileLidarConfig::declare(ConfigSchema& s) {
   sim.declare(s, "sim.");
 }
 
-MobileLidarConfig loadMobileLidarConfig(const std::string& path,
-                                        const std::vector<std::string>& overrides) {
-  MobileLidarConfig c;
-  ConfigSchema s;
-  c.declare(s);
-  s.loadFile(path);
-  for (const auto& o : overrides) s.set(o);
-  checkRigKind(path, c.rig, "mobile_lidar");
-  c.as_built = c.build();
-  if (!c.calibration_file.empty()) applyRigCalibration(path, c.calibration_file, overrides, &s);
+namespace {
+
+// The rig file's range checks (ConfigError naming `path` and the key).
+void checkMobileLidarConfig(const std::string& path, const MobileLidarConfig& c) {
   c.lidar.validate(path, "lidar.");
   const auto device = [&](const std::string& key, const std::string& value, DeviceProtocol p) {
     try {
@@ -90,11 +84,12 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
   };
   device("imu.device", c.imu_device, DeviceProtocol::kHi219);
   device("wheels.device", c.wheels_device, DeviceProtocol::kWheelBoard);
-  if (!(c.odometry.wheel_radius_m > 0) || !(c.odometry.ticks_per_revolution > 0) ||
-      !(c.odometry.ekf.wheel_distance_m > 0)) {
-    throw ConfigError(
-        path + ": odometry wheel radius, ticks per revolution and wheel distance must be > 0");
-  }
+  const auto positive = [&](double v, const char* key) {
+    if (!(v > 0)) throw ConfigError(path + ": key '" + key + "' must be > 0");
+  };
+  positive(c.odometry.wheel_radius_m, "odometry.wheel_radius_m");
+  positive(c.odometry.ticks_per_revolution, "odometry.ticks_per_revolution");
+  positive(c.odometry.ekf.wheel_distance_m, "odometry.wheel_distance_m");
   if (!(c.odometry.wheel_radius_right_m >= 0)) {
     throw ConfigError(path + ": key 'odometry.wheel_radius_right_m' must be >= 0 (0: the left's)");
   }
@@ -113,6 +108,23 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
     throw ConfigError(path +
                       ": key 'assembler.pose_channel' must be ODOMETRY_POSE or WHEEL_ODOMETRY");
   }
+}
+
+}  // namespace
+
+MobileLidarConfig loadMobileLidarConfig(const std::string& path,
+                                        const std::vector<std::string>& overrides) {
+  MobileLidarConfig c;
+  ConfigSchema s;
+  c.declare(s);
+  s.loadFile(path);
+  for (const auto& o : overrides) s.set(o);
+  checkRigKind(path, c.rig, "mobile_lidar");
+  c.as_built = c.build();
+  CalibratedKeys calibrated;
+  if (!c.calibration_file.empty())
+    calibrated = applyRigCalibration(path, c.calibration_file, overrides, &s);
+  checkCalibratedRig(path, calibrated, [&] { checkMobileLidarConfig(path, c); });
   if (!c.mounting.calibration_file.empty()) {
     const MountingCalibration m = loadFileBesideRig(
         path, "mounting.calibration_file", c.mounting.calibration_file, loadMountingCalibration);

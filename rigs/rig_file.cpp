@@ -82,11 +82,13 @@ void throwBesideRigError(const std::string& rig_path, const std::string& key,
                     "): " + error);
 }
 
-void applyRigCalibration(const std::string& rig_path, const std::string& file,
-                         const std::vector<std::string>& overrides, ConfigSchema* schema) {
+CalibratedKeys applyRigCalibration(const std::string& rig_path, const std::string& file,
+                                   const std::vector<std::string>& overrides,
+                                   ConfigSchema* schema) {
   const RigCalibrationFile c =
       loadFileBesideRig(rig_path, "calibration_file", file, loadRigCalibration);
   const std::string where = pathBesideRig(rig_path, file);
+  CalibratedKeys applied{where, {}};
   for (const auto& [key, value] : c.parameters) {
     if (key == "rig" || key.find("calibration_file") != std::string::npos) {
       throw ConfigError(where + ": key 'parameters." + key + "' cannot be calibrated");
@@ -102,8 +104,34 @@ void applyRigCalibration(const std::string& rig_path, const std::string& file,
     } catch (const ConfigError& e) {
       throw ConfigError(where + ": key 'parameters." + key + "': " + e.what());
     }
+    const bool overridden = std::any_of(overrides.begin(), overrides.end(), [&](const auto& o) {
+      return o.compare(0, key.size() + 1, key + "=") == 0;
+    });
+    if (!overridden) applied.keys.push_back(key);
   }
   for (const auto& o : overrides) schema->set(o);
+  return applied;
+}
+
+namespace {
+
+// A rig file's check's message without its leading "PATH: ".
+std::string withoutSource(std::string what, const std::string& path) {
+  if (what.rfind(path, 0) == 0) what = what.substr(path.size());
+  if (what.rfind(": ", 0) == 0) what = what.substr(2);
+  return what;
+}
+
+}  // namespace
+
+std::string calibrationSourceOf(const std::string& rig_path, const std::string& message,
+                                const CalibratedKeys& calibrated) {
+  for (const auto& key : calibrated.keys) {
+    if (message.find("'" + key + "'") == std::string::npos) continue;
+    return calibrated.file + ": " + withoutSource(message, rig_path) + " (its parameters." + key +
+           ", applied by the calibration_file of rig file " + rig_path + ")";
+  }
+  return message;
 }
 
 fs::path configDir() {
@@ -208,9 +236,7 @@ namespace {
   for (const std::string& o : overrides) {
     const std::string key = o.substr(0, o.find('='));
     if (key.empty() || what.find("'" + key + "'") == std::string::npos) continue;
-    if (what.rfind(path, 0) == 0) what = what.substr(path.size());
-    if (what.rfind(": ", 0) == 0) what = what.substr(2);
-    throw ConfigError("--set " + o + ": " + what + " (rig file " + path + ")");
+    throw ConfigError("--set " + o + ": " + withoutSource(what, path) + " (rig file " + path + ")");
   }
   throw e;
 }

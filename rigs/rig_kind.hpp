@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-namespace sweepmap {
+#include "core/config.hpp"
 
-class ConfigSchema;
+namespace sweepmap {
 
 enum class RigKind {
   kRotatingLidar,    // rig A: 2D lidar turned by a stepper, plate correction (Yuan 2021)
@@ -48,13 +48,29 @@ std::string pathBesideRig(const std::string& rig_path, const std::string& file);
 [[noreturn]] void throwBesideRigError(const std::string& rig_path, const std::string& key,
                                       const std::string& file, const std::string& error);
 
+// The keys whose values a rig calibration file gave (those no `--set` replaced), and the file.
+struct CalibratedKeys {
+  std::string file;  // as resolved beside the rig file
+  std::vector<std::string> keys;
+};
+
 // A rig calibration file (sweepmap calib rig; core/calibration_file.hpp) that the rig file
 // names in its top-level `calibration_file` key, applied over the loaded `schema`: each of its
 // keys replaces the rig file's value, then the command line's `key=value` overrides are
 // applied again (they win). Throws ConfigError naming the file and the key for a key the
 // schema does not have, or one that cannot be calibrated (the kind, a calibration file).
-void applyRigCalibration(const std::string& rig_path, const std::string& file,
-                         const std::vector<std::string>& overrides, ConfigSchema* schema);
+CalibratedKeys applyRigCalibration(const std::string& rig_path, const std::string& file,
+                                   const std::vector<std::string>& overrides, ConfigSchema* schema);
+
+// Runs `check` (the range checks of the rig file `rig_path`, whose messages begin with that
+// path); a ConfigError about a key whose value the calibration file gave is rethrown naming
+// that file instead: "CALIBRATION: key 'K' must be ... (its parameters.K, applied by the
+// calibration_file of rig file RIG)".
+std::string calibrationSourceOf(const std::string& rig_path, const std::string& message,
+                                const CalibratedKeys& calibrated);
+template <class Check>
+void checkCalibratedRig(const std::string& rig_path, const CalibratedKeys& calibrated,
+                        Check&& check);
 
 template <class Load>
 auto loadFileBesideRig(const std::string& rig_path, const std::string& key, const std::string& file,
@@ -63,6 +79,16 @@ auto loadFileBesideRig(const std::string& rig_path, const std::string& key, cons
     return load(pathBesideRig(rig_path, file));
   } catch (const std::exception& e) {
     throwBesideRigError(rig_path, key, file, e.what());
+  }
+}
+
+template <class Check>
+void checkCalibratedRig(const std::string& rig_path, const CalibratedKeys& calibrated,
+                        Check&& check) {
+  try {
+    check();
+  } catch (const ConfigError& e) {
+    throw ConfigError(calibrationSourceOf(rig_path, e.what(), calibrated));
   }
 }
 

@@ -22,28 +22,10 @@ void RotatingLidarConfig::declare(ConfigSchema& s) {
   sim.declare(s, "sim.");
 }
 
-RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
-                                            const std::vector<std::string>& overrides) {
-  RotatingLidarConfig rig;
-  ConfigSchema schema;
-  rig.declare(schema);
-  schema.loadFile(path);
-  for (const auto& o : overrides) schema.set(o);
-  checkRigKind(path, rig.rig, "rotating_lidar");
-  if (!rig.calibration_file.empty())
-    applyRigCalibration(path, rig.calibration_file, overrides, &schema);
-  // Calibration files are named relative to the rig file.
-  if (!rig.plate.calibration_file.empty()) {
-    rig.plate.alpha_deg = loadFileBesideRig(path, "plate.calibration_file",
-                                            rig.plate.calibration_file, loadPlateCalibration)
-                              .alpha_deg;
-  }
-  if (!rig.geometry.calibration_file.empty()) {
-    rig.geometry.lidar_offset_x_mm =
-        loadFileBesideRig(path, "geometry.calibration_file", rig.geometry.calibration_file,
-                          loadLidarOffsetCalibration)
-            .lidar_offset_x_mm;
-  }
+namespace {
+
+// The rig file's range checks (ConfigError naming `path` and the key).
+void checkRotatingLidarConfig(const std::string& path, const RotatingLidarConfig& rig) {
   const auto require = [&](bool ok, const char* key, const char* what) {
     if (!ok) throw ConfigError(path + ": key '" + key + "' " + what);
   };
@@ -76,6 +58,34 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
     throw ConfigError(path + ": key 'plate.beta_method' must be centroid, ray_plane or model");
   }
   require(rig.plate.thickness_mm >= 0, "plate.thickness_mm", "must be >= 0");
+}
+
+}  // namespace
+
+RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
+                                            const std::vector<std::string>& overrides) {
+  RotatingLidarConfig rig;
+  ConfigSchema schema;
+  rig.declare(schema);
+  schema.loadFile(path);
+  for (const auto& o : overrides) schema.set(o);
+  checkRigKind(path, rig.rig, "rotating_lidar");
+  CalibratedKeys calibrated;
+  if (!rig.calibration_file.empty())
+    calibrated = applyRigCalibration(path, rig.calibration_file, overrides, &schema);
+  // Calibration files are named relative to the rig file.
+  if (!rig.plate.calibration_file.empty()) {
+    rig.plate.alpha_deg = loadFileBesideRig(path, "plate.calibration_file",
+                                            rig.plate.calibration_file, loadPlateCalibration)
+                              .alpha_deg;
+  }
+  if (!rig.geometry.calibration_file.empty()) {
+    rig.geometry.lidar_offset_x_mm =
+        loadFileBesideRig(path, "geometry.calibration_file", rig.geometry.calibration_file,
+                          loadLidarOffsetCalibration)
+            .lidar_offset_x_mm;
+  }
+  checkCalibratedRig(path, calibrated, [&] { checkRotatingLidarConfig(path, rig); });
   return rig;
 }
 

@@ -548,5 +548,32 @@ TEST(MobileLidarConfig, RigCalibrationFileReplacesItsKeysButNotTheSimulatedCar) 
   std::filesystem::remove_all(dir);
 }
 
+// A value the calibration file gives that the rig's checks refuse is blamed on that file, not on
+// the rig file that holds a good one; a --set of the key replaces it (and is blamed instead).
+TEST(MobileLidarConfig, ARefusedCalibratedValueNamesTheCalibrationFile) {
+  const std::filesystem::path dir = emptyTempDir("sweepmap_rig_b_bad_calibration");
+  RigCalibrationFile f;
+  f.parameters = {{"mounting.x_m", 0.1031}, {"odometry.wheel_distance_m", -0.2}};
+  const std::string file = (dir / "rig_calibration.yaml").string();
+  writeRigCalibration(file, f);
+  const std::string rig_b = std::string(SWEEPMAP_SOURCE_DIR) + "/config/rig_b.yaml";
+  const auto error = [&](const std::vector<std::string>& sets) {
+    try {
+      loadMobileLidarConfig(rig_b, sets);
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string e = error({"calibration_file=" + file});
+  EXPECT_EQ(e.rfind(file + ": key 'odometry.wheel_distance_m' must be > 0", 0), 0u) << e;
+  EXPECT_NE(e.find("parameters.odometry.wheel_distance_m"), std::string::npos) << e;
+  EXPECT_NE(e.find("rig file " + rig_b), std::string::npos) << e;
+  EXPECT_EQ(error({"calibration_file=" + file, "odometry.wheel_distance_m=0.21"}), "");
+  const std::string set = error({"calibration_file=" + file, "odometry.wheel_distance_m=0"});
+  EXPECT_EQ(set.rfind(rig_b + ": key 'odometry.wheel_distance_m'", 0), 0u) << set;
+  std::filesystem::remove_all(dir);
+}
+
 }  // namespace
 }  // namespace sweepmap
