@@ -196,7 +196,12 @@ TEST(CalibCli, MountingFromTheDefaultCircleWithin1Mrad) {
   EXPECT_NEAR(truth.at("gamma_rad").get<double>(), 0.0355, 1e-12);
   for (const char* a : {"gamma_rad", "beta_rad", "alpha_rad"}) {
     EXPECT_NEAR(j.at(a).get<double>(), truth.at(a).get<double>(), 1e-3) << a;
+    // Each angle's sigma, from the covariance: a fraction of a milliradian on this drive.
+    const double sigma = j.at("sigma").at(a).get<double>();
+    EXPECT_GT(sigma, 1e-6) << a;
+    EXPECT_LT(sigma, 1e-3) << a;
   }
+  EXPECT_FALSE(j.at("sigma").contains("time_offset_s"));  // not estimated without --time-offset
   EXPECT_LT(j.at("residual_after_m").get<double>(), j.at("residual_before_m").get<double>());
   // A steady circle cannot check the wheels against the gyro: it says so (and no more).
   ASSERT_EQ(j.at("warnings").size(), 1u) << j.at("warnings");

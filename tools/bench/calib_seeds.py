@@ -47,7 +47,8 @@ def axis_offset_profile(j):
 
 
 def mounting(j):
-    return [("mounting." + k + "_rad", j["error_mrad"][k] * 1e-3, None, "rad", None)
+    sigma = j.get("sigma", {})
+    return [("mounting." + k + "_rad", j["error_mrad"][k] * 1e-3, sigma.get(k + "_rad"), "rad", None)
             for k in ("gamma", "beta", "alpha")]
 
 

@@ -88,6 +88,7 @@ CLI::App* addMounting(CLI::App* calib, std::shared_ptr<MountingCalibRequest> m) 
       "mounting. Human report on stderr; --json prints gamma_rad, beta_rad, alpha_rad, "
       "time_offset_s (with --time-offset: each pose's time minus its ray's after the rig's "
       "lidar.time_offset_s; the rig's value less it is the new lidar.time_offset_s), "
+      "sigma (each one's 1-sigma from the covariance, the rig's other values taken as exact), "
       "residual_before_m, residual_after_m (RMS), correspondences, method, the paper's result "
       "under \"paper\", warnings and, for simulated logs, the truth and "
       "error_mrad. Warns when the wheels disagree with the gyro (each radius over the track "

@@ -128,6 +128,12 @@ std::string mountingResultJsonText(const MountingCalibrationResult& r,
                       {"correspondences", r.correspondences},
                       {"iterations", r.iterations}};
   if (!r.ok) j["reason"] = r.reason;
+  if (r.ok && r.sigma_gamma_rad > 0.0) {  // the fast solver's, from its covariance
+    j["sigma"] = {{"gamma_rad", r.sigma_gamma_rad},
+                  {"beta_rad", r.sigma_beta_rad},
+                  {"alpha_rad", r.sigma_alpha_rad}};
+    if (r.sigma_time_offset_s > 0.0) j["sigma"]["time_offset_s"] = r.sigma_time_offset_s;
+  }
   if (truth && r.ok) {
     j["error_mrad"] = {{"gamma", 1e3 * (r.gamma_rad - truth->gamma_rad)},
                        {"beta", 1e3 * (r.beta_rad - truth->beta_rad)},

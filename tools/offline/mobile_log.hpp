@@ -60,9 +60,10 @@ LidarMounting trueMounting(const truth_mounting_t& truth);
 
 // A mounting calibration's result for reports, as the text of a JSON object: method, ok
 // (reason), gamma/beta/alpha_rad, time_offset_s, track_drift_m_s, residual_before_m/after_m,
-// correspondences, iterations and, given the truth and a result, error_mrad {gamma, beta,
-// alpha} (estimate minus truth). Text, so that no JSON type is in a header; parse it to add
-// keys (numbers read back exactly).
+// correspondences, iterations, the fast solver's 1-sigma uncertainties from its covariance
+// under "sigma" {gamma_rad, beta_rad, alpha_rad, time_offset_s when estimated} and, given the
+// truth and a result, error_mrad {gamma, beta, alpha} (estimate minus truth). Text, so that no JSON
+// type is in a header; parse it to add keys (numbers read back exactly).
 std::string mountingResultJsonText(const MountingCalibrationResult& r,
                                    const std::optional<LidarMounting>& truth = std::nullopt);
 
