@@ -255,7 +255,9 @@ Runner addEmulateCommand(CLI::App& app) {
       "on a shaft that stands still, or follows TRUTH_SHAFT with --follow-lcm); on "
       "pseudo-terminals, fed by a mobile_lidar world (the simulated car): x4 (YDLIDAR X4), "
       "rplidar (RPLIDAR A1), hi219 (HiPNUC HI219 IMU) and wheel-board (our wheel board "
-      "protocol). Prints the address or the pty path to open. Faults: sensor clock offset, "
+      "protocol). Prints the address or the pty path to open, and says when it stalled (the "
+      "machine too busy for it to keep real time: its bytes then come in a burst and may be "
+      "lost, which the host must not blame on the device). Faults: sensor clock offset, "
       "drift and start (the 24-bit wrap), corrupted bytes, a stall, a hang-up and return.");
   auto o = std::make_shared<EmulateOptions>();
   cmd->add_option("devices", o->models,

@@ -9,9 +9,11 @@
 #include <termios.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <iomanip>
 #include <stdexcept>
 #include <vector>
 
@@ -122,6 +124,8 @@ class EmulatorLink {
   bool receive(std::string* out);
   void injectByteFaults(std::string* out);
   void transmit(const std::string& out);
+  void noteTick(int64_t now);
+  void reportLag(int64_t now);
 
   const DeviceFactory& make_device_;
   const ServerOptions& options_;
@@ -138,7 +142,18 @@ class EmulatorLink {
   int64_t start_us_ = 0;
   std::string out_;
   std::vector<uint8_t> in_ = std::vector<uint8_t>(4096);
+  // Ticks the emulator could not run for (a machine too busy for it), since the last report.
+  int64_t last_tick_us_ = -1;
+  int64_t last_report_us_ = -1;
+  int lags_ = 0;
+  int64_t worst_lag_us_ = 0;
+  size_t lost_bytes_ = 0;  // bytes the link's buffer had no room for
 };
+
+// A gap between two ticks longer than this: the emulator did not keep real time.
+constexpr int64_t kLagUs = 100000;
+// At most one report per this much time (the rest are counted into the next one).
+constexpr int64_t kLagReportUs = 5000000;
 
 void EmulatorLink::run(const std::atomic<bool>& stop) {
   start_us_ = now_us_();
@@ -147,6 +162,7 @@ void EmulatorLink::run(const std::atomic<bool>& stop) {
   int64_t down_until = -1;
   while (!stop) {
     const int64_t now = now_us_();
+    noteTick(now);
     const double elapsed_s = static_cast<double>(now - start_us_) * 1e-6;
     if (options_.duration_s > 0 && elapsed_s >= options_.duration_s) break;
     if (!hung_up && faults_.hangup_at_s >= 0 && elapsed_s >= faults_.hangup_at_s) {
@@ -169,7 +185,40 @@ void EmulatorLink::run(const std::atomic<bool>& stop) {
     }
     exchange();
   }
+  if (lags_ > 0) reportLag(now_us_());
   powerDown(now_us_());
+}
+
+// A tick that comes long after the last one means the emulator was not running in between
+// (the machine is too busy): the device's bytes of that time go out at once, in a burst that
+// a serial buffer may not hold. Said on `info`, so that the host's errors are not taken for
+// the driver's.
+void EmulatorLink::noteTick(int64_t now) {
+  if (last_tick_us_ >= 0 && now - last_tick_us_ > kLagUs) {
+    ++lags_;
+    worst_lag_us_ = std::max(worst_lag_us_, now - last_tick_us_);
+  }
+  last_tick_us_ = now;
+  if (lags_ > 0 && (last_report_us_ < 0 || now - last_report_us_ >= kLagReportUs)) {
+    reportLag(now);
+  }
+}
+
+void EmulatorLink::reportLag(int64_t now) {
+  info_ << "emulator: could not keep real time: stalled " << lags_
+        << (lags_ == 1 ? " time" : " times") << ", for up to " << std::fixed << std::setprecision(2)
+        << 1e-6 * double(worst_lag_us_)
+        << " s (the machine is too busy for it); the device's bytes of that time went out at once";
+  if (lost_bytes_ > 0) {
+    info_ << "; " << lost_bytes_
+          << " bytes lost since the last report (the link's buffer was full)";
+  }
+  info_ << "; the host's errors and time jumps around then are the emulator's, not the device's"
+        << std::defaultfloat << std::endl;
+  last_report_us_ = now;
+  lags_ = 0;
+  worst_lag_us_ = 0;
+  lost_bytes_ = 0;
 }
 
 void EmulatorLink::powerUp(int64_t now) {
@@ -270,11 +319,15 @@ void EmulatorLink::injectByteFaults(std::string* out) {
 void EmulatorLink::transmit(const std::string& out) {
   if (options_.pty) {
     // A UART sends whether or not anybody reads: what does not fit is lost.
-    (void)!::write(master_.fd, out.data(), out.size());
+    const ssize_t n = ::write(master_.fd, out.data(), out.size());
+    lost_bytes_ += out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
     return;
   }
   pending_ += out;
-  if (pending_.size() > (4u << 20)) pending_.erase(0, pending_.size() - (4u << 20));
+  if (pending_.size() > (4u << 20)) {
+    lost_bytes_ += pending_.size() - (4u << 20);
+    pending_.erase(0, pending_.size() - (4u << 20));
+  }
   const ssize_t n = ::send(client_.fd, pending_.data(), pending_.size(), MSG_NOSIGNAL);
   if (n > 0) pending_.erase(0, static_cast<size_t>(n));
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -108,6 +109,17 @@ ReplayRunResult replayRecorded(const DemoRun& run, const Rig& rig) {
   return r;
 }
 
+// What the emulator said when it could not keep real time (its log's lines), repeated on
+// stderr: the devices' CRC errors and time jumps of then are the machine's load, not a driver's.
+void sayIfEmulatorStalled(const DemoRun& run) {
+  std::ifstream log(run.logFile("emulator"));
+  for (std::string line; std::getline(log, line);) {
+    if (line.find("could not keep real time") != std::string::npos) {
+      std::cerr << "demo: " << line << "\n";
+    }
+  }
+}
+
 int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::string>& sets,
                  const std::string& scene) {
   DemoRun run = prepare(o, rig, sets);
@@ -156,7 +168,10 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
   int failures = motor_rc != 0;
   failures +=
       run.stopInOrder({{lidar, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}}, 400);
-  if (emulator > 0) failures += run.stop(emulator, 5.0);
+  if (emulator > 0) {
+    failures += run.stop(emulator, 5.0);
+    sayIfEmulatorStalled(run);
+  }
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.sweeps != o.sweeps;
@@ -279,7 +294,10 @@ int mobileDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::stri
   failures += run.stopInOrder(
       {{car->lidar, 5.0}, {car->odometry, 5.0}, {assembler, 10.0}, {mapper, 120.0}, {logger, 10.0}},
       300);
-  if (car->emulator > 0) failures += run.stop(car->emulator, 5.0);
+  if (car->emulator > 0) {
+    failures += run.stop(car->emulator, 5.0);
+    sayIfEmulatorStalled(run);
+  }
 
   const ReplayRunResult r = replayRecorded(run, rig);
   failures += r.log_error || r.scans == 0;
