@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstring>
 #include <iomanip>
+#include <sstream>
 #include <stdexcept>
 #include <vector>
 
@@ -147,7 +148,8 @@ class EmulatorLink {
   int64_t last_report_us_ = -1;
   int lags_ = 0;
   int64_t worst_lag_us_ = 0;
-  size_t lost_bytes_ = 0;  // bytes the link's buffer had no room for
+  bool burst_ = false;     // this tick sends what the device had to send while stalled
+  size_t lost_bytes_ = 0;  // of those bursts, the bytes the link's buffer had no room for
 };
 
 // A gap between two ticks longer than this: the emulator did not keep real time.
@@ -193,28 +195,30 @@ void EmulatorLink::run(const std::atomic<bool>& stop) {
 // (the machine is too busy): the device's bytes of that time go out at once, in a burst that
 // a serial buffer may not hold. Said on `info`, so that the host's errors are not taken for
 // the driver's.
+// A TCP device with no host sends nowhere: its stalls harm nobody and are not counted. The
+// report follows the burst's tick, so that it counts what the burst lost.
 void EmulatorLink::noteTick(int64_t now) {
-  if (last_tick_us_ >= 0 && now - last_tick_us_ > kLagUs) {
+  burst_ = false;
+  if (last_tick_us_ >= 0 && now - last_tick_us_ > kLagUs && (options_.pty || client_)) {
     ++lags_;
     worst_lag_us_ = std::max(worst_lag_us_, now - last_tick_us_);
+    burst_ = true;
   }
   last_tick_us_ = now;
-  if (lags_ > 0 && (last_report_us_ < 0 || now - last_report_us_ >= kLagReportUs)) {
+  if (lags_ > 0 && !burst_ && (last_report_us_ < 0 || now - last_report_us_ >= kLagReportUs)) {
     reportLag(now);
   }
 }
 
 void EmulatorLink::reportLag(int64_t now) {
+  std::ostringstream seconds;
+  seconds << std::fixed << std::setprecision(2) << 1e-6 * double(worst_lag_us_);
   info_ << "emulator: could not keep real time: stalled " << lags_
-        << (lags_ == 1 ? " time" : " times") << ", for up to " << std::fixed << std::setprecision(2)
-        << 1e-6 * double(worst_lag_us_)
+        << (lags_ == 1 ? " time" : " times") << ", for up to " << seconds.str()
         << " s (the machine is too busy for it); the device's bytes of that time went out at once";
-  if (lost_bytes_ > 0) {
-    info_ << "; " << lost_bytes_
-          << " bytes lost since the last report (the link's buffer was full)";
-  }
+  if (lost_bytes_ > 0) info_ << ", " << lost_bytes_ << " of them lost (the link's buffer was full)";
   info_ << "; the host's errors and time jumps around then are the emulator's, not the device's"
-        << std::defaultfloat << std::endl;
+        << std::endl;
   last_report_us_ = now;
   lags_ = 0;
   worst_lag_us_ = 0;
@@ -320,12 +324,12 @@ void EmulatorLink::transmit(const std::string& out) {
   if (options_.pty) {
     // A UART sends whether or not anybody reads: what does not fit is lost.
     const ssize_t n = ::write(master_.fd, out.data(), out.size());
-    lost_bytes_ += out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
+    if (burst_) lost_bytes_ += out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
     return;
   }
   pending_ += out;
   if (pending_.size() > (4u << 20)) {
-    lost_bytes_ += pending_.size() - (4u << 20);
+    if (burst_) lost_bytes_ += pending_.size() - (4u << 20);
     pending_.erase(0, pending_.size() - (4u << 20));
   }
   const ssize_t n = ::send(client_.fd, pending_.data(), pending_.size(), MSG_NOSIGNAL);
