@@ -57,20 +57,30 @@ struct CalibratedKeys {
 // A rig calibration file (sweepmap calib rig; core/calibration_file.hpp) that the rig file
 // names in its top-level `calibration_file` key, applied over the loaded `schema`: each of its
 // keys replaces the rig file's value, then the command line's `key=value` overrides are
-// applied again (they win). Throws ConfigError naming the file and the key for a key the
-// schema does not have, or one that cannot be calibrated (the kind, a calibration file).
+// applied again (they win). Returns the file and the keys whose values it gave. Throws
+// ConfigError naming the file and the key for a key the schema does not have, or one that
+// cannot be calibrated (the kind, a calibration file).
 CalibratedKeys applyRigCalibration(const std::string& rig_path, const std::string& file,
                                    const std::vector<std::string>& overrides, ConfigSchema* schema);
 
-// Runs `check` (the range checks of the rig file `rig_path`, whose messages begin with that
-// path); a ConfigError about a key whose value the calibration file gave is rethrown naming
-// that file instead: "CALIBRATION: key 'K' must be ... (its parameters.K, applied by the
-// calibration_file of rig file RIG)".
+// `message` (a range check's of the rig file `rig_path`, beginning with that path) naming the
+// calibration file instead when it is about a key whose value that file gave: "CALIBRATION:
+// key 'K' must be ... (its parameters.K, applied by the calibration_file of rig file RIG)";
+// otherwise `message` unchanged.
 std::string calibrationSourceOf(const std::string& rig_path, const std::string& message,
                                 const CalibratedKeys& calibrated);
+
+// Runs `check` (the rig file's range checks); a ConfigError it throws is rethrown through
+// calibrationSourceOf.
 template <class Check>
 void checkCalibratedRig(const std::string& rig_path, const CalibratedKeys& calibrated,
-                        Check&& check);
+                        Check&& check) {
+  try {
+    check();
+  } catch (const ConfigError& e) {
+    throw ConfigError(calibrationSourceOf(rig_path, e.what(), calibrated));
+  }
+}
 
 template <class Load>
 auto loadFileBesideRig(const std::string& rig_path, const std::string& key, const std::string& file,
@@ -79,16 +89,6 @@ auto loadFileBesideRig(const std::string& rig_path, const std::string& key, cons
     return load(pathBesideRig(rig_path, file));
   } catch (const std::exception& e) {
     throwBesideRigError(rig_path, key, file, e.what());
-  }
-}
-
-template <class Check>
-void checkCalibratedRig(const std::string& rig_path, const CalibratedKeys& calibrated,
-                        Check&& check) {
-  try {
-    check();
-  } catch (const ConfigError& e) {
-    throw ConfigError(calibrationSourceOf(rig_path, e.what(), calibrated));
   }
 }
 

@@ -48,8 +48,8 @@ def axis_offset_profile(j):
 
 def mounting(j):
     sigma = j.get("sigma", {})
-    return [("mounting." + k + "_rad", j["error_mrad"][k] * 1e-3, sigma.get(k + "_rad"), "rad", None)
-            for k in ("gamma", "beta", "alpha")]
+    return [("mounting." + k + "_rad", j["error_mrad"][k] * 1e-3, sigma.get(k + "_rad"), "rad",
+             None) for k in ("gamma", "beta", "alpha")]
 
 
 # The issue's targets (issue 23): |error| within the limit; "%" limits are relative to the truth.
