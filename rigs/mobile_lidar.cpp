@@ -116,10 +116,7 @@ MobileLidarConfig loadMobileLidarConfig(const std::string& path,
                                         const std::vector<std::string>& overrides) {
   MobileLidarConfig c;
   ConfigSchema s;
-  c.declare(s);
-  s.loadFile(path);
-  for (const auto& o : overrides) s.set(o);
-  checkRigKind(path, c.rig, "mobile_lidar");
+  loadRigSchema(path, overrides, "mobile_lidar", &c, &s);
   c.as_built = c.build();
   CalibratedKeys calibrated;
   if (!c.calibration_file.empty())

@@ -82,6 +82,15 @@ void throwBesideRigError(const std::string& rig_path, const std::string& key,
                     "): " + error);
 }
 
+namespace {
+
+// The key an override `key=value` sets.
+std::string overrideKey(const std::string& assignment) {
+  return assignment.substr(0, assignment.find('='));
+}
+
+}  // namespace
+
 CalibratedKeys applyRigCalibration(const std::string& rig_path, const std::string& file,
                                    const std::vector<std::string>& overrides,
                                    ConfigSchema* schema) {
@@ -104,9 +113,8 @@ CalibratedKeys applyRigCalibration(const std::string& rig_path, const std::strin
     } catch (const ConfigError& e) {
       throw ConfigError(where + ": key 'parameters." + key + "': " + e.what());
     }
-    const bool overridden = std::any_of(overrides.begin(), overrides.end(), [&](const auto& o) {
-      return o.compare(0, key.size() + 1, key + "=") == 0;
-    });
+    const bool overridden = std::any_of(overrides.begin(), overrides.end(),
+                                        [&](const auto& o) { return overrideKey(o) == key; });
     if (!overridden) applied.keys.push_back(key);
   }
   for (const auto& o : overrides) schema->set(o);
@@ -234,7 +242,7 @@ namespace {
   std::string what = e.what();
   if (what.rfind("--set", 0) == 0) throw e;  // the override's own parse error names it already
   for (const std::string& o : overrides) {
-    const std::string key = o.substr(0, o.find('='));
+    const std::string key = overrideKey(o);
     if (key.empty() || what.find("'" + key + "'") == std::string::npos) continue;
     throw ConfigError("--set " + o + ": " + withoutSource(what, path) + " (rig file " + path + ")");
   }

@@ -35,6 +35,17 @@ std::string defaultSceneName(RigKind kind);
 // kind is loaded as another.
 void checkRigKind(const std::string& path, const std::string& found, const std::string& expected);
 
+// The first steps of loading a rig file of one kind into `config` through `schema`: its keys
+// declared, the file read, the `key=value` overrides applied, the kind checked (checkRigKind).
+template <class Config>
+void loadRigSchema(const std::string& path, const std::vector<std::string>& overrides,
+                   const std::string& kind, Config* config, ConfigSchema* schema) {
+  config->declare(*schema);
+  schema->loadFile(path);
+  for (const auto& o : overrides) schema->set(o);
+  checkRigKind(path, config->rig, kind);
+}
+
 // A file a rig file names (a calibration file): a relative `file` is relative to the rig
 // file's folder. Returns load(resolved path); a ConfigError it throws is rethrown naming the
 // rig file, the key, and what the path was relative to.

@@ -66,10 +66,7 @@ RotatingLidarConfig loadRotatingLidarConfig(const std::string& path,
                                             const std::vector<std::string>& overrides) {
   RotatingLidarConfig rig;
   ConfigSchema schema;
-  rig.declare(schema);
-  schema.loadFile(path);
-  for (const auto& o : overrides) schema.set(o);
-  checkRigKind(path, rig.rig, "rotating_lidar");
+  loadRigSchema(path, overrides, "rotating_lidar", &rig, &schema);
   CalibratedKeys calibrated;
   if (!rig.calibration_file.empty())
     calibrated = applyRigCalibration(path, rig.calibration_file, overrides, &schema);

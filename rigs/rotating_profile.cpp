@@ -88,10 +88,7 @@ RotatingProfileConfig loadRotatingProfileConfig(const std::string& path,
                                                 const std::vector<std::string>& overrides) {
   RotatingProfileConfig rig;
   ConfigSchema schema;
-  rig.declare(schema);
-  schema.loadFile(path);
-  for (const auto& o : overrides) schema.set(o);
-  checkRigKind(path, rig.rig, "rotating_profile");
+  loadRigSchema(path, overrides, "rotating_profile", &rig, &schema);
   if (!rig.geometry.calibration_file.empty()) {
     const AxisOffsetCalibration c =
         loadFileBesideRig(path, "geometry.calibration_file", rig.geometry.calibration_file,

@@ -245,20 +245,22 @@ int runEmulate(const EmulateOptions& o) {
 
 }  // namespace
 
+// `sweepmap emulate --help`'s description.
+constexpr const char* kEmulateDescription =
+    "Serve simulated devices behind their real protocols, for the real drivers: ust10lx "
+    "(a Hokuyo SCIP 2.0 sensor over TCP, as the world rig's lidar.model: the UST-10LX of "
+    "rig_a, or e.g. --set lidar.model=UTM-30LX; fed by a rotating_lidar world: the simulated "
+    "lidar "
+    "on a shaft that stands still, or follows TRUTH_SHAFT with --follow-lcm); on "
+    "pseudo-terminals, fed by a mobile_lidar world (the simulated car): x4 (YDLIDAR X4), "
+    "rplidar (RPLIDAR A1), hi219 (HiPNUC HI219 IMU) and wheel-board (our wheel board "
+    "protocol). Prints the address or the pty path to open, and says when it stalled (the "
+    "machine too busy for it to keep real time: its bytes then come in a burst and may be "
+    "lost, which the host must not blame on the device). Faults: sensor clock offset, "
+    "drift and start (the 24-bit wrap), corrupted bytes, a stall, a hang-up and return.";
+
 Runner addEmulateCommand(CLI::App& app) {
-  auto* cmd = app.add_subcommand(
-      "emulate",
-      "Serve simulated devices behind their real protocols, for the real drivers: ust10lx "
-      "(a Hokuyo SCIP 2.0 sensor over TCP, as the world rig's lidar.model: the UST-10LX of "
-      "rig_a, or e.g. --set lidar.model=UTM-30LX; fed by a rotating_lidar world: the simulated "
-      "lidar "
-      "on a shaft that stands still, or follows TRUTH_SHAFT with --follow-lcm); on "
-      "pseudo-terminals, fed by a mobile_lidar world (the simulated car): x4 (YDLIDAR X4), "
-      "rplidar (RPLIDAR A1), hi219 (HiPNUC HI219 IMU) and wheel-board (our wheel board "
-      "protocol). Prints the address or the pty path to open, and says when it stalled (the "
-      "machine too busy for it to keep real time: its bytes then come in a burst and may be "
-      "lost, which the host must not blame on the device). Faults: sensor clock offset, "
-      "drift and start (the 24-bit wrap), corrupted bytes, a stall, a hang-up and return.");
+  auto* cmd = app.add_subcommand("emulate", kEmulateDescription);
   auto o = std::make_shared<EmulateOptions>();
   cmd->add_option("devices", o->models,
                   "ust10lx | x4 | rplidar | hi219 | wheel-board, or several serial ones "

@@ -193,10 +193,9 @@ void EmulatorLink::run(const std::atomic<bool>& stop) {
 
 // A tick that comes long after the last one means the emulator was not running in between
 // (the machine is too busy): the device's bytes of that time go out at once, in a burst that
-// a serial buffer may not hold. Said on `info`, so that the host's errors are not taken for
-// the driver's.
-// A TCP device with no host sends nowhere: its stalls harm nobody and are not counted. The
-// report follows the burst's tick, so that it counts what the burst lost.
+// a serial buffer may not hold. Said on `info` after the burst's tick (so that it counts what
+// the burst lost), so that the host's errors are not taken for the driver's. A TCP device
+// with no host sends nowhere: its stalls harm nobody and are not counted.
 void EmulatorLink::noteTick(int64_t now) {
   burst_ = false;
   if (last_tick_us_ >= 0 && now - last_tick_us_ > kLagUs && (options_.pty || client_)) {
