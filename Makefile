@@ -25,13 +25,16 @@ FUZZ_RUNS ?= 10000000
 FUZZ_PROTOCOLS = scip x4 rplidar hi219 wheelboard lcm_datagram lcm_message
 JOBS ?= 2
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
-# -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable.
 # The on-board tree cross-compiled for arm64, through ccache (the cross compiler's entries
 # are its own: a first build is a cold one).
 PI_CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release -DSWEEPMAP_ONBOARD=ON \
                   --toolchain cmake/toolchain-aarch64-linux-gnu.cmake \
                   -DCMAKE_C_COMPILER_LAUNCHER=ccache -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
-SANITIZE_CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-g -O1" \
+# -O1: sanitizer checks cost less than at -O0, and the stack traces stay readable. -g1: the
+# line tables only, which is all a sanitizer's stack trace needs (file:line, inlined frames);
+# measured on two of the heaviest files, it compiles in 0.6-0.7 of -g's time into objects a
+# third to a quarter of the size.
+SANITIZE_CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Debug "-DCMAKE_CXX_FLAGS_DEBUG=-g1 -O1" \
                         -DSWEEPMAP_SANITIZE=ON -DSWEEPMAP_BUILD_TESTS=ON
 CTEST = ctest --output-on-failure -j$(JOBS) --timeout 900
 # Reports are fatal already (-fno-sanitize-recover=all, ASan's default); these add the
