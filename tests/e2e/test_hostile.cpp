@@ -311,9 +311,10 @@ TEST_F(HostileTest, RigCProcessesTakeEveryAttackAndTheScanStillEqualsReplay) {
   const pid_t mapper = procs.startSubscriber(
       "mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), kPort);
   const pid_t profiler =
-      procs.start("profiler", {binPath("sweepmap-profiler"), "--rig", "rig_c", "--sim", "--sweeps",
-                               "1", "--lcm-url", profiler_url});
-  sleepS(0.7);
+      procs.startSubscriber("profiler",
+                            {binPath("sweepmap-profiler"), "--rig", "rig_c", "--sim", "--sweeps",
+                             "1", "--lcm-url", profiler_url},
+                            7668);
   const std::vector<std::string> subscribed = {"PROFILE", "SWEEP_CLOUD", "MAP_SAVE",
                                                "STATUS_PROFILER"};
   ASSERT_NO_FATAL_FAILURE(sendDatagrams(crashDatagrams(subscribed, 400)));
@@ -353,12 +354,16 @@ TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
   ASSERT_EQ(::chmod(key.c_str(), 0400), 0);
   const ProcessCommand proc{
       {"--rig", kRig, "--set", "motor.mode=1", "--lcm-url", kUrl, "--key-file", key}};
+  // Each process is waited for until it listens, one at a time, so that the crash datagrams
+  // below reach every one of them however loaded the machine is.
   const pid_t recorder =
-      procs.start("recorder", {binPath("sweepmap"), "record", "--preset", "all", "--out",
-                               (dir / "rec").string(), "--lcm-url", kUrl, "--key-file", key});
+      procs.startSubscriber("recorder",
+                            {binPath("sweepmap"), "record", "--preset", "all", "--out",
+                             (dir / "rec").string(), "--lcm-url", kUrl, "--key-file", key},
+                            kPort);
   const pid_t assembler = procs.startSubscriber("assembler", proc("assembler"), kPort);
-  const pid_t lidar =
-      procs.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}));
+  const pid_t lidar = procs.startSubscriber(
+      "lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "3"}), kPort);
   sleepS(0.7);
   // The forger: another run's raw messages, unsigned, played during the signed run.
   const std::string forged = (dir / "forged.lcmlog").string();
@@ -366,8 +371,8 @@ TEST_F(HostileTest, WithAKeyForgedMessagesReachNoNode) {
                       "--seed", "99", "--out", forged}),
             0);
   const pid_t forger = procs.start("forger", playerCommand(kUrl, forged));
-  const pid_t motor =
-      procs.start("motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}));
+  const pid_t motor = procs.startSubscriber(
+      "motor", proc("motor", {"--sim", "--sweeps", "2", "--seed", "3"}), kPort);
   // `sweepmap status` with the key reads the signed statuses.
   const pid_t status =
       procs.start("status", {binPath("sweepmap"), "status", "--once", "--json", "--window", "2.5",
@@ -450,10 +455,11 @@ TEST_F(HostileTest, GeneratedUnitsRefuseAReadableKeyAndHearOnlyTheHosts) {
   const std::string sim_log = simLog(
       dir, {"--rig", kRig, "--scene", kScene, "--mode", "1", "--sweeps", "1", "--seed", "8"});
   const pid_t recorder =
-      procs.start("recorder", {binPath("sweepmap"), "record", "--preset", "all", "--out",
-                               (dir / "rec").string(), "--lcm-url", kUrl, "--key-file", key});
-  const pid_t assembler = procs.start("assembler", argv);
-  sleepS(0.7);
+      procs.startSubscriber("recorder",
+                            {binPath("sweepmap"), "record", "--preset", "all", "--out",
+                             (dir / "rec").string(), "--lcm-url", kUrl, "--key-file", key},
+                            kPort);
+  const pid_t assembler = procs.startSubscriber("assembler", argv, kPort);
   ASSERT_EQ(procs.play(kUrl, sim_log, 60.0), 0) << procs.said("logplayer");
   sleepS(1.2);  // a status at 1 Hz after the last message
   procs.stopInOrder({{assembler, 10.0}, {recorder, 10.0}}, 0.3);
