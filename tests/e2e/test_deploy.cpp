@@ -399,11 +399,12 @@ TEST_F(DeployTest, MessageStormAtTenTimesSpeed) {
   const ProcessCommand proc({"--rig", kRig, "--set", "motor.mode=1", "--set",
                              "motor.rehome_every_sweep=false", "--lcm-url", kUrl,
                              "--queue-capacity", "20"});
-  const pid_t logger = procs_.start("logger", loggerCommand(kUrl, rec, "STATUS_.*|MAP_STATS"));
-  const pid_t assembler = procs_.start("assembler", proc("assembler"));
-  const pid_t mapper =
-      procs_.start("mapper", proc("mapper", {"--save", (dir / "map.bt").string()}));
-  sleepS(0.7);
+  // Each is waited for until it listens, however loaded the machine is.
+  const pid_t logger = procs_.startSubscriber(
+      "logger", loggerCommand(kUrl, rec, "STATUS_.*|MAP_STATS"), kDefaultLcmPort);
+  const pid_t assembler = procs_.startSubscriber("assembler", proc("assembler"), kDefaultLcmPort);
+  const pid_t mapper = procs_.startSubscriber(
+      "mapper", proc("mapper", {"--save", (dir / "map.bt").string()}), kDefaultLcmPort);
   const pid_t player = procs_.start("logplayer", playerCommand(kUrl, sim_log, {"--speed=10"}));
   const RssTrace rss = traceRss(procs_, player, assembler, mapper);
   ASSERT_EQ(procs_.wait(player, 1), 0) << procs_.said(player);
@@ -461,9 +462,9 @@ TEST_F(DeployTest, DiskFullWhileSavingAMapKeepsThePreviousMap) {
                                          {"--rig", kRig, "--set", "motor.mode=1", "--set",
                                           "motor.rehome_every_sweep=false", "--no-plots"});
   const std::string map = (disk / "map.bt").string();
-  const pid_t mapper = procs_.start(
-      "mapper", {binPath("sweepmap-mapper"), "--rig", kRig, "--lcm-url", kUrl, "--save", map});
-  sleepS(0.7);
+  const pid_t mapper = procs_.startSubscriber(
+      "mapper", {binPath("sweepmap-mapper"), "--rig", kRig, "--lcm-url", kUrl, "--save", map},
+      kDefaultLcmPort);
   ASSERT_EQ(procs_.play(kUrl, (replayed / "derived.lcmlog").string(), 120,
                         {"--speed=10", "--regexp=SWEEP_.*"}),
             0);
