@@ -237,6 +237,10 @@ void SimRigConfig::declare(ConfigSchema& s, const std::string& p) {
         "true offset of the lidar's angle zero (about X_L)");
   s.add(p + "plate_thickness_mm", &plate_thickness_mm, "mm",
         "true plate thickness below its upper surface");
+  declareArtefacts(s, p);
+}
+
+void SceneArtefactConfig::declareArtefacts(ConfigSchema& s, const std::string& p) {
   s.add(p + "mixed_pixel_probability", &mixed_pixel_probability, "",
         "a ray at a depth edge returns a range between the two surfaces");
   s.add(p + "dropout_dark_probability", &dropout_dark_probability, "",
@@ -247,14 +251,12 @@ void SimRigConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "window_width_m", &window_width_m, "m",
         "a window (no return) in the -Y wall, this wide; 0: none");
   s.add(p + "whiteboard_proud_mm", &whiteboard_proud_mm, "mm",
-        "a whiteboard this far proud of the -X wall; 0: none");
+        "a whiteboard this far proud of the -X wall (of the +X wall where the scene's "
+        "calibration target is on the -X wall); 0: none");
 }
 
-std::vector<std::string> SimRigConfig::paperSettings() {
-  return {"sim.scan_plane_tilt_deg=0",
-          "sim.mirror_offset_deg=0",
-          "sim.plate_thickness_mm=0",
-          "sim.mixed_pixel_probability=0",
+std::vector<std::string> SceneArtefactConfig::artefactsOff() {
+  return {"sim.mixed_pixel_probability=0",
           "sim.dropout_dark_probability=0",
           "sim.dropout_glancing_probability=0",
           "sim.people=0",
@@ -262,11 +264,22 @@ std::vector<std::string> SimRigConfig::paperSettings() {
           "sim.whiteboard_proud_mm=0"};
 }
 
-void SimRigConfig::applyPaperSettings() {
-  scan_plane_tilt_deg = mirror_offset_deg = plate_thickness_mm = 0.0;
+void SceneArtefactConfig::switchArtefactsOff() {
   mixed_pixel_probability = dropout_dark_probability = dropout_glancing_probability = 0.0;
   people = 0;
   window_width_m = whiteboard_proud_mm = 0.0;
+}
+
+std::vector<std::string> SimRigConfig::paperSettings() {
+  std::vector<std::string> s = {"sim.scan_plane_tilt_deg=0", "sim.mirror_offset_deg=0",
+                                "sim.plate_thickness_mm=0"};
+  for (const std::string& a : artefactsOff()) s.push_back(a);
+  return s;
+}
+
+void SimRigConfig::applyPaperSettings() {
+  scan_plane_tilt_deg = mirror_offset_deg = plate_thickness_mm = 0.0;
+  switchArtefactsOff();
 }
 
 ScanMode scanMode(int mode) {

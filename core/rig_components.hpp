@@ -141,8 +141,26 @@ struct NetworkConfig {
   void validate(const std::string& path, const std::string& prefix) const;
 };
 
+// The real-scene artefacts a calibration must survive (sim/artefacts.hpp), in the room of the
+// simulated lidar of rig A and rig B: the same sim.* keys and defaults for both.
+struct SceneArtefactConfig {
+  double mixed_pixel_probability = 0.5;       // a ray at a depth edge returns a range in between
+  double dropout_dark_probability = 0.3;      // no return from dark furniture (table, cabinet)
+  double dropout_glancing_probability = 0.5;  // no return at grazing incidence (rising from 70 deg)
+  int people = 2;                             // people walking through the room during the sweeps
+  double window_width_m = 1.5;                // a window (glass: no return) in the -Y wall; 0: none
+  // A whiteboard this far proud of the -X wall (of the +X wall where the scene's calibration
+  // target is on the -X wall); 0: none.
+  double whiteboard_proud_mm = 20;
+  void declareArtefacts(ConfigSchema& s, const std::string& prefix);
+  // The settings of the keys above that switch every artefact off (the papers model none).
+  static std::vector<std::string> artefactsOff();
+  // The same on this struct.
+  void switchArtefactsOff();
+};
+
 // Error model of the simulated rig A (Yuan 2021 section 2). Read by the simulator only.
-struct SimRigConfig {
+struct SimRigConfig : SceneArtefactConfig {
   double alpha_true_deg = 29.3598;     // true plate angle (installation error vs plate.alpha_deg)
   double lidar_offset_x_mm = 13.9;     // true lidar-to-axis offset
   double range_noise_sigma_mm = 12.0;  // UST-10LX: +-40 mm read as ~3.3 sigma
@@ -156,13 +174,6 @@ struct SimRigConfig {
   double scan_plane_tilt_deg = 0.3;  // true tilt of the scan plane against the axis (about Y_L)
   double mirror_offset_deg = 0.2;    // true mirror angle zero offset (about X_L)
   double plate_thickness_mm = 2.0;   // true plate: a solid this thick below its upper surface
-  // Real-scene artefacts (sim/artefacts.hpp), drawn from their own generator.
-  double mixed_pixel_probability = 0.5;       // a ray at a depth edge returns a range in between
-  double dropout_dark_probability = 0.3;      // no return from dark furniture (table, cabinet)
-  double dropout_glancing_probability = 0.5;  // no return at grazing incidence (rising from 70 deg)
-  int people = 2;                             // people walking through the room during the sweeps
-  double window_width_m = 1.5;                // a window (glass: no return) in the -Y wall; 0: none
-  double whiteboard_proud_mm = 20;            // a whiteboard this far proud of the -X wall; 0: none
   void declare(ConfigSchema& s, const std::string& prefix);
   // The paper's settings of the keys above (Yuan 2021 models none of them: all 0).
   static std::vector<std::string> paperSettings();

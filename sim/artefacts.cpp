@@ -35,14 +35,18 @@ std::optional<double> rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
 
 }  // namespace
 
-SceneArtefacts::SceneArtefacts(const SimRigConfig& sim, const Scene& scene, uint64_t seed)
-    : sim_(sim), scene_(&scene), rng_(seed ^ 0x9e3779b97f4a7c15ULL) {
+SceneArtefacts::SceneArtefacts(const SceneArtefactConfig& sim, const Scene& scene, uint64_t seed)
+    : sim_(sim), scene_(&scene) {
+  reseed(seed);
   const SceneConfig& c = scene.config();
   const double l = c.room_length_m / 2, w = c.room_width_m / 2;
   if (sim.whiteboard_proud_mm > 0) {
-    whiteboard_ = Eigen::AlignedBox3d(Eigen::Vector3d(-l, 0.5 - 1.0, 0.9),
-                                      Eigen::Vector3d(-l + sim.whiteboard_proud_mm * 1e-3,
-                                                      0.5 + 1.0, std::min(2.1, c.room_height_m)));
+    const double proud = sim.whiteboard_proud_mm * 1e-3, top = std::min(2.1, c.room_height_m);
+    const bool target_there = c.target_enabled && c.target_wall == "x_min";
+    whiteboard_ = target_there ? Eigen::AlignedBox3d(Eigen::Vector3d(l - proud, 0.5 - 1.0, 0.9),
+                                                     Eigen::Vector3d(l, 0.5 + 1.0, top))
+                               : Eigen::AlignedBox3d(Eigen::Vector3d(-l, 0.5 - 1.0, 0.9),
+                                                     Eigen::Vector3d(-l + proud, 0.5 + 1.0, top));
   }
   if (sim.window_width_m > 0) {
     window_xz_ = Eigen::AlignedBox2d(Eigen::Vector2d(-1.0 - sim.window_width_m / 2, 0.9),

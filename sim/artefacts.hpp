@@ -1,5 +1,5 @@
-// The real-scene artefacts a calibration must survive, for the simulated rig-A lidar
-// (sim.* keys of SimRigConfig; all 0 in the paper experiment):
+// The real-scene artefacts a calibration must survive, for the simulated lidars of rig A and
+// rig B (sim.* keys of SceneArtefactConfig; all 0 in the paper experiments):
 //  - mixed pixels: a ray at a depth edge (its neighbour's range differs by more than 50 mm)
 //    returns, with probability sim.mixed_pixel_probability, a range uniformly between the two;
 //  - dropouts: no return from dark furniture (table, cabinet) with probability
@@ -9,9 +9,12 @@
 //  - a window sim.window_width_m wide (1.2 m high, sill 0.9 m, centred at room x = -1 m) in the
 //    -Y wall: glass, no return;
 //  - a whiteboard (2 x 1.2 m, bottom 0.9 m, centred at room y = 0.5 m) sim.whiteboard_proud_mm
-//    proud of the -X wall.
+//    proud of the -X wall, or of the +X wall where the scene's calibration target (rig B's
+//    lab) is on the -X wall.
 // Randomness: one std::mt19937_64 of its own (seed mixed), drawn only where an artefact applies,
-// so a rig without artefacts draws nothing and simulates exactly as before them.
+// so a rig without artefacts draws nothing and simulates exactly as before them. reseed()
+// restarts it (a scan made on its own, as the emulator makes them, draws what it draws in a
+// whole run); the people's walks stay those of the constructor's seed.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -27,7 +30,8 @@ namespace sweepmap {
 
 class SceneArtefacts {
  public:
-  SceneArtefacts(const SimRigConfig& sim, const Scene& scene, uint64_t seed);
+  SceneArtefacts(const SceneArtefactConfig& sim, const Scene& scene, uint64_t seed);
+  void reseed(uint64_t seed) { rng_.seed(seed ^ 0x9e3779b97f4a7c15ULL); }
 
   // Distance to the nearest artefact object (whiteboard, a person at `utime`) along the ray
   // (room frame, unit direction) within (0, limit_m), if any.
@@ -52,7 +56,7 @@ class SceneArtefacts {
   };
   Eigen::AlignedBox3d personAt(const Person& p, int64_t utime) const;
 
-  SimRigConfig sim_;
+  SceneArtefactConfig sim_;
   const Scene* scene_;
   std::optional<Eigen::AlignedBox3d> whiteboard_;
   std::optional<Eigen::AlignedBox2d> window_xz_;  // on the -Y wall

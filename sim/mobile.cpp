@@ -103,6 +103,7 @@ void SimMobileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "beta_true_rad", &beta_true_rad, "rad", "true mounting error about body y");
   s.add(p + "alpha_true_rad", &alpha_true_rad, "rad", "true mounting error about body z");
   s.add(p + "truth_rate_hz", &truth_rate_hz, "Hz", "TRUTH_POSE rate");
+  declareArtefacts(s, p);
 }
 
 void SimMobileConfig::validate(const std::string& source) const {
@@ -307,7 +308,8 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
       scene_(&scene),
       path_({{0, 0, 0, 1, 0}}),
       seed_(seed),
-      start_utime_(start_utime) {
+      start_utime_(start_utime),
+      artefacts_(config, scene, seed * 8 + 5) {
   c_.validate("sim");
   if (!(wheels.radius_m > 0) || !(wheels.ticks_per_revolution > 0) ||
       !(wheels.wheel_distance_m > 0)) {
@@ -517,6 +519,8 @@ std::vector<ImuSample> SimMobile::imu() {
 
 Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& beam) const {
   std::normal_distribution<double> n(0.0, 1.0);
+  SceneArtefacts artefacts = artefacts_;
+  artefacts.reseed((seed_ * 8 + 5) ^ (static_cast<uint64_t>(j) * 0xd1b54a32d192ed03ULL));
   Scan2D scan;
   scan.seq = j;
   // Stamped by the lidar's clock, which runs lidar_time_offset_ms ahead.
@@ -529,32 +533,46 @@ Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& be
   scan.range_max_m = c_.range_max_m;
   scan.ranges_m.resize(static_cast<size_t>(rays_));
   if (beam) scan.angles_rad.resize(static_cast<size_t>(rays_));
+  // The true hits first (the scene, then its artefacts: a window or a dark or grazed surface
+  // returns nothing, a person or the whiteboard comes first), then the mixed pixels at the
+  // depth edges between neighbouring rays, then the range noise.
+  std::vector<BeamHit> hits(static_cast<size_t>(rays_));
   for (int i = 0; i < rays_; ++i) {
-    const double t = 1e-6 * static_cast<double>(scan.rayUtime(static_cast<size_t>(i)) - offset_us -
-                                                start_utime_);
+    const int64_t ray_utime = scan.rayUtime(static_cast<size_t>(i)) - offset_us;
+    const double t = 1e-6 * static_cast<double>(ray_utime - start_utime_);
     const Eigen::Isometry3d T_room_L = planar(roomPoseAt(t)) * T_BL_;
+    const Eigen::Vector3d origin = T_room_L.translation();
     const auto range_at = [&](double ang) {
       const Eigen::Vector3d dir =
           T_room_L.linear() * Eigen::Vector3d(0.0, std::sin(ang), std::cos(ang));
-      return scene_->raycast(T_room_L.translation(), dir, c_.range_max_m).value_or(0.0);
+      Scene::Hit what;
+      std::optional<double> hit = scene_->raycast(origin, dir, c_.range_max_m, &what);
+      if (hit && !artefacts.returns(origin + *hit * dir, dir, what)) hit = 0.0;
+      const double limit_m = hit && *hit > 0.0 ? *hit : c_.range_max_m;
+      if (const auto object = artefacts.raycastObjects(origin, dir, limit_m, ray_utime)) {
+        hit = object;
+      }
+      return hit.value_or(0.0);
     };
     const double motor = scan.angle_min_rad + scan.angle_increment_rad * i;
-    BeamHit hit{motor, 0.0};
-    if (beam) {
-      hit = castBeam(motor, beam, range_at);
-    } else {
-      hit.range_m = range_at(motor);
-    }
+    hits[static_cast<size_t>(i)] =
+        beam ? castBeam(motor, beam, range_at) : BeamHit{motor, range_at(motor)};
+  }
+  std::vector<double> ranges(hits.size());
+  for (size_t i = 0; i < hits.size(); ++i) ranges[i] = hits[i].range_m;
+  artefacts.mixEdges(&ranges);
+  for (size_t i = 0; i < hits.size(); ++i) {
     const double noise = n(*rng);
     double r = 0.0;
-    if (hit.range_m > 0.0) {
-      r = hit.range_m * (1.0 + c_.range_sigma_fraction * noise);
+    if (ranges[i] > 0.0) {
+      r = ranges[i] * (1.0 + c_.range_sigma_fraction * noise);
       if (r < c_.range_min_m || r > c_.range_max_m) r = 0.0;
     }
-    scan.ranges_m[static_cast<size_t>(i)] = static_cast<float>(r);
-    if (beam)
-      scan.angles_rad[static_cast<size_t>(i)] =
-          static_cast<float>(wrapAngle(r > 0.0 ? hit.bearing_rad : motor));
+    scan.ranges_m[i] = static_cast<float>(r);
+    if (beam) {
+      const double motor = scan.angle_min_rad + scan.angle_increment_rad * static_cast<double>(i);
+      scan.angles_rad[i] = static_cast<float>(wrapAngle(r > 0.0 ? hits[i].bearing_rad : motor));
+    }
   }
   return scan;
 }
@@ -586,14 +604,16 @@ std::vector<TruthPose> SimMobile::truth() const {
   return out;
 }
 
-std::vector<std::string> exactOdometrySettings() {
-  return {"sim.wheel_radius_left_error_fraction=0",
-          "sim.wheel_radius_right_error_fraction=0",
-          "sim.wheel_distance_error_m=0",
-          "sim.lever_error_x_m=0",
-          "sim.lever_error_y_m=0",
-          "sim.lever_error_z_m=0",
-          "sim.lidar_time_offset_ms=0"};
+std::vector<std::string> paperMobileSettings() {
+  std::vector<std::string> s = {"sim.wheel_radius_left_error_fraction=0",
+                                "sim.wheel_radius_right_error_fraction=0",
+                                "sim.wheel_distance_error_m=0",
+                                "sim.lever_error_x_m=0",
+                                "sim.lever_error_y_m=0",
+                                "sim.lever_error_z_m=0",
+                                "sim.lidar_time_offset_ms=0"};
+  for (const std::string& a : SceneArtefactConfig::artefactsOff()) s.push_back(a);
+  return s;
 }
 
 }  // namespace sweepmap

@@ -32,15 +32,20 @@
 #include <vector>
 
 #include "core/config.hpp"
+#include "core/rig_components.hpp"
 #include "core/scan.hpp"
 #include "devices/odometry_devices.hpp"
 #include "odometry/wheel_odometry.hpp"
+#include "sim/artefacts.hpp"
 #include "sim/beam.hpp"
 #include "sim/scene.hpp"
 
 namespace sweepmap {
 
-struct SimMobileConfig {
+// The scene's artefacts (SceneArtefactConfig, the same sim.* keys as rig A's) come with the
+// rest: mixed pixels at depth edges, dropouts on the dark table and cabinet and at grazing
+// incidence, people walking through the lab, a window, a whiteboard.
+struct SimMobileConfig : SceneArtefactConfig {
   std::string path = "circle";      // "circle", "loop", "figure8" or "file"
   std::string path_file;            // path: file — YAML of segments (MobilePath::fromFile)
   double circle_radius_m = 0.83;    // Miao 2022 calibration drive
@@ -142,10 +147,11 @@ class MobilePath {
   double turn_per_lap_ = 0.0;
 };
 
-// The `sim.*` settings that switch a real build's odometry and lever errors off (the car's
-// odometry exact, as Miao 2022 takes it when it calibrates the mounting alone): the paper's
-// experiment and the benchmark of its single-parameter `calib mounting`.
-std::vector<std::string> exactOdometrySettings();
+// The `sim.*` settings of Miao 2022's model: a real build's odometry and lever errors off (the
+// car's odometry exact, as the paper takes it when it calibrates the mounting alone) and no
+// scene artefacts: the paper's experiment and the benchmark of its single-parameter
+// `calib mounting`.
+std::vector<std::string> paperMobileSettings();
 
 struct TruthPose {
   int64_t utime;
@@ -203,9 +209,10 @@ class SimMobile {
   const std::vector<SlipEvent>& slips() const { return slips_; }
   int64_t scanDeliveryUtime(const Scan2D& scan) const;
   // One scan (index j; j < 0: before the start, the car at rest) with the given noise
-  // generator. Its rays are the motor's angles on the grid; with a beam offset each ray looks
-  // where castBeam says (Scan2D::angles_rad: where each looked; a return outside the range
-  // limits after the noise becomes no return, along the motor angle).
+  // generator (the artefacts' draws come from a generator of the seed and j, so that a scan
+  // made alone is the same scan as in the whole run). Its rays are the motor's angles on the grid;
+  // with a beam offset each ray looks where castBeam says (Scan2D::angles_rad: where each looked; a
+  // return outside the range limits after the noise becomes no return, along the motor angle).
   Scan2D makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& beam = nullptr) const;
   // The index of the last scan begun at or before `utime` (negative before the start).
   int64_t scanIndexAt(int64_t utime) const {
@@ -234,6 +241,7 @@ class SimMobile {
   uint64_t seed_;
   int64_t start_utime_;
   int rays_;
+  SceneArtefacts artefacts_;  // reseeded per scan (makeScan: a copy)
 };
 
 }  // namespace sweepmap

@@ -34,6 +34,7 @@ class NoiseFreeDrive : public ::testing::Test {
     c.wheel_distance_error_m = 0.0;
     c.lever_error_x_m = c.lever_error_y_m = c.lever_error_z_m = 0.0;
     c.lidar_time_offset_ms = 0.0;
+    c.switchArtefactsOff();  // nor the scene's artefacts
     return c;
   }
 

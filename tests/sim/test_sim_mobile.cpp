@@ -35,6 +35,7 @@ SimMobileConfig quiet() {
   c.wheel_distance_error_m = 0.0;
   c.lever_error_x_m = c.lever_error_y_m = c.lever_error_z_m = 0.0;
   c.lidar_time_offset_ms = 0.0;
+  c.switchArtefactsOff();
   return c;
 }
 
@@ -310,6 +311,73 @@ TEST(SimMobile, RangeNoiseIsOnePercentAndSeedDeterministic) {
   EXPECT_EQ(scans2[17].ranges_m, scans[17].ranges_m);
   SimMobile other(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 6, kStart);
   EXPECT_NE(other.scans()[17].ranges_m, scans[17].ranges_m);
+}
+
+// The scene's artefacts on the car's lidar, each alone against the same noise-free scans
+// without them: the window in the -Y wall returns nothing, people only ever come in front of
+// the room, a mixed pixel lies between its own surface and its neighbour's, and a scan made
+// alone (as the emulator makes them) is the run's.
+TEST(SimMobile, SceneArtefactsEachDoWhatTheySay) {
+  const Scene scene(labScene(), plate());
+  SimMobileConfig off = quiet();
+  off.speed_m_s = 1e-9;          // standing at (-1, -0.83), facing +x: the scan plane at x = -1
+  off.circle_center_x_m = -1.0;  // crosses the window (x -1.75..-0.25, z 0.9..2.1)
+  off.duration_s = 20.0;
+  const auto scansOf = [&](const SimMobileConfig& c) {
+    return SimMobile(c, WheelGeometry{}, kRpy0, kLidarPos, scene, 3, kStart).scans();
+  };
+  const std::vector<Scan2D> plain = scansOf(off);
+  ASSERT_EQ(plain.size(), 140u);
+
+  SimMobileConfig window = off;
+  window.window_width_m = 1.5;
+  const Scan2D w = scansOf(window)[0];
+  int in_window = 0;
+  for (size_t i = 0; i < w.ranges_m.size(); ++i) {
+    const double r = plain[0].ranges_m[i], a = plain[0].rayAngle(i);
+    const double y = -0.83 + r * std::sin(a), z = 0.3 + r * std::cos(a);
+    const bool glass = std::abs(y + 2.5) < 1e-4 && z > 0.9 && z < 2.1;
+    in_window += glass;
+    EXPECT_EQ(w.ranges_m[i], glass ? 0.0f : plain[0].ranges_m[i]) << i;
+  }
+  EXPECT_GT(in_window, 20);
+
+  SimMobileConfig people = off;
+  people.people = 2;
+  const std::vector<Scan2D> walked = scansOf(people);
+  int nearer = 0;
+  for (size_t k = 0; k < plain.size(); ++k) {
+    for (size_t i = 0; i < plain[k].ranges_m.size(); ++i) {
+      ASSERT_LE(walked[k].ranges_m[i], plain[k].ranges_m[i]) << k << " " << i;
+      ASSERT_GT(walked[k].ranges_m[i], 0.0f) << k << " " << i;
+      nearer += walked[k].ranges_m[i] < plain[k].ranges_m[i];
+    }
+  }
+  EXPECT_GT(nearer, 100);  // two people crossing the scan plane at 1 m/s
+
+  SimMobileConfig mixed = off;
+  mixed.mixed_pixel_probability = 0.5;
+  const Scan2D m = scansOf(mixed)[0];
+  const std::vector<float>& r = plain[0].ranges_m;
+  int mixed_rays = 0;
+  for (size_t i = 1; i + 1 < r.size(); ++i) {
+    if (m.ranges_m[i] == r[i]) continue;
+    ++mixed_rays;
+    const auto between = [&](size_t j) {
+      return std::abs(r[j] - r[i]) > 0.05f && m.ranges_m[i] >= std::min(r[i], r[j]) &&
+             m.ranges_m[i] <= std::max(r[i], r[j]);
+    };
+    EXPECT_TRUE(between(i - 1) || between(i + 1)) << i;
+  }
+  EXPECT_GT(mixed_rays, 2);
+
+  SimMobileConfig all = off;  // every artefact at its default, no noise
+  const SimMobileConfig defaults;
+  static_cast<SceneArtefactConfig&>(all) = defaults;
+  const std::vector<Scan2D> run = scansOf(all);
+  SimMobile car(all, WheelGeometry{}, kRpy0, kLidarPos, scene, 3, kStart);
+  std::mt19937_64 rng(99);
+  for (int64_t k : {0, 5, 77}) EXPECT_EQ(car.makeScan(k, &rng).ranges_m, run[size_t(k)].ranges_m);
 }
 
 TEST(SimMobile, RejectsBadConfiguration) {

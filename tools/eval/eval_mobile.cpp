@@ -109,8 +109,9 @@ std::string simulateRun(const MobileExperimentOptions& o, const std::string& nam
                         const std::string& path, double duration_s, uint64_t seed,
                         MobileLidarConfig* rig, SceneConfig* scene) {
   // The paper's setting: its car's odometry taken as exact (it calibrates the mounting alone),
-  // so the build errors of a real car (sim/mobile.hpp) are off unless the caller sets them.
-  std::vector<std::string> overrides = exactOdometrySettings();
+  // so the build errors of a real car (sim/mobile.hpp) are off unless the caller sets them, and
+  // its lab has none of the scene's artefacts.
+  std::vector<std::string> overrides = paperMobileSettings();
   overrides.insert(overrides.end(), o.overrides.begin(), o.overrides.end());
   overrides.push_back("sim.path=" + path);
   overrides.push_back("sim.duration_s=" + fixed(duration_s, 3));
