@@ -425,7 +425,7 @@ RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& in) {
   Solution s;
   wheelsAgainstGyro(in, &s);
   const std::vector<OverlapRay> rays =
-      overlapRays(in.scans, in.nominal.nominal_rpy_rad, std::max(1, in.options.ray_stride));
+      overlapRays(in.scans, in.nominal.nominal_rpy_rad, in.options);
   s.x = Eigen::VectorXd::Zero(kParameters);
   s.x(M::kGamma) = in.nominal.gamma_rad;
   s.x(M::kBeta) = in.nominal.beta_rad;

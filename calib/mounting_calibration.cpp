@@ -698,8 +698,7 @@ MountingCalibrationResult fastPointToPlane(const std::vector<Scan2D>& scans, con
                                            const LidarMounting& initial,
                                            const MountingCalibrationOptions& o) {
   using M = MobileOverlapModel;
-  const std::vector<OverlapRay> rays =
-      overlapRays(scans, initial.nominal_rpy_rad, std::max(1, o.ray_stride));
+  const std::vector<OverlapRay> rays = overlapRays(scans, initial.nominal_rpy_rad, o);
   M model(rays, track, initial.t_BL_m);
   OverlapOptions oo;
   oo.base = o;

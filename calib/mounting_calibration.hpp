@@ -74,6 +74,11 @@ struct MountingCalibrationOptions {
   double neighbour_radius_m = 0.15;
   double plane_radius_m = 0.2;         // the patch tested for flatness and giving the normal
   double range_noise_fraction = 0.01;  // the lidar's range noise (X4: < 1 %), for the flatness test
+  // Fast solver: a ray whose neighbour in the scan differs in range by more than
+  // max(min_edge_jump_m, edge_jump_sigmas of the two ranges' noise) is left out: at a depth edge a
+  // lidar returns mixed pixels, anywhere between the two surfaces, which no surface explains.
+  double edge_jump_sigmas = 4.0;
+  double min_edge_jump_m = 0.05;
   // Rays more oblique to the local plane than this are skipped (grazing: the range noise lies
   // mostly in the plane; measured on the simulated circle: 0.1-0.3 mrad less error in beta
   // and alpha at 1.2 rad than with none).

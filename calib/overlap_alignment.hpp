@@ -107,9 +107,11 @@ struct OverlapResult {
 OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& model,
                            const Eigen::VectorXd& x0, const OverlapOptions& options);
 
-// The valid rays of `scans`, nominally rotated (every `stride`-th of each scan).
+// The valid rays of `scans`, nominally rotated: every o.ray_stride-th of each scan, but those
+// at a depth edge (o.edge_jump_sigmas).
 std::vector<OverlapRay> overlapRays(const std::vector<Scan2D>& scans,
-                                    const Eigen::Vector3d& nominal_rpy_rad, int stride = 1);
+                                    const Eigen::Vector3d& nominal_rpy_rad,
+                                    const MountingCalibrationOptions& o);
 
 // Rig B's model: p_W = T_WB(t + dt) (R(gamma, beta, alpha) q + t_BL + d_lever) - drift (t -
 // t_mid), the planar pose from `track` plus, per odometry parameter k, the track's
