@@ -127,6 +127,7 @@ class EmulatorLink {
   void transmit(const std::string& out);
   void noteTick(int64_t now);
   void reportLag(int64_t now);
+  void reportUnread();
 
   const DeviceFactory& make_device_;
   const ServerOptions& options_;
@@ -150,6 +151,9 @@ class EmulatorLink {
   int64_t worst_lag_us_ = 0;
   bool burst_ = false;     // this tick sends what the device had to send while stalled
   size_t lost_bytes_ = 0;  // of those bursts, the bytes the link's buffer had no room for
+  // Bytes a pty had no room for outside a burst: nobody had it open, or the host did not read
+  // in time (a real UART drops them the same way).
+  size_t unread_bytes_ = 0;
 };
 
 // A gap between two ticks longer than this: the emulator did not keep real time.
@@ -188,6 +192,7 @@ void EmulatorLink::run(const std::atomic<bool>& stop) {
     exchange();
   }
   if (lags_ > 0) reportLag(now_us_());
+  if (unread_bytes_ > 0) reportUnread();
   powerDown(now_us_());
 }
 
@@ -207,6 +212,16 @@ void EmulatorLink::noteTick(int64_t now) {
   if (lags_ > 0 && !burst_ && (last_report_us_ < 0 || now - last_report_us_ >= kLagReportUs)) {
     reportLag(now);
   }
+}
+
+// Said once, at the end: a pty cannot tell a host that does not read in time from none having
+// it open (before the host opens it, after it closes it), so its losses are not dated.
+void EmulatorLink::reportUnread() {
+  info_ << "emulator: the pty had no room for " << unread_bytes_
+        << " of the bytes the device sent (while no host had it open, or while the host did not "
+           "read in time: a real UART drops them the same way)"
+        << std::endl;
+  unread_bytes_ = 0;
 }
 
 void EmulatorLink::reportLag(int64_t now) {
@@ -323,7 +338,8 @@ void EmulatorLink::transmit(const std::string& out) {
   if (options_.pty) {
     // A UART sends whether or not anybody reads: what does not fit is lost.
     const ssize_t n = ::write(master_.fd, out.data(), out.size());
-    if (burst_) lost_bytes_ += out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
+    const size_t lost = out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
+    (burst_ ? lost_bytes_ : unread_bytes_) += lost;
     return;
   }
   pending_ += out;
