@@ -44,7 +44,7 @@ SANITIZE_ENV = ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt
 # Every tracked C++ source; generated lcm-gen headers live in the build tree, not here.
 FORMAT_FILES = $(shell git ls-files '*.cpp' '*.hpp' 2>/dev/null)
 
-.PHONY: all setup setup-pi build demo test test-unit test-sanitize fuzz pi pi-build package \
+.PHONY: all setup setup-pi build demo test test-costs test-unit test-sanitize fuzz pi pi-build package \
         format format-check bench bench-view docs clean bench-calib-seeds
 
 all: build
@@ -73,6 +73,15 @@ demo: build
 test: build format-check
 	cd $(BUILD) && $(CTEST)
 	@$(MAKE) --no-print-directory test-sanitize
+
+# The tests' costs ctest measured in build/ and build-sanitize/ (1 s or more) become the
+# starting order of a fresh build folder's run (tests/CMakeLists.txt): run after `make test`.
+test-costs:
+	@for b in release:$(BUILD) sanitize:$(SANITIZE_BUILD); do \
+	  f=$${b#*:}/Testing/Temporary/CTestCostData.txt; out=tests/ctest_costs/$${b%%:*}.txt; \
+	  awk 'NF == 3 && $$3 >= 1.0 { printf "%s 1 %.1f\n", $$1, $$3 }' $$f | sort -k3 -rn > $$out; \
+	  echo "---" >> $$out; echo "test-costs: $$(($$(wc -l < $$out) - 1)) tests in $$out"; \
+	done
 
 test-unit: setup $(BUILD)/Makefile
 	cmake --build $(BUILD) -j$(JOBS) --target unit_tests

@@ -516,8 +516,10 @@ TEST_F(DevicesTest, CaptureThenDecode) {
 }
 
 // The main job with the lidar emulated over SCIP (sweepmap emulate ust10lx + the real driver)
-// against the same job with the lidar simulated in the lidar process, same seed, mode 7:
-// every sweep corrected, φ_error per sweep within 0.05° of the simulated path's. (Both draw
+// against the same job with the lidar simulated in the lidar process, same seed, mode 7, one
+// sweep (a mode-7 sweep runs 16 s in real time; a second one added 35 s to the test and
+// nothing the first does not show): the sweep corrected, its φ_error within 0.05° of the
+// simulated path's. (Both draw
 // the lidar's noise from the first scan the shaft's truth covers, so the same seed gives the
 // same noise; the runs still differ in their scheduling and scan phase.)
 TEST_F(DevicesTest, EmulatedDemoMatchesTheSimulatedOne) {
@@ -527,7 +529,7 @@ TEST_F(DevicesTest, EmulatedDemoMatchesTheSimulatedOne) {
     const fs::path out = dir_ / devices;
     // The paper's error model: people walking and dropouts fall on other scans when the two
     // paths' scan phases differ, which is not what this test compares.
-    std::vector<std::string> args = {"demo",      "--sweeps", "2",     "--seed",    "5",
+    std::vector<std::string> args = {"demo",      "--sweeps", "1",     "--seed",    "5",
                                      "--devices", devices,    "--out", out.string()};
     for (const std::string& a : paperModelArgs()) args.push_back(a);
     ASSERT_EQ(sweepmap(args, dir_ / (devices + ".txt")), 0) << readFile(dir_ / (devices + ".txt"));
@@ -535,9 +537,9 @@ TEST_F(DevicesTest, EmulatedDemoMatchesTheSimulatedOne) {
   }
   const auto& sim = summaries["sim"]["sweeps"];
   const auto& emu = summaries["emulated"]["sweeps"];
-  ASSERT_EQ(sim.size(), 2u);
-  ASSERT_EQ(emu.size(), 2u);
-  for (size_t i = 0; i < 2; ++i) {
+  ASSERT_EQ(sim.size(), 1u);
+  ASSERT_EQ(emu.size(), 1u);
+  for (size_t i = 0; i < 1; ++i) {
     ASSERT_TRUE(emu[i]["corrected"].get<bool>()) << emu[i].dump();
     const double a = sim[i]["phi_error_deg"].get<double>();
     const double b = emu[i]["phi_error_deg"].get<double>();
