@@ -35,6 +35,12 @@ std::optional<double> rayBox(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
 
 }  // namespace
 
+bool glancingDropout(double incidence_deg, double at_90_deg, std::mt19937_64& rng) {
+  if (!(incidence_deg > 70.0) || !(at_90_deg > 0)) return false;
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  return uniform(rng) < at_90_deg * (incidence_deg - 70.0) / 20.0;
+}
+
 SceneArtefacts::SceneArtefacts(const SceneArtefactConfig& sim, const Scene& scene, uint64_t seed)
     : sim_(sim), scene_(&scene) {
   reseed(seed);
@@ -101,27 +107,16 @@ bool SceneArtefacts::returns(const Eigen::Vector3d& point, const Eigen::Vector3d
     return false;
   }
   const double incidence_deg = std::acos(std::min(1.0, std::fabs(dir[hit.axis]))) * 180.0 / M_PI;
-  if (incidence_deg > 70.0 && sim_.dropout_glancing_probability > 0) {
-    const double p = sim_.dropout_glancing_probability * (incidence_deg - 70.0) / 20.0;
-    if (uniform_(rng_) < p) return false;
-  }
-  return true;
+  return !glancingDropout(incidence_deg, sim_.dropout_glancing_probability, rng_);
 }
 
 void SceneArtefacts::mixEdges(std::vector<double>* ranges) {
-  if (!(sim_.mixed_pixel_probability > 0)) return;
+  // A lidar's beam is wide (mrad): a jump of the true range between neighbouring rays is an
+  // edge (the true ranges: mixEdges changes them as it goes).
   const std::vector<double> r = *ranges;
-  for (size_t i = 0; i < r.size(); ++i) {
-    if (r[i] == 0.0) continue;
-    double other = 0.0, jump = kEdgeJumpM;  // the neighbour across the larger edge
-    for (const size_t j : {i - 1, i + 1}) {
-      if (j >= r.size() || r[j] == 0.0 || !(std::fabs(r[j] - r[i]) > jump)) continue;
-      other = r[j];
-      jump = std::fabs(r[j] - r[i]);
-    }
-    if (other == 0.0 || uniform_(rng_) >= sim_.mixed_pixel_probability) continue;
-    (*ranges)[i] = r[i] + uniform_(rng_) * (other - r[i]);
-  }
+  sweepmap::mixEdges(
+      ranges, [&r](size_t i, size_t j) { return std::fabs(r[j] - r[i]) > kEdgeJumpM; },
+      sim_.mixed_pixel_probability, rng_);
 }
 
 }  // namespace sweepmap

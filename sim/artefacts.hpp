@@ -18,6 +18,7 @@
 #pragma once
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <cstdint>
 #include <optional>
 #include <random>
@@ -27,6 +28,38 @@
 #include "sim/scene.hpp"
 
 namespace sweepmap {
+
+// The artefacts' physics, shared by the lidars' rooms (SceneArtefacts) and rig C's profiler
+// (sim/profiler.hpp); each draws from `rng` only where its artefact applies.
+//
+// Mixed pixels over one scan's or profile's true ranges (0: no return), in ray order, in
+// place: a ray at a depth edge with a neighbour (`edge(i, j)`: rays i and j meet different
+// surfaces, or one surface across a step; it must not read `ranges`, which change as they are
+// mixed) returns, with `probability`, a range uniformly between its own and that neighbour's
+// (across the larger of its two edges).
+template <class AtEdge>
+void mixEdges(std::vector<double>* ranges, const AtEdge& edge, double probability,
+              std::mt19937_64& rng) {
+  if (!(probability > 0)) return;
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  const std::vector<double> r = *ranges;
+  for (size_t i = 0; i < r.size(); ++i) {
+    if (r[i] == 0.0) continue;
+    double other = 0.0, jump = 0.0;  // the neighbour across the larger edge
+    for (const size_t j : {i - 1, i + 1}) {
+      if (j >= r.size() || r[j] == 0.0 || !edge(i, j) || !(std::fabs(r[j] - r[i]) > jump)) {
+        continue;
+      }
+      other = r[j];
+      jump = std::fabs(r[j] - r[i]);
+    }
+    if (other == 0.0 || uniform(rng) >= probability) continue;
+    (*ranges)[i] = r[i] + uniform(rng) * (other - r[i]);
+  }
+}
+// Whether a return at `incidence_deg` from the surface's normal is lost: never up to 70 deg,
+// with a probability rising linearly to `at_90_deg` at 90 deg.
+bool glancingDropout(double incidence_deg, double at_90_deg, std::mt19937_64& rng);
 
 class SceneArtefacts {
  public:

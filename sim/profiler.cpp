@@ -5,18 +5,19 @@
 #include <cmath>
 #include <limits>
 
+#include "sim/artefacts.hpp"
+
 namespace sweepmap {
 
 namespace {
 
 constexpr double kDeg = M_PI / 180.0;
 
-// The nearer of two optional distances.
-std::optional<double> nearer(std::optional<double> a, std::optional<double> b) {
-  if (!a) return b;
-  if (!b) return a;
-  return std::min(*a, *b);
-}
+// Neighbouring columns are at a depth edge (mixed pixels: the line's spot, some 0.1 mm wide,
+// falls on both surfaces) where either's hit lies farther than this from the other's tangent
+// plane: a step, or two surfaces. A steep wall seen at glancing incidence is no edge, though
+// its columns' ranges differ by millimetres.
+constexpr double kEdgeStepMm = 0.5;
 
 // Distance along the ray to the plane w . p = h (w unit), if ahead.
 std::optional<double> toPlane(const Eigen::Vector3d& o, const Eigen::Vector3d& d,
@@ -88,6 +89,12 @@ void SimProfileConfig::declare(ConfigSchema& s, const std::string& p) {
   s.add(p + "encoder_noise_counts", &encoder_noise_counts, "counts",
         "encoder noise sigma (before quantisation)");
   s.add(p + "range_noise_sigma_mm", &range_noise_sigma_mm, "mm", "range noise sigma along a ray");
+  s.add(p + "mixed_pixel_probability", &mixed_pixel_probability, "",
+        "a column at a depth edge (0.5 mm to its neighbour) returns a range between the two");
+  s.add(p + "dropout_glancing_probability", &dropout_glancing_probability, "",
+        "no return at 90 deg incidence (0 up to 70 deg, linear between)");
+  s.add(p + "dropout_spot_probability", &dropout_spot_probability, "",
+        "no return from a column (a dark or specular spot of the surface)");
   s.add(p + "plate_count", &plate_count, "", "m: plate poses, one sweep each");
   s.add(p + "plate_size_mm", &plate_size_mm, "mm", "side of the square plate");
   s.add(p + "plate_distance_mm", &plate_distance_mm, "mm", "plate centre below the sensor");
@@ -107,6 +114,15 @@ void SimProfileConfig::declare(ConfigSchema& s, const std::string& p) {
 
 ProfileGeometry SimProfileConfig::trueGeometry() const {
   return {offset_m_mm, offset_n_mm, laser_tilt_deg * kDeg, encoder_zero_deg * kDeg};
+}
+
+std::vector<std::string> SimProfileConfig::artefactsOff() {
+  return {"sim.mixed_pixel_probability=0", "sim.dropout_glancing_probability=0",
+          "sim.dropout_spot_probability=0"};
+}
+
+void SimProfileConfig::switchArtefactsOff() {
+  mixed_pixel_probability = dropout_glancing_probability = dropout_spot_probability = 0.0;
 }
 
 namespace {
@@ -187,8 +203,8 @@ std::optional<ProfileScene::Frame> ProfileScene::testPieceFrame() const {
   return Frame{origin_, u_, v_, w_};
 }
 
-std::optional<double> ProfileScene::cast(const Eigen::Vector3d& origin,
-                                         const Eigen::Vector3d& dir) const {
+std::optional<ProfileScene::Hit> ProfileScene::cast(const Eigen::Vector3d& origin,
+                                                    const Eigen::Vector3d& dir) const {
   if (test_piece_) return castTestPiece(origin, dir);
   if (!plate_) return std::nullopt;
   const PlatePose& p = *plate_;
@@ -198,11 +214,11 @@ std::optional<double> ProfileScene::cast(const Eigen::Vector3d& origin,
   if (std::fabs(q.dot(p.e1)) > p.half_size_mm || std::fabs(q.dot(p.e2)) > p.half_size_mm) {
     return std::nullopt;
   }
-  return t;
+  return Hit{*t, p.normal};
 }
 
-std::optional<double> ProfileScene::castTestPiece(const Eigen::Vector3d& o_r,
-                                                  const Eigen::Vector3d& d_r) const {
+std::optional<ProfileScene::Hit> ProfileScene::castTestPiece(const Eigen::Vector3d& o_r,
+                                                             const Eigen::Vector3d& d_r) const {
   // In the piece's frame: top face w = 0, the block below it; grooves cut into it.
   const Eigen::Vector3d o((o_r - origin_).dot(u_), (o_r - origin_).dot(v_),
                           (o_r - origin_).dot(w_));
@@ -223,16 +239,22 @@ std::optional<double> ProfileScene::castTestPiece(const Eigen::Vector3d& o_r,
     return std::fabs(p.x()) <= c.block_width_mm / 2 && std::fabs(p.y()) <= c.block_length_mm / 2;
   };
   const auto at = [&](double t) { return Eigen::Vector3d(o + t * d); };
-  std::optional<double> best;
+  std::optional<Hit> best;
+  // The nearer of `best` and a hit at `t` of a surface whose normal is `n` (piece frame).
+  const auto take = [&](double t, const Eigen::Vector3d& n) {
+    if (!best || t < best->range_mm) best = Hit{t, (n.x() * u_ + n.y() * v_ + n.z() * w_)};
+  };
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
   // Top face, outside the grooves.
   if (const auto t = toPlane(o, d, up, 0.0)) {
     const Eigen::Vector3d p = at(*t);
-    if (onBlock(p) && !inRect(p) && !inRound(rounds[0], p) && !inRound(rounds[1], p)) best = t;
+    if (onBlock(p) && !inRect(p) && !inRound(rounds[0], p) && !inRound(rounds[1], p)) {
+      take(*t, up);
+    }
   }
   // Groove bottoms and walls.
   for (const Round& g : rounds) {
-    if (const auto t = toPlane(o, d, up, -g.depth); t && inRound(g, at(*t))) best = nearer(best, t);
+    if (const auto t = toPlane(o, d, up, -g.depth); t && inRound(g, at(*t))) take(*t, up);
     // Inner cylinder wall: |(p - axis)_uv| = r, -depth <= w <= 0.
     const double a = d.x() * d.x() + d.y() * d.y();
     const double b = 2 * (o.x() * d.x() + (o.y() - g.v) * d.y());
@@ -240,13 +262,14 @@ std::optional<double> ProfileScene::castTestPiece(const Eigen::Vector3d& o_r,
     const double disc = b * b - 4 * a * k;
     if (a > 1e-12 && disc >= 0) {
       for (const double t : {(-b - std::sqrt(disc)) / (2 * a), (-b + std::sqrt(disc)) / (2 * a)}) {
-        if (t > 0 && at(t).z() <= 0 && at(t).z() >= -g.depth) best = nearer(best, t);
+        const Eigen::Vector3d p = at(t);
+        if (t > 0 && p.z() <= 0 && p.z() >= -g.depth) {
+          take(t, Eigen::Vector3d(p.x(), p.y() - g.v, 0.0) / g.r);  // radial
+        }
       }
     }
   }
-  if (const auto t = toPlane(o, d, up, -c.rect_depth_mm); t && inRect(at(*t))) {
-    best = nearer(best, t);
-  }
+  if (const auto t = toPlane(o, d, up, -c.rect_depth_mm); t && inRect(at(*t))) take(*t, up);
   // Rectangular groove's walls: the planes u = +-width/2 and v = +-length/2 inside its box.
   const auto inRectBox = [&](const Eigen::Vector3d& p) {
     return std::fabs(p.x()) <= c.rect_width_mm / 2 + 1e-9 &&
@@ -257,7 +280,7 @@ std::optional<double> ProfileScene::castTestPiece(const Eigen::Vector3d& o_r,
     const double half = (axis == 0 ? c.rect_width_mm : c.rect_length_mm) / 2;
     for (const double side : {-half, half}) {
       const Eigen::Vector3d n = axis == 0 ? Eigen::Vector3d::UnitX() : Eigen::Vector3d::UnitY();
-      if (const auto t = toPlane(o, d, n, side); t && inRectBox(at(*t))) best = nearer(best, t);
+      if (const auto t = toPlane(o, d, n, side); t && inRectBox(at(*t))) take(*t, n);
     }
   }
   return best;
@@ -270,7 +293,8 @@ SimProfiler::SimProfiler(const ProfilerConfig& profiler, const TurntableConfig& 
       sim_(sim),
       truth_(sim.trueGeometry()),
       range_rng_(seed * 2 + 1),
-      encoder_rng_(seed * 2 + 2) {}
+      encoder_rng_(seed * 2 + 2),
+      artefact_rng_(seed ^ 0x6a09e667f3bcc909ULL) {}
 
 int64_t SimProfiler::sweepDurationUs() const {
   const double span = std::fabs(turntable_.sweep_end_deg - turntable_.sweep_start_deg);
@@ -308,16 +332,42 @@ Profile SimProfiler::profile(const ProfileScene& scene, double encoder_rad, int6
       std::llround(counts_exact + sim_.encoder_noise_counts * normal_(encoder_rng_)));
   const SensorPose pose = sensorPoseInRigFrame(truth_, encoder_rad);
   const double half_fan = profiler_.fanHalfAngleRad();
-  for (int i = 0; i < profiler_.column_count; ++i) {
-    const double phi = profiler_.column_count > 1
-                           ? -half_fan + 2 * half_fan * i / (profiler_.column_count - 1)
-                           : 0.0;
+  const auto phiOf = [&](int i) {
+    return profiler_.column_count > 1 ? -half_fan + 2 * half_fan * i / (profiler_.column_count - 1)
+                                      : 0.0;
+  };
+  // The true range of each column's return (0: none), then the mixed pixels, then the noise.
+  const size_t columns = static_cast<size_t>(std::max(0, profiler_.column_count));
+  std::vector<double> ranges(columns, 0.0), noise(columns);
+  std::vector<Eigen::Vector3d> points(columns), normals(columns);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (size_t i = 0; i < columns; ++i) {
+    const double phi = phiOf(static_cast<int>(i));
     // The ray in the sensor frame: (0, sin phi, -cos phi), downwards.
-    const Eigen::Vector3d dir = std::sin(phi) * pose.y_axis - std::cos(phi) * pose.z_axis;
-    const double noise = sim_.range_noise_sigma_mm * normal_(range_rng_);  // one per column
-    const auto range = scene.cast(pose.origin, dir.normalized());
-    if (!range) continue;
-    const double r = *range + noise;
+    const Eigen::Vector3d dir =
+        (std::sin(phi) * pose.y_axis - std::cos(phi) * pose.z_axis).normalized();
+    noise[i] = sim_.range_noise_sigma_mm * normal_(range_rng_);  // one per column
+    const auto hit = scene.cast(pose.origin, dir);
+    if (!hit) continue;
+    const double incidence_deg = std::acos(std::min(1.0, std::fabs(hit->normal.dot(dir)))) / kDeg;
+    if (glancingDropout(incidence_deg, sim_.dropout_glancing_probability, artefact_rng_)) continue;
+    if (sim_.dropout_spot_probability > 0 &&
+        uniform(artefact_rng_) < sim_.dropout_spot_probability) {
+      continue;
+    }
+    ranges[i] = hit->range_mm;
+    points[i] = pose.origin + hit->range_mm * dir;
+    normals[i] = hit->normal;
+  }
+  const auto step = [&](size_t i, size_t j) {
+    const Eigen::Vector3d d = points[j] - points[i];
+    return std::max(std::fabs(normals[i].dot(d)), std::fabs(normals[j].dot(d))) > kEdgeStepMm;
+  };
+  mixEdges(&ranges, step, sim_.mixed_pixel_probability, artefact_rng_);
+  for (size_t i = 0; i < columns; ++i) {
+    if (ranges[i] == 0.0) continue;
+    const double phi = phiOf(static_cast<int>(i));
+    const double r = ranges[i] + noise[i];
     const double y = r * std::sin(phi), z = -r * std::cos(phi);
     if (-z < profiler_.near_mm || -z > profiler_.far_mm) continue;
     p.column.push_back(static_cast<int16_t>(i));

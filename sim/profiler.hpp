@@ -8,8 +8,12 @@
 // laser plane, the columns evenly spaced in fan angle) meeting the scene; its range gets
 // N(0, range_noise_sigma_mm) along the ray, and it is valid between near_mm and far_mm below
 // the sensor. The encoder count latched with a profile is the true angle, quantised, with
-// N(0, encoder_noise_counts) noise. Randomness: std::mt19937_64 streams derived from the seed
-// (one for ranges, one for the encoder), so the same seed gives the same profiles.
+// N(0, encoder_noise_counts) noise. The artefacts of a real part (sim/artefacts.hpp's physics):
+// mixed pixels where neighbouring columns' ranges differ by more than 0.5 mm (a groove's rim:
+// the line's spot falls on both surfaces), dropouts at glancing incidence (a groove's walls)
+// and on dark or specular spots of the surface (any column). Randomness: std::mt19937_64
+// streams derived from the seed (one for ranges, one for the encoder, one for the artefacts,
+// drawn only where an artefact applies), so the same seed gives the same profiles.
 #pragma once
 
 #include <Eigen/Core>
@@ -85,11 +89,15 @@ struct SimProfileConfig {
   double encoder_zero_deg = 0.5;  // true turntable angle at encoder count 0
   double encoder_noise_counts = 0.5;
   double range_noise_sigma_mm = 0.02;
-  int plate_count = 3;                   // m, the plate's poses (one sweep each)
-  double plate_size_mm = 250.0;          // square plate
-  double plate_distance_mm = 300.0;      // plate centre below the sensor's origin
-  double plate_distance_step_mm = 40.0;  // pose k's centre: distance + step * (k mod 3 - 1)
-  double plate_tilt_deg = 30.0;          // plate normal from vertical
+  // The artefacts (0: none; the paper models none).
+  double mixed_pixel_probability = 0.5;       // a column at a depth edge returns a range between
+  double dropout_glancing_probability = 0.5;  // no return at 90 deg incidence (from 70 deg)
+  double dropout_spot_probability = 0.01;     // no return from a dark or specular spot
+  int plate_count = 3;                        // m, the plate's poses (one sweep each)
+  double plate_size_mm = 250.0;               // square plate
+  double plate_distance_mm = 300.0;           // plate centre below the sensor's origin
+  double plate_distance_step_mm = 40.0;       // pose k's centre: distance + step * (k mod 3 - 1)
+  double plate_tilt_deg = 30.0;               // plate normal from vertical
   double plate_tilt_spread_deg = 360.0;  // tilt directions spread evenly over this; 0: parallel
   double pause_s = 1.0;                  // between sweeps (the plate is moved)
   // The plate scene ends with a sweep over the base's reference face (turntable.reference),
@@ -100,6 +108,9 @@ struct SimProfileConfig {
   TestPieceConfig test_piece;
   void declare(ConfigSchema& s, const std::string& prefix);
   ProfileGeometry trueGeometry() const;
+  // The settings of the artefacts' keys that switch them off, and the same on this struct.
+  static std::vector<std::string> artefactsOff();
+  void switchArtefactsOff();
 };
 
 // The plate of one sweep: a square of side `size` centred at `centre`, in frame O_r.
@@ -127,8 +138,13 @@ class ProfileScene {
     Eigen::Vector3d origin, u, v, w;
   };
   std::optional<Frame> testPieceFrame() const;
-  // Distance [mm] from `origin` along the unit `dir` to the first surface, if any.
-  std::optional<double> cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
+  // The first surface from `origin` along the unit `dir`, if any: its distance [mm] and its
+  // unit normal (either sign).
+  struct Hit {
+    double range_mm = 0.0;
+    Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();
+  };
+  std::optional<Hit> cast(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
 
  private:
   std::optional<PlatePose> plate_;
@@ -137,7 +153,7 @@ class ProfileScene {
   bool test_piece_ = false;
   TestPieceConfig piece_;
   Eigen::Vector3d origin_, u_, v_, w_;
-  std::optional<double> castTestPiece(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
+  std::optional<Hit> castTestPiece(const Eigen::Vector3d& o, const Eigen::Vector3d& d) const;
 };
 
 // The simulated sensor and turntable. profile() is the physics of one exposure, shared by the
@@ -161,7 +177,7 @@ class SimProfiler {
   TurntableConfig turntable_;
   SimProfileConfig sim_;
   ProfileGeometry truth_;
-  std::mt19937_64 range_rng_, encoder_rng_;
+  std::mt19937_64 range_rng_, encoder_rng_, artefact_rng_;
   std::normal_distribution<double> normal_;
   int64_t sequence_ = 0;
 };

@@ -79,6 +79,90 @@ TEST(AxisOffsetSim, TestPieceHasTable2sDepths) {
   EXPECT_GT(near(30.02), 10000u);  // the second's
 }
 
+// Each of a real part's artefacts alone against the same noise-free sweep without them: the
+// simulator does what config/rig_c.yaml says (mixed pixels at steps, dropouts), and the plate,
+// which has no step and is never seen at glancing incidence, keeps every point but the spots.
+TEST(AxisOffsetSim, ArtefactsEachDoWhatTheySay) {
+  const std::vector<std::string> quiet = {
+      "sim.range_noise_sigma_mm=0",
+      "sim.encoder_noise_counts=0",
+      "sim.mixed_pixel_probability=0",
+      "sim.dropout_glancing_probability=0",
+      "sim.dropout_spot_probability=0",
+      "turntable.speed_deg_s=60"};  // a third of the profiles: short enough under ASan
+  const auto sweepOf = [&](const std::string& scene, const std::string& set) {
+    std::vector<std::string> sets = quiet;
+    if (!set.empty()) sets.push_back(set);
+    const RotatingProfileConfig rig = rigC(sets);
+    SimProfiler profiler(rig.profiler, rig.turntable, rig.sim, 3);
+    const ProfileScene s = scene == "plate"
+                               ? ProfileScene::plate(platePoses(rig.sim, rig.turntable).front())
+                               : ProfileScene::testPiece(rig.sim, rig.turntable);
+    // column -> range, per profile
+    std::vector<std::map<int, double>> out;
+    for (const Profile& p : profiler.sweep(s, 0, 0)) {
+      auto& m = out.emplace_back();
+      for (size_t i = 0; i < p.column.size(); ++i)
+        m[p.column[i]] = std::hypot(p.y_mm[i], p.z_mm[i]);
+    }
+    return out;
+  };
+  struct Count {
+    size_t clean = 0, kept = 0, lost = 0, moved = 0, between = 0;
+  };
+  // Every profile's points against the clean sweep's, column by column.
+  const auto compare = [](const std::vector<std::map<int, double>>& clean,
+                          const std::vector<std::map<int, double>>& with) {
+    Count c;
+    for (size_t k = 0; k < clean.size(); ++k) {
+      for (const auto& [col, r] : clean[k]) {
+        ++c.clean;
+        const auto it = with[k].find(col);
+        if (it == with[k].end()) {
+          ++c.lost;
+        } else if (std::fabs(it->second - r) < 1e-4) {
+          ++c.kept;
+        } else {
+          ++c.moved;
+          for (const int n : {col - 1, col + 1}) {  // between its range and a neighbour's
+            const auto o = clean[k].find(n);
+            if (o != clean[k].end() && it->second > std::min(r, o->second) - 1e-4 &&
+                it->second < std::max(r, o->second) + 1e-4) {
+              ++c.between;
+              break;
+            }
+          }
+        }
+      }
+      for (const auto& [col, r] : with[k]) EXPECT_TRUE(clean[k].count(col)) << "a new point";
+    }
+    return c;
+  };
+  for (const std::string scene : {"plate", "test_piece"}) {
+    SCOPED_TRACE(scene);
+    const auto clean = sweepOf(scene, "");
+    const Count spot = compare(clean, sweepOf(scene, "sim.dropout_spot_probability=0.2"));
+    EXPECT_EQ(spot.moved, 0u);
+    EXPECT_NEAR(double(spot.lost) / double(spot.clean), 0.2, 0.01);
+    const Count glancing = compare(clean, sweepOf(scene, "sim.dropout_glancing_probability=1"));
+    EXPECT_EQ(glancing.moved, 0u);
+    const Count mixed = compare(clean, sweepOf(scene, "sim.mixed_pixel_probability=1"));
+    EXPECT_EQ(mixed.lost, 0u);
+    EXPECT_EQ(mixed.between, mixed.moved);
+    if (scene == "plate") {
+      EXPECT_EQ(glancing.lost, 0u);  // incidence below 50 deg
+      EXPECT_EQ(mixed.moved, 0u);    // no step
+    } else {
+      // The grooves' walls, seen within a few degrees of grazing, and their rims and corners.
+      EXPECT_GT(glancing.lost, clean.size());
+      EXPECT_GT(mixed.moved, clean.size());
+      EXPECT_GT(mixed.kept, 10 * mixed.moved);  // a steep wall is no step
+    }
+    std::printf("%s: %zu points; spots lose %zu, glancing incidence %zu, mixed pixels move %zu\n",
+                scene.c_str(), spot.clean, spot.lost, glancing.lost, mixed.moved);
+  }
+}
+
 TEST(AxisOffsetPaper, MomentsGiveEq13AndEq14) {
   const RotatingProfileConfig rig = rigC();
   const auto planes = simulatedPlates(rig, 1, 3000);

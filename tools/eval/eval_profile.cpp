@@ -35,7 +35,10 @@ constexpr double kDistanceStep_mm = 3.0;
 
 RotatingProfileConfig loadProfileRig(const ProfileExperimentOptions& o,
                                      const std::vector<std::string>& extra) {
-  std::vector<std::string> sets = o.overrides;
+  // The paper's part has none of a real part's artefacts (mixed pixels, dropouts); the user's
+  // --set still wins.
+  std::vector<std::string> sets = SimProfileConfig::artefactsOff();
+  sets.insert(sets.end(), o.overrides.begin(), o.overrides.end());
   sets.insert(sets.end(), extra.begin(), extra.end());
   const Rig rig = sweepmap::loadRig(o.rig_path, sets);
   RotatingProfileConfig c = requireKind<RotatingProfileConfig>(rig, "this experiment");

@@ -216,12 +216,15 @@ std::optional<Frame> topFaceFrame(const std::vector<Eigen::Vector3d>& cloud,
 }
 
 // The round groove centred (nominally) at v = `centre_v`: {diameter, depth}.
-std::array<double, 2> measureRound(const std::vector<Eigen::Vector3d>& piece, double centre_v,
+std::array<double, 2> measureRound(const std::vector<Eigen::Vector3d>& piece,
+                                   const std::vector<bool>& at_rim, double centre_v,
                                    const PieceDesign& d, int* wall_points,
                                    std::vector<std::string>* problems, const char* name) {
   const double r = d.round_diameter_mm / 2, margin = 8.0;
   std::vector<Eigen::Vector3d> wall;
-  for (const auto& p : piece) {
+  for (size_t i = 0; i < piece.size(); ++i) {
+    const Eigen::Vector3d& p = piece[i];
+    if (at_rim[i]) continue;
     if (std::fabs(p.x()) > r + margin || std::fabs(p.y() - centre_v) > r + margin) continue;
     if (p.z() < -kBelowTop_mm - 0.5 && p.z() > -(d.round_depth_mm - 2.0)) wall.push_back(p);
   }
@@ -252,12 +255,13 @@ std::array<double, 2> measureRound(const std::vector<Eigen::Vector3d>& piece, do
 
 // The rectangular groove's width and depth: {width, depth}.
 std::array<double, 2> measureRectWidthDepth(const std::vector<Eigen::Vector3d>& piece,
-                                            const PieceDesign& d,
+                                            const std::vector<bool>& at_rim, const PieceDesign& d,
                                             std::vector<std::string>* problems) {
   const double hw = d.rect_width_mm / 2, hl = d.rect_length_mm / 2;
   std::vector<Eigen::Vector3d> walls[2], bottom;
-  for (const auto& p : piece) {
-    if (std::fabs(p.y()) < hl - 4 && p.z() < -1.5 && p.z() > -(d.rect_depth_mm - 2)) {
+  for (size_t i = 0; i < piece.size(); ++i) {
+    const Eigen::Vector3d& p = piece[i];
+    if (!at_rim[i] && std::fabs(p.y()) < hl - 4 && p.z() < -1.5 && p.z() > -(d.rect_depth_mm - 2)) {
       if (std::fabs(p.x() - hw) < 5) walls[1].push_back(p);
       if (std::fabs(p.x() + hw) < 5) walls[0].push_back(p);
     }
@@ -286,6 +290,37 @@ std::array<double, 2> measureRectWidthDepth(const std::vector<Eigen::Vector3d>& 
 
 // The angle of a profile point's ray in the laser's fan.
 double fanAngle(const ProfileSample& s) { return std::atan2(s.y_mm, -s.z_mm); }
+
+// Whether samples i and j are neighbouring columns of one profile (one missing between them at
+// most: two columns of the fan).
+bool neighbours(const std::vector<ProfileSample>& samples, size_t i, size_t j) {
+  return samples[i].encoder_rad == samples[j].encoder_rad &&
+         std::fabs(fanAngle(samples[i]) - fanAngle(samples[j])) <= kMaxFanGap_rad / 2;
+}
+
+// The first two points below the top face beside a top-face point of their profile: at a
+// groove's rim the line's spot falls on both the top face and what lies below it, and the
+// range comes out anywhere between the two (mixed pixels), close to the wall's radius but not
+// on the wall. The top face's last column may itself be mixed (no longer on the top face), so
+// the wall's first true column beside it is left out too. The walls are fitted without them.
+std::vector<bool> atRim(const std::vector<ProfileSample>& samples,
+                        const std::vector<Eigen::Vector3d>& piece) {
+  std::vector<bool> rim(piece.size(), false);
+  const auto top = [&](size_t i) { return std::fabs(piece[i].z()) < kTopBand_mm; };
+  for (size_t i = 0; i < piece.size(); ++i) {
+    if (!top(i)) continue;
+    for (const int step : {-1, 1}) {
+      size_t j = i;
+      for (int k = 0; k < 2; ++k) {
+        const size_t next = j + static_cast<size_t>(step);
+        if (next >= piece.size() || top(next) || !neighbours(samples, j, next)) break;
+        rim[next] = true;
+        j = next;
+      }
+    }
+  }
+  return rim;
+}
 
 // The rectangular groove's length from its edges across the scan (see the header).
 double measureRectLength(const std::vector<ProfileSample>& samples,
@@ -373,11 +408,12 @@ PieceMeasurement measureTestPiece(const std::vector<ProfileSample>& samples,
     frame->origin += c.x() * frame->u + c.y() * frame->v;
     for (auto& p : piece) p.head<2>() -= c;
   }
-  const auto left = measureRound(piece, -d.spacing_mm, d, &m.round_wall_points[0], &m.problems,
+  const std::vector<bool> rim = atRim(samples, piece);
+  const auto left = measureRound(piece, rim, -d.spacing_mm, d, &m.round_wall_points[0], &m.problems,
                                  "left round groove");
-  const auto right = measureRound(piece, d.spacing_mm, d, &m.round_wall_points[1], &m.problems,
+  const auto right = measureRound(piece, rim, d.spacing_mm, d, &m.round_wall_points[1], &m.problems,
                                   "right round groove");
-  const auto rect = measureRectWidthDepth(piece, d, &m.problems);
+  const auto rect = measureRectWidthDepth(piece, rim, d, &m.problems);
   m.size_mm = {left[0],
                left[1],
                right[0],
