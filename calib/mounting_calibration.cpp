@@ -192,8 +192,8 @@ Prepared prepare(const std::vector<Scan2D>& scans, const LidarMounting& initial,
   for (size_t s = 0; s < scans.size(); ++s) {
     const Scan2D& scan = scans[s];
     for (size_t i = 0; i < scan.ranges_m.size(); i += size_t(stride)) {
+      if (!scan.validRange(i)) continue;
       const double r = scan.ranges_m[i];
-      if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;
       const double a = scan.rayAngle(i);
       p.rays.push_back(
           {R_nom * rotating::pointInLidar(r, a), scan.rayUtime(i), int(s), std::sin(a) > 0.0, r});
@@ -570,10 +570,6 @@ MountingCalibrationResult pointToPlane(const Prepared& prep, const PoseTrack& tr
 void addTargetEdges(const Scan2D& scan, int s, const Eigen::Matrix3d& R_nom,
                     const MountingCalibrationOptions& o, std::vector<Ray>* rays) {
   const size_t n = scan.ranges_m.size();
-  const auto valid = [&](size_t i) {
-    const double r = scan.ranges_m[i];
-    return r != 0.0 && r >= scan.range_min_m && r <= scan.range_max_m;
-  };
   const auto edge = [&](size_t inner, size_t outer) {
     const double r = scan.ranges_m[inner];
     const double a = 0.5 * (scan.rayAngle(inner) + scan.rayAngle(outer));
@@ -581,16 +577,17 @@ void addTargetEdges(const Scan2D& scan, int s, const Eigen::Matrix3d& R_nom,
   };
   size_t i = 1;
   while (i + 1 < n) {
-    if (!valid(i) || !valid(i - 1) || scan.ranges_m[i - 1] < scan.ranges_m[i] + o.edge_jump_m) {
+    if (!scan.validRange(i) || !scan.validRange(i - 1) ||
+        scan.ranges_m[i - 1] < scan.ranges_m[i] + o.edge_jump_m) {
       ++i;
       continue;
     }
     size_t j = i;  // the run [i, j]
-    while (j + 1 < n && valid(j + 1) &&
+    while (j + 1 < n && scan.validRange(j + 1) &&
            std::abs(scan.ranges_m[j + 1] - scan.ranges_m[j]) < o.edge_jump_m)
       ++j;
-    const bool closed =
-        j + 1 < n && valid(j + 1) && scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
+    const bool closed = j + 1 < n && scan.validRange(j + 1) &&
+                        scan.ranges_m[j + 1] > scan.ranges_m[j] + o.edge_jump_m;
     const double r_i = scan.ranges_m[i], r_j = scan.ranges_m[j];
     const double extent = (rotating::pointInLidar(r_i, scan.rayAngle(i)) -
                            rotating::pointInLidar(r_j, scan.rayAngle(j)))

@@ -925,17 +925,12 @@ bool fitPcaPlane(const Eigen::Vector3d* pts, int count, double max_ratio, double
 
 namespace {
 
-bool validRange(const Scan2D& scan, size_t i) {
-  const double r = scan.ranges_m[i];
-  return r != 0.0 && r >= scan.range_min_m && r <= scan.range_max_m;
-}
-
 // Whether valid ray i of `scan` lies at a depth edge: a valid neighbour's range differs from
 // its own by more than the noise of the two explains.
 bool atDepthEdge(const Scan2D& scan, size_t i, const MountingCalibrationOptions& o) {
   const double r = scan.ranges_m[i];
   for (const size_t j : {i - 1, i + 1}) {
-    if (j >= scan.ranges_m.size() || !validRange(scan, j)) continue;
+    if (j >= scan.ranges_m.size() || !scan.validRange(j)) continue;
     const double q = scan.ranges_m[j];
     const double sigma = M_SQRT2 * o.range_noise_fraction * std::max(r, q);
     if (std::abs(q - r) > std::max(o.min_edge_jump_m, o.edge_jump_sigmas * sigma)) return true;
@@ -951,7 +946,7 @@ std::vector<OverlapRay> overlapRays(const std::vector<Scan2D>& scans, const Eige
   const Eigen::Matrix3d R_nom = rotationXYZ(rpy.x(), rpy.y(), rpy.z());
   for (const Scan2D& scan : scans) {
     for (size_t i = 0; i < scan.ranges_m.size(); i += size_t(std::max(1, o.ray_stride))) {
-      if (!validRange(scan, i) || atDepthEdge(scan, i, o)) continue;
+      if (!scan.validRange(i) || atDepthEdge(scan, i, o)) continue;
       const double r = scan.ranges_m[i];
       const double a = scan.rayAngle(i);
       rays.push_back(

@@ -70,8 +70,8 @@ void forEachSweepRay(const std::vector<Scan2D>& scans, double omega_rad_s, F&& f
     const double t_ray_s = 1e-9 * static_cast<double>(scan.time_increment_ns);
     const double phi0 = rotating::motorAngleFromTime(scan.utime, first_ray_utime, omega_rad_s);
     for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+      if (!scan.validRange(i)) continue;
       const double r = scan.ranges_m[i];
-      if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none
       // Per-ray time: the shaft keeps turning while the mirror sweeps the scan.
       const float intensity = i < scan.intensities.size() ? scan.intensities[i] : 0.0f;
       f(SweepRay{phi0 + omega_rad_s * t_ray_s * static_cast<double>(i), r, scan.rayAngle(i),

@@ -46,8 +46,8 @@ std::vector<Eigen::Vector3f> scanToWorld(const Scan2D& scan, const PoseTrack& tr
   if (intensities) intensities->clear();
   int missing = 0;
   for (size_t i = 0; i < scan.ranges_m.size(); ++i) {
+    if (!scan.validRange(i)) continue;
     const double r = scan.ranges_m[i];
-    if (r == 0.0 || !(r >= scan.range_min_m && r <= scan.range_max_m)) continue;  // 0: none
     const auto pose = track.at(scan.rayUtime(i));
     if (!pose) {
       ++missing;

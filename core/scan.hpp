@@ -26,6 +26,11 @@ struct Scan2D {
   // the device measured for that ray (devices whose samples are not on a fixed grid).
   std::vector<float> angles_rad;
 
+  // Whether ray i holds a range (not 0, not NaN, within [range_min_m, range_max_m]).
+  bool validRange(size_t i) const {
+    const double r = ranges_m[i];
+    return r != 0.0 && r >= range_min_m && r <= range_max_m;
+  }
   double rayAngle(size_t i) const {
     return angles_rad.empty() ? angle_min_rad + angle_increment_rad * double(i)
                               : double(angles_rad[i]);
