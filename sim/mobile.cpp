@@ -10,6 +10,11 @@
 namespace sweepmap {
 namespace {
 
+// The simulation's random streams, one generator each seeded `seed * 8 + stream`, so that no
+// stream's draws depend on how many another made.
+enum class Stream : uint64_t { kWheels = 1, kImu = 2, kLidar = 3, kSlip = 4, kArtefacts = 5 };
+uint64_t streamSeed(uint64_t seed, Stream s) { return seed * 8 + static_cast<uint64_t>(s); }
+
 constexpr double kGravity = 9.80665;
 
 Eigen::Isometry3d planar(const Pose2& p) {
@@ -309,7 +314,7 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
       path_({{0, 0, 0, 1, 0}}),
       seed_(seed),
       start_utime_(start_utime),
-      artefacts_(config, scene, seed * 8 + 5) {
+      artefacts_(config, scene, streamSeed(seed, Stream::kArtefacts)) {
   c_.validate("sim");
   if (!(wheels.radius_m > 0) || !(wheels.ticks_per_revolution > 0) ||
       !(wheels.wheel_distance_m > 0)) {
@@ -357,7 +362,7 @@ SimMobile::SimMobile(const SimMobileConfig& config, const WheelGeometry& wheels,
 
   // Slip schedule: exponential gaps after each event's end.
   if (c_.slip_mean_interval_s > 0) {
-    std::mt19937_64 rng(seed * 8 + 4);
+    std::mt19937_64 rng(streamSeed(seed, Stream::kSlip));
     std::exponential_distribution<double> gap(1.0 / c_.slip_mean_interval_s);
     std::uniform_real_distribution<double> u(0.0, 1.0);
     double t = 0.0;
@@ -465,7 +470,7 @@ double SimMobile::wheelTurnedAt(double t, bool right) const {
 Eigen::Isometry3d SimMobile::T_room_world() const { return planar(start_room_); }
 
 std::vector<WheelTicks> SimMobile::wheelTicks() {
-  std::mt19937_64 rng(seed_ * 8 + 1);
+  std::mt19937_64 rng(streamSeed(seed_, Stream::kWheels));
   std::normal_distribution<double> n(0.0, 1.0);
   std::vector<WheelTicks> out;
   // Ticks per metre of ground: each wheel's true radius.
@@ -491,7 +496,7 @@ std::vector<WheelTicks> SimMobile::wheelTicks() {
 }
 
 std::vector<ImuSample> SimMobile::imu() {
-  std::mt19937_64 rng(seed_ * 8 + 2);
+  std::mt19937_64 rng(streamSeed(seed_, Stream::kImu));
   std::normal_distribution<double> n(0.0, 1.0);
   std::vector<ImuSample> out;
   const double T = c_.duration_s;
@@ -520,7 +525,8 @@ std::vector<ImuSample> SimMobile::imu() {
 Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& beam) const {
   std::normal_distribution<double> n(0.0, 1.0);
   SceneArtefacts artefacts = artefacts_;
-  artefacts.reseed((seed_ * 8 + 5) ^ (static_cast<uint64_t>(j) * 0xd1b54a32d192ed03ULL));
+  artefacts.reseed(streamSeed(seed_, Stream::kArtefacts) ^
+                   (static_cast<uint64_t>(j) * 0xd1b54a32d192ed03ULL));
   Scan2D scan;
   scan.seq = j;
   // Stamped by the lidar's clock, which runs lidar_time_offset_ms ahead.
@@ -578,7 +584,7 @@ Scan2D SimMobile::makeScan(int64_t j, std::mt19937_64* rng, const BeamOffset& be
 }
 
 std::vector<Scan2D> SimMobile::scans() {
-  std::mt19937_64 rng(seed_ * 8 + 3);
+  std::mt19937_64 rng(streamSeed(seed_, Stream::kLidar));
   std::vector<Scan2D> out;
   const double scan_span = (rays_ - 1) / c_.sample_rate_hz;
   for (int64_t j = 0;; ++j) {
