@@ -112,11 +112,11 @@ bool SceneArtefacts::returns(const Eigen::Vector3d& point, const Eigen::Vector3d
 
 void SceneArtefacts::mixEdges(std::vector<double>* ranges) {
   // A lidar's beam is wide (mrad): a jump of the true range between neighbouring rays is an
-  // edge (the true ranges: mixEdges changes them as it goes).
-  const std::vector<double> r = *ranges;
-  sweepmap::mixEdges(
-      ranges, [&r](size_t i, size_t j) { return std::fabs(r[j] - r[i]) > kEdgeJumpM; },
-      sim_.mixed_pixel_probability, rng_);
+  // edge.
+  const auto jump = [](const std::vector<double>& r, size_t i, size_t j) {
+    return std::fabs(r[j] - r[i]) > kEdgeJumpM;
+  };
+  sweepmap::mixEdges(ranges, jump, sim_.mixed_pixel_probability, rng_);
 }
 
 }  // namespace sweepmap

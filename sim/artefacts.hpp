@@ -33,10 +33,9 @@ namespace sweepmap {
 // (sim/profiler.hpp); each draws from `rng` only where its artefact applies.
 //
 // Mixed pixels over one scan's or profile's true ranges (0: no return), in ray order, in
-// place: a ray at a depth edge with a neighbour (`edge(i, j)`: rays i and j meet different
-// surfaces, or one surface across a step; it must not read `ranges`, which change as they are
-// mixed) returns, with `probability`, a range uniformly between its own and that neighbour's
-// (across the larger of its two edges).
+// place: a ray at a depth edge with a neighbour (`edge(true_ranges, i, j)`: rays i and j meet
+// different surfaces, or one surface across a step) returns, with `probability`, a range
+// uniformly between its own and that neighbour's (across the larger of its two edges).
 template <class AtEdge>
 void mixEdges(std::vector<double>* ranges, const AtEdge& edge, double probability,
               std::mt19937_64& rng) {
@@ -47,7 +46,7 @@ void mixEdges(std::vector<double>* ranges, const AtEdge& edge, double probabilit
     if (r[i] == 0.0) continue;
     double other = 0.0, jump = 0.0;  // the neighbour across the larger edge
     for (const size_t j : {i - 1, i + 1}) {
-      if (j >= r.size() || r[j] == 0.0 || !edge(i, j) || !(std::fabs(r[j] - r[i]) > jump)) {
+      if (j >= r.size() || r[j] == 0.0 || !edge(r, i, j) || !(std::fabs(r[j] - r[i]) > jump)) {
         continue;
       }
       other = r[j];

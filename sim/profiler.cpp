@@ -359,7 +359,7 @@ Profile SimProfiler::profile(const ProfileScene& scene, double encoder_rad, int6
     points[i] = pose.origin + hit->range_mm * dir;
     normals[i] = hit->normal;
   }
-  const auto step = [&](size_t i, size_t j) {
+  const auto step = [&](const std::vector<double>&, size_t i, size_t j) {
     const Eigen::Vector3d d = points[j] - points[i];
     return std::max(std::fabs(normals[i].dot(d)), std::fabs(normals[j].dot(d))) > kEdgeStepMm;
   };

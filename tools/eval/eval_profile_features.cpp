@@ -288,6 +288,9 @@ std::array<double, 2> measureRectWidthDepth(const std::vector<Eigen::Vector3d>& 
   return out;
 }
 
+// Whether a point (piece frame) lies on the top face.
+bool onTopFace(const Eigen::Vector3d& p) { return std::fabs(p.z()) < kTopBand_mm; }
+
 // The angle of a profile point's ray in the laser's fan.
 double fanAngle(const ProfileSample& s) { return std::atan2(s.y_mm, -s.z_mm); }
 
@@ -306,7 +309,7 @@ bool neighbours(const std::vector<ProfileSample>& samples, size_t i, size_t j) {
 std::vector<bool> atRim(const std::vector<ProfileSample>& samples,
                         const std::vector<Eigen::Vector3d>& piece) {
   std::vector<bool> rim(piece.size(), false);
-  const auto top = [&](size_t i) { return std::fabs(piece[i].z()) < kTopBand_mm; };
+  const auto top = [&](size_t i) { return onTopFace(piece[i]); };
   for (size_t i = 0; i < piece.size(); ++i) {
     if (!top(i)) continue;
     for (const int step : {-1, 1}) {
@@ -330,8 +333,7 @@ double measureRectLength(const std::vector<ProfileSample>& samples,
   std::vector<Eigen::Vector2d> edge[2];  // (u, v) of the last top-face point, v < 0 and v > 0
   // Each point: top face (T), in the groove (G) or between (a wall just below the rim).
   const auto kind = [&](size_t i) {
-    const double h = piece[i].z();
-    return std::fabs(h) < kTopBand_mm ? 'T' : h < -kBelowTop_mm ? 'G' : 'X';
+    return onTopFace(piece[i]) ? 'T' : piece[i].z() < -kBelowTop_mm ? 'G' : 'X';
   };
   // Consecutive T and G of one profile, at most kMaxGap columns apart (X between them): the
   // edge lies between them, the T on the top face within those columns of it.
