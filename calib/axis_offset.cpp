@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "calib/parameter_information.hpp"
+#include "core/angles.hpp"
 
 namespace sweepmap {
 
@@ -20,7 +21,6 @@ using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
-constexpr double kRadToDeg = 180.0 / M_PI;
 // A scaled singular value of the rig's reduced Jacobian below this: a direction the planes do
 // not constrain at all (the encoder zero's is ~1e-13; the weakest determined one on the default
 // plates ~1e-2).

@@ -109,7 +109,7 @@ PlaneFit fitPlaneTo(const std::vector<SweepRay>& rays, const Eigen::Vector3d& t_
 
 // The problem's state: the offset and one (normal, distance) per plane, the rays prepared
 // and their weights.
-struct Problem {
+struct LidarProblem {
   double t[3];
   std::vector<Eigen::Vector3d> normals;
   std::vector<double> distances;
@@ -120,7 +120,7 @@ struct Problem {
 };
 
 void buildProblem(const std::vector<LidarPlaneRays>& planes, const LidarAxisOffsetOptions& o,
-                  Problem* p) {
+                  LidarProblem* p) {
   for (int k = 0; k < 3; ++k) p->t[k] = o.initial_offset_mm[k];
   ceres::Problem::Options po;
   po.manifold_ownership = ceres::TAKE_OWNERSHIP;
@@ -149,7 +149,7 @@ void buildProblem(const std::vector<LidarPlaneRays>& planes, const LidarAxisOffs
 }
 
 // Every ray's residual [mm] (unweighted) at the current state.
-std::vector<double> residualsOf(const Problem& p) {
+std::vector<double> residualsOf(const LidarProblem& p) {
   std::vector<double> out;
   out.reserve(p.residuals);
   for (size_t k = 0; k < p.rays.size(); ++k) {
@@ -170,7 +170,7 @@ double robustSigma(std::vector<double> e) {
   return 1.4826 * e[e.size() / 2];
 }
 
-void setCauchyWeights(double scale_mm, Problem* p) {
+void setCauchyWeights(double scale_mm, LidarProblem* p) {
   const std::vector<double> e = residualsOf(*p);
   size_t i = 0;
   for (auto& w : p->weights) {
@@ -195,7 +195,7 @@ struct TObservability {
   double scale = 0.0;                               // sqrt(sum of the weights)
 };
 
-TObservability analyse(const Problem& p) {
+TObservability analyse(const LidarProblem& p) {
   std::vector<Eigen::Matrix3d> blocks;
   double weights = 0.0;
   for (size_t k = 0; k < p.rays.size(); ++k) {
@@ -262,7 +262,7 @@ void flagUnobservable(const TObservability& obs, const LidarAxisOffsetOptions& o
 // Standard deviations of x (and y): the inverse of J^T J of the offset with the planes
 // eliminated (calib/parameter_information.hpp, in a fixed order), scaled by the weighted
 // residuals' variance.
-void standardDeviations(const LidarAxisOffsetOptions& o, size_t plane_count, Problem* p,
+void standardDeviations(const LidarAxisOffsetOptions& o, size_t plane_count, LidarProblem* p,
                         LidarAxisOffsetResult* r) {
   if (!r->observable) return;
   ceres::Problem::EvaluateOptions eo;
@@ -316,7 +316,7 @@ struct RmsSums {
 // Each plane refit by least squares with the nominal and the estimated offset; the RMS over
 // every plane and over the walls, of all their points and of the inliers (the points within
 // the Cauchy scale of their plane at the solution: the same points before and after).
-void reportPlanes(const std::vector<LidarPlaneRays>& planes, const Problem& p,
+void reportPlanes(const std::vector<LidarPlaneRays>& planes, const LidarProblem& p,
                   const LidarAxisOffsetOptions& o, LidarAxisOffsetResult* r) {
   RmsSums before, after, in_before, in_after;
   const std::vector<double> e = residualsOf(p);
@@ -497,7 +497,7 @@ LidarAxisOffsetResult solveLidarAxisOffset(const std::vector<LidarPlaneRays>& pl
   const auto t0 = Clock::now();
   LidarAxisOffsetResult r;
   r.y_estimated = o.estimate_y;
-  Problem p;
+  LidarProblem p;
   buildProblem(planes, o, &p);
   r.cauchy_scale_mm = o.cauchy_scale_mm > 0 ? o.cauchy_scale_mm
                                             : 2.3849 * std::max(1e-6, robustSigma(residualsOf(p)));

@@ -3,10 +3,10 @@
 #include <cmath>
 #include <sstream>
 
+#include "core/angles.hpp"
+
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 LidarModel scip(const std::string& name, ScipGeometry pp, uint32_t no_return, bool intensity,
                 double min_m, double max_m, const std::string& source) {
@@ -106,7 +106,8 @@ void checkScipFit(const LidarConfig& l, const LidarModel& m) {
           "with angle_min_deg " + num(l.angle_min_deg) + " asks for steps " +
               std::to_string(r.start_step) + ".." + std::to_string(r.end_step) + ", outside the " +
               m.name + "'s " + std::to_string(pp.amin) + ".." + std::to_string(pp.amax) + " (" +
-              num(pp.angleRad(pp.amin) / kDeg) + ".." + num(pp.angleRad(pp.amax) / kDeg) + " deg)");
+              num(pp.angleRad(pp.amin) / kDegToRad) + ".." + num(pp.angleRad(pp.amax) / kDegToRad) +
+              " deg)");
   require(l.range_min_m >= pp.dmin_mm * 1e-3 - 1e-9 && l.range_max_m <= pp.dmax_mm * 1e-3 + 1e-9,
           "range_max_m",
           "and range_min_m must lie within the " + m.name + "'s DMIN..DMAX " +
@@ -177,7 +178,7 @@ LidarConfig fullFieldOf(const LidarModel& m) {
     l.beam_count = m.pp.amax - m.pp.amin + 1;
     l.steps_per_revolution = m.pp.ares;
     l.angle_increment_deg = 360.0 / m.pp.ares;
-    l.angle_min_deg = m.pp.angleRad(m.pp.amin) / kDeg;
+    l.angle_min_deg = m.pp.angleRad(m.pp.amin) / kDegToRad;
     l.range_min_m = m.pp.dmin_mm * 1e-3;
     l.range_max_m = m.pp.dmax_mm * 1e-3;
     return l;

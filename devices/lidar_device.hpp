@@ -15,6 +15,14 @@ struct DeviceHealth {
   std::vector<std::pair<std::string, int64_t>> counters;  // e.g. {"reconnects", 2}
   std::vector<std::string> events;  // since the last call: "scip://...: connection refused"
   std::string fatal;                // non-empty: the device cannot be used (identity mismatch)
+
+  // The counter `name`, or -1 when the device keeps no such counter.
+  int64_t counter(const std::string& name) const {
+    for (const auto& [k, v] : counters) {
+      if (k == name) return v;
+    }
+    return -1;
+  }
 };
 
 class LidarDevice {

@@ -7,6 +7,7 @@
 
 #include "core/lidar_models.hpp"
 #include "drivers/clock_sync.hpp"
+#include "drivers/line_clock.hpp"
 #include "drivers/protocols/rplidar.hpp"
 #include "drivers/protocols/scip.hpp"
 #include "drivers/protocols/ydlidar.hpp"
@@ -383,30 +384,6 @@ class RevolutionAssembler {
   Counters counters_;
 };
 
-// Host time of a stream offset: the chunk that holds it arrived at `arrival`, and a UART
-// delivers baud/10 bytes per second, so a byte `behind` bytes before the chunk's end left
-// the device that much earlier. Without receive times (a raw file): the line time alone.
-class LineClock {
- public:
-  LineClock(ScanTime time, int baud) : time_(time), byte_us_(10e6 / baud) {}
-  void chunk(int64_t arrival, int64_t end_offset) {
-    arrival_ = arrival;
-    end_offset_ = end_offset;
-  }
-  int64_t at(int64_t offset) const {
-    if (time_ == ScanTime::kStream || arrival_ < 0) {
-      return static_cast<int64_t>(std::llround(static_cast<double>(offset) * byte_us_));
-    }
-    return arrival_ - static_cast<int64_t>(std::llround((end_offset_ - offset) * byte_us_));
-  }
-  double byteUs() const { return byte_us_; }
-
- private:
-  ScanTime time_;
-  double byte_us_;
-  int64_t arrival_ = -1, end_offset_ = 0;
-};
-
 // A motor far from the rig's rate means another device or setting. One turn's rate is timed
 // by the arrival of its bytes, and a host that stalls, then reads a backlog at once, makes one
 // turn look fast: so the rate must be off for kOffTurns turns in a row, after the first few.
@@ -472,7 +449,7 @@ class X4Session : public LidarSession {
   X4Session(const LidarConfig& expected, const SessionOptions& options)
       : expected_(expected),
         model_(catalogueModel(expected, DeviceProtocol::kYdlidarX4)),
-        line_(options.time, options.baud > 0 ? options.baud : kX4DefaultBaud),
+        line_(options.baud > 0 ? options.baud : kX4DefaultBaud, options.time != ScanTime::kStream),
         turns_(expected) {}
 
   void start(ByteStream& stream, const std::function<int64_t()>& now) override {
@@ -583,7 +560,8 @@ class RplidarSession : public LidarSession {
   RplidarSession(const LidarConfig& expected, const SessionOptions& options)
       : expected_(expected),
         model_(catalogueModel(expected, DeviceProtocol::kRplidar)),
-        line_(options.time, options.baud > 0 ? options.baud : kRplidarDefaultBaud),
+        line_(options.baud > 0 ? options.baud : kRplidarDefaultBaud,
+              options.time != ScanTime::kStream),
         turns_(expected) {}
 
   void start(ByteStream& stream, const std::function<int64_t()>& now) override {

@@ -63,8 +63,7 @@ void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* da
     decoder.feed(data, size, events);
   }
   *fed += static_cast<int64_t>(size);
-  line->arrival = raw ? -1 : arrival_utime;
-  line->chunk_end = *fed;
+  line->chunk(raw ? -1 : arrival_utime, *fed);
   for (const Event& e : *events) {
     if (const auto* d = std::get_if<DecodeError>(&e)) {
       errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
@@ -79,7 +78,7 @@ void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* da
 // ---- HI219 ----
 
 Hi219Session::Hi219Session(int baud, bool raw) : clock_(deviceClock(1000.0)), raw_(raw) {
-  line_.byte_us = 10e6 / (baud > 0 ? baud : 115200);
+  line_ = LineClock(baud);
 }
 
 void Hi219Session::reset() {
@@ -94,7 +93,7 @@ int Hi219Session::onBytes(const uint8_t* data, size_t size, int64_t arrival_utim
 }
 
 int Hi219Session::finish(std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
-  return decode(nullptr, 0, line_.arrival, true, samples, errors);
+  return decode(nullptr, 0, line_.arrival(), true, samples, errors);
 }
 
 int Hi219Session::decode(const uint8_t* data, size_t size, int64_t arrival_utime, bool at_end,
@@ -141,7 +140,7 @@ std::string Hi219Driver::identity() const {
 // ---- wheel board ----
 
 WheelBoardSession::WheelBoardSession(int baud, bool raw) : clock_(deviceClock(1.0)), raw_(raw) {
-  line_.byte_us = 10e6 / (baud > 0 ? baud : 115200);
+  line_ = LineClock(baud);
 }
 
 void WheelBoardSession::reset() {
@@ -158,7 +157,7 @@ int WheelBoardSession::onBytes(const uint8_t* data, size_t size, int64_t arrival
 }
 
 int WheelBoardSession::finish(std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
-  return decode(nullptr, 0, line_.arrival, true, ticks, errors);
+  return decode(nullptr, 0, line_.arrival(), true, ticks, errors);
 }
 
 int WheelBoardSession::decode(const uint8_t* data, size_t size, int64_t arrival_utime, bool at_end,

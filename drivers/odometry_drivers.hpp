@@ -23,24 +23,12 @@
 
 #include "devices/odometry_devices.hpp"
 #include "drivers/clock_sync.hpp"
+#include "drivers/line_clock.hpp"
 #include "drivers/protocols/hi219.hpp"
 #include "drivers/protocols/wheelboard.hpp"
 #include "drivers/stream_device.hpp"
 
 namespace sweepmap {
-
-// Host time of a frame that starts at stream `offset`: in a chunk received at `arrival`, the
-// receive time less the line time of the bytes after it; without receive times, the line
-// time from the stream's first byte.
-struct LineClock {
-  double byte_us = 10e6 / 115200;  // 10 bits per byte (8N1)
-  int64_t arrival = -1;            // < 0: raw bytes
-  int64_t chunk_end = 0;           // stream offset just past the chunk
-  int64_t at(int64_t offset) const {
-    if (arrival < 0) return static_cast<int64_t>(std::llround(double(offset) * byte_us));
-    return arrival - static_cast<int64_t>(std::llround(double(chunk_end - offset) * byte_us));
-  }
-};
 
 // Cumulative counts of a 32-bit counter that wraps.
 struct Unwrap32 {

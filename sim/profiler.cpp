@@ -5,13 +5,12 @@
 #include <cmath>
 #include <limits>
 
+#include "core/angles.hpp"
 #include "sim/artefacts.hpp"
 
 namespace sweepmap {
 
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 // Neighbouring columns are at a depth edge (mixed pixels: the line's spot, some 0.1 mm wide,
 // falls on both surfaces) where either's hit lies farther than this from the other's tangent
@@ -113,7 +112,7 @@ void SimProfileConfig::declare(ConfigSchema& s, const std::string& p) {
 }
 
 ProfileGeometry SimProfileConfig::trueGeometry() const {
-  return {offset_m_mm, offset_n_mm, laser_tilt_deg * kDeg, encoder_zero_deg * kDeg};
+  return {offset_m_mm, offset_n_mm, laser_tilt_deg * kDegToRad, encoder_zero_deg * kDegToRad};
 }
 
 std::vector<std::string> SimProfileConfig::artefactsOff() {
@@ -129,7 +128,7 @@ namespace {
 
 // The encoder angle (before the zero) in the middle of a sweep.
 double sweepMiddleRad(const TurntableConfig& t) {
-  return 0.5 * (t.sweep_start_deg + t.sweep_end_deg) * kDeg;
+  return 0.5 * (t.sweep_start_deg + t.sweep_end_deg) * kDegToRad;
 }
 
 }  // namespace
@@ -143,8 +142,8 @@ std::vector<PlatePose> platePoses(const SimProfileConfig& sim, const TurntableCo
     PlatePose p;
     // Centred under the laser line's middle at the sweep's middle.
     p.centre = profilePointInRigFrame(truth, 0.0, -distance, mid);
-    const double dir = sim.plate_tilt_spread_deg * kDeg * k / sim.plate_count;
-    const double tilt = sim.plate_tilt_deg * kDeg;
+    const double dir = sim.plate_tilt_spread_deg * kDegToRad * k / sim.plate_count;
+    const double tilt = sim.plate_tilt_deg * kDegToRad;
     // Tilt directions measured in the sensor's heading at the sweep's middle.
     const SensorPose s = sensorPoseInRigFrame(truth, mid);
     const Eigen::Vector3d x_s = s.y_axis.cross(s.z_axis).normalized();
@@ -166,8 +165,8 @@ PlatePose referencePose(const SimProfileConfig& sim, const TurntableConfig& turn
   PlatePose p;
   p.centre = profilePointInRigFrame(truth, 0.0, -sim.plate_distance_mm, mid);
   // In O_r itself, not in the sensor's heading: the face is fixed to the base.
-  const double azimuth = sim.reference_azimuth_deg * kDeg;
-  const double tilt = turntable.reference.normal_tilt_deg * kDeg;
+  const double azimuth = sim.reference_azimuth_deg * kDegToRad;
+  const double tilt = turntable.reference.normal_tilt_deg * kDegToRad;
   p.normal = Eigen::Vector3d(std::sin(tilt) * std::cos(azimuth), std::sin(tilt) * std::sin(azimuth),
                              std::cos(tilt));
   const SensorPose s = sensorPoseInRigFrame(truth, mid);
@@ -312,7 +311,7 @@ std::vector<Profile> SimProfiler::sweep(const ProfileScene& scene, int32_t sweep
     const double t_s = j / profiler_.profile_rate_hz;
     // The encoder angle (before the zero): constant speed from the sweep's start.
     const double encoder_deg = turntable_.sweep_start_deg + span_deg * t_s / duration_s;
-    profiles.push_back(profile(scene, encoder_deg * kDeg,
+    profiles.push_back(profile(scene, encoder_deg * kDegToRad,
                                start_utime + static_cast<int64_t>(std::llround(t_s * 1e6)),
                                sweep_id));
   }
@@ -349,7 +348,8 @@ Profile SimProfiler::profile(const ProfileScene& scene, double encoder_rad, int6
     noise[i] = sim_.range_noise_sigma_mm * normal_(range_rng_);  // one per column
     const auto hit = scene.cast(pose.origin, dir);
     if (!hit) continue;
-    const double incidence_deg = std::acos(std::min(1.0, std::fabs(hit->normal.dot(dir)))) / kDeg;
+    const double incidence_deg =
+        std::acos(std::min(1.0, std::fabs(hit->normal.dot(dir)))) / kDegToRad;
     if (glancingDropout(incidence_deg, sim_.dropout_glancing_probability, artefact_rng_)) continue;
     if (sim_.dropout_spot_probability > 0 &&
         uniform(artefact_rng_) < sim_.dropout_spot_probability) {

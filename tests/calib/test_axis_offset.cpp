@@ -9,6 +9,7 @@
 #include <map>
 
 #include "calib/axis_offset.hpp"
+#include "core/angles.hpp"
 #include "profile_test_util.hpp"
 
 namespace sweepmap {
@@ -17,13 +18,11 @@ namespace {
 using test::rigC;
 using test::simulatedPlates;
 
-constexpr double kDeg = M_PI / 180.0;
-
 // The encoder zero is a gauge freedom (planes cannot see it): ours starts from the truth's.
 AxisOffsetOptions startFromNominal(const RotatingProfileConfig& rig) {
   AxisOffsetOptions o;
   o.initial = rig.geometry.toGeometry();
-  o.initial.encoder_zero_rad = rig.sim.encoder_zero_deg * kDeg;
+  o.initial.encoder_zero_rad = rig.sim.encoder_zero_deg * kDegToRad;
   return o;
 }
 
@@ -52,7 +51,7 @@ TEST(AxisOffsetSim, PlatePointsLieOnTheTruePlaneWithTheTrueOffsets) {
     EXPECT_LT(worst, 2e-4) << planes[k].source;  // float32 at 400 mm: 3e-5
   }
   // The three poses are not parallel.
-  EXPECT_LT(std::fabs(poses[0].normal.dot(poses[1].normal)), std::cos(20 * kDeg));
+  EXPECT_LT(std::fabs(poses[0].normal.dot(poses[1].normal)), std::cos(20 * kDegToRad));
 }
 
 TEST(AxisOffsetSim, TestPieceHasTable2sDepths) {
@@ -187,7 +186,7 @@ TEST(AxisOffsetOurs, RecoversMAndNWithinATenthOfAMillimetre) {
     const double dn = std::fabs(r.geometry.n_mm - rig.sim.offset_n_mm);
     std::printf("%4d  %7.4f  %7.4f  %7.4f  %7.4f  %+8.5f\n", static_cast<int>(seed), dm, dn,
                 r.sigma_m_mm, r.sigma_n_mm,
-                r.geometry.laser_tilt_rad / kDeg - rig.sim.laser_tilt_deg);
+                r.geometry.laser_tilt_rad / kDegToRad - rig.sim.laser_tilt_deg);
     EXPECT_LT(dm, 0.1) << "seed " << seed;
     EXPECT_LT(dn, 0.1) << "seed " << seed;
     EXPECT_TRUE(r.observable);
@@ -279,11 +278,11 @@ ReferenceRun solveWithReference(const RotatingProfileConfig& rig, double azimuth
   AxisOffsetOptions o;
   o.initial = rig.geometry.toGeometry();  // encoder zero 0
   o.estimate_encoder_zero = true;
-  o.reference_azimuth_rad = rig.turntable.reference.normal_azimuth_deg * kDeg;
-  o.reference_azimuth_sigma_rad = azimuth_sigma_deg * kDeg;
+  o.reference_azimuth_rad = rig.turntable.reference.normal_azimuth_deg * kDegToRad;
+  o.reference_azimuth_sigma_rad = azimuth_sigma_deg * kDegToRad;
   o.reference_planes =
       findReferencePlanes(planes, o.initial, o.reference_azimuth_rad,
-                          rig.turntable.reference.normal_tilt_deg * kDeg, 5 * kDeg);
+                          rig.turntable.reference.normal_tilt_deg * kDegToRad, 5 * kDegToRad);
   return {o.reference_planes, solveAxisOffset(planes, o)};
 }
 
@@ -296,7 +295,7 @@ TEST(AxisOffsetOurs, EncoderZeroFromTheBasesReferenceFace) {
   const AxisOffsetResult& r = run.result;
   ASSERT_TRUE(r.zero_estimated) << (r.warnings.empty() ? "" : r.warnings.front());
   EXPECT_FALSE(hasWarning(r, "not observable"));
-  const double zero_deg = r.geometry.encoder_zero_rad / kDeg;
+  const double zero_deg = r.geometry.encoder_zero_rad / kDegToRad;
   EXPECT_GT(r.sigma_zero_deg, 0.0);
   EXPECT_LT(r.sigma_zero_deg, 0.01);
   EXPECT_LE(std::fabs(zero_deg - rig.sim.encoder_zero_deg), 3 * r.sigma_zero_deg) << zero_deg;
@@ -313,7 +312,7 @@ TEST(AxisOffsetOurs, EncoderZeroIsMeasuredAgainstTheReferenceFace) {
   const ReferenceRun run = solveWithReference(rig, 0.02);
   const AxisOffsetResult& r = run.result;
   ASSERT_TRUE(r.zero_estimated);
-  EXPECT_NEAR(r.geometry.encoder_zero_rad / kDeg, 0.5 + 0.3, 3 * r.sigma_zero_fit_deg);
+  EXPECT_NEAR(r.geometry.encoder_zero_rad / kDegToRad, 0.5 + 0.3, 3 * r.sigma_zero_fit_deg);
   EXPECT_NEAR(r.sigma_zero_deg, std::hypot(r.sigma_zero_fit_deg, 0.02), 1e-12);
 }
 

@@ -11,11 +11,10 @@
 #include "calib/rig_a_calibration.hpp"
 #include "calib/rotating_geometry.hpp"
 #include "calib/sweep_assembly.hpp"
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 // A box room around the axis (frame O' of the sweep) [m]; faces 0-3 walls (-x, +x, -y, +y),
 // 4 floor, 5 ceiling.
@@ -42,9 +41,9 @@ SyntheticSweep sweep(const Room& room, const Eigen::Vector3d& t_true_mm, double 
   const Eigen::Matrix3d R = rotating::rotZ(-room.yaw_rad);  // O' to the room's axes
   SyntheticSweep s;
   for (double phi_deg = 0; phi_deg <= sweep_deg + 1e-9; phi_deg += dphi_deg) {
-    const double phi = phi_deg * kDeg;
+    const double phi = phi_deg * kDegToRad;
     for (double th_deg = -135; th_deg <= 135 + 1e-9; th_deg += dtheta_deg) {
-      const double th = th_deg * kDeg;
+      const double th = th_deg * kDegToRad;
       const Eigen::Vector3d o =
           R * rotating::lidarToOPrime(Eigen::Vector3d::Zero(), phi, t_true_mm * 1e-3);
       const Eigen::Vector3d d = R * rotating::rotZ(phi) * R_L * rotating::pointInLidar(1.0, th);
@@ -131,7 +130,7 @@ TEST(LidarAxisOffset, RecoversTheOffsetWithoutNoise) {
 // which sees each wall from both sides of the scan plane, puts the tilt into the offset.
 TEST(LidarAxisOffset, HoldsTheRigsScanPlaneTiltAndMirrorOffset) {
   const Eigen::Vector3d truth(13.9, 0, 0);
-  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDeg, 0.2 * kDeg);
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDegToRad, 0.2 * kDegToRad);
   const auto planes =
       byFace(sweep(Room{}, truth, 0.0, 1, 0.5, 0.5, {13.9, 0, 0}, R_L, 360.0), kAllFaces);
   LidarAxisOffsetOptions held;
@@ -208,7 +207,7 @@ TEST(LidarAxisOffset, DropsTheRaysOfADepthEdgeThatPassTheGate) {
   SyntheticSweep s = sweep(Room{}, {16.0, 0, 0}, 0.0, 5);
   std::vector<char> jamb(s.rays.size(), 0);
   for (size_t i = 0; i < s.rays.size(); ++i) {
-    const double phi_deg = s.rays[i].phi_rad / kDeg;
+    const double phi_deg = s.rays[i].phi_rad / kDegToRad;
     if (s.face[i] != 1 || phi_deg < 69.0 - 1e-9 || phi_deg > 77.0 + 1e-9) continue;
     const bool recess = phi_deg >= 70.0 - 1e-9 && phi_deg <= 76.0 + 1e-9;
     s.rays[i].range_m += recess ? 0.3 : 0.02;

@@ -8,11 +8,10 @@
 #include "calib/plate.hpp"
 #include "calib/plate_model.hpp"
 #include "calib/rotating_geometry.hpp"
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 // Points on the paper's plate (isosceles right triangle, hypotenuse 112 mm at 54.75 mm
 // from the axis) at height z, middle line at `beta` in O', sampled the way a rotating
@@ -55,20 +54,20 @@ class CentroidAtDensity : public ::testing::TestWithParam<int> {};
 TEST_P(CentroidAtDensity, RecoversBetaOfSymmetricPlate) {
   const int spokes = GetParam();
   for (double beta_deg : {-20.0, 0.0, 12.5, 35.0}) {
-    const auto pts = synthPlate(beta_deg * kDeg, spokes, 12, -0.045);
+    const auto pts = synthPlate(beta_deg * kDegToRad, spokes, 12, -0.045);
     const PlateEstimate e = estimateBetaCentroid(pts, paperRegion(), 30);
     ASSERT_TRUE(e.found) << e.reason;
-    EXPECT_NEAR(e.beta_rad / kDeg, beta_deg, 1e-3) << "spokes " << spokes;
+    EXPECT_NEAR(e.beta_rad / kDegToRad, beta_deg, 1e-3) << "spokes " << spokes;
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(Densities, CentroidAtDensity, ::testing::Values(8, 20, 80, 400));
 
 TEST(Centroid, NoiseAveragesOut) {
-  const auto pts = synthPlate(10 * kDeg, 200, 20, -0.045, 0.004, 7);
+  const auto pts = synthPlate(10 * kDegToRad, 200, 20, -0.045, 0.004, 7);
   const PlateEstimate e = estimateBetaCentroid(pts, paperRegion(), 30);
   ASSERT_TRUE(e.found);
-  EXPECT_NEAR(e.beta_rad / kDeg, 10.0, 0.3);
+  EXPECT_NEAR(e.beta_rad / kDegToRad, 10.0, 0.3);
 }
 
 TEST(Centroid, TooFewPointsIsNotFound) {
@@ -80,14 +79,14 @@ TEST(Centroid, TooFewPointsIsNotFound) {
 }
 
 TEST(Centroid, PointsOutsideRegionIgnored) {
-  auto pts = synthPlate(5 * kDeg, 40, 10, -0.045);
+  auto pts = synthPlate(5 * kDegToRad, 40, 10, -0.045);
   const PlateEstimate clean = estimateBetaCentroid(pts, paperRegion(), 30);
   pts.push_back({-0.09f, 0.0f, -0.045f});  // other half
   pts.push_back({2.0f, 1.0f, -0.045f});    // far away
   pts.push_back({0.09f, 0.0f, 0.5f});      // above
   const PlateEstimate e = estimateBetaCentroid(pts, paperRegion(), 30);
   EXPECT_EQ(e.points, clean.points);
-  EXPECT_NEAR(e.beta_rad / kDeg, 5.0, 1e-3);
+  EXPECT_NEAR(e.beta_rad / kDegToRad, 5.0, 1e-3);
   EXPECT_EQ(extractPlatePoints(pts, paperRegion()).size(), static_cast<size_t>(e.points));
 }
 
@@ -110,11 +109,11 @@ RayScan scanPlate(double beta, double phi_step_deg, double noise_m, unsigned see
   RayScan out;
   const double d = 0.0139, z = -0.045;
   for (double phi = 0; phi < 180; phi += phi_step_deg) {
-    const Eigen::Matrix3d R = rotating::rotZ(phi * kDeg);
+    const Eigen::Matrix3d R = rotating::rotZ(phi * kDegToRad);
     for (double theta = -135; theta <= 135; theta += 0.25) {
       const Eigen::Vector3d origin = R * Eigen::Vector3d(d, 0, 0);
       const Eigen::Vector3d dir =
-          R * Eigen::Vector3d(0, std::sin(theta * kDeg), std::cos(theta * kDeg));
+          R * Eigen::Vector3d(0, std::sin(theta * kDegToRad), std::cos(theta * kDegToRad));
       if (dir.z() >= 0) continue;
       const double t = z / dir.z();
       if (!insidePlate((origin + t * dir).head<2>(), beta)) continue;
@@ -127,12 +126,12 @@ RayScan scanPlate(double beta, double phi_step_deg, double noise_m, unsigned see
 }
 
 TEST(RayPlane, NoiseFreeAgreesWithCentroid) {
-  const RayScan s = scanPlate(25 * kDeg, 0.28125, 0.0, 1);
+  const RayScan s = scanPlate(25 * kDegToRad, 0.28125, 0.0, 1);
   const PlateEstimate c = estimateBetaCentroid(s.points, paperRegion(), 30);
   const PlateEstimate r = estimateBetaRayPlane(s.rays, paperRegion(), 0.03, 30);
   ASSERT_TRUE(c.found && r.found);
-  EXPECT_NEAR(r.beta_rad / kDeg, 25.0, 0.02);
-  EXPECT_NEAR(c.beta_rad / kDeg, 25.0, 0.02);
+  EXPECT_NEAR(r.beta_rad / kDegToRad, 25.0, 0.02);
+  EXPECT_NEAR(c.beta_rad / kDegToRad, 25.0, 0.02);
 }
 
 // With UST-10LX-like noise the centroid of noisy points is biased (points near the
@@ -142,9 +141,9 @@ TEST(RayPlane, UnbiasedUnderRangeNoiseWhereCentroidIsNot) {
   double mean_centroid = 0, mean_rays = 0;
   const int runs = 6;
   for (int k = 0; k < runs; ++k) {
-    const RayScan s = scanPlate(25 * kDeg, 0.28125, 0.012, 100 + k);
-    mean_centroid += estimateBetaCentroid(s.points, paperRegion(), 30).beta_rad / kDeg - 25.0;
-    mean_rays += estimateBetaRayPlane(s.rays, paperRegion(), 0.03, 30).beta_rad / kDeg - 25.0;
+    const RayScan s = scanPlate(25 * kDegToRad, 0.28125, 0.012, 100 + k);
+    mean_centroid += estimateBetaCentroid(s.points, paperRegion(), 30).beta_rad / kDegToRad - 25.0;
+    mean_rays += estimateBetaRayPlane(s.rays, paperRegion(), 0.03, 30).beta_rad / kDegToRad - 25.0;
   }
   mean_centroid /= runs;
   mean_rays /= runs;
@@ -159,16 +158,16 @@ class BothMethodsAtDensity : public ::testing::TestWithParam<double> {};
 
 TEST_P(BothMethodsAtDensity, EstimateBeta) {
   const double step_deg = GetParam();
-  const RayScan s = scanPlate(-12 * kDeg, step_deg, 0.012, 9);
+  const RayScan s = scanPlate(-12 * kDegToRad, step_deg, 0.012, 9);
   const PlateEstimate c = estimateBetaCentroid(s.points, paperRegion(), 30);
   const PlateEstimate r = estimateBetaRayPlane(s.rays, paperRegion(), 0.03, 30);
   ASSERT_TRUE(c.found && r.found) << c.reason << r.reason;
-  std::cout << "step " << step_deg << " deg: centroid " << c.beta_rad / kDeg + 12
-            << " deg, ray-plane " << r.beta_rad / kDeg + 12 << " deg off\n";
+  std::cout << "step " << step_deg << " deg: centroid " << c.beta_rad / kDegToRad + 12
+            << " deg, ray-plane " << r.beta_rad / kDegToRad + 12 << " deg off\n";
   // Sparse scans sample the plate coarsely: both errors grow with the step.
   const double bound = std::max(0.15, 0.25 * step_deg);
-  EXPECT_NEAR(r.beta_rad / kDeg, -12.0, bound);
-  EXPECT_NEAR(c.beta_rad / kDeg, -12.0, bound + 0.4);
+  EXPECT_NEAR(r.beta_rad / kDegToRad, -12.0, bound);
+  EXPECT_NEAR(c.beta_rad / kDegToRad, -12.0, bound + 0.4);
 }
 
 INSTANTIATE_TEST_SUITE_P(Modes1357, BothMethodsAtDensity,
@@ -181,7 +180,7 @@ TEST(RayPlane, GateRejectsRaysThatHitSomethingElse) {
   const PlateEstimate r = estimateBetaRayPlane(s.rays, paperRegion(), 0.03, 30);
   ASSERT_TRUE(r.found);
   EXPECT_LE(r.points, static_cast<int>((n + 1) / 2));
-  EXPECT_NEAR(r.beta_rad, 0.0, 0.5 * kDeg);
+  EXPECT_NEAR(r.beta_rad, 0.0, 0.5 * kDegToRad);
   EXPECT_FALSE(estimateBetaRayPlane({}, paperRegion(), 0.03, 30).found);
 }
 
@@ -196,11 +195,11 @@ class PlateCheckTest : public ::testing::Test {
     std::mt19937 rng(5);
     std::normal_distribution<double> n(0.0, noise_m);
     for (double phi = 0; phi < 180; phi += 0.5625) {
-      const Eigen::Matrix3d R = rotating::rotZ(phi * kDeg);
+      const Eigen::Matrix3d R = rotating::rotZ(phi * kDegToRad);
       for (double theta = -135; theta <= 135; theta += 0.25) {
         const Eigen::Vector3d origin = R * Eigen::Vector3d(0.0139, 0, 0);
         const Eigen::Vector3d dir =
-            R * Eigen::Vector3d(0, std::sin(theta * kDeg), std::cos(theta * kDeg));
+            R * Eigen::Vector3d(0, std::sin(theta * kDegToRad), std::cos(theta * kDegToRad));
         const auto t = plateRayRange(origin, dir, paperRegion());
         if (!t) continue;
         // Off the plate the ray goes on to the floor, a metre further.
@@ -213,30 +212,30 @@ class PlateCheckTest : public ::testing::Test {
 };
 
 TEST_F(PlateCheckTest, CleanPlatePasses) {
-  const RayScan s = regionRays(20 * kDeg, 0.012);
-  const PlateCheck c = check(s, 20 * kDeg);
+  const RayScan s = regionRays(20 * kDegToRad, 0.012);
+  const PlateCheck c = check(s, 20 * kDegToRad);
   EXPECT_EQ(c.problem, "") << c.expected << " " << c.on_plate << " " << c.off_plate;
   EXPECT_GT(c.expected, 100);
 }
 
 TEST_F(PlateCheckTest, ObjectOverThePlateIsMixed) {
-  RayScan s = regionRays(20 * kDeg, 0.0);
+  RayScan s = regionRays(20 * kDegToRad, 0.0);
   for (size_t i = 0; i < s.rays.size(); i += 4) s.rays[i].range_m -= 0.04;  // a cable above
-  EXPECT_NE(check(s, 20 * kDeg).problem.find("mixed"), std::string::npos);
+  EXPECT_NE(check(s, 20 * kDegToRad).problem.find("mixed"), std::string::npos);
 }
 
 TEST_F(PlateCheckTest, MissingHalfIsPartial) {
-  RayScan s = regionRays(20 * kDeg, 0.0);
+  RayScan s = regionRays(20 * kDegToRad, 0.0);
   for (auto& r : s.rays) {
     const Eigen::Vector3d p = r.origin + r.range_m * r.direction;
-    if (std::atan2(p.y(), p.x()) > 20 * kDeg) r.range_m += 1.0;  // that half is gone
+    if (std::atan2(p.y(), p.x()) > 20 * kDegToRad) r.range_m += 1.0;  // that half is gone
   }
-  EXPECT_NE(check(s, 20 * kDeg).problem.find("partial"), std::string::npos);
+  EXPECT_NE(check(s, 20 * kDegToRad).problem.find("partial"), std::string::npos);
 }
 
 TEST_F(PlateCheckTest, WrongBetaDisagreesWithExtent) {
-  const RayScan s = regionRays(20 * kDeg, 0.0);
-  EXPECT_NE(check(s, 35 * kDeg).problem, "");
+  const RayScan s = regionRays(20 * kDegToRad, 0.0);
+  EXPECT_NE(check(s, 35 * kDegToRad).problem, "");
 }
 
 // The rays of one full turn as rig A's UST-10LX casts them (scans 0.5625 deg apart, rays 0.25
@@ -245,13 +244,14 @@ TEST_F(PlateCheckTest, WrongBetaDisagreesWithExtent) {
 // surface or its hypotenuse's face; 1 m past it).
 std::vector<PlateRay> fullTurnPlateRays(const PlateModel& m, const PlateRegion& region,
                                         double alpha) {
-  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDeg, 0.2 * kDeg);
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDegToRad, 0.2 * kDegToRad);
   std::vector<PlateRay> rays;
   for (int k = 0; k < 640; ++k) {
-    const Eigen::Matrix3d Rz = rotating::rotZ(k * 0.5625 * kDeg);
+    const Eigen::Matrix3d Rz = rotating::rotZ(k * 0.5625 * kDegToRad);
     for (int i = 0; i < 1081; ++i) {
       const Eigen::Vector3d o = Rz * Eigen::Vector3d(0.0139, 0, 0);
-      const Eigen::Vector3d d = Rz * R_L * rotating::pointInLidar(1.0, (-135 + 0.25 * i) * kDeg);
+      const Eigen::Vector3d d =
+          Rz * R_L * rotating::pointInLidar(1.0, (-135 + 0.25 * i) * kDegToRad);
       const auto t = plateRayRange(o, d, region);
       if (!t) continue;
       rays.push_back({o, d, plateCovers(m, o, d, alpha) ? *t : *t + 1.0});
@@ -271,16 +271,16 @@ TEST(PlateModel, SampledFitFindsTheAngleOnAFullTurnsRayGrid) {
   const PlateRegion region = PlateRegion::fromConfig(c);
   for (const double alpha_deg : {29.3598, 30.1, 31.77, -12.3}) {
     SCOPED_TRACE(alpha_deg);
-    const auto rays = fullTurnPlateRays(m, region, alpha_deg * kDeg);
+    const auto rays = fullTurnPlateRays(m, region, alpha_deg * kDegToRad);
     const auto hit = plateHits(m, rays);
     const std::vector<double> hits(hit.begin(), hit.end());
     const PlateModelFit smooth = fitPlateModel(m, rays, 30);
     ASSERT_TRUE(smooth.found);
-    EXPECT_NEAR(smooth.angle_rad / kDeg, alpha_deg, 0.05);  // the start
+    EXPECT_NEAR(smooth.angle_rad / kDegToRad, alpha_deg, 0.05);  // the start
     const auto sampled = fitPlateSampled(m, rays, hits, smooth.angle_rad);
     ASSERT_TRUE(sampled.has_value());
-    EXPECT_NEAR(*sampled / kDeg, alpha_deg, 0.002);
-    EXPECT_EQ(*plateSampledMismatch(m, rays, alpha_deg * kDeg, hits), 0.0);
+    EXPECT_NEAR(*sampled / kDegToRad, alpha_deg, 0.002);
+    EXPECT_EQ(*plateSampledMismatch(m, rays, alpha_deg * kDegToRad, hits), 0.0);
   }
 }
 
@@ -305,17 +305,17 @@ struct MixedTurn {
 // the rays graze it. `noise_m`: the ranges' Gaussian noise.
 MixedTurn mixedFullTurn(const PlateModel& m, const PlateRegion& region, double alpha, uint64_t seed,
                         bool floor = false, double noise_m = 0.0) {
-  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDeg, 0.2 * kDeg);
+  const Eigen::Matrix3d R_L = rotating::lidarRotation(0.3 * kDegToRad, 0.2 * kDegToRad);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   MixedTurn turn;
   for (int k = 0; k < 640; ++k) {
-    const Eigen::Matrix3d Rz = rotating::rotZ(k * 0.5625 * kDeg);
+    const Eigen::Matrix3d Rz = rotating::rotZ(k * 0.5625 * kDegToRad);
     const Eigen::Vector3d o = Rz * Eigen::Vector3d(0.0139, 0, 0);
     std::vector<Eigen::Vector3d> dirs;
     std::vector<double> range;  // the plate's, or 1 m past the plate's plane (the floor)
     for (int i = 0; i < 1081; ++i) {
-      dirs.push_back(Rz * R_L * rotating::pointInLidar(1.0, (-135 + 0.25 * i) * kDeg));
+      dirs.push_back(Rz * R_L * rotating::pointInLidar(1.0, (-135 + 0.25 * i) * kDegToRad));
       const double t = dirs.back().z() < -1e-3 ? (m.height_m - o.z()) / dirs.back().z() : 3.0;
       const double background = floor && dirs.back().z() < -1e-3 ? -1.0 / dirs.back().z() : t + 1.0;
       range.push_back(plateCovers(m, o, dirs.back(), alpha) ? t : background);
@@ -360,7 +360,7 @@ TEST(PlateModel, MixedPixelsAtThePlatesEdgesAreCountedOrLeftOut) {
   PlateConfig c;
   const PlateModel m = PlateModel::fromConfig(c);
   const PlateRegion region = PlateRegion::fromConfig(c);
-  const double alpha = 29.3598 * kDeg;
+  const double alpha = 29.3598 * kDegToRad;
   for (const uint64_t seed : {1, 2, 3}) {
     SCOPED_TRACE(seed);
     const MixedTurn t = mixedFullTurn(m, region, alpha, seed);
@@ -383,7 +383,7 @@ TEST(PlateModel, MixedPixelsAtThePlatesEdgesAreCountedOrLeftOut) {
 struct NoisyPlate {
   PlateModel model = PlateModel::fromConfig(PlateConfig{});
   PlateRegion region = PlateRegion::fromConfig(PlateConfig{});
-  double alpha = 29.3598 * kDeg;
+  double alpha = 29.3598 * kDegToRad;
   NoisyPlate() { model.range_gate_m = 5 * 0.012; }
 };
 
@@ -439,12 +439,12 @@ TEST(PlateModel, AgreeingFitIsNotMovedByAFewWrongRays) {
       rays.push_back(t.rays[i]);
       w.push_back(all[i]);
     }
-    const auto agreeing = fitPlateAgreeing(m, rays, w, alpha + 0.1 * kDeg);
-    const auto sampled = fitPlateSampled(m, rays, w, alpha + 0.1 * kDeg);
+    const auto agreeing = fitPlateAgreeing(m, rays, w, alpha + 0.1 * kDegToRad);
+    const auto sampled = fitPlateSampled(m, rays, w, alpha + 0.1 * kDegToRad);
     ASSERT_TRUE(agreeing.has_value());
     ASSERT_TRUE(sampled.has_value());
-    worst = std::max(worst, std::fabs(*agreeing - alpha) / kDeg);
-    worst_sampled = std::max(worst_sampled, std::fabs(*sampled - alpha) / kDeg);
+    worst = std::max(worst, std::fabs(*agreeing - alpha) / kDegToRad);
+    worst_sampled = std::max(worst_sampled, std::fabs(*sampled - alpha) / kDegToRad);
   }
   std::printf("largest error: agreeing %.4f deg, sampled centroid %.4f deg\n", worst,
               worst_sampled);

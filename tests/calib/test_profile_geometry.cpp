@@ -5,20 +5,19 @@
 #include <Eigen/Geometry>
 #include <cmath>
 
+#include "core/angles.hpp"
 #include "core/profile_geometry.hpp"
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 TEST(ProfileGeometry, ReducesToEq7WithoutTiltAndEncoderZero) {
   const ProfileGeometry g{123.0, 409.0, 0.0, 0.0};
   for (const double alpha_deg : {-170.0, -25.0, 0.0, 3.7, 25.0, 90.0, 181.0}) {
     for (const double y : {-90.0, 0.0, 55.5}) {
       for (const double z : {-400.0, -190.0, 0.0}) {
-        const Eigen::Vector3d ours = profilePointInRigFrame(g, y, z, alpha_deg * kDeg);
-        const Eigen::Vector3d paper = zhaoEq7(123.0, 409.0, alpha_deg * kDeg, y, z);
+        const Eigen::Vector3d ours = profilePointInRigFrame(g, y, z, alpha_deg * kDegToRad);
+        const Eigen::Vector3d paper = zhaoEq7(123.0, 409.0, alpha_deg * kDegToRad, y, z);
         EXPECT_LT((ours - paper).norm(), 1e-9) << "alpha " << alpha_deg << " y " << y;
       }
     }
@@ -46,16 +45,16 @@ TEST(ProfileGeometry, OffsetsAreWhereEq7PutsThem) {
 }
 
 TEST(ProfileGeometry, EncoderZeroTurnsTheCloudAboutTheAxis) {
-  const ProfileGeometry zero{123.0, 409.0, 0.0, 0.0}, shifted{123.0, 409.0, 0.0, 0.5 * kDeg};
+  const ProfileGeometry zero{123.0, 409.0, 0.0, 0.0}, shifted{123.0, 409.0, 0.0, 0.5 * kDegToRad};
   EXPECT_LT((profilePointInRigFrame(shifted, 20, -250, 0.1) -
-             profilePointInRigFrame(zero, 20, -250, 0.1 + 0.5 * kDeg))
+             profilePointInRigFrame(zero, 20, -250, 0.1 + 0.5 * kDegToRad))
                 .norm(),
             1e-9);
   EXPECT_DOUBLE_EQ(turntableAngleRad(65536, 262144, 0.25), M_PI / 2 + 0.25);
 }
 
 TEST(ProfileGeometry, TiltLeansTheLaserPlaneFromTheAxis) {
-  const double tilt = 0.2 * kDeg;
+  const double tilt = 0.2 * kDegToRad;
   const ProfileGeometry g{123.0, 409.0, tilt, 0.0};
   // A point h below the origin moves by h sin(tilt) along the plane's normal (-X_r at 0).
   const Eigen::Vector3d p = profilePointInRigFrame(g, 0.0, -300.0, 0.0);

@@ -4,11 +4,10 @@
 
 #include "calib/rotating_geometry.hpp"
 #include "calib/sweep_assembly.hpp"
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 class SweepAssemblyTest : public ::testing::Test {
  protected:
@@ -24,8 +23,8 @@ class SweepAssemblyTest : public ::testing::Test {
     Scan2D s;
     s.utime = window_.start_utime + 25000 * j;
     s.seq = j;
-    s.angle_min_rad = -90 * kDeg;
-    s.angle_increment_rad = 45 * kDeg;
+    s.angle_min_rad = -90 * kDegToRad;
+    s.angle_increment_rad = 45 * kDegToRad;
     s.time_increment_ns = 1000000;  // 1 ms between rays
     s.range_min_m = 0.06;
     s.range_max_m = 10.0;
@@ -126,7 +125,7 @@ TEST_F(SweepAssemblyTest, CorrectionAppliesAlphaMinusBeta) {
   ASSERT_TRUE(out.corrected) << out.reason;
   const double beta = std::atan2(y, rig_.geometry.lidar_offset_x_mm * 1e-3);
   EXPECT_NEAR(out.plate.beta_rad, beta, 1e-6);
-  EXPECT_NEAR(out.phi_offset_rad, wrapAngle(30 * kDeg - beta), 1e-6);
+  EXPECT_NEAR(out.phi_offset_rad, wrapAngle(30 * kDegToRad - beta), 1e-6);
   const Eigen::Vector3f rotated =
       (rotating::rotZ(out.phi_offset_rad) * out.points_Op[0].cast<double>()).cast<float>();
   EXPECT_LT((out.points[0] - rotated).norm(), 1e-6);

@@ -9,6 +9,7 @@
 
 #include "calib/rotating_geometry.hpp"
 #include "calib/walls.hpp"
+#include "core/angles.hpp"
 #include "core/event_log.hpp"
 #include "core/rig_components.hpp"
 #include "sim/scene.hpp"
@@ -17,8 +18,6 @@
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 std::string sourcePath(const std::string& rel) {
   return std::string(SWEEPMAP_SOURCE_DIR) + "/" + rel;
@@ -50,7 +49,7 @@ std::string simulatedLog(const std::string& name, const std::string& rig_path,
 }
 
 double angleDeg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) / kDeg;
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0, 1.0)) / kDegToRad;
 }
 
 // Points on an axis-aligned rectangle: `fixed` axis at `value`, the other two spanning
@@ -96,7 +95,7 @@ std::vector<Eigen::Vector3f> syntheticRoom(double yaw_rad, uint32_t seed = 1) {
 }
 
 TEST(WallExtraction, FindsTheFourWallsOfASyntheticRoomInOrder) {
-  const double yaw = 3 * kDeg;
+  const double yaw = 3 * kDegToRad;
   const auto cloud = syntheticRoom(yaw);
   const WallExtraction e = extractWalls(cloud);
   ASSERT_EQ(e.walls.size(), 4u) << e.reason;
@@ -118,7 +117,7 @@ TEST(WallExtraction, FindsTheFourWallsOfASyntheticRoomInOrder) {
 }
 
 TEST(WallExtraction, IsDeterministic) {
-  const auto cloud = syntheticRoom(-7 * kDeg, 2);
+  const auto cloud = syntheticRoom(-7 * kDegToRad, 2);
   const WallExtraction a = extractWalls(cloud);
   const WallExtraction b = extractWalls(cloud);
   ASSERT_EQ(a.walls.size(), 4u) << a.reason;
@@ -154,7 +153,7 @@ TEST(WallExtraction, RefitOnFullCloudKeepsOrientation) {
   const auto cloud = syntheticRoom(0);
   WallPlaneFit rough;
   rough.normal =
-      Eigen::AngleAxisd(0.5 * kDeg, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(-1, 0, 0);
+      Eigen::AngleAxisd(0.5 * kDegToRad, Eigen::Vector3d::UnitZ()) * Eigen::Vector3d(-1, 0, 0);
   rough.offset = 2.8;
   const auto refit = refitWalls(cloud, {rough}, 0.05);
   ASSERT_EQ(refit.size(), 1u);

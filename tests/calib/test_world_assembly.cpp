@@ -3,11 +3,10 @@
 #include <cmath>
 
 #include "calib/world_assembly.hpp"
+#include "core/angles.hpp"
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 TEST(WorldAssembly, RotationOrderIsZYX) {
   const Eigen::Matrix3d R = rotationXYZ(0.1, 0.2, 0.3);
@@ -22,7 +21,7 @@ TEST(WorldAssembly, RotationOrderIsZYX) {
 // A horizontal lidar: nominal pitch +90 deg maps the sector's middle Z_L to body x.
 TEST(WorldAssembly, HorizontalMountingLooksForward) {
   LidarMounting m;
-  m.nominal_rpy_rad = Eigen::Vector3d(0, 90 * kDeg, 0);
+  m.nominal_rpy_rad = Eigen::Vector3d(0, 90 * kDegToRad, 0);
   m.t_BL_m = Eigen::Vector3d(0.145, 0, 0.3);
   const Eigen::Isometry3d T = m.T_BL();
   EXPECT_TRUE((T * Eigen::Vector3d(0, 0, 2)).isApprox(Eigen::Vector3d(2.145, 0, 0.3), 1e-12));
@@ -31,8 +30,8 @@ TEST(WorldAssembly, HorizontalMountingLooksForward) {
 
 TEST(PoseTrack, InterpolatesAndWrapsHeading) {
   PoseTrack t;
-  t.add(0, {0, 0, 170 * kDeg});
-  t.add(1000, {1, 2, -170 * kDeg});
+  t.add(0, {0, 0, 170 * kDegToRad});
+  t.add(1000, {1, 2, -170 * kDegToRad});
   const auto mid = t.at(500);
   ASSERT_TRUE(mid);
   EXPECT_DOUBLE_EQ(mid->x_m, 0.5);
@@ -50,13 +49,13 @@ TEST(PoseTrack, InterpolatesAndWrapsHeading) {
 // ray's own pose the wall is straight at x = 5; with the scan's start pose it smears.
 TEST(WorldAssembly, DeskewsWithEachRaysPose) {
   LidarMounting m;
-  m.nominal_rpy_rad = Eigen::Vector3d(0, 90 * kDeg, 0);
+  m.nominal_rpy_rad = Eigen::Vector3d(0, 90 * kDegToRad, 0);
   PoseTrack track;
   for (int64_t t = 0; t <= 200000; t += 10000) track.add(t, {1e-6 * double(t), 0, 0});
   Scan2D s;
   s.utime = 0;
-  s.angle_min_rad = -30 * kDeg;
-  s.angle_increment_rad = 1 * kDeg;
+  s.angle_min_rad = -30 * kDegToRad;
+  s.angle_increment_rad = 1 * kDegToRad;
   s.time_increment_ns = 1000000;  // 1 ms per ray: 61 ms for the scan
   s.range_min_m = 0.02;
   s.range_max_m = 10;

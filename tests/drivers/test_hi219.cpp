@@ -7,6 +7,7 @@
 #include <sstream>
 #include <string>
 
+#include "core/angles.hpp"
 #include "drivers/protocols/hi219.hpp"
 
 namespace sweepmap {
@@ -41,8 +42,6 @@ std::vector<hi219::Frame> frames(const std::string& s, hi219::Decoder* d = nullp
   return f;
 }
 
-constexpr double kDeg = M_PI / 180.0;
-
 TEST(Hi219, ManualFrameOfSingleItems) {
   // The manual's CRC of this frame, 0x61FD, over its first four bytes and the payload.
   const auto* b = reinterpret_cast<const uint8_t*>(kItems.data());
@@ -54,12 +53,12 @@ TEST(Hi219, ManualFrameOfSingleItems) {
   // eul(R/P/Y) 36.92 -34.84 44.3.
   EXPECT_NEAR(f[0].accel_m_s2[0], 0.597 * hi219::kGravity, 1e-9);
   EXPECT_NEAR(f[0].accel_m_s2[2], 0.738 * hi219::kGravity, 1e-9);
-  EXPECT_NEAR(f[0].gyro_rad_s[0], -0.2 * kDeg, 1e-12);
-  EXPECT_NEAR(f[0].gyro_rad_s[2], 6.8 * kDeg, 1e-12);
+  EXPECT_NEAR(f[0].gyro_rad_s[0], -0.2 * kDegToRad, 1e-12);
+  EXPECT_NEAR(f[0].gyro_rad_s[2], 6.8 * kDegToRad, 1e-12);
   EXPECT_NEAR(f[0].mag_ut[2], -20.6, 1e-9);
-  EXPECT_NEAR(f[0].rpy_rad[0], 36.92 * kDeg, 1e-12);
-  EXPECT_NEAR(f[0].rpy_rad[1], -34.84 * kDeg, 1e-12);
-  EXPECT_NEAR(f[0].rpy_rad[2], 44.3 * kDeg, 1e-12);
+  EXPECT_NEAR(f[0].rpy_rad[0], 36.92 * kDegToRad, 1e-12);
+  EXPECT_NEAR(f[0].rpy_rad[1], -34.84 * kDegToRad, 1e-12);
+  EXPECT_NEAR(f[0].rpy_rad[2], 44.3 * kDegToRad, 1e-12);
   EXPECT_TRUE(f[0].has_pressure);
   EXPECT_FALSE(f[0].has_time);
 }
@@ -71,10 +70,10 @@ TEST(Hi219, ManualImusolRecord) {
   // mag 19.183 -26.208 -34.542; eul 48.720 -21.014 -45.512; quat 0.855 0.310 -0.310 -0.277.
   EXPECT_EQ(f[0].time_ms, 310205u);
   EXPECT_NEAR(f[0].accel_m_s2[1] / hi219::kGravity, 0.770, 5e-4);
-  EXPECT_NEAR(f[0].gyro_rad_s[2] / kDeg, -119.070, 5e-4);
+  EXPECT_NEAR(f[0].gyro_rad_s[2] / kDegToRad, -119.070, 5e-4);
   EXPECT_NEAR(f[0].mag_ut[0], 19.183, 5e-4);
-  EXPECT_NEAR(f[0].rpy_rad[0] / kDeg, 48.720, 5e-4);
-  EXPECT_NEAR(f[0].rpy_rad[2] / kDeg, -45.512, 5e-4);
+  EXPECT_NEAR(f[0].rpy_rad[0] / kDegToRad, 48.720, 5e-4);
+  EXPECT_NEAR(f[0].rpy_rad[2] / kDegToRad, -45.512, 5e-4);
   EXPECT_NEAR(f[0].quat_wxyz[0], 0.855, 5e-4);
   EXPECT_NEAR(f[0].quat_wxyz[3], -0.277, 5e-4);
   // Our encoder makes the same bytes from the decoded values (the record's reserved bytes

@@ -39,14 +39,6 @@ bool waitUntil(const std::function<bool()>& done, double timeout_s = 10.0) {
   return done();
 }
 
-int64_t counter(const DeviceHealth& h, const std::string& name) {
-  for (const auto& [k, v] : h.counters) {
-    if (k == name) return v;
-  }
-  ADD_FAILURE() << "no counter " << name;
-  return -1;
-}
-
 std::string ticksFrame(uint16_t seq, uint32_t time_us, int32_t left, int32_t right,
                        uint16_t flags = 0) {
   wheelboard::Ticks t;
@@ -291,9 +283,9 @@ TEST(WheelBoardDriver, ReadingsCommandsWatchdogAndAZeroSpeedOnStop) {
     EXPECT_NEAR(speeds[1].v_m_s, 0.25, 1e-9);
     EXPECT_EQ(uint16_t(speeds[1].seq - speeds[0].seq), 1);
     watchdog = true;
-    ASSERT_TRUE(waitUntil([&] { return counter(driver.health(), "watchdog_stops") == 1; }));
-    EXPECT_EQ(counter(driver.health(), "commands_sent"), 2);
-    EXPECT_EQ(counter(driver.health(), "frames_lost"), 0);
+    ASSERT_TRUE(waitUntil([&] { return driver.health().counter("watchdog_stops") == 1; }));
+    EXPECT_EQ(driver.health().counter("commands_sent"), 2);
+    EXPECT_EQ(driver.health().counter("frames_lost"), 0);
   }
   // The driver is gone: its last words were a zero speed.
   ASSERT_TRUE(waitUntil([&] { return speedsIn(board.received()).size() >= 3; }));
@@ -325,8 +317,8 @@ TEST(Hi219Driver, ReconnectsAfterTheIMUsPortHangsUp) {
     return after >= 20;
   }));
   const DeviceHealth h = driver.health();
-  EXPECT_GE(counter(h, "reconnects"), 1);
-  EXPECT_EQ(counter(h, "checksum_errors"), 0);
+  EXPECT_GE(h.counter("reconnects"), 1);
+  EXPECT_EQ(h.counter("checksum_errors"), 0);
 }
 
 // A port that is not there: one clear error naming it, then quiet retries.

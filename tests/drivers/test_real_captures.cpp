@@ -16,6 +16,7 @@
 #include <string>
 #include <vector>
 
+#include "core/angles.hpp"
 #include "core/lidar_models.hpp"
 #include "drivers/lidar_sessions.hpp"
 #include "drivers/protocols/hi219.hpp"
@@ -24,8 +25,6 @@
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 std::string corpusPath(const std::string& name) {
   return std::string(SWEEPMAP_SOURCE_DIR) + "/tests/data/real/" + name;
@@ -181,7 +180,7 @@ TEST(RealCapturesScip, Urg04lxGdReplyDecodedAsItsModel) {
   for (size_t i : {size_t(0), size_t(1), size_t(340), size_t(681)}) {
     EXPECT_NEAR(scan.rayAngle(i), (44.0 + double(i) - 384.0) * 2.0 * M_PI / 1024.0, 1e-9) << i;
   }
-  EXPECT_NEAR(scan.rayAngle(0) / kDeg, -119.53125, 1e-4);  // 0.01 deg and better
+  EXPECT_NEAR(scan.rayAngle(0) / kDegToRad, -119.53125, 1e-4);  // 0.01 deg and better
   // Values below DMIN 20 are the URG-04LX's error codes (Table 3), never ranges: 85 of them.
   EXPECT_EQ(scan.ranges_m[0], 0.0f);  // code 6
   EXPECT_FLOAT_EQ(scan.ranges_m[3], 4.190f);
@@ -378,9 +377,9 @@ TEST(RealCapturesHi219, ManualFrameOfOldItems) {
                mag_ut[3] = {-12.8, -16.0, -20.6}, rpy_deg[3] = {36.92, -34.84, 44.3};
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(f.accel_m_s2[k] / hi219::kGravity, acc_g[k], 1e-9) << k;
-    EXPECT_NEAR(f.gyro_rad_s[k] / kDeg, gyr_dps[k], 1e-9) << k;
+    EXPECT_NEAR(f.gyro_rad_s[k] / kDegToRad, gyr_dps[k], 1e-9) << k;
     EXPECT_NEAR(f.mag_ut[k], mag_ut[k], 1e-9) << k;
-    EXPECT_NEAR(f.rpy_rad[k] / kDeg, rpy_deg[k], 1e-9) << k;
+    EXPECT_NEAR(f.rpy_rad[k] / kDegToRad, rpy_deg[k], 1e-9) << k;
   }
   EXPECT_TRUE(f.has_pressure);
   EXPECT_EQ(f.pressure_pa, 0.0);
@@ -401,9 +400,9 @@ TEST(RealCapturesHi219, ManualImusolRecord) {
                quat[4] = {0.855, 0.310, -0.310, -0.277};
   for (int k = 0; k < 3; ++k) {
     EXPECT_NEAR(f.accel_m_s2[k] / hi219::kGravity, acc_g[k], 5e-4) << k;
-    EXPECT_NEAR(f.gyro_rad_s[k] / kDeg, gyr_dps[k], 5e-4) << k;
+    EXPECT_NEAR(f.gyro_rad_s[k] / kDegToRad, gyr_dps[k], 5e-4) << k;
     EXPECT_NEAR(f.mag_ut[k], mag_ut[k], 5e-4) << k;
-    EXPECT_NEAR(f.rpy_rad[k] / kDeg, rpy_deg[k], 5e-4) << k;
+    EXPECT_NEAR(f.rpy_rad[k] / kDegToRad, rpy_deg[k], 5e-4) << k;
   }
   for (int k = 0; k < 4; ++k) EXPECT_NEAR(f.quat_wxyz[k], quat[k], 5e-4) << k;
 }
@@ -578,7 +577,7 @@ TEST(RealCapturesX4External, OneScanPerRevolutionWithEverySample) {
         if (turn[i].distance_mm < 120.0 || turn[i].distance_mm > 10000.0) continue;
         ++valid;
         if (i >= s.ranges_m.size()) continue;
-        const double da = std::remainder(s.angles_rad[i] / kDeg - turn[i].angle_deg, 360.0);
+        const double da = std::remainder(s.angles_rad[i] / kDegToRad - turn[i].angle_deg, 360.0);
         if (std::abs(s.ranges_m[i] * 1e3 - turn[i].distance_mm) < 1e-3 && std::abs(da) < 0.01) {
           ++present;
         }
@@ -666,7 +665,8 @@ TEST(RealCapturesRplidarExternal, OneScanPerTurnWithEverySample) {
         if (turn[i].distance_mm < 150.0 || turn[i].distance_mm > 12000.0) continue;
         ++valid;
         if (i >= scans[k].ranges_m.size()) continue;
-        const double da = std::remainder(scans[k].angles_rad[i] / kDeg - turn[i].angle_deg, 360.0);
+        const double da =
+            std::remainder(scans[k].angles_rad[i] / kDegToRad - turn[i].angle_deg, 360.0);
         present += std::abs(scans[k].ranges_m[i] * 1e3 - turn[i].distance_mm) < 1e-3 &&
                    std::abs(da) < 0.01;
       }

@@ -126,13 +126,6 @@ bool eventually(Pred pred) {
   return false;
 }
 
-int64_t counter(const DeviceHealth& h, const std::string& name) {
-  for (const auto& [k, v] : h.counters) {
-    if (k == name) return v;
-  }
-  return -1;
-}
-
 TEST(RealLidar, StreamsAndReconnectsAfterAHangUp) {
   FakeDevice dev;
   RealLidarOptions o;
@@ -157,8 +150,8 @@ TEST(RealLidar, StreamsAndReconnectsAfterAHangUp) {
     return got.size() == 4;
   }));
   const DeviceHealth h = lidar.health();
-  EXPECT_EQ(counter(h, "reconnects"), 1);
-  EXPECT_EQ(counter(h, "device_scans"), 4);
+  EXPECT_EQ(h.counter("reconnects"), 1);
+  EXPECT_EQ(h.counter("device_scans"), 4);
   EXPECT_EQ(tapped.load(), 2 * 7 + 28);  // the tap sees everything
 }
 
@@ -206,8 +199,8 @@ TEST(RealLidar, SilenceIsATimeoutThenAReconnect) {
   lidar.start();
   dev.accept("UST");
   dev.accept("UST");  // after 300 ms of silence the driver reconnects
-  ASSERT_TRUE(eventually([&] { return counter(lidar.health(), "timeouts") == 1; }));
-  EXPECT_EQ(counter(lidar.health(), "reconnects"), 1);
+  ASSERT_TRUE(eventually([&] { return lidar.health().counter("timeouts") == 1; }));
+  EXPECT_EQ(lidar.health().counter("reconnects"), 1);
 }
 
 TEST(RealLidar, RefusedIsReportedOnceAndRetried) {
@@ -225,7 +218,7 @@ TEST(RealLidar, RefusedIsReportedOnceAndRetried) {
   ASSERT_TRUE(eventually([&] {
     DeviceHealth h = lidar.health();
     events.insert(events.end(), h.events.begin(), h.events.end());
-    return counter(h, "connect_failures") >= 5;
+    return h.counter("connect_failures") >= 5;
   }));
   ASSERT_EQ(events.size(), 1u);
   EXPECT_NE(events[0].find("Connection refused; retrying"), std::string::npos) << events[0];
@@ -252,8 +245,8 @@ TEST(RealLidar, ARunOfErrorsReconnects) {
   dev.accept("UST");
   dev.send("x\nx\nx\nx\nx\n");
   dev.accept("UST");
-  ASSERT_TRUE(eventually([&] { return counter(lidar.health(), "reconnects") == 1; }));
-  EXPECT_EQ(counter(lidar.health(), "checksum_errors"), 5);
+  ASSERT_TRUE(eventually([&] { return lidar.health().counter("reconnects") == 1; }));
+  EXPECT_EQ(lidar.health().counter("checksum_errors"), 5);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/angles.hpp"
 #include "core/calibration_file.hpp"
 #include "rigs/mobile_lidar.hpp"
 #include "rigs/rig_file.hpp"
@@ -349,14 +350,14 @@ TEST(CalibRig, RigCTestPieceWithinATenthOfAPercentWithCalibRigsFile) {
       cachedSimLog("calib_rig_c_test_piece_seed104",
                    {"--rig", "rig_c", "--set", "sim.scene=test_piece", "--seed", "104"});
   const AxisOffsetCalibration c = loadAxisOffsetCalibration(calib.string());
-  constexpr double kDeg = M_PI / 180.0;
-  const ProfileGeometry g{c.m_mm, c.n_mm, c.laser_tilt_deg * kDeg, c.encoder_zero_deg * kDeg};
+  const ProfileGeometry g{c.m_mm, c.n_mm, c.laser_tilt_deg * kDegToRad,
+                          c.encoder_zero_deg * kDegToRad};
   const ProfileLog log = readProfileLog(piece);
   ASSERT_TRUE(log.test_piece.has_value());
   ASSERT_EQ(log.sweeps.size(), 1u);
   // The piece lies under the sweep's middle.
   const TurntableConfig t = loadRotatingProfileConfig(sourcePath("config/rig_c.yaml")).turntable;
-  const double middle_rad = 0.5 * (t.sweep_start_deg + t.sweep_end_deg) * kDeg;
+  const double middle_rad = 0.5 * (t.sweep_start_deg + t.sweep_end_deg) * kDegToRad;
   const eval::PieceMeasurement m = eval::measureTestPiece(log.sweeps[0].samples, g, middle_rad);
   EXPECT_TRUE(m.problems.empty()) << m.problems.front();
   for (int k = 0; k < eval::kPieceFeatureCount; ++k) {

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 
+#include "core/angles.hpp"
 #include "tests/e2e/test_support.hpp"
 #include "tools/eval/eval_rotating.hpp"
 
@@ -15,14 +16,15 @@ namespace {
 
 const std::string kRig = sourcePath("config/rig_a.yaml");
 const std::string kScene = sourcePath("config/scene_conference_room.yaml");
-constexpr double kDeg = M_PI / 180.0;
 
 // --- pieces ---------------------------------------------------------------------------
 
 TEST(MapErrorDistance, Eq21) {
   EXPECT_DOUBLE_EQ(mapErrorDistance(0.0, 0.05, 10.0), 10.0);
-  EXPECT_NEAR(mapErrorDistance(0.5 * kDeg, 0.05, 10.0), 0.05 / std::tan(0.5 * kDeg), 1e-12);
-  EXPECT_NEAR(mapErrorDistance(-0.5 * kDeg, 0.05, 10.0), 0.05 / std::tan(0.5 * kDeg), 1e-12);
+  EXPECT_NEAR(mapErrorDistance(0.5 * kDegToRad, 0.05, 10.0), 0.05 / std::tan(0.5 * kDegToRad),
+              1e-12);
+  EXPECT_NEAR(mapErrorDistance(-0.5 * kDegToRad, 0.05, 10.0), 0.05 / std::tan(0.5 * kDegToRad),
+              1e-12);
   // The paper's mode 1: 50 mm at 2.2996 m <=> |phi_error| = atan(0.05 / 2.2996).
   EXPECT_NEAR(mapErrorDistance(std::atan(0.05 / 2.2996), 0.05, 10.0), 2.2996, 1e-9);
   // Exactly 50 mm at 10 m is still within.

@@ -14,18 +14,14 @@
 #include "sweepmap/map_stats_t.hpp"
 #include "sweepmap/map_update_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
+#include "tests/processes/node_test_util.hpp"
 
 namespace sweepmap {
 namespace {
 
 using Voxel = std::array<int32_t, 3>;
 
-template <class T>
-Message encode(const std::string& ch, const T& msg) {
-  Outbox o;
-  o.publish(ch, 0, msg);
-  return o.take().front();
-}
+using test::encode;
 
 // One sweep (one chunk and its status) from the origin: a wall at x = `wall_x` (y, z in
 // [-2, 2) every 4 cm: 80 x 80 voxels, more than one MAP_UPDATE chunk), and, when `cube`, a solid

@@ -12,18 +12,14 @@
 #include "sweepmap/map_save_t.hpp"
 #include "sweepmap/map_stats_t.hpp"
 #include "sweepmap/sweep_status_t.hpp"
+#include "tests/processes/node_test_util.hpp"
 
 namespace sweepmap {
 namespace {
 
 namespace fs = std::filesystem;
 
-template <class T>
-Message encode(const std::string& ch, const T& msg) {
-  Outbox o;
-  o.publish(ch, 0, msg);
-  return o.take().front();
-}
+using test::encode;
 
 // A wall of points at x = 2 m split into `count` chunks.
 std::vector<Message> wallChunks(int64_t sweep, int count) {

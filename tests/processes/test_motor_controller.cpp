@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "core/angles.hpp"
 #include "processes/channels.hpp"
 #include "processes/motor_controller.hpp"
 #include "processes/offline_bus.hpp"
@@ -12,8 +13,6 @@
 
 namespace sweepmap {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 struct ControllerRun {
   std::vector<scan_window_t> windows;
@@ -97,11 +96,11 @@ TEST_P(ActionSequenceTiming, ImprovedWindowSeesOnlyConstantSpeed) {
         // Ramps vary by +-10 % of their distance; the switch answers 2 +- 1 ms late and
         // its edge sits half the hysteresis off.
         const double omega = M_PI / m.period_s;
-        const double v_home = rig.motor.homing_speed_deg_s * kDeg;
-        const double a = rig.motor.accel_deg_s2 * kDeg;
+        const double v_home = rig.motor.homing_speed_deg_s * kDegToRad;
+        const double a = rig.motor.accel_deg_s2 * kDegToRad;
         const double bound = 0.030 * (omega + v_home) +
                              0.11 * (omega * omega + v_home * v_home) / (2 * a) + 0.003 * v_home +
-                             0.5 * rig.sim.switch_hysteresis_deg * kDeg + 0.1 * kDeg;
+                             0.5 * rig.sim.switch_hysteresis_deg * kDegToRad + 0.1 * kDegToRad;
         EXPECT_LT(std::abs(start_angle), bound) << "mode " << mode;
       }
     }

@@ -18,17 +18,13 @@
 #include "sweepmap/process_status_t.hpp"
 #include "sweepmap/wheel_cmd_t.hpp"
 #include "sweepmap/wheel_ticks_t.hpp"
+#include "tests/processes/node_test_util.hpp"
 #include "tests/sim/hand_scene.hpp"
 
 namespace sweepmap {
 namespace {
 
-template <class T>
-Message encode(const std::string& ch, const T& m) {
-  Outbox o;
-  o.publish(ch, 0, m);
-  return o.take().front();
-}
+using test::encode;
 
 Message ticks(int64_t utime, int64_t left, int64_t right) {
   wheel_ticks_t m;

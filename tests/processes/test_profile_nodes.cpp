@@ -14,18 +14,14 @@
 #include "sim/profile_devices.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/truth_profile_rig_t.hpp"
+#include "tests/processes/node_test_util.hpp"
 
 namespace sweepmap {
 namespace {
 
 constexpr int64_t kT0 = 1700000000000000LL;
 
-template <class T>
-Message encode(const std::string& ch, const T& m) {
-  Outbox o;
-  o.publish(ch, 0, m);
-  return o.take().front();
-}
+using test::encode;
 
 bool sameProfile(const Profile& a, const Profile& b) {
   return a.utime == b.utime && a.sequence == b.sequence && a.encoder_counts == b.encoder_counts &&

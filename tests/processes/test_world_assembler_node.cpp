@@ -7,16 +7,12 @@
 #include "processes/world_assembler_node.hpp"
 #include "sweepmap/cloud_chunk_t.hpp"
 #include "sweepmap/pose2d_t.hpp"
+#include "tests/processes/node_test_util.hpp"
 
 namespace sweepmap {
 namespace {
 
-template <class T>
-Message encode(const std::string& ch, const T& m) {
-  Outbox o;
-  o.publish(ch, 0, m);
-  return o.take().front();
-}
+using test::encode;
 
 Message pose(int64_t utime, double x) {
   pose2d_t p{};

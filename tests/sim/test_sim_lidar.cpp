@@ -5,13 +5,13 @@
 #include <iostream>
 #include <memory>
 
+#include "core/angles.hpp"
 #include "hand_scene.hpp"
 #include "sim/lidar.hpp"
 
 namespace sweepmap {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr int64_t kFirstScanUtime = 1'000'000;
 
 // Index of the ray at `theta_deg` with the default UST-10LX layout (-135 deg, 0.25 deg).
@@ -63,8 +63,8 @@ TEST_F(SimLidarTest, ScanLayout) {
   EXPECT_EQ(scan.utime, kFirstScanUtime);
   EXPECT_EQ(scan.seq, 0);
   EXPECT_EQ(scan.ranges_m.size(), 1081u);
-  EXPECT_DOUBLE_EQ(scan.angle_min_rad, -135.0 * kDeg);
-  EXPECT_DOUBLE_EQ(scan.angle_increment_rad, 0.25 * kDeg);
+  EXPECT_DOUBLE_EQ(scan.angle_min_rad, -135.0 * kDegToRad);
+  EXPECT_DOUBLE_EQ(scan.angle_increment_rad, 0.25 * kDegToRad);
   EXPECT_EQ(scan.time_increment_ns, 17361);  // 1 / (40 Hz * 1440)
   EXPECT_DOUBLE_EQ(scan.range_min_m, 0.06);
   EXPECT_DOUBLE_EQ(scan.range_max_m, 10.0);
@@ -80,7 +80,7 @@ TEST_F(SimLidarTest, SeesWallsAtTheAnalyticRange) {
   EXPECT_NEAR(scan.ranges_m[ray(45)], 2.0 * std::sqrt(2.0), 1e-6);  // ceiling, oblique
   EXPECT_NEAR(scan.ranges_m[ray(135)], std::sqrt(2.0), 1e-6);       // floor, oblique
   // Shaft at 90 deg: ray +90 looks along -X from y = 0.8 + offset.
-  scan = standingScan(90.0 * kDeg);
+  scan = standingScan(90.0 * kDegToRad);
   EXPECT_NEAR(scan.ranges_m[ray(90)], 5.2, 1e-6);
   EXPECT_NEAR(scan.ranges_m[ray(-90)], 2.8, 1e-6);
   // The rig's yaw turns frame O in the room: yaw 90, shaft 0 is the same as shaft 90.
@@ -122,9 +122,9 @@ TEST_F(SimLidarTest, SeesThePlateWhenTheShaftTurnsOverIt) {
   build();
   // phi relative to alpha - 90 deg (where the scan plane's +Y half points along the
   // plate's middle line) turns from -70 to +70 deg at 40 deg/s.
-  const double alpha = sim_.alpha_true_deg * kDeg;
-  const double phi_mid = alpha - 90.0 * kDeg;
-  truth_.apply({kFirstScanUtime, phi_mid - 70.0 * kDeg, 40.0 * kDeg, 0.0});
+  const double alpha = sim_.alpha_true_deg * kDegToRad;
+  const double phi_mid = alpha - 90.0 * kDegToRad;
+  truth_.apply({kFirstScanUtime, phi_mid - 70.0 * kDegToRad, 40.0 * kDegToRad, 0.0});
   const auto scans = lidar()->poll(kFirstScanUtime + 3'600'000);
   ASSERT_GT(scans.size(), 130u);
 
@@ -155,17 +155,17 @@ TEST_F(SimLidarTest, SeesThePlateWhenTheShaftTurnsOverIt) {
   const auto touch = [&](const Eigen::Vector3d& v) {
     return std::atan2(v.y(), v.x()) - std::acos(offset / v.head<2>().norm()) - phi_mid;
   };
-  EXPECT_NEAR(min_phi, touch(corners[1]), 2.0 * kDeg);  // about -35 deg
-  EXPECT_NEAR(max_phi, touch(corners[0]), 2.0 * kDeg);  // about +56 deg
+  EXPECT_NEAR(min_phi, touch(corners[1]), 2.0 * kDegToRad);  // about -35 deg
+  EXPECT_NEAR(max_phi, touch(corners[0]), 2.0 * kDegToRad);  // about +56 deg
 }
 
 TEST_F(SimLidarTest, PlateVerticesFormTheInstalledTriangle) {
-  const auto v = SimLidar::plateVertices(plate_, 30.0 * kDeg);
+  const auto v = SimLidar::plateVertices(plate_, 30.0 * kDegToRad);
   ASSERT_EQ(v.size(), 3u);
-  EXPECT_NEAR((v[0] - v[1]).norm(), 0.112, 1e-12);                      // hypotenuse
-  EXPECT_NEAR((v[2] - v[0]).dot(v[2] - v[1]), 0.0, 1e-12);              // right angle at apex
-  EXPECT_NEAR((0.5 * (v[0] + v[1])).head<2>().norm(), 0.05475, 1e-12);  // base distance
-  EXPECT_NEAR(std::atan2(v[2].y(), v[2].x()), 30.0 * kDeg, 1e-12);      // middle line
+  EXPECT_NEAR((v[0] - v[1]).norm(), 0.112, 1e-12);                       // hypotenuse
+  EXPECT_NEAR((v[2] - v[0]).dot(v[2] - v[1]), 0.0, 1e-12);               // right angle at apex
+  EXPECT_NEAR((0.5 * (v[0] + v[1])).head<2>().norm(), 0.05475, 1e-12);   // base distance
+  EXPECT_NEAR(std::atan2(v[2].y(), v[2].x()), 30.0 * kDegToRad, 1e-12);  // middle line
   for (const auto& p : v) EXPECT_DOUBLE_EQ(p.z(), -0.045);
 }
 

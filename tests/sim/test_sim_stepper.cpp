@@ -5,12 +5,12 @@
 #include <memory>
 #include <stdexcept>
 
+#include "core/angles.hpp"
 #include "sim/stepper.hpp"
 
 namespace sweepmap {
 namespace {
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr int64_t kStartUtime = 1'000'000;
 
 SimRigConfig perfectSim() {
@@ -206,11 +206,11 @@ TEST_F(SimStepperTest, SameSeedSameMotion) {
 
 TEST_F(SimStepperTest, InitialSwitchLevelFromTheSheet) {
   for (double deg : {-10.0, -89.0, 0.0, 350.0}) {  // in (home - 90, home] modulo 360
-    make(perfectSim(), 1, deg * kDeg);
+    make(perfectSim(), 1, deg * kDegToRad);
     EXPECT_TRUE(stepper_->switchBlocked()) << deg;
   }
   for (double deg : {0.5, -91.0, 180.0, -270.0}) {
-    make(perfectSim(), 1, deg * kDeg);
+    make(perfectSim(), 1, deg * kDegToRad);
     EXPECT_FALSE(stepper_->switchBlocked()) << deg;
   }
 }
@@ -222,8 +222,8 @@ double crossingOnCruise(const ShaftSegment& s, double level_rad) {
 }
 
 TEST_F(SimStepperTest, EdgesAtCrossingPlusResponseInBothDirectionsWithHysteresis) {
-  make(perfectSim(), 1, -10.0 * kDeg);
-  const double speed = 20.0 * kDeg, accel = 720.0 * kDeg, h = 0.3 * kDeg;
+  make(perfectSim(), 1, -10.0 * kDegToRad);
+  const double speed = 20.0 * kDegToRad, accel = 720.0 * kDegToRad, h = 0.3 * kDegToRad;
   ASSERT_TRUE(stepper_->switchBlocked());
 
   // Turning positive: the sheet leaves the beam at home + h/2.
@@ -239,7 +239,7 @@ TEST_F(SimStepperTest, EdgesAtCrossingPlusResponseInBothDirectionsWithHysteresis
   stepper_->command(now_, run(-speed, accel));
   const double enter = crossingOnCruise(segments_.back(), -h / 2);
   // ... and leaves the far end at home - 90 deg - h/2.
-  const double leave_far = crossingOnCruise(segments_.back(), -90.0 * kDeg - h / 2);
+  const double leave_far = crossingOnCruise(segments_.back(), -90.0 * kDegToRad - h / 2);
   edges = pollUntil(kStartUtime + 8'000'000);
   ASSERT_EQ(edges.size(), 2u);
   EXPECT_TRUE(edges[0].blocked);
@@ -249,7 +249,7 @@ TEST_F(SimStepperTest, EdgesAtCrossingPlusResponseInBothDirectionsWithHysteresis
 
   // Back positive: enters the far end at home - 90 deg + h/2.
   stepper_->command(now_, run(speed, accel));
-  const double enter_far = crossingOnCruise(segments_.back(), -90.0 * kDeg + h / 2);
+  const double enter_far = crossingOnCruise(segments_.back(), -90.0 * kDegToRad + h / 2);
   edges = pollUntil(now_ + 1'500'000);
   ASSERT_EQ(edges.size(), 1u);
   EXPECT_TRUE(edges[0].blocked);
@@ -260,24 +260,24 @@ TEST_F(SimStepperTest, EdgesAtCrossingPlusResponseInBothDirectionsWithHysteresis
 TEST_F(SimStepperTest, EdgeDuringARampIsExactToAMicrosecond) {
   SimRigConfig sim = perfectSim();
   sim.switch_response_jitter_ms = 1.0;
-  const double h = 0.3 * kDeg;
+  const double h = 0.3 * kDegToRad;
   for (uint64_t seed = 0; seed < 20; ++seed) {
     now_ = kStartUtime;
-    make(sim, seed, -0.5 * kDeg);
+    make(sim, seed, -0.5 * kDegToRad);
     // Ramp of 1 deg at 200 deg/s^2: the edge at +0.15 deg is crossed while accelerating.
-    stepper_->command(now_, run(20.0 * kDeg, 200.0 * kDeg));
+    stepper_->command(now_, run(20.0 * kDegToRad, 200.0 * kDegToRad));
     const auto edges = pollUntil(kStartUtime + 300'000);
     ASSERT_EQ(edges.size(), 1u);
     const ShaftTrajectory& truth = stepper_->trajectory();
-    ASSERT_NE(truth.velocityAt(edges[0].utime - 1000), 20.0 * kDeg);  // still in the ramp
+    ASSERT_NE(truth.velocityAt(edges[0].utime - 1000), 20.0 * kDegToRad);  // still in the ramp
     // Reported 1..3 ms after the crossing.
     EXPECT_LT(truth.angleAt(edges[0].utime - 3001), h / 2);
     EXPECT_GT(truth.angleAt(edges[0].utime - 999), h / 2);
   }
   // Without jitter the crossing is pinned to the microsecond.
   now_ = kStartUtime;
-  make(perfectSim(), 1, -0.5 * kDeg);
-  stepper_->command(now_, run(20.0 * kDeg, 200.0 * kDeg));
+  make(perfectSim(), 1, -0.5 * kDegToRad);
+  stepper_->command(now_, run(20.0 * kDegToRad, 200.0 * kDegToRad));
   const auto edges = pollUntil(kStartUtime + 300'000);
   ASSERT_EQ(edges.size(), 1u);
   const ShaftTrajectory& truth = stepper_->trajectory();
@@ -286,20 +286,20 @@ TEST_F(SimStepperTest, EdgeDuringARampIsExactToAMicrosecond) {
 }
 
 TEST_F(SimStepperTest, ReversalInsideTheHysteresisBandKeepsTheLevel) {
-  make(perfectSim(), 1, 0.05 * kDeg);  // just clear of the sheet
+  make(perfectSim(), 1, 0.05 * kDegToRad);  // just clear of the sheet
   ASSERT_FALSE(stepper_->switchBlocked());
-  const double speed = 10.0 * kDeg, accel = 100.0 * kDeg;
-  stepper_->command(now_, moveBy(-0.1 * kDeg, speed, accel));  // to -0.05: inside the band
+  const double speed = 10.0 * kDegToRad, accel = 100.0 * kDegToRad;
+  stepper_->command(now_, moveBy(-0.1 * kDegToRad, speed, accel));  // to -0.05: inside the band
   EXPECT_TRUE(pollUntil(now_ + 500'000).empty());
   EXPECT_FALSE(stepper_->switchBlocked());
-  stepper_->command(now_, moveBy(-0.2 * kDeg, speed, accel));  // to -0.25: past home - h/2
+  stepper_->command(now_, moveBy(-0.2 * kDegToRad, speed, accel));  // to -0.25: past home - h/2
   auto edges = pollUntil(now_ + 500'000);
   ASSERT_EQ(edges.size(), 1u);
   EXPECT_TRUE(edges[0].blocked);
-  stepper_->command(now_, moveBy(0.3 * kDeg, speed, accel));  // to +0.05: short of home + h/2
+  stepper_->command(now_, moveBy(0.3 * kDegToRad, speed, accel));  // to +0.05: short of home + h/2
   EXPECT_TRUE(pollUntil(now_ + 500'000).empty());
   EXPECT_TRUE(stepper_->switchBlocked());
-  stepper_->command(now_, moveBy(0.2 * kDeg, speed, accel));  // to +0.25
+  stepper_->command(now_, moveBy(0.2 * kDegToRad, speed, accel));  // to +0.25
   edges = pollUntil(now_ + 500'000);
   ASSERT_EQ(edges.size(), 1u);
   EXPECT_FALSE(edges[0].blocked);
@@ -307,8 +307,8 @@ TEST_F(SimStepperTest, ReversalInsideTheHysteresisBandKeepsTheLevel) {
 
 TEST_F(SimStepperTest, HomingSearchOverSeveralTurnsAlternatesEdges) {
   SimRigConfig sim;  // default error model
-  make(sim, 9, 100.0 * kDeg);
-  stepper_->command(now_, run(360.0 * kDeg, 720.0 * kDeg));  // 1 turn/s
+  make(sim, 9, 100.0 * kDegToRad);
+  stepper_->command(now_, run(360.0 * kDegToRad, 720.0 * kDegToRad));  // 1 turn/s
   const auto edges = pollUntil(kStartUtime + 3'600'000, 1000);
   // Three full turns: the far end and home once each per turn.
   ASSERT_GE(edges.size(), 6u);

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <stdexcept>
 
+#include "core/angles.hpp"
 #include "core/event_log.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/eval/common.hpp"
@@ -23,7 +24,6 @@ using eval::fixed;
 using eval::ProfileEvaluation;
 using eval::ProfileSetting;
 
-constexpr double kDegToRad = M_PI / 180.0;
 // Zhao 2021 Table 2's wrong settings relative to its optimum (110/395 and 130/425 against
 // 123/409), applied to the truth.
 constexpr double kTooSmallM = -13.0, kTooSmallN = -14.0;

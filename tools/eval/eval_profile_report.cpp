@@ -4,6 +4,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/angles.hpp"
 #include "core/atomic_file.hpp"
 #include "tools/eval/common.hpp"
 
@@ -12,7 +13,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using json = nlohmann::json;
-constexpr double kRadToDeg = 180.0 / M_PI;
 // The bound for ours and the paper's own (Zhao 2021 section 4).
 constexpr double kOursBoundPct = 0.1;
 constexpr double kPaperBoundPct = 0.25;

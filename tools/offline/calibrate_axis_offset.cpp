@@ -9,6 +9,7 @@
 #include <optional>
 #include <sstream>
 
+#include "core/angles.hpp"
 #include "core/calibration_file.hpp"
 #include "core/exit_codes.hpp"
 #include "mapping/plot.hpp"
@@ -19,20 +20,19 @@
 namespace sweepmap {
 namespace {
 
+using calib_workflow::kCalibAxisOffset;
+
 using calib_workflow::Clock;
 using calib_workflow::seconds;
-
-const std::string kWhat = "calib axis-offset";
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 using Inputs = PlateSweeps;
 
 bool checkInputs(const AxisOffsetCalibRequest& o, RotatingProfileConfig* rig) {
-  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kWhat, rig)) return false;
+  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kCalibAxisOffset, rig)) return false;
   for (const auto& log : o.logs) {
-    if (!calib_workflow::logFileExists(log, kWhat)) return false;
+    if (!calib_workflow::logFileExists(log, kCalibAxisOffset)) return false;
   }
-  return calib_workflow::outputDirExists(o.out, kWhat);
+  return calib_workflow::outputDirExists(o.out, kCalibAxisOffset);
 }
 
 std::string figurePath(const AxisOffsetCalibRequest& o) {
@@ -75,7 +75,7 @@ void reportHuman(const AxisOffsetCalibRequest& o, const Inputs& in, const AxisOf
                  const std::string& figure_error, bool written) {
   std::cerr << std::fixed << std::setprecision(4);
   if (grid) {
-    std::cerr << kWhat << ": paper (Algorithm 1, " << grid->m_values.size() << " x "
+    std::cerr << kCalibAxisOffset << ": paper (Algorithm 1, " << grid->m_values.size() << " x "
               << grid->n_values.size() << " nodes of " << o.grid.step_mm
               << " mm): M = " << grid->m_mm << " mm, N = " << grid->n_mm
               << " mm, min S = " << grid->s_min_mm << " mm, " << std::setprecision(3)
@@ -83,7 +83,7 @@ void reportHuman(const AxisOffsetCalibRequest& o, const Inputs& in, const AxisOf
     std::cerr << "  figure: " << (figure_error.empty() ? figure : "not drawn: " + figure_error)
               << "\n";
   }
-  std::cerr << std::setprecision(4) << kWhat << ": ours (Ceres, " << r.residuals
+  std::cerr << std::setprecision(4) << kCalibAxisOffset << ": ours (Ceres, " << r.residuals
             << " residuals): M = " << r.geometry.m_mm << " +- " << r.sigma_m_mm
             << " mm, N = " << r.geometry.n_mm << " +- " << r.sigma_n_mm << " mm";
   if (r.tilt_estimated) {
@@ -182,7 +182,6 @@ std::vector<size_t> useReferenceFace(const TurntableReference& ref,
                                      const std::vector<PlanePoints>& planes,
                                      AxisOffsetOptions* options) {
   if (!ref.declared) return {};
-  constexpr double kDegToRad = M_PI / 180.0;
   options->reference_azimuth_rad = ref.normal_azimuth_deg * kDegToRad;
   options->reference_azimuth_sigma_rad = ref.azimuth_sigma_deg * kDegToRad;
   const std::vector<size_t> found =
@@ -244,11 +243,11 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
   RotatingProfileConfig rig;
   if (!checkInputs(o, &rig)) return kExitUsage;
   Inputs in;
-  if (!readPlateSweeps(o.logs, {o.min_points_per_sweep, o.max_points_per_sweep}, kWhat,
+  if (!readPlateSweeps(o.logs, {o.min_points_per_sweep, o.max_points_per_sweep}, kCalibAxisOffset,
                        /*say_each=*/true, &in))
     return kExitBadInput;
   if (in.planes.empty()) {
-    std::cerr << kWhat << ": no sweep with " << o.min_points_per_sweep
+    std::cerr << kCalibAxisOffset << ": no sweep with " << o.min_points_per_sweep
               << " or more points in the logs: nothing calibrated\n";
     return 1;
   }
@@ -258,7 +257,7 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
     try {
       grid = gridSearchAxisOffset(in.planes, o.grid);
     } catch (const std::invalid_argument& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
+      std::cerr << kCalibAxisOffset << ": " << e.what() << "\n";
       return kExitUsage;
     }
     figure = figurePath(o);
@@ -277,7 +276,7 @@ int calibrateAxisOffsetFromLogs(const AxisOffsetCalibRequest& o) {
       writeCalibration(o, in, r, grid);
       written = true;
     } catch (const std::exception& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
+      std::cerr << kCalibAxisOffset << ": " << e.what() << "\n";
       return kExitDeviceIo;
     }
   }

@@ -16,6 +16,12 @@ namespace sweepmap::calib_workflow {
 
 using Clock = std::chrono::steady_clock;
 
+// The calibration commands' names, which begin their errors and warnings.
+inline const std::string kCalibAxisOffset = "calib axis-offset";
+inline const std::string kCalibMounting = "calib mounting";
+inline const std::string kCalibPlateAngle = "calib plate-angle";
+inline const std::string kCalibRig = "calib rig";
+
 inline double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
 
 // The rig as its kind T into *rig; false after "WHAT: config error: ..." if it cannot be

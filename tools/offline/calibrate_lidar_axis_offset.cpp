@@ -11,6 +11,7 @@
 
 #include "calib/rig_calibration.hpp"
 #include "calib/rotating_geometry.hpp"
+#include "core/angles.hpp"
 #include "core/calibration_file.hpp"
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
@@ -22,12 +23,12 @@
 namespace sweepmap {
 namespace {
 
+using calib_workflow::kCalibAxisOffset;
+
 using calib_workflow::Clock;
 using calib_workflow::seconds;
 
-const std::string kWhat = "calib axis-offset";
-
-struct Inputs {
+struct LidarInputs {
   std::vector<LidarPlaneRays> planes;
   // Per sweep used, the joint check's plate rays (its planes are in `planes`, plane_counts
   // of them each, in order).
@@ -41,18 +42,18 @@ struct Inputs {
 };
 
 bool checkInputs(const LidarAxisOffsetCalibRequest& o, RotatingLidarConfig* rig) {
-  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kWhat, rig)) return false;
+  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kCalibAxisOffset, rig)) return false;
   for (const auto& log : o.logs) {
-    if (!calib_workflow::logFileExists(log, kWhat)) return false;
+    if (!calib_workflow::logFileExists(log, kCalibAxisOffset)) return false;
   }
-  return calib_workflow::outputDirExists(o.out, kWhat);
+  return calib_workflow::outputDirExists(o.out, kCalibAxisOffset);
 }
 
 // One sweep: its rays placed again (the scans it came from) and its planes into in->planes,
 // or why not into in->rejected; a line on stderr either way.
 void takeSweep(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
                const std::string& log, const AssembledSweep& s, const std::vector<Scan2D>& scans,
-               Inputs* in) {
+               LidarInputs* in) {
   const std::string source = log + " sweep " + std::to_string(s.window.sweep_id);
   const auto reject = [&](const std::string& why) {
     in->rejected.push_back(source + ": " + why);
@@ -85,7 +86,8 @@ void takeSweep(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& 
 
 // Every sweep of every log through takeSweep; false (after saying so) if a log cannot be
 // opened. A corrupt tail is noted and what came before used.
-bool readLogs(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig, Inputs* in) {
+bool readLogs(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
+              LidarInputs* in) {
   const auto t0 = Clock::now();
   LidarLogReading r;
   r.take_sweep = [&](const std::string& log, const AssembledSweep& s,
@@ -93,7 +95,7 @@ bool readLogs(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& r
   r.took_log = [&](const LogReadResult& l) {
     if (l.lidar_offset_x_true_m && !in->truth_x_mm) in->truth_x_mm = *l.lidar_offset_x_true_m * 1e3;
   };
-  if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) return false;
+  if (!readLidarLogs(o.logs, rig, kCalibAxisOffset, r, &in->log_errors)) return false;
   in->read_s = seconds(Clock::now() - t0) - in->segment_s;
   return true;
 }
@@ -105,7 +107,7 @@ std::string num(double v) {
 }
 
 void writeCalibration(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
-                      const Inputs& in, const LidarAxisOffsetResult& r) {
+                      const LidarInputs& in, const LidarAxisOffsetResult& r) {
   LidarOffsetCalibration c;
   c.lidar_offset_x_mm = r.offset_mm.x();
   c.source["tool"] = "sweepmap calib axis-offset";
@@ -124,10 +126,10 @@ void writeCalibration(const LidarAxisOffsetCalibRequest& o, const RotatingLidarC
 }
 
 void reportHuman(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
-                 const Inputs& in, const LidarAxisOffsetResult& r, bool written) {
-  std::cerr << std::fixed << std::setprecision(4) << kWhat << ": t_L^O' x = " << r.offset_mm.x()
-            << " +- " << r.sigma_x_mm << " mm (the rig's " << rig.geometry.lidar_offset_x_mm
-            << " mm)";
+                 const LidarInputs& in, const LidarAxisOffsetResult& r, bool written) {
+  std::cerr << std::fixed << std::setprecision(4) << kCalibAxisOffset
+            << ": t_L^O' x = " << r.offset_mm.x() << " +- " << r.sigma_x_mm << " mm (the rig's "
+            << rig.geometry.lidar_offset_x_mm << " mm)";
   if (r.y_estimated) {
     std::cerr << ", y = " << r.offset_mm.y() << " +- " << r.sigma_y_mm
               << " mm (reported only: the rig's model has none)";
@@ -157,7 +159,7 @@ void reportHuman(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig
 }
 
 nlohmann::json resultJson(const LidarAxisOffsetCalibRequest& o, const RotatingLidarConfig& rig,
-                          const Inputs& in, const LidarAxisOffsetResult& r, bool written) {
+                          const LidarInputs& in, const LidarAxisOffsetResult& r, bool written) {
   const auto orNull = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nullptr; };
   nlohmann::json j;
   j["lidar_offset_x_mm"] = r.offset_mm.x();
@@ -216,16 +218,15 @@ namespace {
 
 // The rig file's scan-plane tilt and mirror offset, which this command holds.
 Eigen::Matrix3d lidarRotationOf(const RotatingLidarConfig& rig) {
-  constexpr double kDeg = M_PI / 180.0;
-  return rotating::lidarRotation(rig.geometry.scan_plane_tilt_deg * kDeg,
-                                 rig.geometry.mirror_offset_deg * kDeg);
+  return rotating::lidarRotation(rig.geometry.scan_plane_tilt_deg * kDegToRad,
+                                 rig.geometry.mirror_offset_deg * kDegToRad);
 }
 
 }  // namespace
 
 // The walls' flatness with the estimated offset: their rays' cell medians against their
 // planes; a warning into r when they bend more than noise does.
-void checkWalls(const RotatingLidarConfig& rig, const Inputs& in, LidarAxisOffsetResult* r) {
+void checkWalls(const RotatingLidarConfig& rig, const LidarInputs& in, LidarAxisOffsetResult* r) {
   std::vector<double> medians;
   const Eigen::Matrix3d R_L = lidarRotationOf(rig);
   for (size_t k = 0; k < in.planes.size() && k < r->planes.size(); ++k) {
@@ -248,7 +249,8 @@ void checkWalls(const RotatingLidarConfig& rig, const Inputs& in, LidarAxisOffse
 // mirror offset and the plate angle solved with it, clutter on the walls left out): when it
 // differs from this fit's by more than 3 sigma, another parameter is off or the walls carry
 // clutter that this fit took for them, and a warning into r says so. Takes in->planes.
-void checkAgainstJointModel(const RotatingLidarConfig& rig, Inputs* in, LidarAxisOffsetResult* r) {
+void checkAgainstJointModel(const RotatingLidarConfig& rig, LidarInputs* in,
+                            LidarAxisOffsetResult* r) {
   size_t next = 0;
   for (size_t k = 0; k < in->sweeps.size(); ++k) {
     for (size_t j = 0; j < in->plane_counts[k]; ++j) {
@@ -293,10 +295,10 @@ void checkAgainstJointModel(const RotatingLidarConfig& rig, Inputs* in, LidarAxi
 int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
   RotatingLidarConfig rig;
   if (!checkInputs(o, &rig)) return kExitUsage;
-  Inputs in;
+  LidarInputs in;
   if (!readLogs(o, rig, &in)) return kExitBadInput;
   if (in.planes.empty()) {
-    std::cerr << kWhat << ": no sweep with planes in the logs (" << in.rejected.size()
+    std::cerr << kCalibAxisOffset << ": no sweep with planes in the logs (" << in.rejected.size()
               << " rejected): nothing calibrated\n";
     if (o.json)
       std::cout << nlohmann::json{{"sweeps_used", 0}, {"sweeps_rejected", in.rejected}}.dump(2)
@@ -316,7 +318,7 @@ int calibrateLidarAxisOffsetFromLogs(const LidarAxisOffsetCalibRequest& o) {
       writeCalibration(o, rig, in, r);
       written = true;
     } catch (const std::exception& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
+      std::cerr << kCalibAxisOffset << ": " << e.what() << "\n";
       return kExitDeviceIo;
     }
   }

@@ -19,10 +19,10 @@
 namespace sweepmap {
 namespace {
 
+using calib_workflow::kCalibMounting;
+
 using calib_workflow::Clock;
 using calib_workflow::seconds;
-
-const std::string kWhat = "calib mounting";
 
 // Both methods' results and how long each took.
 struct MethodRuns {
@@ -36,9 +36,9 @@ struct MethodRuns {
 // Check the inputs: the rig (mobile_lidar), the log and the output folder; false after
 // saying on stderr what is wrong.
 bool checkInputs(const MountingCalibRequest& o, MobileLidarConfig* rig) {
-  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kWhat, rig)) return false;
-  if (!calib_workflow::logFileExists(o.log, kWhat)) return false;
-  return calib_workflow::outputDirExists(o.out, kWhat);
+  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kCalibMounting, rig)) return false;
+  if (!calib_workflow::logFileExists(o.log, kCalibMounting)) return false;
+  return calib_workflow::outputDirExists(o.out, kCalibMounting);
 }
 
 const PoseTrack& chosenTrack(const MobileLog& log, const std::string& track) {
@@ -52,14 +52,15 @@ bool readLog(const MountingCalibRequest& o, const MobileLidarConfig& rig, Mobile
   try {
     *log = loadMobileLog(o.log, rig);
   } catch (const std::exception& e) {
-    std::cerr << kWhat << ": cannot read log '" << o.log << "': " << e.what() << "\n";
+    std::cerr << kCalibMounting << ": cannot read log '" << o.log << "': " << e.what() << "\n";
     return false;
   }
   if (log->log_error) {
-    std::cerr << kWhat << ": " << o.log << ": " << log->error << " (the data before it is used)\n";
+    std::cerr << kCalibMounting << ": " << o.log << ": " << log->error
+              << " (the data before it is used)\n";
   }
   if (o.track == "truth" && log->truth.size() == 0) {
-    std::cerr << kWhat << ": --track truth: the log has no TRUTH_POSE (not simulated)\n";
+    std::cerr << kCalibMounting << ": --track truth: the log has no TRUTH_POSE (not simulated)\n";
     return false;
   }
   return true;
@@ -125,7 +126,7 @@ bool timeOffsetAtBound(const MountingCalibRequest& o, const MethodRuns& runs) {
   const bool at_bound = o.time_offset && runs.ours.ok &&
                         std::abs(runs.ours.time_offset_s) >= 0.99 * runs.max_time_offset_s;
   if (at_bound) {
-    std::cerr << kWhat << ": warning: the time offset ran to its bound (+-"
+    std::cerr << kCalibMounting << ": warning: the time offset ran to its bound (+-"
               << runs.max_time_offset_s
               << " s): the drive does not observe it (a steady circle only turns the whole "
                  "cloud); calibrate without --time-offset\n";
@@ -149,7 +150,7 @@ std::vector<std::string> othersOff(const MountingCalibRequest& o, const MobileLi
                        "), so the mounting assumes the rig file's wheel radii and track; drive "
                        "the figure-eight `sweepmap calib plan` asks for, or run "
                        "`sweepmap calib rig` on it, to check them");
-    for (const auto& text : warnings) std::cerr << kWhat << ": warning: " << text << "\n";
+    for (const auto& text : warnings) std::cerr << kCalibMounting << ": warning: " << text << "\n";
     return warnings;
   }
   const double r_right = rig.odometry.rightWheelRadius();
@@ -172,7 +173,7 @@ std::vector<std::string> othersOff(const MountingCalibRequest& o, const MobileLi
         " (the turn rates they give are not the gyro's), so the odometry track this fit used "
         "is biased; run `sweepmap calib rig`, which calibrates the wheels with the mounting");
   }
-  for (const auto& text : warnings) std::cerr << kWhat << ": warning: " << text << "\n";
+  for (const auto& text : warnings) std::cerr << kCalibMounting << ": warning: " << text << "\n";
   return warnings;
 }
 
@@ -221,7 +222,7 @@ bool writeCalibration(const MountingCalibRequest& o, const MountingCalibrationRe
   try {
     writeMountingCalibration(o.out, c);
   } catch (const std::exception& e) {
-    std::cerr << kWhat << ": " << e.what() << "\n";
+    std::cerr << kCalibMounting << ": " << e.what() << "\n";
     return false;
   }
   return true;
@@ -235,7 +236,7 @@ int calibrateMountingFromLog(const MountingCalibRequest& o) {
   if (!checkInputs(o, &rig)) return kExitUsage;
   ProgressOptions po;
   po.enabled = !o.json;
-  Progress progress(kWhat, po);
+  Progress progress(kCalibMounting, po);
   MethodRuns runs;
   MobileLog log;
   {
@@ -248,8 +249,8 @@ int calibrateMountingFromLog(const MountingCalibRequest& o) {
   progress.finish();
   const PoseTrack& track = chosenTrack(log, o.track);
   const double load_s = seconds(Clock::now() - t_start) - runs.ours_s - runs.paper_s;
-  std::cerr << kWhat << ": " << log.scans.size() << " scans, " << track.size() << " " << o.track
-            << " poses from " << o.log << "\n";
+  std::cerr << kCalibMounting << ": " << log.scans.size() << " scans, " << track.size() << " "
+            << o.track << " poses from " << o.log << "\n";
 
   std::optional<LidarMounting> truth;
   if (log.truth_mounting) truth = trueMounting(*log.truth_mounting);
@@ -259,7 +260,7 @@ int calibrateMountingFromLog(const MountingCalibRequest& o) {
   j["warnings"] = othersOff(o, rig);
 
   if (!runs.ours.ok) {
-    std::cerr << kWhat << ": nothing calibrated: " << runs.ours.reason << "\n";
+    std::cerr << kCalibMounting << ": nothing calibrated: " << runs.ours.reason << "\n";
     if (o.json) std::cout << std::setprecision(12) << j.dump(2) << "\n";
     return 1;
   }

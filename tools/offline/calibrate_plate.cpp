@@ -20,10 +20,10 @@
 namespace sweepmap {
 namespace {
 
+using calib_workflow::kCalibPlateAngle;
+
 using calib_workflow::Clock;
 using calib_workflow::seconds;
-
-const std::string kWhat = "calib plate-angle";
 
 struct RejectedSweep {
   std::string log;
@@ -60,11 +60,11 @@ struct AlphaFit {
 // Check the inputs: the rig (rotating_lidar), the logs and the output folder; false after
 // saying on stderr what is wrong.
 bool checkInputs(const PlateAngleCalibRequest& o, RotatingLidarConfig* rig) {
-  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kWhat, rig)) return false;
+  if (!calib_workflow::loadRigOfKind(o.rig, o.sets, kCalibPlateAngle, rig)) return false;
   for (const auto& log : o.logs) {
-    if (!calib_workflow::logFileExists(log, kWhat)) return false;
+    if (!calib_workflow::logFileExists(log, kCalibPlateAngle)) return false;
   }
-  return calib_workflow::outputDirExists(o.out, kWhat);
+  return calib_workflow::outputDirExists(o.out, kCalibPlateAngle);
 }
 
 // One assembled sweep: the normals of its four walls into in->sweeps, or why not into
@@ -113,13 +113,13 @@ bool readLog(const std::string& log, const RotatingLidarConfig& rig,
       walls_this_log_s += takeSweep(log, s, wall_options, in);
     });
   } catch (const LogError& e) {
-    std::cerr << kWhat << ": cannot read log '" << log << "': " << e.what() << "\n";
+    std::cerr << kCalibPlateAngle << ": cannot read log '" << log << "': " << e.what() << "\n";
     return false;
   }
   in->walls_s += walls_this_log_s;
   in->read_s += seconds(Clock::now() - t_log) - walls_this_log_s;
   if (r.log_error) {
-    std::cerr << kWhat << ": " << r.error << " (the sweeps before it are used)\n";
+    std::cerr << kCalibPlateAngle << ": " << r.error << " (the sweeps before it are used)\n";
     in->log_errors.push_back({log, r.error});
   }
   if (r.alpha_true_rad && !in->alpha_true_rad) in->alpha_true_rad = r.alpha_true_rad;
@@ -140,8 +140,9 @@ nlohmann::json logErrorsJson(const std::vector<LogFailure>& log_errors) {
 
 // Report that no sweep was usable; the exit status 1.
 int reportNothingCalibrated(const PlateAngleCalibRequest& o, const LogSweeps& in) {
-  std::cerr << kWhat << ": no usable sweep (" << in.seen << " seen, " << in.rejected.size()
-            << " rejected) in " << o.logs.size() << " log(s): nothing calibrated\n";
+  std::cerr << kCalibPlateAngle << ": no usable sweep (" << in.seen << " seen, "
+            << in.rejected.size() << " rejected) in " << o.logs.size()
+            << " log(s): nothing calibrated\n";
   if (o.json) {
     std::cout << nlohmann::json{{"sweeps_used", 0},
                                 {"sweeps_rejected", rejectedJson(in.rejected)},
@@ -189,10 +190,10 @@ void writeCalibration(const PlateAngleCalibRequest& o, const LogSweeps& in, cons
 void reportHuman(const PlateAngleCalibRequest& o, const LogSweeps& in, const AlphaFit& f,
                  double total_s) {
   const LmResult& result = f.lm;
-  std::cerr << std::setprecision(8) << kWhat << ": alpha = " << f.alpha_deg << " deg from "
-            << in.sweeps.size() << " sweeps (" << in.rejected.size() << " rejected), "
-            << result.iterations << " LM iterations, F_cost " << std::setprecision(4)
-            << result.final_cost << ", " << result.stop_reason
+  std::cerr << std::setprecision(8) << kCalibPlateAngle << ": alpha = " << f.alpha_deg
+            << " deg from " << in.sweeps.size() << " sweeps (" << in.rejected.size()
+            << " rejected), " << result.iterations << " LM iterations, F_cost "
+            << std::setprecision(4) << result.final_cost << ", " << result.stop_reason
             << (result.converged ? "" : " (NOT converged)") << "\n"
             << "  mean E_atti per sweep: " << f.e_before << " as assembled -> " << f.e_after
             << " with the calibrated alpha\n";

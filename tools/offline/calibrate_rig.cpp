@@ -29,11 +29,11 @@
 namespace sweepmap {
 namespace {
 
+using calib_workflow::kCalibRig;
+
 namespace fs = std::filesystem;
 using calib_workflow::Clock;
 using calib_workflow::seconds;
-
-const std::string kWhat = "calib rig";
 
 struct RigAInputs {
   std::vector<RigASweep> sweeps;
@@ -178,7 +178,7 @@ bool readLogs(const RigCalibRequest& o, const RotatingLidarConfig& rig, Progress
   };
   r.took_log = [&](const LogReadResult& l) { takeTruth(l, &in->truth); };
   r.progress = &progress;
-  if (!readLidarLogs(o.logs, rig, kWhat, r, &in->log_errors)) {
+  if (!readLidarLogs(o.logs, rig, kCalibRig, r, &in->log_errors)) {
     pool.cancel();
     return false;
   }
@@ -218,17 +218,17 @@ std::string pointRigAt(const std::string& rig_path, const std::string& key,
 int calibrateRigA(const RigCalibRequest& o, const Rig& loaded) {
   const RotatingLidarConfig& rig = std::get<RotatingLidarConfig>(loaded.config);
   for (const auto& log : o.logs) {
-    if (!calib_workflow::logFileExists(log, kWhat)) return kExitUsage;
+    if (!calib_workflow::logFileExists(log, kCalibRig)) return kExitUsage;
   }
-  if (!calib_workflow::outputDirExists(o.out, kWhat)) return kExitUsage;
+  if (!calib_workflow::outputDirExists(o.out, kCalibRig)) return kExitUsage;
   ProgressOptions po;
   po.enabled = !o.json;
-  Progress progress(kWhat, po);
+  Progress progress(kCalibRig, po);
   RigAInputs in;
   if (!readLogs(o, rig, progress, &in)) return kExitBadInput;
   if (in.sweeps.empty()) {
     progress.finish();
-    std::cerr << kWhat << ": no usable sweep in the logs (" << in.rejected.size()
+    std::cerr << kCalibRig << ": no usable sweep in the logs (" << in.rejected.size()
               << " rejected): nothing calibrated\n";
     if (o.json)
       std::cout << nlohmann::json{{"sweeps_used", 0}, {"sweeps_rejected", in.rejected}}.dump(2)
@@ -303,11 +303,11 @@ int reportRigCalibration(const RigCalibRequest& o, const Rig& loaded, double rea
       write();
       written = true;
     } catch (const std::exception& e) {
-      std::cerr << kWhat << ": " << e.what() << "\n";
+      std::cerr << kCalibRig << ": " << e.what() << "\n";
       return kExitDeviceIo;
     }
   }
-  std::cerr << kWhat << " (" << loaded.kindName() << "): ";
+  std::cerr << kCalibRig << " (" << loaded.kindName() << "): ";
   if (loaded.kind() == RigKind::kMobileLidar) {
     std::cerr << o.logs.size() << " drive(s); ";
   } else {
@@ -338,7 +338,7 @@ int calibrateRigFromLogs(const RigCalibRequest& o) {
   try {
     rig = loadRig(o.rig, o.sets);
   } catch (const std::exception& e) {
-    std::cerr << kWhat << ": config error: " << e.what() << "\n";
+    std::cerr << kCalibRig << ": config error: " << e.what() << "\n";
     return kExitUsage;
   }
   if (rig.kind() == RigKind::kRotatingProfile) return calibrateProfileRig(o, rig);

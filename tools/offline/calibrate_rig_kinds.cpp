@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "calib/axis_offset.hpp"
+#include "core/angles.hpp"
 #include "core/calibration_file.hpp"
 #include "core/config.hpp"
 #include "core/event_log.hpp"
@@ -23,11 +24,11 @@
 namespace sweepmap {
 namespace {
 
+using calib_workflow::kCalibRig;
+
 using calib_workflow::Clock;
 using calib_workflow::seconds;
 
-const std::string kWhat = "calib rig";
-constexpr double kRadToDeg = 180.0 / M_PI;
 // The plan's recording of rig C and what the solver uses of it.
 constexpr int kPlatePoses = 3;  // Zhao 2021's m = 3 non-parallel poses
 constexpr int kMaxPointsPerSweep = 20000;
@@ -40,9 +41,9 @@ std::string num(double v) {
 
 bool checkPaths(const RigCalibRequest& o) {
   for (const auto& log : o.logs) {
-    if (!calib_workflow::logFileExists(log, kWhat)) return false;
+    if (!calib_workflow::logFileExists(log, kCalibRig)) return false;
   }
-  return calib_workflow::outputDirExists(o.out, kWhat);
+  return calib_workflow::outputDirExists(o.out, kCalibRig);
 }
 
 // ---- rig C -------------------------------------------------------------------------------
@@ -177,15 +178,15 @@ int calibrateProfileRig(const RigCalibRequest& o, const Rig& loaded) {
   if (!checkPaths(o)) return kExitUsage;
   ProgressOptions po;
   po.enabled = !o.json;
-  Progress progress(kWhat, po);
+  Progress progress(kCalibRig, po);
   progress.stage("reading the plate poses");
   ProfileInputs in;
-  if (!readPlateSweeps(o.logs, {kMinPointsPerSweep, kMaxPointsPerSweep}, kWhat,
+  if (!readPlateSweeps(o.logs, {kMinPointsPerSweep, kMaxPointsPerSweep}, kCalibRig,
                        /*say_each=*/false, &in))
     return kExitBadInput;
   if (in.planes.empty()) {
     progress.finish();
-    std::cerr << kWhat << ": no sweep with " << kMinPointsPerSweep
+    std::cerr << kCalibRig << ": no sweep with " << kMinPointsPerSweep
               << " or more points in the logs: nothing calibrated\n";
     return 1;
   }
@@ -219,13 +220,13 @@ int calibrateMobileLidarRig(const RigCalibRequest& o, const Rig& loaded) {
   try {
     c = runMobileRigCalibration(request);
   } catch (const ConfigError& e) {
-    std::cerr << kWhat << ": config error: " << e.what() << "\n";
+    std::cerr << kCalibRig << ": config error: " << e.what() << "\n";
     return kExitUsage;
   } catch (const LogError& e) {  // names the log and the offset
-    std::cerr << kWhat << ": cannot read log: " << e.what() << "\n";
+    std::cerr << kCalibRig << ": cannot read log: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const std::exception& e) {  // what the drive held could not be calibrated
-    std::cerr << kWhat << ": " << o.logs.at(0) << ": " << e.what() << "\n";
+    std::cerr << kCalibRig << ": " << o.logs.at(0) << ": " << e.what() << "\n";
     return kExitBadInput;
   }
   c.seconds = seconds(Clock::now() - t0);  // reading, odometry re-runs and the solve

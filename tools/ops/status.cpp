@@ -11,6 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/angles.hpp"
 #include "core/exit_codes.hpp"
 #include "core/lcm_schema.hpp"
 #include "net/udpm_receiver.hpp"
@@ -23,7 +24,6 @@ namespace sweepmap {
 namespace {
 
 constexpr const char* kStatusPrefix = "STATUS_";
-constexpr double kRadToDeg = 180.0 / M_PI;
 
 const char* healthName(int health) {
   switch (health) {
