@@ -3,6 +3,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 
@@ -96,12 +97,37 @@ bool ownRay(const Eigen::Vector3d& n, double d, const Eigen::Vector3d& o, const 
   return true;
 }
 
+// A region of a plane left out as clutter: the rays that meet the plane with in-plane
+// coordinates (along e1, e2) within [lo, hi].
+struct ClutterBox {
+  Eigen::Vector3d e1, e2;
+  Eigen::Vector2d lo, hi;
+};
+
+// Where the ray o -> p meets the plane (n, d), if it runs towards it.
+std::optional<Eigen::Vector3d> meetingPoint(const Eigen::Vector3d& n, double d,
+                                            const Eigen::Vector3d& o, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d ray = p - o;
+  const std::optional<double> r = predictedRange(n, d, o, ray);
+  if (!r) return std::nullopt;
+  return Eigen::Vector3d(o + ray.normalized() * *r);
+}
+
+bool inClutter(const std::vector<ClutterBox>& boxes, const Eigen::Vector3d& s) {
+  for (const ClutterBox& b : boxes) {
+    const Eigen::Vector2d c(b.e1.dot(s), b.e2.dot(s));
+    if ((c.array() >= b.lo.array()).all() && (c.array() <= b.hi.array()).all()) return true;
+  }
+  return false;
+}
+
 // The points of `plane`'s window (each within window_sigmas of its sigma, its own ray by
-// ownRay), with their weights.
+// ownRay, not meeting the plane in a clutter box), with their weights.
 void planeWindow(const std::vector<Eigen::Vector3f>& cloud,
                  const std::vector<Eigen::Vector3f>& origins, const Eigen::Vector3d& n, double d,
                  const RangeNoise& noise, const std::vector<PlaneEquation>& nearer,
-                 std::vector<int>* idx, std::vector<double>* w) {
+                 const std::vector<ClutterBox>& clutter, std::vector<int>* idx,
+                 std::vector<double>* w) {
   idx->clear();
   w->clear();
   for (size_t i = 0; i < cloud.size(); ++i) {
@@ -110,27 +136,28 @@ void planeWindow(const std::vector<Eigen::Vector3f>& cloud,
     const double s = std::hypot(noise.fraction * h, noise.floor_m);
     if (!(std::abs(n.dot(p) + d) <= noise.window_sigmas * s)) continue;
     if (!ownRay(n, d, o, p, noise, nearer)) continue;
+    if (!clutter.empty()) {
+      const std::optional<Eigen::Vector3d> at = meetingPoint(n, d, o, p);
+      if (!at || inClutter(clutter, *at)) continue;
+    }
     idx->push_back(int(i));
     w->push_back(1.0 / (s * s));
   }
 }
 
-}  // namespace
-
-RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
-                         const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
-                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer) {
-  RefinedPlane r;
-  r.normal = start.normal.normalized();
-  r.offset = start.offset / std::max(1e-12, start.normal.norm());
+// The window's fixed point from `r`'s plane (refinePlane without the clutter search).
+void refineFixedPoint(const std::vector<Eigen::Vector3f>& cloud,
+                      const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise,
+                      const std::vector<PlaneEquation>& nearer,
+                      const std::vector<ClutterBox>& clutter, RefinedPlane* r) {
   std::vector<int> last;
   for (int it = 0; it < noise.iterations; ++it) {
     std::vector<int> idx;
     std::vector<double> w;
-    planeWindow(cloud, origins, r.normal, r.offset, noise, nearer, &idx, &w);
+    planeWindow(cloud, origins, r->normal, r->offset, noise, nearer, clutter, &idx, &w);
     if (idx.size() < 10) {
-      r.ok = false;
-      return r;
+      r->ok = false;
+      return;
     }
     double sw = 0.0;
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
@@ -145,15 +172,143 @@ RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
       cov += w[k] * e * e.transpose();
     }
     Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(cov).eigenvectors().col(0);
-    if (n.dot(r.normal) < 0) n = -n;
-    r.normal = n;
-    r.offset = -n.dot(c);
-    r.centroid = c;
-    r.inliers = idx;
-    r.weights = w;
-    r.ok = true;
+    if (n.dot(r->normal) < 0) n = -n;
+    r->normal = n;
+    r->offset = -n.dot(c);
+    r->centroid = c;
+    r->inliers = idx;
+    r->weights = w;
+    r->ok = true;
     if (idx == last) break;
     last = std::move(idx);
+  }
+}
+
+// The plane's inliers binned by where their rays meet it, in cells of `cell` along e1, e2:
+// per cell the sum of the weights and of the weighted offsets towards the lidar, as 2D prefix
+// sums (entry (i, j): cells below i along e1 and below j along e2).
+struct CellSums {
+  Eigen::Vector3d e1, e2;
+  Eigen::Vector2d lo;
+  double cell = 0.0;
+  int nu = 0, nv = 0;
+  Eigen::MatrixXd W, S;
+  double sum(const Eigen::MatrixXd& m, int u0, int u1, int v0, int v1) const {
+    return m(u1 + 1, v1 + 1) - m(u0, v1 + 1) - m(u1 + 1, v0) + m(u0, v0);
+  }
+};
+
+CellSums cellSums(const std::vector<Eigen::Vector3f>& cloud,
+                  const std::vector<Eigen::Vector3f>& origins, const RefinedPlane& r,
+                  const RangeNoise& noise) {
+  CellSums c;
+  const Eigen::Vector3d& n = r.normal;
+  c.e1 = n.cross(Eigen::Vector3d::UnitZ());
+  if (c.e1.norm() < 0.5) c.e1 = n.cross(Eigen::Vector3d::UnitX());
+  c.e1.normalize();
+  c.e2 = n.cross(c.e1);
+  struct Item {
+    Eigen::Vector2d at;
+    double w, rho;
+  };
+  std::vector<Item> items;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+  for (size_t k = 0; k < r.inliers.size(); ++k) {
+    const Eigen::Vector3d p = cloud[size_t(r.inliers[k])].cast<double>();
+    const Eigen::Vector3d o = origins[size_t(r.inliers[k])].cast<double>();
+    const std::optional<Eigen::Vector3d> s = meetingPoint(n, r.offset, o, p);
+    if (!s) continue;
+    const double h = n.dot(o) + r.offset;
+    items.push_back({Eigen::Vector2d(c.e1.dot(*s), c.e2.dot(*s)), r.weights[k],
+                     (n.dot(p) + r.offset) * (h < 0 ? -1.0 : 1.0)});
+    lo = lo.cwiseMin(items.back().at);
+    hi = hi.cwiseMax(items.back().at);
+  }
+  if (items.empty()) return c;
+  // At most 64 cells a side: the rectangles are (cells a side)^4 / 4.
+  c.cell = std::max({noise.clutter_cell_m, (hi - lo).maxCoeff() / 63.0, 1e-3});
+  c.lo = lo;
+  c.nu = int((hi.x() - lo.x()) / c.cell) + 1;
+  c.nv = int((hi.y() - lo.y()) / c.cell) + 1;
+  c.W = Eigen::MatrixXd::Zero(c.nu + 1, c.nv + 1);
+  c.S = c.W;
+  for (const Item& it : items) {
+    const int u = std::min(c.nu - 1, int((it.at.x() - lo.x()) / c.cell));
+    const int v = std::min(c.nv - 1, int((it.at.y() - lo.y()) / c.cell));
+    c.W(u + 1, v + 1) += it.w;
+    c.S(u + 1, v + 1) += it.w * it.rho;
+  }
+  for (int u = 1; u <= c.nu; ++u) {
+    for (int v = 1; v <= c.nv; ++v) {
+      c.W(u, v) += c.W(u - 1, v) + c.W(u, v - 1) - c.W(u - 1, v - 1);
+      c.S(u, v) += c.S(u - 1, v) + c.S(u, v - 1) - c.S(u - 1, v - 1);
+    }
+  }
+  return c;
+}
+
+// The best rectangle of a far wall's noisy cells may cover a whiteboard in part: it is grown
+// by this many cells each way (more leaves out more of the wall, whose noise then grows).
+constexpr int kClutterGrowCells = 1;
+
+// The rectangle of cells (less than half of the plane's weight) that stands proud of the rest
+// by the most sigmas, if by at least clutter_min_m and clutter_sigmas (RangeNoise); grown by
+// kClutterGrowCells.
+std::optional<ClutterBox> findClutter(const std::vector<Eigen::Vector3f>& cloud,
+                                      const std::vector<Eigen::Vector3f>& origins,
+                                      const RefinedPlane& r, const RangeNoise& noise) {
+  const CellSums c = cellSums(cloud, origins, r, noise);
+  if (c.nu == 0) return std::nullopt;
+  const double Wt = c.W(c.nu, c.nv), St = c.S(c.nu, c.nv);
+  double best = noise.clutter_sigmas;
+  std::optional<std::array<int, 4>> at;
+  for (int u0 = 0; u0 < c.nu; ++u0) {
+    for (int u1 = u0; u1 < c.nu; ++u1) {
+      for (int v0 = 0; v0 < c.nv; ++v0) {
+        for (int v1 = v0; v1 < c.nv; ++v1) {
+          const double Win = c.sum(c.W, u0, u1, v0, v1);
+          if (!(Win > 0.0) || 2.0 * Win > Wt) continue;
+          const double Sin = c.sum(c.S, u0, u1, v0, v1);
+          const double proud = Sin / Win - (St - Sin) / (Wt - Win);
+          if (proud < noise.clutter_min_m) continue;
+          const double z = proud / std::sqrt(1.0 / Win + 1.0 / (Wt - Win));
+          if (z > best) {
+            best = z;
+            at = {u0, u1, v0, v1};
+          }
+        }
+      }
+    }
+  }
+  if (!at) return std::nullopt;
+  const auto [u0, u1, v0, v1] = *at;
+  ClutterBox b;
+  b.e1 = c.e1;
+  b.e2 = c.e2;
+  b.lo = c.lo + c.cell * Eigen::Vector2d(u0 - kClutterGrowCells, v0 - kClutterGrowCells);
+  b.hi = c.lo + c.cell * Eigen::Vector2d(u1 + 1 + kClutterGrowCells, v1 + 1 + kClutterGrowCells);
+  return b;
+}
+
+}  // namespace
+
+RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
+                         const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
+                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer) {
+  RefinedPlane r;
+  r.normal = start.normal.normalized();
+  r.offset = start.offset / std::max(1e-12, start.normal.norm());
+  std::vector<ClutterBox> clutter;
+  refineFixedPoint(cloud, origins, noise, nearer, clutter, &r);
+  while (r.ok && noise.clutter_min_m > 0 && int(clutter.size()) < noise.clutter_max_regions) {
+    const std::optional<ClutterBox> box = findClutter(cloud, origins, r, noise);
+    if (!box) break;
+    clutter.push_back(*box);
+    RefinedPlane next = r;
+    refineFixedPoint(cloud, origins, noise, nearer, clutter, &next);
+    if (!next.ok) break;
+    r = std::move(next);
+    r.clutter_regions = int(clutter.size());
   }
   return r;
 }
@@ -169,8 +324,11 @@ RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>
   std::vector<WallPlaneFit> start;
   if (p.walls.size() == 4) start = p.walls;
   if (p.floor && p.ceiling) start.insert(start.end(), {*p.floor, *p.ceiling});
+  // Alone without the clutter search: the others' strips along its edges would stand proud.
+  RangeNoise plain = noise;
+  plain.clutter_min_m = 0.0;
   std::vector<RefinedPlane> alone;
-  for (const WallPlaneFit& s : start) alone.push_back(refinePlane(cloud, origins, s, noise));
+  for (const WallPlaneFit& s : start) alone.push_back(refinePlane(cloud, origins, s, plain));
   std::vector<RefinedPlane> refined;
   for (size_t i = 0; i < alone.size(); ++i) {
     std::vector<PlaneEquation> nearer;

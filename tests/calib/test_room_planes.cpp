@@ -18,15 +18,20 @@ struct Rays {
 };
 
 // Rays from origins near_m to far_m in front of the wall to points spread over it, each range
-// with 1 % noise; a measured range beyond kRangeMax gives no point. Deterministic.
-Rays farWall(int count, double near_m = 5.5, double far_m = 9.5) {
-  std::mt19937_64 rng(7);
+// with 1 % noise; a measured range beyond kRangeMax gives no point. With proud_m > 0, a
+// whiteboard that much in front of the wall (2 x 1.2 m, 0.9 m up, as the lab's). Deterministic.
+Rays farWall(int count, double near_m = 5.5, double far_m = 9.5, double proud_m = 0.0,
+             uint64_t seed = 7) {
+  std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> u(0.0, 1.0);
   std::normal_distribution<double> n(0.0, 1.0);
   Rays r;
   while (int(r.points.size()) < count) {
     const Eigen::Vector3d o(kWallX - near_m - (far_m - near_m) * u(rng), -2.0 + 4.0 * u(rng), 0.3);
-    const Eigen::Vector3d target(kWallX, -2.5 + 5.0 * u(rng), 2.5 * u(rng));
+    Eigen::Vector3d target(kWallX, -2.5 + 5.0 * u(rng), 2.5 * u(rng));
+    if (std::abs(target.y() - 0.5) < 1.0 && std::abs(target.z() - 1.5) < 0.6) {
+      target = o + (target - o) * (kWallX - proud_m - o.x()) / (kWallX - o.x());
+    }
     const double range = (target - o).norm();
     const double measured = range * (1.0 + kNoise * n(rng));
     if (measured > kRangeMax) continue;
@@ -79,6 +84,44 @@ TEST(RoomPlanes, AWallNearTheRangeLimitIsNotPulledTowardsTheLidar) {
   const RefinedPlane all = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
   ASSERT_TRUE(all.ok);
   EXPECT_LT(wallOffset(all.normal, all.offset), -0.004);
+}
+
+// A whiteboard 20 mm proud of a wall seen from 5.5-9.5 m lies well within the wall's window
+// (its points scatter +-55-95 mm): it pulls the wall in by its share of the points times 20 mm.
+// As a region its mean stands out, and it is left out.
+TEST(RoomPlanes, AWhiteboardOnAFarWallIsLeftOutAsClutter) {
+  RangeNoise noise;
+  noise.fraction = kNoise;
+  noise.range_max_m = kRangeMax;
+  RangeNoise blind = noise;
+  blind.clutter_min_m = 0.0;
+  for (uint64_t seed : {7, 8, 9}) {
+    const Rays rays = farWall(20000, 5.5, 9.5, 0.02, seed);
+    const RefinedPlane with = refinePlane(rays.points, rays.origins, planeAt(kWallX), blind);
+    ASSERT_TRUE(with.ok);
+    EXPECT_LT(wallOffset(with.normal, with.offset), -0.0025) << seed;
+    const RefinedPlane p = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
+    ASSERT_TRUE(p.ok);
+    EXPECT_GE(p.clutter_regions, 1) << seed;
+    EXPECT_NEAR(wallOffset(p.normal, p.offset), 0.0, 0.001) << seed;
+  }
+}
+
+// A wall with nothing on it loses no region to the clutter search, near or far.
+TEST(RoomPlanes, ABareWallHasNoClutter) {
+  RangeNoise noise;
+  noise.fraction = kNoise;
+  noise.range_max_m = kRangeMax;
+  for (uint64_t seed : {7, 8, 9, 10, 11}) {
+    for (auto [near_m, far_m] : {std::pair{5.5, 9.5}, std::pair{0.5, 3.0}}) {
+      for (int count : {2000, 20000}) {
+        const Rays rays = farWall(count, near_m, far_m, 0.0, seed);
+        const RefinedPlane p = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
+        ASSERT_TRUE(p.ok);
+        EXPECT_EQ(p.clutter_regions, 0) << seed << " " << near_m << " " << count;
+      }
+    }
+  }
 }
 
 // A box room (walls at x = +-kHalfL, y = +-kHalfW, floor z = 0, ceiling kHeight) scanned by
@@ -145,7 +188,9 @@ TEST(RoomPlanes, TheRoomsCornersDoNotPullItsPlanesInwards) {
   EXPECT_NEAR(*dims.L1, 2 * kHalfL, 0.0005);
   EXPECT_NEAR(*dims.L2, 2 * kHalfW, 0.0005);
   EXPECT_NEAR(*dims.L3, kHeight, 0.0003);
-  // The cause: the +Y wall alone, the strips of the floor and the ceiling along it taken in.
+  // The cause: the +Y wall alone, the strips of the floor and the ceiling along it taken in
+  // (without the clutter search, which would take out a strip as a proud region).
+  noise.clutter_min_m = 0.0;
   const RefinedPlane alone = refinePlane(rays.points, rays.origins, planes.walls[0], noise);
   ASSERT_TRUE(alone.ok);
   // < 0: the plane lies in the room, nearer the lidar than the wall.
