@@ -54,7 +54,7 @@ void awaitFirstFrame(ByteStream& stream, int timeout_ms, const std::string& what
 // stream offset, every other event to `on_event`.
 template <class Decoder, class Event, class OnEvent>
 void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* data, size_t size,
-                 int64_t arrival_utime, bool raw, int64_t* fed, LineClock* line,
+                 int64_t arrival_utime, int64_t* fed, LineClock* line,
                  std::vector<std::string>* errors, OnEvent on_event, bool at_end = false) {
   events->clear();
   if (at_end) {
@@ -63,7 +63,7 @@ void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* da
     decoder.feed(data, size, events);
   }
   *fed += static_cast<int64_t>(size);
-  line->chunk(raw ? -1 : arrival_utime, *fed);
+  line->chunk(arrival_utime, *fed);
   for (const Event& e : *events) {
     if (const auto* d = std::get_if<DecodeError>(&e)) {
       errors->push_back("byte " + std::to_string(d->offset) + ": " + d->what);
@@ -77,9 +77,8 @@ void decodeChunk(Decoder& decoder, std::vector<Event>* events, const uint8_t* da
 
 // ---- HI219 ----
 
-Hi219Session::Hi219Session(int baud, bool raw) : clock_(deviceClock(1000.0)), raw_(raw) {
-  line_ = LineClock(baud);
-}
+Hi219Session::Hi219Session(int baud, bool raw)
+    : clock_(deviceClock(1000.0)), line_(baud, !raw), raw_(raw) {}
 
 void Hi219Session::reset() {
   decoder_.reset();
@@ -100,7 +99,7 @@ int Hi219Session::decode(const uint8_t* data, size_t size, int64_t arrival_utime
                          std::vector<ImuSample>* samples, std::vector<std::string>* errors) {
   int n = 0;
   decodeChunk(
-      decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
+      decoder_, &events_, data, size, arrival_utime, &fed_, &line_, errors,
       [&](const hi219::Event& e) {
         const auto& f = std::get<hi219::Frame>(e);
         if (f.id >= 0) user_id_ = f.id;
@@ -139,9 +138,8 @@ std::string Hi219Driver::identity() const {
 
 // ---- wheel board ----
 
-WheelBoardSession::WheelBoardSession(int baud, bool raw) : clock_(deviceClock(1.0)), raw_(raw) {
-  line_ = LineClock(baud);
-}
+WheelBoardSession::WheelBoardSession(int baud, bool raw)
+    : clock_(deviceClock(1.0)), line_(baud, !raw), raw_(raw) {}
 
 void WheelBoardSession::reset() {
   decoder_.reset();
@@ -164,7 +162,7 @@ int WheelBoardSession::decode(const uint8_t* data, size_t size, int64_t arrival_
                               std::vector<WheelTicks>* ticks, std::vector<std::string>* errors) {
   int n = 0;
   decodeChunk(
-      decoder_, &events_, data, size, arrival_utime, raw_, &fed_, &line_, errors,
+      decoder_, &events_, data, size, arrival_utime, &fed_, &line_, errors,
       [&](const wheelboard::Event& e) {
         const auto* t = std::get_if<wheelboard::Ticks>(&e);
         if (!t) return;  // a SPEED frame of a two-way capture

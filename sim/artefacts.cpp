@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "core/angles.hpp"
 #include "sim/reflectance.hpp"
 
 namespace sweepmap {
@@ -106,7 +107,7 @@ bool SceneArtefacts::returns(const Eigen::Vector3d& point, const Eigen::Vector3d
       uniform_(rng_) < sim_.dropout_dark_probability) {
     return false;
   }
-  const double incidence_deg = std::acos(std::min(1.0, std::fabs(dir[hit.axis]))) * 180.0 / M_PI;
+  const double incidence_deg = std::acos(std::min(1.0, std::fabs(dir[hit.axis]))) * kRadToDeg;
   return !glancingDropout(incidence_deg, sim_.dropout_glancing_probability, rng_);
 }
 
