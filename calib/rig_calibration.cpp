@@ -94,6 +94,7 @@ nlohmann::json rigCalibrationJson(const RigCalibration& c) {
   nlohmann::json measures = nlohmann::json::object();
   for (const auto& m : c.measures) {
     nlohmann::json j = {{"value", m.value}, {"unit", m.unit}};
+    if (m.sigma) j["sigma"] = *m.sigma;
     if (m.truth) {
       j["truth"] = *m.truth;
       j["error"] = m.value - *m.truth;
@@ -187,8 +188,13 @@ std::string rigCalibrationReport(const RigCalibration& c) {
     s << "\n";
   }
   for (const auto& m : c.measures) {
-    s << "  measured " << m.key << " " << std::setprecision(4) << m.value << " " << m.unit;
-    if (m.truth) s << ", truth " << *m.truth << ", off by " << m.value - *m.truth;
+    s << "  measured " << m.key << " " << std::fixed << std::setprecision(6) << m.value;
+    if (m.sigma) s << " +- " << std::setprecision(4) << *m.sigma;
+    s << " " << m.unit;
+    if (m.truth) {
+      s << ", truth " << std::setprecision(6) << *m.truth << ", off by " << std::setprecision(4)
+        << m.value - *m.truth;
+    }
     s << "\n";
   }
   for (const auto& w : c.warnings) s << "  warning: " << w << "\n";

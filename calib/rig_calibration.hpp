@@ -31,6 +31,7 @@ struct CalibMeasure {
   double value = 0.0;
   std::string unit;
   std::optional<double> truth;  // simulated logs: the scene's
+  std::optional<double> sigma;  // its 1-sigma uncertainty, where known
 };
 
 struct RigCalibration {

@@ -5,7 +5,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <optional>
+#include <utility>
 
 namespace sweepmap {
 
@@ -137,12 +139,53 @@ void planeWindow(const std::vector<Eigen::Vector3f>& cloud,
     if (!(std::abs(n.dot(p) + d) <= noise.window_sigmas * s)) continue;
     if (!ownRay(n, d, o, p, noise, nearer)) continue;
     if (!clutter.empty()) {
-      const std::optional<Eigen::Vector3d> at = meetingPoint(n, d, o, p);
-      if (!at || inClutter(clutter, *at)) continue;
+      const std::optional<Eigen::Vector3d> meets = meetingPoint(n, d, o, p);
+      if (meets && inClutter(clutter, *meets)) continue;
     }
     idx->push_back(int(i));
     w->push_back(1.0 / (s * s));
   }
+}
+
+double weightOf(const RefinedPlane& r) {
+  double w = 0.0;
+  for (double x : r.weights) w += x;
+  return w;
+}
+
+// In-plane axes of the normal n: horizontal for a wall, x and y for the floor and the ceiling.
+void planeAxes(const Eigen::Vector3d& n, Eigen::Vector3d* e1, Eigen::Vector3d* e2) {
+  *e1 = n.cross(Eigen::Vector3d::UnitZ());
+  if (e1->norm() < 0.5) *e1 = Eigen::Vector3d::UnitY().cross(n);
+  e1->normalize();
+  *e2 = n.cross(*e1);
+}
+
+// RefinedPlane::offset_sigma of r's inliers: the weighted mean's sigma with the weighted
+// deviations summed per in-plane cell first (the sandwich over cells, with its small-sample
+// factor), or the points' own (1 / sum of the weights, times chi2 per dof when above 1) if
+// larger.
+double offsetSigma(const std::vector<Eigen::Vector3f>& cloud, const RefinedPlane& r) {
+  Eigen::Vector3d e1, e2;
+  planeAxes(r.normal, &e1, &e2);
+  std::map<std::pair<int64_t, int64_t>, double> cells;
+  double sw = 0.0, chi2 = 0.0;
+  for (size_t k = 0; k < r.inliers.size(); ++k) {
+    const Eigen::Vector3d p = cloud[size_t(r.inliers[k])].cast<double>();
+    const double e = r.normal.dot(p) + r.offset;
+    cells[{int64_t(std::floor(e1.dot(p) / kOffsetClusterM)),
+           int64_t(std::floor(e2.dot(p) / kOffsetClusterM))}] += r.weights[k] * e;
+    sw += r.weights[k];
+    chi2 += r.weights[k] * e * e;
+  }
+  if (!(sw > 0.0)) return 0.0;
+  const double dof = std::max(1.0, double(r.inliers.size()) - 3.0);
+  const double own = std::sqrt(std::max(1.0, chi2 / dof) / sw);
+  if (cells.size() < 2) return own;
+  double ss = 0.0;
+  for (const auto& [cell, sum] : cells) ss += sum * sum;
+  const double m = double(cells.size());
+  return std::max(own, std::sqrt(ss * m / (m - 1.0)) / sw);
 }
 
 // The window's fixed point from `r`'s plane (refinePlane without the clutter search).
@@ -182,6 +225,7 @@ void refineFixedPoint(const std::vector<Eigen::Vector3f>& cloud,
     if (idx == last) break;
     last = std::move(idx);
   }
+  if (r->ok) r->offset_sigma = offsetSigma(cloud, *r);
 }
 
 // The plane's inliers binned by where their rays meet it, in cells of `cell` along e1, e2:
@@ -203,10 +247,7 @@ CellSums cellSums(const std::vector<Eigen::Vector3f>& cloud,
                   const RangeNoise& noise) {
   CellSums c;
   const Eigen::Vector3d& n = r.normal;
-  c.e1 = n.cross(Eigen::Vector3d::UnitZ());
-  if (c.e1.norm() < 0.5) c.e1 = n.cross(Eigen::Vector3d::UnitX());
-  c.e1.normalize();
-  c.e2 = n.cross(c.e1);
+  planeAxes(n, &c.e1, &c.e2);
   struct Item {
     Eigen::Vector2d at;
     double w, rho;
@@ -300,17 +341,24 @@ RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
   r.offset = start.offset / std::max(1e-12, start.normal.norm());
   std::vector<ClutterBox> clutter;
   refineFixedPoint(cloud, origins, noise, nearer, clutter, &r);
+  const double whole = weightOf(r);
   while (r.ok && noise.clutter_min_m > 0 && int(clutter.size()) < noise.clutter_max_regions) {
     const std::optional<ClutterBox> box = findClutter(cloud, origins, r, noise);
     if (!box) break;
     clutter.push_back(*box);
     RefinedPlane next = r;
     refineFixedPoint(cloud, origins, noise, nearer, clutter, &next);
-    if (!next.ok) break;
+    // A plane that would lose more than that share is smeared or bent, not cluttered: each
+    // region taken out on one side would push it further back.
+    if (!next.ok || weightOf(next) < (1.0 - noise.clutter_max_share) * whole) break;
     r = std::move(next);
     r.clutter_regions = int(clutter.size());
   }
   return r;
+}
+
+double refinedDistanceSigma(const RefinedPlane& a, const RefinedPlane& b) {
+  return std::hypot(a.offset_sigma, b.offset_sigma);
 }
 
 double refinedDistance(const RefinedPlane& a, const RefinedPlane& b) {
@@ -345,17 +393,26 @@ RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>
     if (!refined[a].ok || !refined[b].ok) return std::nullopt;
     return refinedDistance(refined[a], refined[b]);
   };
+  const auto sigma = [&](size_t a, size_t b) {
+    return refinedDistanceSigma(refined[a], refined[b]);
+  };
   RoomDims d;
   const size_t f = p.walls.size() == 4 ? 4 : 0;  // the floor's index
   if (f == 4) {
     const std::optional<double> y = distance(0, 2);
     const std::optional<double> x = distance(1, 3);
     if (x && y) {
-      d.L1 = std::max(*x, *y);
-      d.L2 = std::min(*x, *y);
+      const bool x_longer = *x >= *y;
+      d.L1 = x_longer ? *x : *y;
+      d.L2 = x_longer ? *y : *x;
+      d.L1_sigma = x_longer ? sigma(1, 3) : sigma(0, 2);
+      d.L2_sigma = x_longer ? sigma(0, 2) : sigma(1, 3);
     }
   }
-  if (p.floor && p.ceiling) d.L3 = distance(f, f + 1);
+  if (p.floor && p.ceiling) {
+    d.L3 = distance(f, f + 1);
+    if (d.L3) d.L3_sigma = sigma(f, f + 1);
+  }
   return d;
 }
 

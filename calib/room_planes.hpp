@@ -35,6 +35,9 @@ RoomPlanes findRoomPlanes(const std::vector<Eigen::Vector3f>& cloud,
 
 struct RoomDims {
   std::optional<double> L1, L2, L3;  // length, width (the longer and shorter wall spacing), height
+  // Their sigmas from the two planes' offset sigmas (RefinedPlane::offset_sigma); 0: none
+  // (roomDims' RANSAC planes).
+  double L1_sigma = 0.0, L2_sigma = 0.0, L3_sigma = 0.0;
 };
 RoomDims roomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& cloud);
 
@@ -60,7 +63,11 @@ RoomDims roomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& 
 // proud of the rest's, towards the lidar, by at least clutter_min_m and clutter_sigmas of the
 // difference's sigma is left out, grown by one cell, and the plane refined again; up to
 // clutter_max_regions times. Only towards the lidar: nothing stands behind a wall, and a
-// recess (a door, a window) lies beyond the window of the wall's near views.
+// recess (a door, a window) lies beyond the window of the wall's near views (not handled: a
+// recess in a wall seen only from afar, whose window holds it). At most clutter_max_share of
+// the plane's weight is left out in all: a plane smeared by a wrong calibration stands proud
+// here and there, and taking out one side would push it back. The search's threshold has a
+// thin margin on a wall seen only from afar (see clutter_sigmas).
 struct RangeNoise {
   double fraction = 0.01;
   double range_max_m = 0.0;  // 0: no limit
@@ -76,6 +83,7 @@ struct RangeNoise {
   double clutter_sigmas = 4.5;
   double clutter_cell_m = 0.25;
   int clutter_max_regions = 3;
+  double clutter_max_share = 0.5;  // of the plane's weight, all regions together (grown)
 };
 struct RefinedPlane {
   bool ok = false;
@@ -85,7 +93,12 @@ struct RefinedPlane {
   std::vector<int> inliers;
   std::vector<double> weights;  // of each inlier: 1 / sigma^2
   int clutter_regions = 0;      // regions left out as clutter proud of the plane
+  // The sigma of the plane's offset at its centroid: the weighted mean's, cluster-robust over
+  // in-plane cells of kOffsetClusterM (the points of a cell err together: one stretch of the
+  // track saw them), never below what the points' own noise gives.
+  double offset_sigma = 0.0;
 };
+constexpr double kOffsetClusterM = 0.5;
 // `origins[i]`: where the lidar was when it measured cloud[i]. Starts from `start` (a RANSAC
 // plane); not ok when fewer than 10 points remain.
 // `nearer`: the room's other planes (normal, offset). Where two surfaces meet (a wall and the
@@ -105,8 +118,12 @@ RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
 // The distance of two near-parallel refined planes: the mean of each one's distance from the
 // other's weighted centroid.
 double refinedDistance(const RefinedPlane& a, const RefinedPlane& b);
+// Its sigma: the two offsets' sigmas in quadrature (each plane's tilt, at the other's centroid,
+// left out: the planes face each other across the room's middle).
+double refinedDistanceSigma(const RefinedPlane& a, const RefinedPlane& b);
 // The room's length, width and height from refined planes (RoomPlanes' walls, floor and
-// ceiling refined in its cloud: each alone, then each again with the others as `nearer`).
+// ceiling refined in its cloud: each alone without the clutter search, then each again with
+// the others as `nearer` and the clutter search as `noise` says), with their sigmas.
 RoomDims refinedRoomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise);
 

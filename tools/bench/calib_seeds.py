@@ -105,7 +105,8 @@ def rows_of_rig(j):
                      p["truth"]))
     for key, m in j.get("measures", {}).items():
         if m.get("truth") is not None:
-            rows.append((key, m["value"] - m["truth"], None, m.get("unit", ""), m["truth"]))
+            rows.append((key, m["value"] - m["truth"], m.get("sigma"), m.get("unit", ""),
+                         m["truth"]))
     return rows
 
 
