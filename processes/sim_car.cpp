@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "processes/channels.hpp"
+#include "processes/sim_setup.hpp"
 
 namespace sweepmap {
 
@@ -68,6 +69,7 @@ truth_mobile_rig_t truthMobileRigMessage(const MobileLidarConfig& rig, const Sim
   }
   m.lidar_time_offset_s = c.lidar_time_offset_ms * 1e-3;
   m.gyro_bias_z_rad_s = c.gyro_bias_z_rad_s;
+  setArtefactTruth(c, &m);
   return m;
 }
 

@@ -25,12 +25,7 @@ truth_rig_errors_t makeTruthRigErrors(const SimRigConfig& sim, int64_t utime) {
   m.scan_plane_tilt_rad = sim.scan_plane_tilt_deg * M_PI / 180.0;
   m.mirror_offset_rad = sim.mirror_offset_deg * M_PI / 180.0;
   m.plate_thickness_m = sim.plate_thickness_mm * 1e-3;
-  m.mixed_pixel_probability = sim.mixed_pixel_probability;
-  m.dropout_dark_probability = sim.dropout_dark_probability;
-  m.dropout_glancing_probability = sim.dropout_glancing_probability;
-  m.people = sim.people;
-  m.window_width_m = sim.window_width_m;
-  m.whiteboard_proud_m = sim.whiteboard_proud_mm * 1e-3;
+  setArtefactTruth(sim, &m);
   return m;
 }
 
@@ -46,6 +41,9 @@ truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t swe
   t.encoder_zero_rad = g.encoder_zero_rad;
   t.range_noise_sigma_mm = sim.range_noise_sigma_mm;
   t.encoder_noise_counts = sim.encoder_noise_counts;
+  t.mixed_pixel_probability = sim.mixed_pixel_probability;
+  t.dropout_glancing_probability = sim.dropout_glancing_probability;
+  t.dropout_spot_probability = sim.dropout_spot_probability;
   t.scene = sim.scene;
   t.has_plane = plate != nullptr;
   if (plate) {

@@ -27,6 +27,18 @@ truth_rig_t makeTruthRig(const RotatingLidarConfig& rig, const SceneConfig& scen
 // The build's errors and the scene's artefacts (TRUTH_RIG_ERRORS), published beside it.
 truth_rig_errors_t makeTruthRigErrors(const SimRigConfig& sim, int64_t utime);
 
+// The scene's artefacts into a truth message of rig A (truth_rig_errors_t) or rig B
+// (truth_mobile_rig_t): their fields have the names of the sim.* keys.
+template <class TruthMessage>
+void setArtefactTruth(const SceneArtefactConfig& sim, TruthMessage* m) {
+  m->mixed_pixel_probability = sim.mixed_pixel_probability;
+  m->dropout_dark_probability = sim.dropout_dark_probability;
+  m->dropout_glancing_probability = sim.dropout_glancing_probability;
+  m->people = sim.people;
+  m->window_width_m = sim.window_width_m;
+  m->whiteboard_proud_m = sim.whiteboard_proud_mm * 1e-3;
+}
+
 // Rig C's truth (TRUTH_PROFILE_RIG) for sweep `sweep_id`, with the plate's true plane when
 // `plate` is given: what the offline simulation and the live simulated profiler publish.
 truth_profile_rig_t makeTruthProfileRig(const SimProfileConfig& sim, int32_t sweep_id,

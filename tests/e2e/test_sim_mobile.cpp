@@ -165,6 +165,12 @@ TEST(SimMobile, CircleLogReplaysWithEkfBetterThanWheelOdometry) {
         EXPECT_DOUBLE_EQ(t.wheel_distance_m, 0.2 + 0.004);
         EXPECT_DOUBLE_EQ(t.lidar_time_offset_s, 0.003);
         EXPECT_DOUBLE_EQ(t.gyro_bias_z_rad_s, 0.01);
+        EXPECT_DOUBLE_EQ(t.mixed_pixel_probability, 0.5);  // the scene's artefacts
+        EXPECT_DOUBLE_EQ(t.dropout_dark_probability, 0.3);
+        EXPECT_DOUBLE_EQ(t.dropout_glancing_probability, 0.5);
+        EXPECT_EQ(t.people, 2);
+        EXPECT_DOUBLE_EQ(t.window_width_m, 1.5);
+        EXPECT_DOUBLE_EQ(t.whiteboard_proud_m, 0.02);
       }
       if (ev.channel == channels::kLidarScan) {
         lidar_scan_t s;

@@ -135,6 +135,9 @@ TEST(ProfileScanNode, SweepsThePlatePosesAndTheirPointsLieOnTheTruePlanes) {
     ++profiles[p.sweep_id];
     const truth_profile_rig_t& t = run.truths.at(static_cast<size_t>(p.sweep_id));
     ASSERT_EQ(t.sweep_id, p.sweep_id);
+    EXPECT_DOUBLE_EQ(t.mixed_pixel_probability, 0.5);  // the part's artefacts, on by default
+    EXPECT_DOUBLE_EQ(t.dropout_glancing_probability, 0.5);
+    EXPECT_DOUBLE_EQ(t.dropout_spot_probability, 0.01);
     const Eigen::Vector3d n(t.plane_normal[0], t.plane_normal[1], t.plane_normal[2]);
     for (const auto& q : profilePointsInRigFrameM(assembler.geometry(), fromLcm(p))) {
       distances[p.sweep_id].push_back(n.dot(q.cast<double>() * 1e3) - t.plane_distance_mm);

@@ -44,7 +44,8 @@ Runner addSimCommand(CLI::App& app) {
       "clock, deterministic from the seed. rotating_lidar (rig A): the motor and lidar process "
       "classes against the simulated stepper, switch and lidar (MOTOR_*, SCAN_WINDOW, "
       "LIDAR_SCAN, TRUTH_*). mobile_lidar (rig B): the car with wheel encoders, IMU and vertical "
-      "lidar driving sim.path (WHEEL_TICKS, IMU, LIDAR_SCAN, TRUTH_POSE, TRUTH_MOUNTING). "
+      "lidar driving sim.path (WHEEL_TICKS, IMU, LIDAR_SCAN, TRUTH_POSE, TRUTH_MOUNTING, "
+      "TRUTH_MOBILE_RIG). "
       "rotating_profile (rig C): the profile sensor on its turntable sweeping the calibration "
       "plate once per pose (sim.plate_count) or the paper's test piece (PROFILE, "
       "TRUTH_PROFILE_RIG)");
