@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cmath>
 #include <initializer_list>
-#include <map>
 #include <set>
 #include <utility>
 
@@ -330,9 +329,8 @@ PlacedCloud awayFromStructure(const PlacedCloud& c) {
 // the cloud shows at height f says the lever arm's z is off by -f. The floor refined against
 // the range noise, away from what stands on it (the RANSAC plane's 30 mm window held the foot
 // of every wall: -0.13 mm on every seed; a 3 sigma window alone still -0.01 to -0.02 mm). Its
-// sigma: the weighted mean's, with the points' weighted deviations summed per cell of
-// kClusterM first (points of a cell err together: the same passes, the same attitude errors of
-// the track).
+// sigma: the refined plane's offset_sigma at its centroid (cluster-robust over in-plane cells:
+// the points of a cell err together, the same passes, the same attitude errors of the track).
 struct FloorLever {
   bool ok = false;
   double dz = 0.0, sigma = 0.0;
@@ -342,25 +340,12 @@ FloorLever leverFromFloor(const PlacedCloud& all, const RoomPlanes& planes,
   FloorLever f;
   if (!planes.floor || planes.floor->inlier_indices.size() < 100) return f;
   const PlacedCloud cloud = awayFromStructure(all);
-  RangeNoise floor_noise = noise;  // what stands on the floor is taken away above
-  floor_noise.clutter_min_m = 0.0;
-  const RefinedPlane floor = refinePlane(cloud.points, cloud.origins, *planes.floor, floor_noise);
+  // No clutter search: what stands on the floor is taken away above.
+  const RefinedPlane floor = refinePlane(cloud.points, cloud.origins, *planes.floor, noise);
   if (!floor.ok) return f;
-  const double h = floor.centroid.z();
-  std::map<std::pair<int, int>, double> cells;
-  double sw = 0.0;
-  for (size_t k = 0; k < floor.inliers.size(); ++k) {
-    const Eigen::Vector3f& p = cloud.points[size_t(floor.inliers[k])];
-    cells[{int(std::floor(p.x() / kClusterM)), int(std::floor(p.y() / kClusterM))}] +=
-        floor.weights[k] * (double(p.z()) - h);
-    sw += floor.weights[k];
-  }
-  double ss = 0.0;
-  for (const auto& [cell, sum] : cells) ss += sum * sum;
-  f.ok = cells.size() > 10;
-  if (!f.ok) return f;
-  f.dz = -h;
-  f.sigma = std::sqrt(ss * double(cells.size()) / double(cells.size() - 1)) / sw;
+  f.ok = true;
+  f.dz = -floor.centroid.z();
+  f.sigma = floor.offset_sigma;
   return f;
 }
 

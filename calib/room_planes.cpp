@@ -244,7 +244,7 @@ struct CellSums {
 
 CellSums cellSums(const std::vector<Eigen::Vector3f>& cloud,
                   const std::vector<Eigen::Vector3f>& origins, const RefinedPlane& r,
-                  const RangeNoise& noise) {
+                  const ClutterSearch& search) {
   CellSums c;
   const Eigen::Vector3d& n = r.normal;
   planeAxes(n, &c.e1, &c.e2);
@@ -267,7 +267,7 @@ CellSums cellSums(const std::vector<Eigen::Vector3f>& cloud,
   }
   if (items.empty()) return c;
   // At most 64 cells a side: the rectangles are (cells a side)^4 / 4.
-  c.cell = std::max({noise.clutter_cell_m, (hi - lo).maxCoeff() / 63.0, 1e-3});
+  c.cell = std::max({search.cell_m, (hi - lo).maxCoeff() / 63.0, 1e-3});
   c.lo = lo;
   c.nu = int((hi.x() - lo.x()) / c.cell) + 1;
   c.nv = int((hi.y() - lo.y()) / c.cell) + 1;
@@ -293,15 +293,15 @@ CellSums cellSums(const std::vector<Eigen::Vector3f>& cloud,
 constexpr int kClutterGrowCells = 1;
 
 // The rectangle of cells (less than half of the plane's weight) that stands proud of the rest
-// by the most sigmas, if by at least clutter_min_m and clutter_sigmas (RangeNoise); grown by
+// by the most sigmas, if by at least search.min_m and search.sigmas; grown by
 // kClutterGrowCells.
 std::optional<ClutterBox> findClutter(const std::vector<Eigen::Vector3f>& cloud,
                                       const std::vector<Eigen::Vector3f>& origins,
-                                      const RefinedPlane& r, const RangeNoise& noise) {
-  const CellSums c = cellSums(cloud, origins, r, noise);
+                                      const RefinedPlane& r, const ClutterSearch& search) {
+  const CellSums c = cellSums(cloud, origins, r, search);
   if (c.nu == 0) return std::nullopt;
   const double Wt = c.W(c.nu, c.nv), St = c.S(c.nu, c.nv);
-  double best = noise.clutter_sigmas;
+  double best = search.sigmas;
   std::optional<std::array<int, 4>> at;
   for (int u0 = 0; u0 < c.nu; ++u0) {
     for (int u1 = u0; u1 < c.nu; ++u1) {
@@ -311,7 +311,7 @@ std::optional<ClutterBox> findClutter(const std::vector<Eigen::Vector3f>& cloud,
           if (!(Win > 0.0) || 2.0 * Win > Wt) continue;
           const double Sin = c.sum(c.S, u0, u1, v0, v1);
           const double proud = Sin / Win - (St - Sin) / (Wt - Win);
-          if (proud < noise.clutter_min_m) continue;
+          if (proud < search.min_m) continue;
           const double z = proud / std::sqrt(1.0 / Win + 1.0 / (Wt - Win));
           if (z > best) {
             best = z;
@@ -335,22 +335,23 @@ std::optional<ClutterBox> findClutter(const std::vector<Eigen::Vector3f>& cloud,
 
 RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
-                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer) {
+                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer,
+                         const std::optional<ClutterSearch>& search) {
   RefinedPlane r;
   r.normal = start.normal.normalized();
   r.offset = start.offset / std::max(1e-12, start.normal.norm());
   std::vector<ClutterBox> clutter;
   refineFixedPoint(cloud, origins, noise, nearer, clutter, &r);
   const double whole = weightOf(r);
-  while (r.ok && noise.clutter_min_m > 0 && int(clutter.size()) < noise.clutter_max_regions) {
-    const std::optional<ClutterBox> box = findClutter(cloud, origins, r, noise);
+  while (r.ok && search && int(clutter.size()) < search->max_regions) {
+    const std::optional<ClutterBox> box = findClutter(cloud, origins, r, *search);
     if (!box) break;
     clutter.push_back(*box);
     RefinedPlane next = r;
     refineFixedPoint(cloud, origins, noise, nearer, clutter, &next);
     // A plane that would lose more than that share is smeared or bent, not cluttered: each
     // region taken out on one side would push it further back.
-    if (!next.ok || weightOf(next) < (1.0 - noise.clutter_max_share) * whole) break;
+    if (!next.ok || weightOf(next) < (1.0 - search->max_share) * whole) break;
     r = std::move(next);
     r.clutter_regions = int(clutter.size());
   }
@@ -367,16 +368,15 @@ double refinedDistance(const RefinedPlane& a, const RefinedPlane& b) {
 }
 
 RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>& cloud,
-                         const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise) {
+                         const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise,
+                         const ClutterSearch& clutter) {
   // The planes in this order: the four walls (extractWalls' order), the floor, the ceiling.
   std::vector<WallPlaneFit> start;
   if (p.walls.size() == 4) start = p.walls;
   if (p.floor && p.ceiling) start.insert(start.end(), {*p.floor, *p.ceiling});
   // Alone without the clutter search: the others' strips along its edges would stand proud.
-  RangeNoise plain = noise;
-  plain.clutter_min_m = 0.0;
   std::vector<RefinedPlane> alone;
-  for (const WallPlaneFit& s : start) alone.push_back(refinePlane(cloud, origins, s, plain));
+  for (const WallPlaneFit& s : start) alone.push_back(refinePlane(cloud, origins, s, noise));
   std::vector<RefinedPlane> refined;
   for (size_t i = 0; i < alone.size(); ++i) {
     std::vector<PlaneEquation> nearer;
@@ -387,7 +387,8 @@ RoomDims refinedRoomDims(const RoomPlanes& p, const std::vector<Eigen::Vector3f>
     WallPlaneFit from;
     from.normal = alone[i].normal;
     from.offset = alone[i].offset;
-    refined.push_back(alone[i].ok ? refinePlane(cloud, origins, from, noise, nearer) : alone[i]);
+    refined.push_back(alone[i].ok ? refinePlane(cloud, origins, from, noise, nearer, clutter)
+                                  : alone[i]);
   }
   const auto distance = [&](size_t a, size_t b) -> std::optional<double> {
     if (!refined[a].ok || !refined[b].ok) return std::nullopt;

@@ -54,36 +54,38 @@ RoomDims roomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& 
 // within window_sigmas of its noise below range_max_m is left out: which rays remain no
 // longer depends on their noise.
 //
-// Clutter proud of a plane (a whiteboard on a wall, a poster, a shelf's back) lies within a
-// far wall's window: a 20 mm whiteboard on the lab's far wall, seen from 5.5-9.5 m (points
-// +-55-95 mm along the normal), pulled the wall 2-2.6 mm in. No point tells it apart, but the
-// region does: its rays' weighted mean stands proud of the rest by many sigmas of that mean.
-// After the fixed point, the axis-aligned rectangle of in-plane cells (each ray at the point
-// where it meets the plane, so which cell does not depend on its noise) whose mean stands
-// proud of the rest's, towards the lidar, by at least clutter_min_m and clutter_sigmas of the
-// difference's sigma is left out, grown by one cell, and the plane refined again; up to
-// clutter_max_regions times. Only towards the lidar: nothing stands behind a wall, and a
-// recess (a door, a window) lies beyond the window of the wall's near views (not handled: a
-// recess in a wall seen only from afar, whose window holds it). At most clutter_max_share of
-// the plane's weight is left out in all: a plane smeared by a wrong calibration stands proud
-// here and there, and taking out one side would push it back. The search's threshold has a
-// thin margin on a wall seen only from afar (see clutter_sigmas).
 struct RangeNoise {
   double fraction = 0.01;
   double range_max_m = 0.0;  // 0: no limit
   double floor_m = 0.001;    // added in quadrature to each sigma (the model's own error)
   double window_sigmas = 3.0;
   int iterations = 12;
+};
+// Clutter proud of a plane (a whiteboard on a wall, a poster, a shelf's back) lies within a
+// far wall's window: a 20 mm whiteboard on the lab's far wall, seen from 5.5-9.5 m (points
+// +-55-95 mm along the normal), pulled the wall 2-2.6 mm in. No point tells it apart, but the
+// region does: its rays' weighted mean stands proud of the rest by many sigmas of that mean.
+// After the fixed point, the axis-aligned rectangle of in-plane cells (each ray at the point
+// where it meets the plane, so which cell does not depend on its noise) whose mean stands
+// proud of the rest's, towards the lidar, by at least min_m and `sigmas` of the difference's
+// sigma is left out, grown by one cell, and the plane refined again; up to max_regions times.
+// Only towards the lidar: nothing stands behind a wall, and a recess (a door, a window) lies
+// beyond the window of the wall's near views (not handled: a recess in a wall seen only from
+// afar, whose window holds it). At most max_share of the plane's weight is left out in all: a
+// plane smeared by a wrong calibration stands proud here and there, and taking out one side
+// would push it back. The threshold has a thin margin on a wall seen only from afar (see
+// `sigmas`).
+struct ClutterSearch {
   // Larger than the track's error between two views of a wall (rig B: 1.5-3.9 mm at most),
-  // which no region of clutter should be mistaken for. 0: no clutter search.
-  double clutter_min_m = 0.008;
+  // which no region of clutter should be mistaken for.
+  double min_m = 0.008;
   // Above the rectangle that stands out most on a bare wall (2.5-4.1 sigmas on synthetic walls
   // of 2,000-20,000 points); the lab's whiteboard on the far wall of calib plan's drive stood
   // out by 4.5 (seed 2).
-  double clutter_sigmas = 4.5;
-  double clutter_cell_m = 0.25;
-  int clutter_max_regions = 3;
-  double clutter_max_share = 0.5;  // of the plane's weight, all regions together (grown)
+  double sigmas = 4.5;
+  double cell_m = 0.25;
+  int max_regions = 3;
+  double max_share = 0.5;  // of the plane's weight, all regions together (grown)
 };
 struct RefinedPlane {
   bool ok = false;
@@ -112,9 +114,11 @@ struct PlaneEquation {
   Eigen::Vector3d normal;
   double offset;
 };
+// `clutter`: the clutter search after the fixed point (none: the fixed point alone).
 RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
-                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer = {});
+                         const RangeNoise& noise, const std::vector<PlaneEquation>& nearer = {},
+                         const std::optional<ClutterSearch>& clutter = std::nullopt);
 // The distance of two near-parallel refined planes: the mean of each one's distance from the
 // other's weighted centroid.
 double refinedDistance(const RefinedPlane& a, const RefinedPlane& b);
@@ -123,8 +127,9 @@ double refinedDistance(const RefinedPlane& a, const RefinedPlane& b);
 double refinedDistanceSigma(const RefinedPlane& a, const RefinedPlane& b);
 // The room's length, width and height from refined planes (RoomPlanes' walls, floor and
 // ceiling refined in its cloud: each alone without the clutter search, then each again with
-// the others as `nearer` and the clutter search as `noise` says), with their sigmas.
+// the others as `nearer` and with `clutter`), with their sigmas.
 RoomDims refinedRoomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& cloud,
-                         const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise);
+                         const std::vector<Eigen::Vector3f>& origins, const RangeNoise& noise,
+                         const ClutterSearch& clutter = {});
 
 }  // namespace sweepmap

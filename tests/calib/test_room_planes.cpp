@@ -117,14 +117,13 @@ TEST(RoomPlanes, AWhiteboardOnAFarWallIsLeftOutAsClutter) {
   RangeNoise noise;
   noise.fraction = kNoise;
   noise.range_max_m = kRangeMax;
-  RangeNoise blind = noise;
-  blind.clutter_min_m = 0.0;
   for (uint64_t seed : {7, 8, 9}) {
     const Rays rays = farWall(20000, 5.5, 9.5, 0.02, seed);
-    const RefinedPlane with = refinePlane(rays.points, rays.origins, planeAt(kWallX), blind);
+    const RefinedPlane with = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
     ASSERT_TRUE(with.ok);
     EXPECT_LT(wallOffset(with.normal, with.offset), -0.0025) << seed;
-    const RefinedPlane p = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
+    const RefinedPlane p =
+        refinePlane(rays.points, rays.origins, planeAt(kWallX), noise, {}, ClutterSearch{});
     ASSERT_TRUE(p.ok);
     EXPECT_GE(p.clutter_regions, 1) << seed;
     EXPECT_NEAR(wallOffset(p.normal, p.offset), 0.0, 0.001) << seed;
@@ -140,7 +139,8 @@ TEST(RoomPlanes, ABareWallHasNoClutter) {
     for (auto [near_m, far_m] : {std::pair{5.5, 9.5}, std::pair{0.5, 3.0}}) {
       for (int count : {2000, 20000}) {
         const Rays rays = farWall(count, near_m, far_m, 0.0, seed);
-        const RefinedPlane p = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
+        const RefinedPlane p =
+            refinePlane(rays.points, rays.origins, planeAt(kWallX), noise, {}, ClutterSearch{});
         ASSERT_TRUE(p.ok);
         EXPECT_EQ(p.clutter_regions, 0) << seed << " " << near_m << " " << count;
       }
@@ -217,7 +217,6 @@ TEST(RoomPlanes, TheRoomsCornersDoNotPullItsPlanesInwards) {
   EXPECT_NEAR(*dims.L3, kHeight, 0.0003);
   // The cause: the +Y wall alone, the strips of the floor and the ceiling along it taken in
   // (without the clutter search, which would take out a strip as a proud region).
-  noise.clutter_min_m = 0.0;
   const RefinedPlane alone = refinePlane(rays.points, rays.origins, planes.walls[0], noise);
   ASSERT_TRUE(alone.ok);
   // < 0: the plane lies in the room, nearer the lidar than the wall.
