@@ -342,8 +342,9 @@ FloorLever leverFromFloor(const PlacedCloud& all, const RoomPlanes& planes,
   const PlacedCloud cloud = awayFromStructure(all);
   // No clutter search: what stands on the floor is taken away above.
   const RefinedPlane floor = refinePlane(cloud.points, cloud.origins, *planes.floor, noise);
-  if (!floor.ok) return f;
-  f.ok = true;
+  // Its sigma is cluster-robust over the cells: too few of them give no sigma to trust.
+  f.ok = floor.ok && floor.offset_cells > 10;
+  if (!f.ok) return f;
   f.dz = -floor.centroid.z();
   f.sigma = floor.offset_sigma;
   return f;

@@ -164,8 +164,9 @@ void planeAxes(const Eigen::Vector3d& n, Eigen::Vector3d* e1, Eigen::Vector3d* e
 // RefinedPlane::offset_sigma of r's inliers: the weighted mean's sigma with the weighted
 // deviations summed per in-plane cell first (the sandwich over cells, with its small-sample
 // factor), or the points' own (1 / sum of the weights, times chi2 per dof when above 1) if
-// larger.
-double offsetSigma(const std::vector<Eigen::Vector3f>& cloud, const RefinedPlane& r) {
+// larger. `cells_out`: how many cells the inliers fall in.
+double offsetSigma(const std::vector<Eigen::Vector3f>& cloud, const RefinedPlane& r,
+                   int* cells_out) {
   Eigen::Vector3d e1, e2;
   planeAxes(r.normal, &e1, &e2);
   std::map<std::pair<int64_t, int64_t>, double> cells;
@@ -178,6 +179,7 @@ double offsetSigma(const std::vector<Eigen::Vector3f>& cloud, const RefinedPlane
     sw += r.weights[k];
     chi2 += r.weights[k] * e * e;
   }
+  *cells_out = int(cells.size());
   if (!(sw > 0.0)) return 0.0;
   const double dof = std::max(1.0, double(r.inliers.size()) - 3.0);
   const double own = std::sqrt(std::max(1.0, chi2 / dof) / sw);
@@ -225,7 +227,7 @@ void refineFixedPoint(const std::vector<Eigen::Vector3f>& cloud,
     if (idx == last) break;
     last = std::move(idx);
   }
-  if (r->ok) r->offset_sigma = offsetSigma(cloud, *r);
+  if (r->ok) r->offset_sigma = offsetSigma(cloud, *r, &r->offset_cells);
 }
 
 // The plane's inliers binned by where their rays meet it, in cells of `cell` along e1, e2:

@@ -53,7 +53,6 @@ RoomDims roomDims(const RoomPlanes& planes, const std::vector<Eigen::Vector3f>& 
 // towards the lidar. A ray whose range to the plane (predicted by the plane, not measured) is
 // within window_sigmas of its noise below range_max_m is left out: which rays remain no
 // longer depends on their noise.
-//
 struct RangeNoise {
   double fraction = 0.01;
   double range_max_m = 0.0;  // 0: no limit
@@ -99,6 +98,7 @@ struct RefinedPlane {
   // in-plane cells of kOffsetClusterM (the points of a cell err together: one stretch of the
   // track saw them), never below what the points' own noise gives.
   double offset_sigma = 0.0;
+  int offset_cells = 0;  // the cells it is cluster-robust over
 };
 constexpr double kOffsetClusterM = 0.5;
 // `origins[i]`: where the lidar was when it measured cloud[i]. Starts from `start` (a RANSAC
@@ -114,11 +114,11 @@ struct PlaneEquation {
   Eigen::Vector3d normal;
   double offset;
 };
-// `clutter`: the clutter search after the fixed point (none: the fixed point alone).
+// `search`: the clutter search after the fixed point (none: the fixed point alone).
 RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
                          const RangeNoise& noise, const std::vector<PlaneEquation>& nearer = {},
-                         const std::optional<ClutterSearch>& clutter = std::nullopt);
+                         const std::optional<ClutterSearch>& search = std::nullopt);
 // The distance of two near-parallel refined planes: the mean of each one's distance from the
 // other's weighted centroid.
 double refinedDistance(const RefinedPlane& a, const RefinedPlane& b);

@@ -278,8 +278,9 @@ Runner addEmulateCommand(CLI::App& app) {
       ->delimiter(',');
   cmd->add_option("--fault-device", o->fault_device,
                   "the device the link faults below apply to (default: the first)");
-  cmd->add_flag("--publish-truth", o->world.publish_truth,
-                "mobile rigs: publish the car's TRUTH_POSE and TRUTH_MOUNTING on LCM");
+  cmd->add_flag(
+      "--publish-truth", o->world.publish_truth,
+      "mobile rigs: publish the car's TRUTH_POSE, TRUTH_MOUNTING and TRUTH_MOBILE_RIG on LCM");
   cmd->add_option("--start-utime", o->start_utime,
                   "when the simulated world starts [us, wall clock]; 0 = now")
       ->capture_default_str();
