@@ -57,25 +57,56 @@ struct Cloud {
   pcl::KdTreeFLANN<pcl::PointXYZ> voxel_tree[2];
 };
 
-// The centroids of `pts` per cube of `size`, in the order of the cubes' keys.
-std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double size) {
-  std::vector<std::pair<std::array<int64_t, 3>, int>> keys(pts.size());
-  for (size_t i = 0; i < pts.size(); ++i) {
-    keys[i] = {{int64_t(std::floor(pts[i].x() / size)), int64_t(std::floor(pts[i].y() / size)),
-                int64_t(std::floor(pts[i].z() / size))},
-               int(i)};
+using CubeKey = std::array<int64_t, 3>;
+
+CubeKey cubeOf(const Eigen::Vector3d& p, double size) {
+  return {int64_t(std::floor(p.x() / size)), int64_t(std::floor(p.y() / size)),
+          int64_t(std::floor(p.z() / size))};
+}
+
+// The rays `rays_in` grouped by the cube of `at(ray)`: rays in the cubes' key order, and each
+// cube's range of them.
+template <class At>
+void groupByCube(const std::vector<int>& rays_in, double size, At at, std::vector<CubeKey>* keys,
+                 std::vector<int>* rays_out, std::vector<size_t>* begin) {
+  std::vector<std::pair<CubeKey, int>> keyed;
+  keyed.reserve(rays_in.size());
+  for (int i : rays_in) keyed.push_back({cubeOf(at(i), size), i});
+  std::sort(keyed.begin(), keyed.end());
+  keys->clear();
+  rays_out->clear();
+  begin->assign(1, 0);
+  for (size_t i = 0; i < keyed.size(); ++i) {
+    rays_out->push_back(keyed[i].second);
+    if (i + 1 == keyed.size() || keyed[i + 1].first != keyed[i].first) {
+      keys->push_back(keyed[i].first);
+      begin->push_back(i + 1);
+    }
   }
-  std::sort(keys.begin(), keys.end());
+}
+
+// The mean of at(i) over each cube's rays, as groupByCube gave them.
+template <class At>
+std::vector<Eigen::Vector3d> cubeMeans(const std::vector<int>& order,
+                                       const std::vector<size_t>& begin, At at) {
   std::vector<Eigen::Vector3d> out;
-  for (size_t i = 0; i < keys.size();) {
-    size_t j = i;
+  for (size_t k = 0; k + 1 < begin.size(); ++k) {
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    for (; j < keys.size() && keys[j].first == keys[i].first; ++j)
-      sum += pts[size_t(keys[j].second)];
-    out.push_back(sum / double(j - i));
-    i = j;
+    for (size_t j = begin[k]; j < begin[k + 1]; ++j) sum += at(order[j]);
+    out.push_back(sum / double(begin[k + 1] - begin[k]));
   }
   return out;
+}
+
+// The centroids of `pts` per cube of `size`, in the order of the cubes' keys.
+std::vector<Eigen::Vector3d> voxelCentroids(const std::vector<Eigen::Vector3d>& pts, double size) {
+  std::vector<int> all(pts.size()), order;
+  for (size_t i = 0; i < pts.size(); ++i) all[i] = int(i);
+  std::vector<CubeKey> keys;
+  std::vector<size_t> begin;
+  const auto point = [&](int i) { return pts[size_t(i)]; };
+  groupByCube(all, size, point, &keys, &order, &begin);
+  return cubeMeans(order, begin, point);
 }
 
 pcl::PointCloud<pcl::PointXYZ>::Ptr toPcl(const std::vector<Eigen::Vector3d>& pts) {
@@ -146,48 +177,131 @@ int nearest(const Cloud& c, int h, const Eigen::Vector3d& p, int k, double radiu
   return n;
 }
 
-// Query a's correspondence, as the reference solver's planeResidual decides it: the other
-// pass's local plane flat, the query's own half seeing the same plane, not grazing, the query
-// over the middle of the patch.
 // The range a ray from `origin` along `dir` meets the plane (normal n through m) at.
 double predictedRange(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
                       const Eigen::Vector3d& n, const Eigen::Vector3d& m) {
   return std::abs(n.dot(m - origin)) / std::max(1e-9, std::abs(n.dot(dir)));
 }
 
-// The plane of a patch of voxel centroids, if flat to within the range noise of the query's ray
-// (at most along the normal) plus a millimetre. The noise is that of the range the plane
-// predicts for the ray, not of the range measured: a limit from the measured range would pass
-// the queries measured long more often than those measured short, and a noise-weighted one
-// weigh them less (together 0.1 % of every range, taken up as the wheels' scale).
-bool flatPatch(const Eigen::Vector3d* patch, int count, const Eigen::Vector3d& origin,
-               const Eigen::Vector3d& dir, const MountingCalibrationOptions& o,
-               Eigen::Vector3d* mean, Eigen::Vector3d* n) {
+// One half's local plane around a point: the PCA plane of its voxel centroids within
+// plane_radius_m (at least min_neighbours of them, planar), and their mean squared distance
+// from it.
+struct LocalPlane {
+  bool ok = false;
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), n = Eigen::Vector3d::UnitZ();
+  double spread_m2 = 0.0;
+};
+
+LocalPlane fitLocalPlane(const Cloud& c, int h, const Eigen::Vector3d& at,
+                         const MountingCalibrationOptions& o) {
+  LocalPlane lp;
+  Eigen::Vector3d patch[64];
+  const int count = voxelsNear(c, h, at, o.plane_radius_m, patch);
   if (count < o.min_neighbours ||
-      !fitPcaPlane(patch, count, o.max_planarity_ratio, 1e300, mean, n)) {
-    return false;
+      !fitPcaPlane(patch, count, o.max_planarity_ratio, 1e300, &lp.mean, &lp.n)) {
+    return lp;
   }
-  const double sigma = o.range_noise_fraction * predictedRange(origin, dir, *n, *mean);
   double var = 0.0;
-  for (int i = 0; i < count; ++i) var += std::pow(n->dot(patch[i] - *mean), 2);
-  return var / count <= 2.0 * sigma * sigma + 1e-6;
+  for (int i = 0; i < count; ++i) var += std::pow(lp.n.dot(patch[i] - lp.mean), 2);
+  lp.spread_m2 = var / count;
+  lp.ok = true;
+  return lp;
 }
 
-// The local planes at query a from the voxel centroids: the other pass's (its normal and
-// mean), and the one the query's own half sees there, which must agree (the query lies on that
-// surface, not on another one near an edge). False if either is not flat or they disagree.
-bool localPlane(const OverlapRay& ra, const Cloud& c, size_t a, const MountingCalibrationOptions& o,
+// Whether a local plane is flat to within the range noise of the query's ray (at most along
+// the normal) plus a millimetre. The noise is that of the range the plane predicts for the
+// ray, not of the range measured: a limit from the measured range would pass the queries
+// measured long more often than those measured short, and a noise-weighted one weigh them less
+// (together 0.1 % of every range, taken up as the wheels' scale).
+bool flatFor(const LocalPlane& lp, const Eigen::Vector3d& origin, const Eigen::Vector3d& dir,
+             const MountingCalibrationOptions& o) {
+  if (!lp.ok) return false;
+  const double sigma = o.range_noise_fraction * predictedRange(origin, dir, lp.n, lp.mean);
+  return lp.spread_m2 <= 2.0 * sigma * sigma + 1e-6;
+}
+
+// The local planes of a search's queries, per half (right 0, left 1). With plane_cell_m > 0
+// the queries whose points fell in one cube of that size share them, fitted around the mean
+// of their points (the 4 cm voxels' radius search and PCA were about 90 % of a search's time
+// on rig B, with every query fitting its own); else each query's are fitted around its point.
+struct QueryPlanes {
+  std::vector<int> slot;  // per query: its planes in `fit`
+  std::vector<std::array<LocalPlane, 2>> fit;
+};
+
+// Which queries share their local planes: per ray, its group (-1: none yet). Fixed over the
+// searches of one alignment, from the cubes the points fell in when the ray was first a query,
+// so that a query's planes move with the parameters as smoothly as its point does: grouped
+// anew at every search, the queries near a cube's face changed groups, and the solver needed
+// half as many searches again.
+struct PlaneGroups {
+  std::vector<int> of_ray;
+  int count = 0;
+};
+
+void groupQueries(const std::vector<int>& queries, const Cloud& c, double cell_m,
+                  PlaneGroups* groups) {
+  if (groups->of_ray.empty()) groups->of_ray.assign(c.p.size(), -1);
+  std::vector<int> fresh;
+  for (int i : queries) {
+    if (groups->of_ray[size_t(i)] < 0) fresh.push_back(i);
+  }
+  std::vector<CubeKey> keys;
+  std::vector<int> order;
+  std::vector<size_t> begin;
+  groupByCube(
+      fresh, cell_m, [&](int i) { return c.p[size_t(i)]; }, &keys, &order, &begin);
+  for (size_t k = 0; k + 1 < begin.size(); ++k, ++groups->count) {
+    for (size_t j = begin[k]; j < begin[k + 1]; ++j)
+      groups->of_ray[size_t(order[j])] = groups->count;
+  }
+}
+
+QueryPlanes queryPlanes(const std::vector<int>& queries, const Cloud& c, const OverlapOptions& oo,
+                        int threads, PlaneGroups* groups) {
+  if (oo.plane_cell_m > 0.0) groupQueries(queries, c, oo.plane_cell_m, groups);
+  QueryPlanes qp;
+  qp.slot.resize(queries.size());
+  std::vector<int> slot_of_group(size_t(groups->count), -1);
+  std::vector<Eigen::Vector3d> sum;
+  std::vector<int> count;
+  for (size_t q = 0; q < queries.size(); ++q) {
+    const int g = oo.plane_cell_m > 0.0 ? groups->of_ray[size_t(queries[q])] : -1;
+    int& slot = g >= 0 ? slot_of_group[size_t(g)] : qp.slot[q];
+    if (g < 0 || slot < 0) {
+      slot = int(sum.size());
+      sum.push_back(Eigen::Vector3d::Zero());
+      count.push_back(0);
+    }
+    qp.slot[q] = slot;
+    sum[size_t(slot)] += c.p[size_t(queries[q])];
+    ++count[size_t(slot)];
+  }
+  qp.fit.resize(sum.size());
+  forChunks(sum.size(), threads, [&](size_t, size_t b, size_t e) {
+    for (size_t i = b; i < e; ++i) {
+      const Eigen::Vector3d at = sum[i] / double(count[i]);
+      for (int h = 0; h < 2; ++h) qp.fit[i][size_t(h)] = fitLocalPlane(c, h, at, oo.base);
+    }
+  });
+  return qp;
+}
+
+// The local planes at query a: the other pass's (its normal and mean), and the one the
+// query's own half sees there, which must agree (the query lies on that surface, not on
+// another one near an edge). False if either is not flat or they disagree.
+bool localPlane(const OverlapRay& ra, const Cloud& c, size_t a,
+                const std::array<LocalPlane, 2>& fits, const MountingCalibrationOptions& o,
                 Eigen::Vector3d* n, Eigen::Vector3d* mean) {
-  const Eigen::Vector3d& pa = c.p[a];
-  const Eigen::Vector3d origin = pa - ra.range_m * c.dir[a];
-  Eigen::Vector3d patch[64];
-  const int n_patch = voxelsNear(c, ra.left ? 0 : 1, pa, o.plane_radius_m, patch);
-  if (!flatPatch(patch, n_patch, origin, c.dir[a], o, mean, n)) return false;
+  const Eigen::Vector3d origin = c.p[a] - ra.range_m * c.dir[a];
+  const LocalPlane& other = fits[ra.left ? 0 : 1];
+  if (!flatFor(other, origin, c.dir[a], o)) return false;
+  *mean = other.mean;
+  *n = other.n;
   if (!o.check_own_plane) return true;
-  Eigen::Vector3d own_n, own_mean;
-  const int n_own = voxelsNear(c, ra.left ? 1 : 0, pa, o.plane_radius_m, patch);
-  return flatPatch(patch, n_own, origin, c.dir[a], o, &own_mean, &own_n) &&
-         std::abs(own_n.dot(*n)) >= std::cos(o.max_normal_angle_rad);
+  const LocalPlane& own = fits[ra.left ? 1 : 0];
+  return flatFor(own, origin, c.dir[a], o) &&
+         std::abs(own.n.dot(*n)) >= std::cos(o.max_normal_angle_rad);
 }
 
 // Query a's correspondence, as the reference solver's planeResidual decides it: flat local
@@ -195,12 +309,13 @@ bool localPlane(const OverlapRay& ra, const Cloud& c, size_t a, const MountingCa
 // of its half, at least min_pass_gap_s away), not grazing, the query over the middle of the
 // patch.
 bool findCorrespondence(const std::vector<OverlapRay>& rays, const Cloud& c, int a,
-                        const OverlapOptions& oo, Correspondence* out) {
+                        const std::array<LocalPlane, 2>& fits, const OverlapOptions& oo,
+                        Correspondence* out) {
   const MountingCalibrationOptions& o = oo.base;
   const OverlapRay& ra = rays[size_t(a)];
   const Eigen::Vector3d& pa = c.p[size_t(a)];
   Eigen::Vector3d n, plane_mean;
-  if (!localPlane(ra, c, size_t(a), o, &n, &plane_mean)) return false;
+  if (!localPlane(ra, c, size_t(a), fits, o, &n, &plane_mean)) return false;
   const double sigma = o.range_noise_fraction * predictedRange(pa - ra.range_m * c.dir[size_t(a)],
                                                                c.dir[size_t(a)], n, plane_mean);
   if (o.max_incidence_rad < 0.5 * M_PI &&
@@ -241,25 +356,29 @@ bool findCorrespondence(const std::vector<OverlapRay>& rays, const Cloud& c, int
 
 // Every query_stride-th covered ray within the query ranges, with its correspondence.
 std::vector<Correspondence> search(const std::vector<OverlapRay>& rays, const Cloud& c,
-                                   const OverlapOptions& oo, int threads) {
+                                   const OverlapOptions& oo, int threads, PlaneGroups* plane_groups,
+                                   int64_t* local_planes) {
   const MountingCalibrationOptions& o = oo.base;
   std::vector<int> queries;
-  size_t k = 0;
   for (size_t i = 0; i < rays.size(); ++i) {
-    if (!c.covered[i]) continue;
-    if (k++ % size_t(std::max(1, o.query_stride)) != 0) continue;
+    // Strided by the ray's index, not by its count among the covered: the rays the track
+    // covers change with the time offset, and would shift every query to its neighbour.
+    if (!c.covered[i] || i % size_t(std::max(1, o.query_stride)) != 0) continue;
     if (rays[i].range_m < o.min_range_m || rays[i].range_m > o.max_range_m) continue;
     queries.push_back(int(i));
   }
+  const QueryPlanes planes = queryPlanes(queries, c, oo, threads, plane_groups);
   std::vector<std::vector<Correspondence>> parts((queries.size() + kChunk - 1) / kChunk);
   forChunks(queries.size(), threads, [&](size_t chunk, size_t b, size_t e) {
     for (size_t q = b; q < e; ++q) {
       Correspondence corr;
-      if (findCorrespondence(rays, c, queries[q], oo, &corr)) parts[chunk].push_back(corr);
+      if (findCorrespondence(rays, c, queries[q], planes.fit[size_t(planes.slot[q])], oo, &corr))
+        parts[chunk].push_back(corr);
     }
   });
   std::vector<Correspondence> all;
   for (const auto& p : parts) all.insert(all.end(), p.begin(), p.end());
+  *local_planes += int64_t(planes.fit.size());
   return all;
 }
 
@@ -280,7 +399,7 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
   OverlapJacobian Ja, Jb, Jmean = OverlapJacobian::Zero();
   model.point(size_t(corr.a), &pa, &da, &Ja);
   // The range noise along the normal of a ray from its origin: that of the range the
-  // neighbours' plane predicts for it (flatPatch says why not the measured one).
+  // neighbours' plane predicts for it (flatFor says why not the measured one).
   Eigen::Vector3d origins[kMaxNb];
   const auto variance = [&](const Eigen::Vector3d& origin) {
     const double s = o.range_noise_fraction * corr.n.dot(mean - origin);
@@ -339,7 +458,7 @@ struct Patches {
 
 // One patch's points at the current estimate and its plane: the weighted centroid, the
 // normal and the in-plane axes, and each point's range noise along the normal (that of the
-// range the plane predicts for its ray, as flatPatch says).
+// range the plane predicts for its ray, as flatFor says).
 struct PatchFit {
   std::vector<Eigen::Vector3d> p;
   std::vector<double> sigma, w2;
@@ -391,34 +510,6 @@ void fitPatch(const std::vector<OverlapRay>& rays, const int* idx, size_t count,
     }
   }
   weightedPlane(f);
-}
-
-using CubeKey = std::array<int64_t, 3>;
-
-CubeKey cubeOf(const Eigen::Vector3d& p, double size) {
-  return {int64_t(std::floor(p.x() / size)), int64_t(std::floor(p.y() / size)),
-          int64_t(std::floor(p.z() / size))};
-}
-
-// The rays `rays_in` grouped by the cube of `at(ray)`: rays in the cubes' key order, and each
-// cube's range of them.
-template <class At>
-void groupByCube(const std::vector<int>& rays_in, double size, At at, std::vector<CubeKey>* keys,
-                 std::vector<int>* rays_out, std::vector<size_t>* begin) {
-  std::vector<std::pair<CubeKey, int>> keyed;
-  keyed.reserve(rays_in.size());
-  for (int i : rays_in) keyed.push_back({cubeOf(at(i), size), i});
-  std::sort(keyed.begin(), keyed.end());
-  keys->clear();
-  rays_out->clear();
-  begin->assign(1, 0);
-  for (size_t i = 0; i < keyed.size(); ++i) {
-    rays_out->push_back(keyed[i].second);
-    if (i + 1 == keyed.size() || keyed[i + 1].first != keyed[i].first) {
-      keys->push_back(keyed[i].first);
-      begin->push_back(i + 1);
-    }
-  }
 }
 
 // A patch's points farther from its plane than this many sigmas of their own range noise are
@@ -1050,6 +1141,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
   res.x = x0;
   Cloud cloud;
   std::vector<Correspondence> corrs;
+  PlaneGroups plane_groups;  // fixed from a ray's first search as a query on
   Patches patches;
   double change = 1e300;
   Normal H = Normal::Zero();
@@ -1069,7 +1161,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
         patches = searchPatches(rays, cloud, oo, threads);
       } else {
         buildTrees(rays, oo.plane_voxel_m, &cloud);
-        corrs = search(rays, cloud, oo, threads);
+        corrs = search(rays, cloud, oo, threads, &plane_groups, &res.local_planes);
       }
       ++res.searches;
     }

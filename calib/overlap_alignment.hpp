@@ -61,6 +61,11 @@ struct OverlapOptions {
   // The local planes (the other pass's, and the one the query lies on) are fitted to the
   // centroids of each half's points in cubes of this size within base.plane_radius_m.
   double plane_voxel_m = 0.04;
+  // > 0: the queries whose points fall in one cube of this size (when they are first queries)
+  // share their local planes, fitted around the mean of their points; 0: every query fits its
+  // own around its point. On rig B's plan drive the fits were about 90 % of a search's time;
+  // shared, a third as many (the same estimates within the seeds' spread: results.md, rig B).
+  double plane_cell_m = 0.04;
   int plane_neighbours = 48;     // k nearest of the other pass: the residual's neighbours
   int irls_iterations = 12;      // reweighted Gauss-Newton steps per round
   int threads = 0;               // 0: every core; the result is the same for any number
@@ -102,6 +107,7 @@ struct OverlapResult {
   int correspondences = 0;
   int rounds = 0;
   int searches = 0;
+  int64_t local_planes = 0;  // point-to-plane: the places local planes were fitted at, summed
 };
 
 OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& model,
