@@ -295,15 +295,15 @@ CellSums cellSums(const std::vector<Eigen::Vector3f>& cloud,
 constexpr int kClutterGrowCells = 1;
 
 // The rectangle of cells (less than half of the plane's weight) that stands proud of the rest
-// by the most sigmas, if by at least search.min_m and search.sigmas; grown by
-// kClutterGrowCells.
+// by the most sigmas, if by at least search.min_m and min_sigmas; grown by kClutterGrowCells.
 std::optional<ClutterBox> findClutter(const std::vector<Eigen::Vector3f>& cloud,
                                       const std::vector<Eigen::Vector3f>& origins,
-                                      const RefinedPlane& r, const ClutterSearch& search) {
+                                      const RefinedPlane& r, const ClutterSearch& search,
+                                      double min_sigmas) {
   const CellSums c = cellSums(cloud, origins, r, search);
   if (c.nu == 0) return std::nullopt;
   const double Wt = c.W(c.nu, c.nv), St = c.S(c.nu, c.nv);
-  double best = search.sigmas;
+  double best = min_sigmas;
   std::optional<std::array<int, 4>> at;
   for (int u0 = 0; u0 < c.nu; ++u0) {
     for (int u1 = u0; u1 < c.nu; ++u1) {
@@ -345,17 +345,35 @@ RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
   std::vector<ClutterBox> clutter;
   refineFixedPoint(cloud, origins, noise, nearer, clutter, &r);
   const double whole = weightOf(r);
-  while (r.ok && search && int(clutter.size()) < search->max_regions) {
-    const std::optional<ClutterBox> box = findClutter(cloud, origins, r, *search);
-    if (!box) break;
-    clutter.push_back(*box);
+  // The plane with `box` left out too, if it keeps enough of its weight: a plane that would
+  // lose more than max_share is smeared or bent, not cluttered (each region taken out on one
+  // side would push it further back).
+  const auto without = [&](const ClutterBox& box) -> std::optional<RefinedPlane> {
+    std::vector<ClutterBox> more = clutter;
+    more.push_back(box);
     RefinedPlane next = r;
-    refineFixedPoint(cloud, origins, noise, nearer, clutter, &next);
-    // A plane that would lose more than that share is smeared or bent, not cluttered: each
-    // region taken out on one side would push it further back.
-    if (!next.ok || weightOf(next) < (1.0 - search->max_share) * whole) break;
-    r = std::move(next);
-    r.clutter_regions = int(clutter.size());
+    refineFixedPoint(cloud, origins, noise, nearer, more, &next);
+    if (!next.ok || weightOf(next) < (1.0 - search->max_share) * whole) return std::nullopt;
+    next.clutter_regions = int(more.size());
+    return next;
+  };
+  while (r.ok && search && int(clutter.size()) < search->max_regions) {
+    const std::optional<ClutterBox> box = findClutter(cloud, origins, r, *search, search->sigmas);
+    if (!box) {
+      // Nothing stands out for certain; a region that may be clutter widens the sigma.
+      const std::optional<ClutterBox> maybe =
+          findClutter(cloud, origins, r, *search, search->ambiguous_sigmas);
+      const std::optional<RefinedPlane> alt = maybe ? without(*maybe) : std::nullopt;
+      if (alt) {
+        r.ambiguity_m = std::abs(alt->normal.dot(r.centroid) + alt->offset);
+        r.offset_sigma = std::hypot(r.offset_sigma, r.ambiguity_m);
+      }
+      break;
+    }
+    std::optional<RefinedPlane> next = without(*box);
+    if (!next) break;
+    clutter.push_back(*box);
+    r = std::move(*next);
   }
   return r;
 }

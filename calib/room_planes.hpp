@@ -82,6 +82,11 @@ struct ClutterSearch {
   // of 2,000-20,000 points); the lab's whiteboard on the far wall of calib plan's drive stood
   // out by 4.5 (seed 2).
   double sigmas = 4.5;
+  // A best region between this and `sigmas` may be clutter or chance: it is not taken out, but
+  // the offset's sigma grows by how far taking it out would move the plane (on seed 2 of the
+  // plan's drive the whiteboard stood out by less than 4.5 once the calibration moved by a
+  // fraction of its sigma, and the room came out 6.5 mm short at 3.7 of its sigmas).
+  double ambiguous_sigmas = 3.5;
   double cell_m = 0.25;
   int max_regions = 3;
   double max_share = 0.5;  // of the plane's weight, all regions together (grown)
@@ -94,6 +99,9 @@ struct RefinedPlane {
   std::vector<int> inliers;
   std::vector<double> weights;  // of each inlier: 1 / sigma^2
   int clutter_regions = 0;      // regions left out as clutter proud of the plane
+  // How far leaving out a region that stood out by ambiguous_sigmas to sigmas would have moved
+  // the plane at its centroid (0: none did); offset_sigma holds it.
+  double ambiguity_m = 0.0;
   // The sigma of the plane's offset at its centroid: the weighted mean's, cluster-robust over
   // in-plane cells of kOffsetClusterM (the points of a cell err together: one stretch of the
   // track saw them), never below what the points' own noise gives.
@@ -114,7 +122,8 @@ struct PlaneEquation {
   Eigen::Vector3d normal;
   double offset;
 };
-// `search`: the clutter search after the fixed point (none: the fixed point alone).
+// `search`: the clutter search after the fixed point (none: the fixed point alone); a region
+// that stands out by ambiguous_sigmas but not by sigmas stays, and widens offset_sigma.
 RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
                          const std::vector<Eigen::Vector3f>& origins, const WallPlaneFit& start,
                          const RangeNoise& noise, const std::vector<PlaneEquation>& nearer = {},

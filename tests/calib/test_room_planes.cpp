@@ -130,6 +130,37 @@ TEST(RoomPlanes, AWhiteboardOnAFarWallIsLeftOutAsClutter) {
   }
 }
 
+// A whiteboard (30 mm proud) that stands out by less than the search's sigmas stays in the
+// plane and pulls it in beyond 3 of the points' sigmas; the offset's sigma grows by how far leaving
+// it out would move the plane, and the wall lies within 3 of those.
+TEST(RoomPlanes, ARegionThatMayBeClutterWidensTheOffsetsSigma) {
+  RangeNoise noise;
+  noise.fraction = kNoise;
+  noise.range_max_m = kRangeMax;
+  ClutterSearch none;
+  none.sigmas = none.ambiguous_sigmas = 1e9;  // nothing stands out that far
+  ClutterSearch maybe = none;
+  maybe.ambiguous_sigmas = ClutterSearch{}.ambiguous_sigmas;
+  for (uint64_t seed : {7, 8, 9}) {
+    const Rays rays = farWall(20000, 5.5, 9.5, 0.03, seed);
+    const auto sigmasOff = [&](const RefinedPlane& p) {
+      const Eigen::Vector3d at(kWallX, p.centroid.y(), p.centroid.z());
+      return std::abs(p.normal.dot(at) + p.offset) / p.offset_sigma;
+    };
+    const RefinedPlane kept =
+        refinePlane(rays.points, rays.origins, planeAt(kWallX), noise, {}, none);
+    const RefinedPlane widened =
+        refinePlane(rays.points, rays.origins, planeAt(kWallX), noise, {}, maybe);
+    ASSERT_TRUE(kept.ok && widened.ok);
+    EXPECT_EQ(widened.clutter_regions, 0) << seed;
+    EXPECT_DOUBLE_EQ(widened.offset, kept.offset) << seed;
+    EXPECT_EQ(kept.ambiguity_m, 0.0) << seed;
+    EXPECT_GT(widened.ambiguity_m, 0.002) << seed;
+    EXPECT_GT(sigmasOff(kept), 3.0) << seed;
+    EXPECT_LT(sigmasOff(widened), 3.0) << seed;
+  }
+}
+
 // A wall with nothing on it loses no region to the clutter search, near or far.
 TEST(RoomPlanes, ABareWallHasNoClutter) {
   RangeNoise noise;
