@@ -1,8 +1,11 @@
 // The emulator's link (tools/emulate/emulator_server.hpp) on its own clock: what it says when
-// it cannot keep real time.
+// it cannot keep real time, and what its pty lost.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <atomic>
+#include <cstdio>
 #include <memory>
 #include <sstream>
 #include <string>
@@ -63,6 +66,55 @@ TEST(EmulatorServer, SaysWhenItFellBehindRealTime) {
 TEST(EmulatorServer, KeepingRealTimeSaysNothingOfIt) {
   const std::string said = serveWithClock(5000, -1, 0, 3.0);
   EXPECT_EQ(said.find("real time"), std::string::npos) << said;
+}
+
+// A host that opens the pty 50 s in, reads what is queued once and never again: the bytes the
+// pty had no room for before that read (a host that opened it late) and after it (a host that
+// did not read in time) are told apart. The host acts from the emulator's own clock, so the
+// test does not depend on timing.
+TEST(EmulatorServer, TellsBytesLostBeforeAHostFirstReadFromThoseLostAfter) {
+  const std::string link =
+      ::testing::TempDir() + "/emulator_server_pty_" + std::to_string(::getpid());
+  int64_t now = 0;
+  int readings = 0, host = -1;
+  size_t read_bytes = 0;
+  const std::function<int64_t()> clock = [&] {
+    if (++readings == 2000) {
+      host = ::open(link.c_str(), O_RDONLY | O_NOCTTY | O_NONBLOCK);
+      char buf[65536];
+      for (ssize_t n; (n = ::read(host, buf, sizeof buf)) > 0;) read_bytes += size_t(n);
+    }
+    now += 25000;  // three readings a tick: 75 ms, within real time
+    return now;
+  };
+  ServerOptions options;
+  options.pty = true;
+  options.tick_us = 0;
+  options.duration_s = 100.0;
+  options.pty_link = link;
+  std::ostringstream info;
+  std::atomic<bool> stop{false};
+  serveEmulator([](int64_t) { return std::make_unique<StreamingDevice>(); }, options, LinkFaults{},
+                clock, stop, info);
+  ::close(host);
+  ::unlink(link.c_str());
+  ASSERT_GT(read_bytes, 0u);
+  const std::string said = info.str();
+  const size_t at = said.find("emulator: the pty had no room for ");
+  ASSERT_NE(at, std::string::npos) << said;
+  size_t total = 0, before = 0, after = 0;
+  ASSERT_EQ(std::sscanf(said.c_str() + at,
+                        "emulator: the pty had no room for %zu of the bytes the device sent: %zu "
+                        "before a host first read from it (it opened the pty late, or never), %zu "
+                        "after",
+                        &total, &before, &after),
+            3)
+      << said;
+  // 50 kB (a byte per millisecond) before the read, as many after; the pty holds about 20 kB.
+  EXPECT_GT(before, 10000u) << said;
+  EXPECT_GT(after, 10000u) << said;
+  EXPECT_EQ(total, before + after);
+  EXPECT_LE(read_bytes + total, 100000u);  // of the 100 s's bytes: read, lost or still queued
 }
 
 }  // namespace

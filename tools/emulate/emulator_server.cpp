@@ -5,6 +5,7 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
+#include <sys/ioctl.h>
 #include <sys/socket.h>
 #include <termios.h>
 #include <unistd.h>
@@ -151,9 +152,15 @@ class EmulatorLink {
   int64_t worst_lag_us_ = 0;
   bool burst_ = false;     // this tick sends what the device had to send while stalled
   size_t lost_bytes_ = 0;  // of those bursts, the bytes the link's buffer had no room for
-  // Bytes a pty had no room for outside a burst: nobody had it open, or the host did not read
-  // in time (a real UART drops them the same way).
-  size_t unread_bytes_ = 0;
+  // Bytes a pty had no room for outside a burst, before a host first read from it (it opened
+  // the pty late) and after (it did not read in time): a real UART drops them the same way.
+  size_t unread_bytes_ = 0, unread_before_host_ = 0;
+  // Whether a host has read from the pty: its line discipline's queue (FIONREAD on our own end,
+  // which shares it; at most 4095 bytes, refilled at once from the pty's ~20 kB behind it) was
+  // shorter at a write than after the write before, or a write found room after one had not.
+  bool host_read_ = false;
+  bool pty_full_ = false;
+  int queued_after_write_ = 0;
 };
 
 // A gap between two ticks longer than this: the emulator did not keep real time.
@@ -192,7 +199,7 @@ void EmulatorLink::run(const std::atomic<bool>& stop) {
     exchange();
   }
   if (lags_ > 0) reportLag(now_us_());
-  if (unread_bytes_ > 0) reportUnread();
+  if (unread_bytes_ + unread_before_host_ > 0) reportUnread();
   powerDown(now_us_());
 }
 
@@ -214,14 +221,15 @@ void EmulatorLink::noteTick(int64_t now) {
   }
 }
 
-// Said once, at the end: a pty cannot tell a host that does not read in time from none having
-// it open (before the host opens it, after it closes it), so its losses are not dated.
+// Said once, at the end, split at the host's first read: bytes lost before it mean a host that
+// opened the pty late (or not at all), bytes lost after it a host that did not read in time.
 void EmulatorLink::reportUnread() {
-  info_ << "emulator: the pty had no room for " << unread_bytes_
-        << " of the bytes the device sent (while no host had it open, or while the host did not "
-           "read in time: a real UART drops them the same way)"
+  info_ << "emulator: the pty had no room for " << unread_before_host_ + unread_bytes_
+        << " of the bytes the device sent: " << unread_before_host_
+        << " before a host first read from it (it opened the pty late, or never), " << unread_bytes_
+        << " after (the host did not read in time: a real UART drops them the same way)"
         << std::endl;
-  unread_bytes_ = 0;
+  unread_bytes_ = unread_before_host_ = 0;
 }
 
 void EmulatorLink::reportLag(int64_t now) {
@@ -242,6 +250,8 @@ void EmulatorLink::reportLag(int64_t now) {
 void EmulatorLink::powerUp(int64_t now) {
   device_ = make_device_(now);
   if (options_.pty) {
+    host_read_ = pty_full_ = false;  // a new pty: nobody has read from it
+    queued_after_write_ = 0;
     announcePty(openPty(&master_, &slave_));
   } else {
     listener_.reset(listenOn(address_, options_.listen));
@@ -337,9 +347,15 @@ void EmulatorLink::injectByteFaults(std::string* out) {
 void EmulatorLink::transmit(const std::string& out) {
   if (options_.pty) {
     // A UART sends whether or not anybody reads: what does not fit is lost.
+    int queued = 0;
+    if (!host_read_ && ::ioctl(slave_.fd, FIONREAD, &queued) == 0 && queued < queued_after_write_)
+      host_read_ = true;
     const ssize_t n = ::write(master_.fd, out.data(), out.size());
     const size_t lost = out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
-    (burst_ ? lost_bytes_ : unread_bytes_) += lost;
+    if (pty_full_ && n > 0) host_read_ = true;  // room again after it was full
+    pty_full_ = lost > 0;
+    (burst_ ? lost_bytes_ : host_read_ ? unread_bytes_ : unread_before_host_) += lost;
+    if (!host_read_ && ::ioctl(slave_.fd, FIONREAD, &queued) == 0) queued_after_write_ = queued;
     return;
   }
   pending_ += out;
