@@ -354,7 +354,8 @@ bool findCorrespondence(const std::vector<OverlapRay>& rays, const Cloud& c, int
   return true;
 }
 
-// Every query_stride-th covered ray within the query ranges, with its correspondence.
+// The covered rays within the query ranges whose index is a multiple of query_stride, with
+// their correspondences.
 std::vector<Correspondence> search(const std::vector<OverlapRay>& rays, const Cloud& c,
                                    const OverlapOptions& oo, int threads, PlaneGroups* plane_groups,
                                    int64_t* local_planes) {

@@ -9,6 +9,10 @@
 //    analytic Jacobians; the robust (Cauchy) loss is applied by iteratively reweighted
 //    Gauss-Newton on the small normal equations, instead of an automatically differentiated
 //    solver re-evaluating every residual per iteration;
+//  - the local planes come from 4 cm voxel centroids, and the queries whose points fall in
+//    one cube of plane_cell_m share theirs (the reference fits every query's own);
+//  - the queries are every query_stride-th ray by the ray's index (the reference counts the
+//    covered rays, which shift with the time offset);
 //  - the queries are processed on all cores in fixed chunks whose results are reduced in
 //    chunk order: the result does not depend on the number of threads or their timing.
 // Transport-free; PCL stays in the .cpp.

@@ -100,7 +100,8 @@ struct RefinedPlane {
   std::vector<double> weights;  // of each inlier: 1 / sigma^2
   int clutter_regions = 0;      // regions left out as clutter proud of the plane
   // How far leaving out a region that stood out by ambiguous_sigmas to sigmas would have moved
-  // the plane at its centroid (0: none did); offset_sigma holds it.
+  // the plane at its centroid (0: none did, or the search ended at max_regions or max_share
+  // before looking); offset_sigma holds it.
   double ambiguity_m = 0.0;
   // The sigma of the plane's offset at its centroid: the weighted mean's, cluster-robust over
   // in-plane cells of kOffsetClusterM (the points of a cell err together: one stretch of the

@@ -2,6 +2,7 @@
 // seen near the lidar's range limit, whose returns beyond the limit are lost.
 #include <gtest/gtest.h>
 
+#include <optional>
 #include <random>
 
 #include "calib/room_planes.hpp"
@@ -93,21 +94,28 @@ TEST(RoomPlanes, TheOffsetsSigmaIsItsScatter) {
   RangeNoise noise;
   noise.fraction = kNoise;
   noise.range_max_m = kRangeMax;
-  double z2 = 0.0;
-  const int walls = 20;
-  for (int seed = 0; seed < walls; ++seed) {
-    const Rays rays = farWall(2000, 5.5, 9.5, 0.0, 100 + uint64_t(seed));
-    const RefinedPlane p = refinePlane(rays.points, rays.origins, planeAt(kWallX), noise);
-    ASSERT_TRUE(p.ok);
-    ASSERT_GT(p.offset_sigma, 0.0);
-    // The wall's offset from the plane where the sigma holds: at the plane's centroid.
-    const Eigen::Vector3d at(kWallX, p.centroid.y(), p.centroid.z());
-    const double z = (p.normal.dot(at) + p.offset) / p.offset_sigma;
-    EXPECT_LT(std::abs(z), 3.5) << seed;
-    z2 += z * z / walls;
+  // With the clutter search too: on a bare wall it may widen the sigma by a region that stands
+  // out by chance (ambiguous_sigmas), which must not make it much wider than the scatter
+  // (measured: mean z^2 1.22 without the search, 1.13 with it).
+  for (const std::optional<ClutterSearch>& search :
+       {std::optional<ClutterSearch>{}, std::optional<ClutterSearch>{ClutterSearch{}}}) {
+    double z2 = 0.0;
+    const int walls = 20;
+    for (int seed = 0; seed < walls; ++seed) {
+      const Rays rays = farWall(2000, 5.5, 9.5, 0.0, 100 + uint64_t(seed));
+      const RefinedPlane p =
+          refinePlane(rays.points, rays.origins, planeAt(kWallX), noise, {}, search);
+      ASSERT_TRUE(p.ok);
+      ASSERT_GT(p.offset_sigma, 0.0);
+      // The wall's offset from the plane where the sigma holds: at the plane's centroid.
+      const Eigen::Vector3d at(kWallX, p.centroid.y(), p.centroid.z());
+      const double z = (p.normal.dot(at) + p.offset) / p.offset_sigma;
+      EXPECT_LT(std::abs(z), 3.5) << seed;
+      z2 += z * z / walls;
+    }
+    EXPECT_GT(z2, 0.3) << search.has_value();
+    EXPECT_LT(z2, 2.0) << search.has_value();
   }
-  EXPECT_GT(z2, 0.3);
-  EXPECT_LT(z2, 2.0);
 }
 
 // A whiteboard 20 mm proud of a wall seen from 5.5-9.5 m lies well within the wall's window
@@ -130,9 +138,10 @@ TEST(RoomPlanes, AWhiteboardOnAFarWallIsLeftOutAsClutter) {
   }
 }
 
-// A whiteboard (30 mm proud) that stands out by less than the search's sigmas stays in the
-// plane and pulls it in beyond 3 of the points' sigmas; the offset's sigma grows by how far leaving
-// it out would move the plane, and the wall lies within 3 of those.
+// A whiteboard (30 mm proud) that the search may not take out (its sigmas set out of reach, as
+// for a region between ambiguous_sigmas and sigmas) stays in the plane and pulls it in beyond 3
+// of the points' sigmas; the offset's sigma grows by how far leaving it out would move the
+// plane, and the wall lies within 3 of those.
 TEST(RoomPlanes, ARegionThatMayBeClutterWidensTheOffsetsSigma) {
   RangeNoise noise;
   noise.fraction = kNoise;
@@ -154,7 +163,6 @@ TEST(RoomPlanes, ARegionThatMayBeClutterWidensTheOffsetsSigma) {
     ASSERT_TRUE(kept.ok && widened.ok);
     EXPECT_EQ(widened.clutter_regions, 0) << seed;
     EXPECT_DOUBLE_EQ(widened.offset, kept.offset) << seed;
-    EXPECT_EQ(kept.ambiguity_m, 0.0) << seed;
     EXPECT_GT(widened.ambiguity_m, 0.002) << seed;
     EXPECT_GT(sigmasOff(kept), 3.0) << seed;
     EXPECT_LT(sigmasOff(widened), 3.0) << seed;

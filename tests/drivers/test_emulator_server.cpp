@@ -50,6 +50,24 @@ std::string serveWithClock(int64_t step_us, int stall_at, int64_t stall_us, doub
   return info.str();
 }
 
+// The bytes the pty had no room for, before a host opened it and after, from its report.
+struct Unread {
+  size_t total = 0, before = 0, after = 0;
+};
+Unread unreadOf(const std::string& said) {
+  Unread u;
+  const size_t at = said.find("emulator: the pty had no room for ");
+  EXPECT_NE(at, std::string::npos) << said;
+  if (at == std::string::npos) return u;
+  EXPECT_EQ(std::sscanf(said.c_str() + at,
+                        "emulator: the pty had no room for %zu of the bytes the device sent: %zu "
+                        "before a host opened it (it started late, or never), %zu after",
+                        &u.total, &u.before, &u.after),
+            3)
+      << said;
+  return u;
+}
+
 TEST(EmulatorServer, SaysWhenItFellBehindRealTime) {
   // Nobody reads the pty. Its buffer holds the 3 s kept in real time (3 kB); the 100 s stall's
   // burst (100 kB) overflows it, and the report counts what was lost.
@@ -63,16 +81,26 @@ TEST(EmulatorServer, SaysWhenItFellBehindRealTime) {
   EXPECT_EQ(said.find("stalled", said.find("stalled") + 1), std::string::npos) << said;  // once
 }
 
+// Nobody opens the pty: after a stall's burst fills it, the 39 s that follow lose most of their
+// bytes, all of them before a host opened it (the burst's own are counted apart).
+TEST(EmulatorServer, WithNoHostEveryLossIsBeforeAHostOpenedThePty) {
+  const std::string said = serveWithClock(25000, 40, 100000000, 140.0);
+  EXPECT_NE(said.find(" of them lost (the link's buffer was full)"), std::string::npos) << said;
+  const Unread u = unreadOf(said);
+  EXPECT_GT(u.before, 10000u) << said;
+  EXPECT_EQ(u.after, 0u) << said;
+}
+
 TEST(EmulatorServer, KeepingRealTimeSaysNothingOfIt) {
   const std::string said = serveWithClock(5000, -1, 0, 3.0);
   EXPECT_EQ(said.find("real time"), std::string::npos) << said;
 }
 
 // A host that opens the pty 50 s in, reads what is queued once and never again: the bytes the
-// pty had no room for before that read (a host that opened it late) and after it (a host that
+// pty had no room for before it opened it (a host that started late) and after (a host that
 // did not read in time) are told apart. The host acts from the emulator's own clock, so the
 // test does not depend on timing.
-TEST(EmulatorServer, TellsBytesLostBeforeAHostFirstReadFromThoseLostAfter) {
+TEST(EmulatorServer, TellsBytesLostBeforeAHostOpenedThePtyFromThoseLostAfter) {
   const std::string link =
       ::testing::TempDir() + "/emulator_server_pty_" + std::to_string(::getpid());
   int64_t now = 0;
@@ -100,21 +128,12 @@ TEST(EmulatorServer, TellsBytesLostBeforeAHostFirstReadFromThoseLostAfter) {
   ::unlink(link.c_str());
   ASSERT_GT(read_bytes, 0u);
   const std::string said = info.str();
-  const size_t at = said.find("emulator: the pty had no room for ");
-  ASSERT_NE(at, std::string::npos) << said;
-  size_t total = 0, before = 0, after = 0;
-  ASSERT_EQ(std::sscanf(said.c_str() + at,
-                        "emulator: the pty had no room for %zu of the bytes the device sent: %zu "
-                        "before a host first read from it (it opened the pty late, or never), %zu "
-                        "after",
-                        &total, &before, &after),
-            3)
-      << said;
+  const Unread u = unreadOf(said);
   // 50 kB (a byte per millisecond) before the read, as many after; the pty holds about 20 kB.
-  EXPECT_GT(before, 10000u) << said;
-  EXPECT_GT(after, 10000u) << said;
-  EXPECT_EQ(total, before + after);
-  EXPECT_LE(read_bytes + total, 100000u);  // of the 100 s's bytes: read, lost or still queued
+  EXPECT_GT(u.before, 10000u) << said;
+  EXPECT_GT(u.after, 10000u) << said;
+  EXPECT_EQ(u.total, u.before + u.after);
+  EXPECT_LE(read_bytes + u.total, 100000u);  // of the 100 s's bytes: read, lost or still queued
 }
 
 }  // namespace

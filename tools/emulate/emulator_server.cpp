@@ -5,7 +5,7 @@
 #include <netinet/in.h>
 #include <netinet/tcp.h>
 #include <poll.h>
-#include <sys/ioctl.h>
+#include <sys/inotify.h>
 #include <sys/socket.h>
 #include <termios.h>
 #include <unistd.h>
@@ -129,6 +129,7 @@ class EmulatorLink {
   void noteTick(int64_t now);
   void reportLag(int64_t now);
   void reportUnread();
+  void noteHostOpen();
 
   const DeviceFactory& make_device_;
   const ServerOptions& options_;
@@ -152,15 +153,13 @@ class EmulatorLink {
   int64_t worst_lag_us_ = 0;
   bool burst_ = false;     // this tick sends what the device had to send while stalled
   size_t lost_bytes_ = 0;  // of those bursts, the bytes the link's buffer had no room for
-  // Bytes a pty had no room for outside a burst, before a host first read from it (it opened
-  // the pty late) and after (it did not read in time): a real UART drops them the same way.
+  // Bytes a pty had no room for outside a burst, before a host opened it (it started late) and
+  // after (it did not read in time): a real UART drops them the same way.
   size_t unread_bytes_ = 0, unread_before_host_ = 0;
-  // Whether a host has read from the pty: its line discipline's queue (FIONREAD on our own end,
-  // which shares it; at most 4095 bytes, refilled at once from the pty's ~20 kB behind it) was
-  // shorter at a write than after the write before, or a write found room after one had not.
-  bool host_read_ = false;
-  bool pty_full_ = false;
-  int queued_after_write_ = 0;
+  // Whether a host has opened the pty: inotify's IN_OPEN on its path (our own end was opened
+  // before the watch). Where the watch cannot be set, the losses are not split.
+  Fd opens_;
+  bool host_opened_ = false;
 };
 
 // A gap between two ticks longer than this: the emulator did not keep real time.
@@ -221,15 +220,28 @@ void EmulatorLink::noteTick(int64_t now) {
   }
 }
 
-// Said once, at the end, split at the host's first read: bytes lost before it mean a host that
-// opened the pty late (or not at all), bytes lost after it a host that did not read in time.
+// Said once, at the end, split at the host's opening of the pty: bytes lost before it mean a
+// host that started late (or never), bytes lost after it a host that did not read in time.
 void EmulatorLink::reportUnread() {
   info_ << "emulator: the pty had no room for " << unread_before_host_ + unread_bytes_
-        << " of the bytes the device sent: " << unread_before_host_
-        << " before a host first read from it (it opened the pty late, or never), " << unread_bytes_
-        << " after (the host did not read in time: a real UART drops them the same way)"
-        << std::endl;
+        << " of the bytes the device sent";
+  if (opens_) {
+    info_ << ": " << unread_before_host_ << " before a host opened it (it started late, or never), "
+          << unread_bytes_
+          << " after (the host did not read in time: a real UART drops them the same way)";
+  } else {
+    info_ << " (while no host had it open, or while the host did not read in time: a real UART "
+             "drops them the same way)";
+  }
+  info_ << std::endl;
   unread_bytes_ = unread_before_host_ = 0;
+}
+
+// Whether a host has opened the pty since the last look (inotify's IN_OPEN on its path).
+void EmulatorLink::noteHostOpen() {
+  if (!opens_ || host_opened_) return;
+  alignas(inotify_event) char buf[4096];
+  for (ssize_t n; (n = ::read(opens_.fd, buf, sizeof buf)) > 0;) host_opened_ = true;
 }
 
 void EmulatorLink::reportLag(int64_t now) {
@@ -250,9 +262,11 @@ void EmulatorLink::reportLag(int64_t now) {
 void EmulatorLink::powerUp(int64_t now) {
   device_ = make_device_(now);
   if (options_.pty) {
-    host_read_ = pty_full_ = false;  // a new pty: nobody has read from it
-    queued_after_write_ = 0;
-    announcePty(openPty(&master_, &slave_));
+    const std::string path = openPty(&master_, &slave_);
+    host_opened_ = false;  // a new pty: nobody has opened it
+    opens_.reset(::inotify_init1(IN_NONBLOCK | IN_CLOEXEC));
+    if (opens_ && ::inotify_add_watch(opens_.fd, path.c_str(), IN_OPEN) < 0) opens_.reset(-1);
+    announcePty(path);
   } else {
     listener_.reset(listenOn(address_, options_.listen));
     info_ << "emulator: listening on " << options_.listen << std::endl;
@@ -347,15 +361,10 @@ void EmulatorLink::injectByteFaults(std::string* out) {
 void EmulatorLink::transmit(const std::string& out) {
   if (options_.pty) {
     // A UART sends whether or not anybody reads: what does not fit is lost.
-    int queued = 0;
-    if (!host_read_ && ::ioctl(slave_.fd, FIONREAD, &queued) == 0 && queued < queued_after_write_)
-      host_read_ = true;
     const ssize_t n = ::write(master_.fd, out.data(), out.size());
     const size_t lost = out.size() - static_cast<size_t>(std::max<ssize_t>(n, 0));
-    if (pty_full_ && n > 0) host_read_ = true;  // room again after it was full
-    pty_full_ = lost > 0;
-    (burst_ ? lost_bytes_ : host_read_ ? unread_bytes_ : unread_before_host_) += lost;
-    if (!host_read_ && ::ioctl(slave_.fd, FIONREAD, &queued) == 0) queued_after_write_ = queued;
+    if (lost > 0) noteHostOpen();
+    (burst_ ? lost_bytes_ : host_opened_ || !opens_ ? unread_bytes_ : unread_before_host_) += lost;
     return;
   }
   pending_ += out;
