@@ -267,9 +267,10 @@ QueryPlanes queryPlanes(const std::vector<int>& queries, const Cloud& c, const O
   std::vector<int> count;
   for (size_t q = 0; q < queries.size(); ++q) {
     const int g = oo.plane_cell_m > 0.0 ? groups->of_ray[size_t(queries[q])] : -1;
-    int& slot = g >= 0 ? slot_of_group[size_t(g)] : qp.slot[q];
-    if (g < 0 || slot < 0) {
+    int slot = g >= 0 ? slot_of_group[size_t(g)] : -1;
+    if (slot < 0) {  // the query's group is new to this search, or it has none
       slot = int(sum.size());
+      if (g >= 0) slot_of_group[size_t(g)] = slot;
       sum.push_back(Eigen::Vector3d::Zero());
       count.push_back(0);
     }

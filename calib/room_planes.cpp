@@ -104,6 +104,7 @@ bool ownRay(const Eigen::Vector3d& n, double d, const Eigen::Vector3d& o, const 
 struct ClutterBox {
   Eigen::Vector3d e1, e2;
   Eigen::Vector2d lo, hi;
+  double sigmas = 0.0;  // how far its region stood out
 };
 
 // Where the ray o -> p meets the plane (n, d), if it runs towards it.
@@ -330,6 +331,7 @@ std::optional<ClutterBox> findClutter(const std::vector<Eigen::Vector3f>& cloud,
   b.e2 = c.e2;
   b.lo = c.lo + c.cell * Eigen::Vector2d(u0 - kClutterGrowCells, v0 - kClutterGrowCells);
   b.hi = c.lo + c.cell * Eigen::Vector2d(u1 + 1 + kClutterGrowCells, v1 + 1 + kClutterGrowCells);
+  b.sigmas = best;
   return b;
 }
 
@@ -358,12 +360,13 @@ RefinedPlane refinePlane(const std::vector<Eigen::Vector3f>& cloud,
     return next;
   };
   while (r.ok && search && int(clutter.size()) < search->max_regions) {
-    const std::optional<ClutterBox> box = findClutter(cloud, origins, r, *search, search->sigmas);
-    if (!box) {
+    // One scan for both: the region that stands out most, certain clutter or maybe.
+    const std::optional<ClutterBox> box =
+        findClutter(cloud, origins, r, *search, std::min(search->ambiguous_sigmas, search->sigmas));
+    if (!box) break;
+    if (!(box->sigmas > search->sigmas)) {
       // Nothing stands out for certain; a region that may be clutter widens the sigma.
-      const std::optional<ClutterBox> maybe =
-          findClutter(cloud, origins, r, *search, search->ambiguous_sigmas);
-      const std::optional<RefinedPlane> alt = maybe ? without(*maybe) : std::nullopt;
+      const std::optional<RefinedPlane> alt = without(*box);
       if (alt) {
         r.ambiguity_m = std::abs(alt->normal.dot(r.centroid) + alt->offset);
         r.offset_sigma = std::hypot(r.offset_sigma, r.ambiguity_m);
