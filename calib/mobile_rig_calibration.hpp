@@ -9,7 +9,9 @@
 //      error no turn rate shows; it moves the world points of the passes, as the mounting
 //      (gamma, beta, alpha), its lever arm and the lidar-to-odometry time offset do. These
 //      are one least squares (calib/overlap_alignment.hpp) on the odometry re-run with the
-//      corrected wheels, its track linearised in e by re-running it with the scale moved.
+//      corrected wheels, its track linearised in e by re-running it with the scale moved: each
+//      point against the plane of its patch (both passes' points, the plane eliminated), each
+//      sigma the larger of that solve's and point-to-plane's at the same solution.
 //      Iterated twice (the odometry re-run at the new scale).
 //   3. A parameter whose sigma exceeds its observability bound is reported unobservable,
 //      held at nominal, and the least squares solved again without it.

@@ -1120,18 +1120,22 @@ Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradi
     const Eigen::MatrixXd S = Hinv * two_way * Hinv;
     M = S.diagonal().minCoeff() > 0 ? two_way : Eigen::MatrixXd(M + Mt);
   }
-  Eigen::MatrixXd S = Hinv * M * Hinv;
-  Eigen::VectorXd scale(F);
-  for (int i = 0; i < F; ++i) {
-    const double c = classic(free[size_t(i)], free[size_t(i)]);
-    scale(i) = S(i, i) > 0 && S(i, i) < c ? std::sqrt(c / S(i, i)) : 1.0;
-  }
-  S = scale.asDiagonal() * S * scale.asDiagonal();
+  Eigen::VectorXd at_least(F);
+  for (int i = 0; i < F; ++i) at_least(i) = classic(free[size_t(i)], free[size_t(i)]);
+  const Eigen::MatrixXd S = widenedTo(Hinv * M * Hinv, at_least);
   Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(P, P);
   for (int i = 0; i < F; ++i) {
     for (int j = 0; j < F; ++j) cov(free[size_t(i)], free[size_t(j)]) = S(i, j);
   }
   return cov;
+}
+
+Eigen::MatrixXd widenedTo(const Eigen::MatrixXd& cov, const Eigen::VectorXd& variance) {
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(cov.rows());
+  for (Eigen::Index i = 0; i < cov.rows(); ++i) {
+    if (cov(i, i) > 0.0 && cov(i, i) < variance(i)) scale(i) = std::sqrt(variance(i) / cov(i, i));
+  }
+  return scale.asDiagonal() * cov * scale.asDiagonal();
 }
 
 OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& model,

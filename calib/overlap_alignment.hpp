@@ -88,9 +88,10 @@ struct OverlapOptions {
   // one residual against the patch's plane, the plane (offset and tilt) eliminated, so each
   // point's noise enters once. Point-to-plane compares every query with the local plane of
   // the other pass's k nearest points: their noise enters every query that leans on them.
-  // Off: on rig B's plan drive it halves the sigmas in a fifth of the CPU time, but alpha and
-  // the time offset move with patch_m by more than their sigmas (the EKF track's error, which
-  // they do not cover): docs/explanation/results.md, rig B.
+  // Off by default: its covariance holds the range noise, not the EKF track's error (over 15
+  // seeds of rig B's plan drive, alpha's sigma 2.1 and the time offset's 1.7 times too small).
+  // Rig B's calib rig uses it and widens each sigma to point-to-plane's where that is larger
+  // (calib/mobile_rig_calibration.cpp; docs/explanation/results.md, rig B, "Fifteen seeds").
   bool patch_residuals = false;
   double patch_m = 0.25;
   // Rounds whose parameter change is below this re-linearise without a new search.
@@ -113,6 +114,10 @@ struct OverlapResult {
   int searches = 0;
   int64_t local_planes = 0;  // point-to-plane: the places local planes were fitted at, summed
 };
+
+// cov with each row and column i scaled so that its variance is at least variance(i), the
+// correlations kept (a covariance that leaves out an error source, widened to one that holds it).
+Eigen::MatrixXd widenedTo(const Eigen::MatrixXd& cov, const Eigen::VectorXd& variance);
 
 OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& model,
                            const Eigen::VectorXd& x0, const OverlapOptions& options);

@@ -160,5 +160,27 @@ TEST(OverlapAlignment, QueriesInOneCellShareTheirLocalPlanes) {
   for (int t : {1, 3}) EXPECT_EQ(align(0.04, t).x, shared.x) << t << " threads";
 }
 
+// Widening a covariance to another's variances: each smaller variance raised to the other's, the
+// larger kept, the correlations unchanged (rig B's calib rig widens the patches' covariance to
+// point-to-plane's this way).
+TEST(OverlapAlignment, WidenedToRaisesOnlyTheSmallerVariancesAndKeepsTheCorrelations) {
+  Eigen::MatrixXd cov(3, 3);
+  cov << 4.0, 1.2, -0.6,  //
+      1.2, 1.0, 0.3,      //
+      -0.6, 0.3, 0.25;
+  const Eigen::VectorXd other = Eigen::Vector3d(1.0, 9.0, 0.0);
+  const Eigen::MatrixXd w = widenedTo(cov, other);
+  EXPECT_DOUBLE_EQ(w(0, 0), 4.0);  // already wider
+  EXPECT_DOUBLE_EQ(w(1, 1), 9.0);
+  EXPECT_DOUBLE_EQ(w(2, 2), 0.25);
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      EXPECT_NEAR(w(i, j) / std::sqrt(w(i, i) * w(j, j)),
+                  cov(i, j) / std::sqrt(cov(i, i) * cov(j, j)), 1e-12)
+          << i << ", " << j;
+    }
+  }
+}
+
 }  // namespace
 }  // namespace sweepmap
