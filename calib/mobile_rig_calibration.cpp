@@ -68,11 +68,7 @@ void runOdometry(const MobileRigCalibrationInput& in, const MobileWheelParameter
   s->moved = in.odometry(scaled(w, 1.0 + s->step)).track;
 }
 
-// The solver's options over `free`. The residuals are each point's distance from its patch's
-// plane (the plane adjustment: OverlapOptions::patch_residuals), which counts each point's range
-// noise once; point-to-plane counts the other pass's noise again in every query that leans on
-// it. Over 15 seeds of calib plan's drive the patches put beta within 0.3 mrad on 12 and alpha
-// on 15, point-to-plane on 9 and 10 (docs/explanation/results.md, rig B, "Fifteen seeds").
+// The solver's options over `free`, with patch residuals or point-to-plane.
 OverlapOptions solverOptions(const std::vector<bool>& free, const MobileRigCalibrationInput& in,
                              bool patches) {
   OverlapOptions oo;
@@ -89,7 +85,12 @@ OverlapOptions solverOptions(const std::vector<bool>& free, const MobileRigCalib
   return oo;
 }
 
-// One joint solve from x over `free`; the held parameters keep their values in x.
+// One joint solve from x over `free`; the held parameters keep their values in x. The residuals
+// are each point's distance from its patch's plane (the plane adjustment:
+// OverlapOptions::patch_residuals), which counts each point's range noise once; point-to-plane
+// counts the other pass's noise again in every query that leans on it. Over 15 seeds of calib
+// plan's drive the patches put beta within 0.3 mrad on 12 and alpha on 15, point-to-plane on 9
+// and 10 (docs/explanation/results.md, rig B, "Fifteen seeds").
 OverlapResult solve(const std::vector<OverlapRay>& rays, M& model, const Eigen::VectorXd& x,
                     const std::vector<bool>& free, const MobileRigCalibrationInput& in) {
   return alignOverlap(rays, model, x, solverOptions(free, in, true));
@@ -98,16 +99,21 @@ OverlapResult solve(const std::vector<OverlapRay>& rays, M& model, const Eigen::
 // The patches' covariance holds the range noise but not the EKF track's error, which moves
 // every point of a stretch of the drive alike, as alpha and the time offset do: over the 15
 // seeds their sigmas were 2.1 and 1.7 times too small. Point-to-plane's two-way clustered
-// covariance takes that error in (its sigmas honest on the same seeds, mean z^2 0.75-1.40), and
-// counts the other pass's noise more than once. Each sigma becomes the larger of the two, at
-// the same solution (one search), the patches' correlations kept: honest, if wide for beta.
-void widenByPointToPlane(const std::vector<OverlapRay>& rays, M& model,
-                         const MobileRigCalibrationInput& in, const std::vector<bool>& free,
-                         OverlapResult* r) {
+// covariance takes that error in (its full runs' sigmas honest on the same seeds, mean z^2
+// 0.75-1.40), and counts the other pass's noise more than once. One round of it from the
+// patches' solution (one search, its first round untrimmed, the Cauchy loss alone against
+// outliers) gives each parameter's sigma; each becomes the larger of the two, the patches'
+// correlations kept. Measured so on the 15 seeds: mean z^2 0.03-0.83, the largest 1.5 sigma,
+// wide for beta and gamma. Returns why not, if point-to-plane finds too little.
+std::string widenByPointToPlane(const std::vector<OverlapRay>& rays, M& model,
+                                const MobileRigCalibrationInput& in, const std::vector<bool>& free,
+                                OverlapResult* r) {
   OverlapOptions oo = solverOptions(free, in, false);
   oo.base.max_outer_iterations = 1;
   const OverlapResult p2p = alignOverlap(rays, model, r->x, oo);
-  if (p2p.ok) r->covariance = widenedTo(r->covariance, p2p.covariance.diagonal());
+  if (!p2p.ok) return p2p.reason;
+  r->covariance = widenedTo(r->covariance, p2p.covariance.diagonal());
+  return "";
 }
 
 // The covariance of the parameters in `set` from the information matrix; false if singular.
@@ -137,7 +143,11 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
   if (!first.ok) return first;
   std::vector<int> kept = {M::kGamma, M::kBeta, M::kAlpha};
   Eigen::MatrixXd cov;
-  if (!covarianceOf(first.information, kept, &cov)) return first;
+  if (!covarianceOf(first.information, kept, &cov)) {
+    std::fill(free->begin(), free->end(), false);
+    for (int k : kept) (*free)[size_t(k)] = true;
+    return first;
+  }
   const int order[] = {kScale, M::kLeverY, M::kLeverX, M::kLeverZ, M::kTimeOffset};
   for (int k : order) {
     if (!(*free)[size_t(k)]) continue;
@@ -171,7 +181,8 @@ struct Solution {
   bool floor_z = false;  // the lever arm's z from the floor (the passes cannot see it)
   double floor_z_sigma = 0.0;
   std::vector<std::string> room_warnings;
-  bool wheels = false;  // step 1 determined k_L and k_R
+  std::string not_widened;  // why the sigmas were not widened to point-to-plane's ("": they were)
+  bool wheels = false;      // step 1 determined k_L and k_R
   double rms_before = 0.0;
 };
 
@@ -221,6 +232,12 @@ void addWarnings(const MobileRigCalibrationInput& in, const Solution& s, RigCali
     out->warnings.push_back("wheels against the gyro: " + std::to_string(s.wg.trimmed) + " of " +
                             std::to_string(s.wg.trimmed + s.wg.rows) +
                             " windows disagreed beyond the noise (wheel slip) and were left out");
+  }
+  if (!s.not_widened.empty()) {
+    out->warnings.push_back(
+        "the sigmas are the plane patches' alone (point-to-plane at their "
+        "solution: " +
+        s.not_widened + "): alpha's and the time offset's may be up to twice too small");
   }
   if (s.r.chi2_per_dof > 4.0) {
     out->warnings.push_back("the residuals are larger than the lidar's noise explains (chi2/dof " +
@@ -356,8 +373,9 @@ PlacedCloud awayFromStructure(const PlacedCloud& c) {
 // by more than 9 mm at 0.3 m height: 50 mm at 77 deg. A return there may be a mixed pixel
 // between the two ranges, and one beyond the floor lies below it, inside its 3 sigma window.
 // The depth-edge filter's 4 sigma does not see such gaps at 1-2 m. On 15 seeds of calib plan's
-// drive the floor then stood 0.02-0.035 mm low, 3.2-4.7 sigma on three seeds. With this
-// limit the lever arm's z is within 0.022 mm, at most 2.5 sigma.
+// drive the floor then stood 0.02-0.036 mm low, 3.2-4.7 sigma on three seeds. With this
+// limit the lever arm's z is within 0.022 mm, at most 2.5 sigma. (The step is the X4's; a lidar
+// of finer steps has smaller gaps at the same angle, so the limit only costs it some rays.)
 constexpr double kFloorMaxIncidenceRad = 60.0 * M_PI / 180.0;
 PlacedCloud steepRays(const PlacedCloud& c, const Eigen::Vector3d& n) {
   const Eigen::Vector3f nf = n.cast<float>();
@@ -487,7 +505,7 @@ RigCalibration calibrateMobileRig(const MobileRigCalibrationInput& in) {
       return failed;
     }
     if (pass == 0) s.rms_before = s.r.residual_before_m;
-    if (pass + 1 == kPasses) widenByPointToPlane(rays, model, in, try_free, &s.r);
+    if (pass + 1 == kPasses) s.not_widened = widenByPointToPlane(rays, model, in, try_free, &s.r);
     s.free = try_free;
     floorAndRoom(in, rays, model, pass + 1 == kPasses, &s);
     s.x = s.r.x;

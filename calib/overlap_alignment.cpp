@@ -1131,9 +1131,11 @@ Eigen::MatrixXd clusteredCovariance(const std::vector<Residual>& rs, const Gradi
 }
 
 Eigen::MatrixXd widenedTo(const Eigen::MatrixXd& cov, const Eigen::VectorXd& variance) {
+  eigen_assert(cov.rows() == cov.cols() && variance.size() == cov.rows());
   Eigen::VectorXd scale = Eigen::VectorXd::Ones(cov.rows());
   for (Eigen::Index i = 0; i < cov.rows(); ++i) {
-    if (cov(i, i) > 0.0 && cov(i, i) < variance(i)) scale(i) = std::sqrt(variance(i) / cov(i, i));
+    if (cov(i, i) > 0.0 && std::isfinite(variance(i)) && cov(i, i) < variance(i))
+      scale(i) = std::sqrt(variance(i) / cov(i, i));
   }
   return scale.asDiagonal() * cov * scale.asDiagonal();
 }

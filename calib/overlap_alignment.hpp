@@ -15,7 +15,8 @@
 //    covered rays, which shift with the time offset);
 //  - the queries are processed on all cores in fixed chunks whose results are reduced in
 //    chunk order: the result does not depend on the number of threads or their timing.
-// Transport-free; PCL stays in the .cpp.
+// With patch_residuals each point is compared with the plane of its patch instead (rig B's
+// calib rig). Transport-free; PCL stays in the .cpp.
 #pragma once
 
 #include <Eigen/Core>
@@ -117,6 +118,8 @@ struct OverlapResult {
 
 // cov with each row and column i scaled so that its variance is at least variance(i), the
 // correlations kept (a covariance that leaves out an error source, widened to one that holds it).
+// Rows with cov(i, i) <= 0 (held parameters) and non-finite variances are left as they are;
+// variance has cov's size.
 Eigen::MatrixXd widenedTo(const Eigen::MatrixXd& cov, const Eigen::VectorXd& variance);
 
 OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& model,

@@ -164,15 +164,16 @@ TEST(OverlapAlignment, QueriesInOneCellShareTheirLocalPlanes) {
 // larger kept, the correlations unchanged (rig B's calib rig widens the patches' covariance to
 // point-to-plane's this way).
 TEST(OverlapAlignment, WidenedToRaisesOnlyTheSmallerVariancesAndKeepsTheCorrelations) {
-  Eigen::MatrixXd cov(3, 3);
-  cov << 4.0, 1.2, -0.6,  //
-      1.2, 1.0, 0.3,      //
+  Eigen::MatrixXd cov = Eigen::MatrixXd::Zero(4, 4);  // the last parameter held
+  cov.topLeftCorner<3, 3>() << 4.0, 1.2, -0.6,        //
+      1.2, 1.0, 0.3,                                  //
       -0.6, 0.3, 0.25;
-  const Eigen::VectorXd other = Eigen::Vector3d(1.0, 9.0, 0.0);
+  const Eigen::VectorXd other = Eigen::Vector4d(1.0, 9.0, 0.0, 2.0);
   const Eigen::MatrixXd w = widenedTo(cov, other);
   EXPECT_DOUBLE_EQ(w(0, 0), 4.0);  // already wider
   EXPECT_DOUBLE_EQ(w(1, 1), 9.0);
   EXPECT_DOUBLE_EQ(w(2, 2), 0.25);
+  EXPECT_EQ(w.row(3).norm(), 0.0);  // held: stays held
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
       EXPECT_NEAR(w(i, j) / std::sqrt(w(i, i) * w(j, j)),
