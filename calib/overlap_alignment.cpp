@@ -385,13 +385,16 @@ std::vector<Correspondence> search(const std::vector<OverlapRay>& rays, const Cl
 }
 
 // One residual, linear in the parameter change: w (r + J dx), Cauchy loss at `scale`.
+// Its fields are left unset at construction: the forming functions set every one, and a
+// round's residuals (some 100 MB) are not zeroed first.
 struct Residual {
+  Residual() {}  // user-provided: with = default, vector::resize would zero each one
   double r, w, scale;
   Eigen::Matrix<double, 1, kMaxOverlapParameters> J;
   bool keep;
   Eigen::Vector3f at;   // the query's world point (its cluster for the sandwich covariance)
   double t_a_s, t_b_s;  // the query's and its neighbours' (mean) times [s], likewise
-  double dof = 1.0;     // its share of the degrees of freedom (less a patch's plane's)
+  double dof;           // its share of the degrees of freedom (less a patch's plane's)
 };
 
 Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& model,
@@ -433,20 +436,22 @@ Residual formResidual(const std::vector<OverlapRay>& rays, const OverlapModel& m
     res.scale = std::max(o.loss_scale_sigmas, o.loss_scale_m * res.w);
   }
   res.keep = true;
+  res.dof = 1.0;
   return res;
 }
 
-std::vector<Residual> formResiduals(const std::vector<OverlapRay>& rays, const OverlapModel& model,
-                                    const std::vector<Correspondence>& corrs, bool trim,
-                                    const MountingCalibrationOptions& o, int threads) {
-  std::vector<Residual> out(corrs.size());
+// The residuals of `corrs`, into *out (its storage reused from round to round: a round's
+// residuals take some 100 MB).
+void formResiduals(const std::vector<OverlapRay>& rays, const OverlapModel& model,
+                   const std::vector<Correspondence>& corrs, bool trim,
+                   const MountingCalibrationOptions& o, int threads, std::vector<Residual>* out) {
+  out->resize(corrs.size());
   forChunks(corrs.size(), threads, [&](size_t, size_t b, size_t e) {
     for (size_t i = b; i < e; ++i) {
-      out[i] = formResidual(rays, model, corrs[i], o);
-      out[i].keep = !trim || std::abs(out[i].r) <= corrs[i].trim_m;
+      (*out)[i] = formResidual(rays, model, corrs[i], o);
+      (*out)[i].keep = !trim || std::abs((*out)[i].r) <= corrs[i].trim_m;
     }
   });
-  return out;
 }
 
 // ------------------------------------------------------------------ plane adjustment
@@ -871,54 +876,87 @@ void formPatch(const std::vector<OverlapRay>& rays, const OverlapModel& model, c
   for (size_t j = 0; j < slot.size(); ++j) out[slot[j]] = part[j];
 }
 
-std::vector<Residual> formPatchResiduals(const std::vector<OverlapRay>& rays,
-                                         const OverlapModel& model, const Patches& patches,
-                                         bool trim, const MountingCalibrationOptions& o,
-                                         int threads) {
-  std::vector<Residual> out(patches.members.size());
+// Every patch's residuals, into *out (as formResiduals).
+void formPatchResiduals(const std::vector<OverlapRay>& rays, const OverlapModel& model,
+                        const Patches& patches, bool trim, const MountingCalibrationOptions& o,
+                        int threads, std::vector<Residual>* out) {
+  out->resize(patches.members.size());
   forChunks(patches.count(), threads, [&](size_t, size_t b, size_t e) {
     for (size_t k = b; k < e; ++k) {
       const size_t at = patches.begin[k];
-      formPatch(rays, model, &patches.members[at], patches.begin[k + 1] - at, trim, o, &out[at]);
+      formPatch(rays, model, &patches.members[at], patches.begin[k + 1] - at, trim, o, &(*out)[at]);
     }
   });
-  return out;
 }
 
 using Normal = Eigen::Matrix<double, kMaxOverlapParameters, kMaxOverlapParameters>;
 using Gradient = Eigen::Matrix<double, kMaxOverlapParameters, 1>;
 
-// The reweighted normal equations at the change dx (chunk sums reduced in order).
-void normalEquations(const std::vector<Residual>& rs, const Gradient& dx, int threads, Normal* H,
-                     Gradient* g, double* chi2, double* used) {
-  const size_t chunks = (rs.size() + kChunk - 1) / kChunk;
-  std::vector<Normal> Hs(chunks, Normal::Zero());
-  std::vector<Gradient> gs(chunks, Gradient::Zero());
+// A round's kept residuals, laid out for the reweighting: the weighted rows w J over the
+// model's P parameters, the weighted residuals w r, 1 / scale^2 of each's Cauchy loss, and
+// each's share of the degrees of freedom. Only the loss weights change between iterations.
+struct WeightedRows {
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> A;
+  Eigen::VectorXd e0, inv_scale2, dof;
+};
+
+WeightedRows weightedRows(const std::vector<Residual>& rs, int P) {
+  const auto n = Eigen::Index(std::count_if(rs.begin(), rs.end(), [](auto& r) { return r.keep; }));
+  WeightedRows w;
+  w.A.resize(n, P);
+  w.e0.resize(n);
+  w.inv_scale2.resize(n);
+  w.dof.resize(n);
+  Eigen::Index i = 0;
+  for (const Residual& r : rs) {
+    if (!r.keep) continue;
+    w.A.row(i) = r.w * r.J.head(P);
+    w.e0(i) = r.w * r.r;
+    w.inv_scale2(i) = 1.0 / (r.scale * r.scale);
+    w.dof(i) = r.dof;
+    ++i;
+  }
+  return w;
+}
+
+// The reweighted normal equations at the change dx. Each chunk scales its rows by the
+// square roots of their loss weights and takes one symmetric rank update (a blocked
+// product); the chunks' sums are reduced in order, so any thread count gives the same sums.
+void normalEquations(const WeightedRows& w, const Gradient& dx, int threads, Normal* H, Gradient* g,
+                     double* chi2, double* used) {
+  const Eigen::Index P = w.A.cols();
+  const size_t n = size_t(w.A.rows());
+  const size_t chunks = (n + kChunk - 1) / kChunk;
+  std::vector<Eigen::MatrixXd> Hs(chunks, Eigen::MatrixXd::Zero(P, P));
+  std::vector<Eigen::VectorXd> gs(chunks);
   std::vector<double> cs(chunks, 0.0);
   std::vector<double> us(chunks, 0.0);
-  forChunks(rs.size(), threads, [&](size_t c, size_t b, size_t e) {
-    for (size_t i = b; i < e; ++i) {
-      const Residual& r = rs[i];
-      if (!r.keep) continue;
-      const double ei = r.w * (r.r + r.J.dot(dx.transpose()));
-      const double rho1 = 1.0 / (1.0 + ei * ei / (r.scale * r.scale));  // Cauchy
-      const Eigen::Matrix<double, 1, kMaxOverlapParameters> wj = r.w * r.J;
-      Hs[c].noalias() += rho1 * wj.transpose() * wj;
-      gs[c].noalias() += rho1 * ei * wj.transpose();
-      cs[c] += rho1 * ei * ei;
-      us[c] += r.dof;
-    }
+  const Eigen::VectorXd step = dx.head(P);
+  forChunks(n, threads, [&](size_t c, size_t b, size_t e) {
+    const auto rows = w.A.middleRows(Eigen::Index(b), Eigen::Index(e - b));
+    const Eigen::VectorXd ei = w.e0.segment(Eigen::Index(b), rows.rows()) + rows * step;
+    const Eigen::ArrayXd rho1 =  // Cauchy
+        1.0 /
+        (1.0 + ei.array().square() * w.inv_scale2.segment(Eigen::Index(b), rows.rows()).array());
+    gs[c] = rows.transpose() * (rho1 * ei.array()).matrix();
+    cs[c] = (rho1 * ei.array().square()).sum();
+    us[c] = w.dof.segment(Eigen::Index(b), rows.rows()).sum();
+    const Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> scaled =
+        rho1.sqrt().matrix().asDiagonal() * rows;
+    Hs[c].selfadjointView<Eigen::Lower>().rankUpdate(scaled.transpose());
   });
-  H->setZero();
+  Eigen::MatrixXd lower = Eigen::MatrixXd::Zero(P, P);
   g->setZero();
   *chi2 = 0.0;
   *used = 0.0;
   for (size_t c = 0; c < chunks; ++c) {
-    *H += Hs[c];
-    *g += gs[c];
+    lower += Hs[c];
+    g->head(P) += gs[c];
     *chi2 += cs[c];
     *used += us[c];
   }
+  H->setZero();
+  H->topLeftCorner(P, P) = lower.selfadjointView<Eigen::Lower>();
 }
 
 // Iteratively reweighted Gauss-Newton on the round's linear residuals; the change, within
@@ -931,12 +969,13 @@ Gradient solveRound(const std::vector<Residual>& rs, const Eigen::VectorXd& x, i
     if (oo.free.empty() || oo.free[size_t(k)]) free.push_back(k);
   }
   const int F = int(free.size());
+  const WeightedRows rows = weightedRows(rs, P);
   for (int it = 0; it < oo.irls_iterations && F > 0; ++it) {
     Normal H;
     Gradient g;
     double chi2 = 0.0;
     double used = 0.0;
-    normalEquations(rs, dx, threads, &H, &g, &chi2, &used);
+    normalEquations(rows, dx, threads, &H, &g, &chi2, &used);
     Eigen::MatrixXd Hf(F, F);
     Eigen::VectorXd gf(F);
     for (int i = 0; i < F; ++i) {
@@ -1154,6 +1193,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
   double change = 1e300;
   Normal H = Normal::Zero();
   double chi2_dof = 0.0;
+  std::vector<Residual> rs;    // this round's residuals
   std::vector<Residual> last;  // the last round's residuals and change
   Gradient last_dx = Gradient::Zero();
   for (int round = 0; round < o.max_outer_iterations; ++round) {
@@ -1173,9 +1213,10 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
       }
       ++res.searches;
     }
-    const std::vector<Residual> rs =
-        oo.patch_residuals ? formPatchResiduals(rays, model, patches, round > 0, o, threads)
-                           : formResiduals(rays, model, corrs, round > 0, o, threads);
+    if (oo.patch_residuals)
+      formPatchResiduals(rays, model, patches, round > 0, o, threads, &rs);
+    else
+      formResiduals(rays, model, corrs, round > 0, o, threads, &rs);
     const int kept =
         int(std::count_if(rs.begin(), rs.end(), [](const Residual& r) { return r.keep; }));
     if (kept < o.min_correspondences) {
@@ -1195,7 +1236,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
     }
     res.x += dx.head(P);
     if (oo.cluster_m > 0) {
-      last = rs;
+      std::swap(last, rs);  // rs keeps the storage of the round before for the next
       last_dx = dx;
     }
     if (round >= 1 && change < o.convergence_rad) break;
