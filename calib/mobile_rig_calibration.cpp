@@ -142,10 +142,13 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
   const OverlapResult first = solve(rays, model, x, angles, in);
   if (!first.ok) return first;
   std::vector<int> kept = {M::kGamma, M::kBeta, M::kAlpha};
-  Eigen::MatrixXd cov;
-  if (!covarianceOf(first.information, kept, &cov)) {
+  const auto keepOnly = [&] {
     std::fill(free->begin(), free->end(), false);
     for (int k : kept) (*free)[size_t(k)] = true;
+  };
+  Eigen::MatrixXd cov;
+  if (!covarianceOf(first.information, kept, &cov)) {
+    keepOnly();
     return first;
   }
   const int order[] = {kScale, M::kLeverY, M::kLeverX, M::kLeverZ, M::kTimeOffset};
@@ -165,8 +168,7 @@ OverlapResult solveObservable(const std::vector<OverlapRay>& rays, M& model,
       cov = c;
     }
   }
-  std::fill(free->begin(), free->end(), false);
-  for (int k : kept) (*free)[size_t(k)] = true;
+  keepOnly();
   return solve(rays, model, first.x, *free, in);
 }
 
@@ -340,6 +342,18 @@ RangeNoise rangeNoiseOf(const MobileRigCalibrationInput& in) {
   return noise;
 }
 
+// The points of c (with their ray origins) for which keep(point, origin) holds.
+template <class Keep>
+PlacedCloud filtered(const PlacedCloud& c, Keep keep) {
+  PlacedCloud out;
+  for (size_t i = 0; i < c.points.size(); ++i) {
+    if (!keep(c.points[i], c.origins[i])) continue;
+    out.points.push_back(c.points[i]);
+    out.origins.push_back(c.origins[i]);
+  }
+  return out;
+}
+
 // The cloud without the floor near anything standing on it: the (x, y) cells of
 // kStructureCellM holding a point between 2 and 30 cm above the floor, and their neighbours.
 // The foot of a wall or a table leg lies within the floor's window (3 sigma, 9 mm) and all of
@@ -354,18 +368,15 @@ PlacedCloud awayFromStructure(const PlacedCloud& c) {
   for (const Eigen::Vector3f& p : c.points) {
     if (p.z() > 0.02f && p.z() < 0.3f) standing.insert(cellOf(p));
   }
-  PlacedCloud out;
-  for (size_t i = 0; i < c.points.size(); ++i) {
-    const auto [x, y] = cellOf(c.points[i]);
-    bool near = false;
-    for (int dx = -1; dx <= 1 && !near; ++dx) {
-      for (int dy = -1; dy <= 1 && !near; ++dy) near = standing.count({x + dx, y + dy}) > 0;
+  return filtered(c, [&](const Eigen::Vector3f& p, const Eigen::Vector3f&) {
+    const auto [x, y] = cellOf(p);
+    for (int dx = -1; dx <= 1; ++dx) {
+      for (int dy = -1; dy <= 1; ++dy) {
+        if (standing.count({x + dx, y + dy}) > 0) return false;
+      }
     }
-    if (near) continue;
-    out.points.push_back(c.points[i]);
-    out.origins.push_back(c.origins[i]);
-  }
-  return out;
+    return true;
+  });
 }
 
 // The rays of c within kFloorMaxIncidenceRad of the normal n. Rays nearer grazing are
@@ -380,14 +391,9 @@ constexpr double kFloorMaxIncidenceRad = 60.0 * M_PI / 180.0;
 PlacedCloud steepRays(const PlacedCloud& c, const Eigen::Vector3d& n) {
   const Eigen::Vector3f nf = n.cast<float>();
   const float min_cos = float(std::cos(kFloorMaxIncidenceRad));
-  PlacedCloud out;
-  for (size_t i = 0; i < c.points.size(); ++i) {
-    const Eigen::Vector3f d = (c.points[i] - c.origins[i]).normalized();
-    if (std::abs(d.dot(nf)) < min_cos) continue;
-    out.points.push_back(c.points[i]);
-    out.origins.push_back(c.origins[i]);
-  }
-  return out;
+  return filtered(c, [&](const Eigen::Vector3f& p, const Eigen::Vector3f& origin) {
+    return std::abs((p - origin).normalized().dot(nf)) >= min_cos;
+  });
 }
 
 // The lidar's height from the floor: the body frame's xOy plane is the floor, so the floor
