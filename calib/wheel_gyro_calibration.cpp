@@ -83,13 +83,21 @@ bool solveRows(const std::vector<Row>& rows, const std::vector<char>& use, const
     N += w * rows[i].a * rows[i].a.transpose();
     rhs += w * rows[i].a * rows[i].y;
   }
+  // Singular as judged on N with unit diagonal: the bias's entry may outweigh the wheels'
+  // by many orders (the windows at rest weigh 1 / sigma^2 with a small sigma).
+  const Eigen::Vector3d unit = N.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  const Eigen::LDLT<Eigen::Matrix3d> scaled(unit.asDiagonal() * N * unit.asDiagonal());
+  if (scaled.info() != Eigen::Success || !(scaled.vectorD().minCoeff() > 1e-12)) return false;
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(N);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 1e-12 * N.trace()))
-    return false;
   *x = ldlt.solve(rhs);
   *normal = N;
   return true;
 }
+
+// The least scatter a group is given: 1 urad, far below any real gyro's noise over a window
+// (rig B's: about 1 mrad). Noiseless readings (a simulation) fit the windows at rest to
+// rounding; their weight would then swamp the wheels' rows.
+constexpr double kMinGroupSigmaRad = 1e-6;
 
 // Each group's residual scatter over the rows in use (a group without rows keeps its sigma).
 void groupSigmas(const std::vector<Row>& rows, const std::vector<char>& use,
@@ -106,7 +114,7 @@ void groupSigmas(const std::vector<Row>& rows, const std::vector<char>& use,
   const double total = std::max(1, n[0] + n[1]);
   for (int g = 0; g < 2; ++g) {
     const double dof = n[g] - 3.0 * n[g] / total;
-    if (dof > 1.0 && ss[g] > 0) sigma[g] = std::sqrt(ss[g] / dof);
+    if (dof > 1.0) sigma[g] = std::max(kMinGroupSigmaRad, std::sqrt(ss[g] / dof));
   }
 }
 

@@ -20,10 +20,14 @@ struct Drive {
   double k_left, k_right, bias;  // truth
 };
 
-Drive simulate(const std::string& path, double stop_interval_s, uint64_t seed) {
+Drive simulate(const std::string& path, double stop_interval_s, uint64_t seed,
+               bool noiseless = false) {
   const Scene scene(loadScene(std::string(SWEEPMAP_SOURCE_DIR) + "/config/scene_lab.yaml"),
                     PlateConfig{});
   SimMobileConfig c;  // every build error and slip at its default
+  if (noiseless) {    // the build's errors and the gyro's bias kept
+    c.gyro_sigma_rad_s = c.encoder_speed_sigma_fraction = c.slip_mean_interval_s = 0.0;
+  }
   c.path = path;
   c.duration_s = 120.0;
   c.stop_interval_s = stop_interval_s;
@@ -60,6 +64,20 @@ TEST(WheelGyroCalibration, FigureEightWithStopsDeterminesBothWheelsAndTheBias) {
     EXPECT_GT(r.rest_rows, 20);
     EXPECT_GT(r.trimmed, 0);  // the slips
   }
+}
+
+// Noiseless readings (no gyro noise, no encoder noise but the ticks' own steps, no slip): the
+// windows at rest then fit the bias to rounding, and their group's scatter with it. Before, its
+// weight (1 / scatter^2) swamped the normal matrix's trace, the singularity test failed, and
+// the wheels were reported undetermined. The easiest drive must calibrate.
+TEST(WheelGyroCalibration, NoiselessReadingsDetermineBothWheelsAndTheBias) {
+  const Drive d = simulate("figure8", 20.0, 1, true);
+  const WheelGyroResult r = calibrateWheelsAgainstGyro(d.wheels, d.gyro, WheelGyroOptions{});
+  ASSERT_TRUE(r.ok) << r.reason;
+  EXPECT_LT(std::abs(r.x(0) / d.k_left - 1), 1e-3);
+  EXPECT_LT(std::abs(r.x(1) / d.k_right - 1), 1e-3);
+  EXPECT_NEAR(r.x(2), d.bias, 1e-4);
+  for (int k = 0; k < 3; ++k) EXPECT_TRUE(std::isfinite(r.covariance(k, k))) << k;
 }
 
 // A circle at constant speed turns one way at one rate: both wheels always in the same
