@@ -969,8 +969,9 @@ Gradient solveRound(const std::vector<Residual>& rs, const Eigen::VectorXd& x, i
     if (oo.free.empty() || oo.free[size_t(k)]) free.push_back(k);
   }
   const int F = int(free.size());
-  const WeightedRows rows = weightedRows(rs, P);
-  for (int it = 0; it < oo.irls_iterations && F > 0; ++it) {
+  if (F == 0) return dx;
+  const WeightedRows rows = weightedRows(rs, P);  // alive with rs: half as large again
+  for (int it = 0; it < oo.irls_iterations; ++it) {
     Normal H;
     Gradient g;
     double chi2 = 0.0;
@@ -1213,10 +1214,11 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
       }
       ++res.searches;
     }
-    if (oo.patch_residuals)
+    if (oo.patch_residuals) {
       formPatchResiduals(rays, model, patches, round > 0, o, threads, &rs);
-    else
+    } else {
       formResiduals(rays, model, corrs, round > 0, o, threads, &rs);
+    }
     const int kept =
         int(std::count_if(rs.begin(), rs.end(), [](const Residual& r) { return r.keep; }));
     if (kept < o.min_correspondences) {

@@ -71,7 +71,7 @@ TEST(WheelGyroCalibration, FigureEightWithStopsDeterminesBothWheelsAndTheBias) {
 // weight (1 / scatter^2) swamped the normal matrix's trace, the singularity test failed, and
 // the wheels were reported undetermined. The easiest drive must calibrate.
 TEST(WheelGyroCalibration, NoiselessReadingsDetermineBothWheelsAndTheBias) {
-  const Drive d = simulate("figure8", 20.0, 1, true);
+  const Drive d = simulate("figure8", 20.0, 1, /*noiseless=*/true);
   const WheelGyroResult r = calibrateWheelsAgainstGyro(d.wheels, d.gyro, WheelGyroOptions{});
   ASSERT_TRUE(r.ok) << r.reason;
   EXPECT_LT(std::abs(r.x(0) / d.k_left - 1), 1e-3);
