@@ -66,13 +66,38 @@ CubeKey cubeOf(const Eigen::Vector3d& p, double size) {
 
 // The rays `rays_in` grouped by the cube of `at(ray)`: rays in the cubes' key order, and each
 // cube's range of them.
+// Keys within +-2^20 cubes of the origin (42 km at 4 cm) are sorted packed into one word, 21
+// bits a coordinate, in the same order: a third of the time of sorting the arrays.
 template <class At>
 void groupByCube(const std::vector<int>& rays_in, double size, At at, std::vector<CubeKey>* keys,
                  std::vector<int>* rays_out, std::vector<size_t>* begin) {
+  constexpr int64_t kHalf = int64_t(1) << 20;
   std::vector<std::pair<CubeKey, int>> keyed;
   keyed.reserve(rays_in.size());
-  for (int i : rays_in) keyed.push_back({cubeOf(at(i), size), i});
-  std::sort(keyed.begin(), keyed.end());
+  bool packable = true;
+  for (int i : rays_in) {
+    keyed.push_back({cubeOf(at(i), size), i});
+    for (int64_t c : keyed.back().first) packable = packable && c >= -kHalf && c < kHalf;
+  }
+  if (packable) {
+    std::vector<std::pair<uint64_t, int>> packed(keyed.size());
+    for (size_t i = 0; i < keyed.size(); ++i) {
+      const CubeKey& k = keyed[i].first;
+      packed[i] = {
+          uint64_t(k[0] + kHalf) << 42 | uint64_t(k[1] + kHalf) << 21 | uint64_t(k[2] + kHalf),
+          keyed[i].second};
+    }
+    std::sort(packed.begin(), packed.end());
+    constexpr uint64_t kMask = (uint64_t(1) << 21) - 1;
+    for (size_t i = 0; i < keyed.size(); ++i) {
+      const uint64_t w = packed[i].first;
+      keyed[i] = {{int64_t(w >> 42) - kHalf, int64_t((w >> 21) & kMask) - kHalf,
+                   int64_t(w & kMask) - kHalf},
+                  packed[i].second};
+    }
+  } else {
+    std::sort(keyed.begin(), keyed.end());
+  }
   keys->clear();
   rays_out->clear();
   begin->assign(1, 0);

@@ -13,7 +13,8 @@ constexpr double kRadToDeg = 180.0 / M_PI;
 
 // The same angle in (-pi, pi] (exact: std::remainder, no trigonometry).
 inline double wrapAngle(double angle_rad) {
-  const double w = std::remainder(angle_rad, 2.0 * M_PI);  // in [-pi, pi]
+  if (angle_rad > -M_PI && angle_rad <= M_PI) return angle_rad;  // remainder's own answer
+  const double w = std::remainder(angle_rad, 2.0 * M_PI);        // in [-pi, pi]
   return w <= -M_PI ? w + 2.0 * M_PI : w;
 }
 

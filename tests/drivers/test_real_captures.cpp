@@ -583,7 +583,9 @@ TEST(RealCapturesX4External, OneScanPerRevolutionWithEverySample) {
         }
       }
       for (size_t i = 1; i < s.ranges_m.size(); ++i) ASSERT_GT(s.rayUtime(i), s.rayUtime(i - 1));
-      if (k > 0) EXPECT_GT(s.utime, scans[k - 1].rayUtime(scans[k - 1].ranges_m.size() - 1));
+      if (k > 0) {
+        EXPECT_GT(s.utime, scans[k - 1].rayUtime(scans[k - 1].ranges_m.size() - 1));
+      }
     }
     std::cout << x.file << ": " << scans.size() << " turns, " << valid << " valid samples in them, "
               << present << " present (" << 100.0 * double(present) / double(valid) << " %)\n";
