@@ -237,8 +237,7 @@ void addWarnings(const MobileRigCalibrationInput& in, const Solution& s, RigCali
   }
   if (!s.not_widened.empty()) {
     out->warnings.push_back(
-        "the sigmas are the plane patches' alone (point-to-plane at their "
-        "solution: " +
+        "the sigmas are the plane patches' alone (point-to-plane at their solution: " +
         s.not_widened + "): alpha's and the time offset's may be up to twice too small");
   }
   if (s.r.chi2_per_dof > 4.0) {

@@ -925,8 +925,9 @@ struct WeightedRows {
   Eigen::VectorXd e0, inv_scale2, dof;
 };
 
-WeightedRows weightedRows(const std::vector<Residual>& rs, int P) {
-  const auto n = Eigen::Index(std::count_if(rs.begin(), rs.end(), [](auto& r) { return r.keep; }));
+// The rows of the `kept` residuals of rs that keep is set on (alignOverlap has counted them).
+WeightedRows weightedRows(const std::vector<Residual>& rs, int kept, int P) {
+  const auto n = Eigen::Index(kept);
   WeightedRows w;
   w.A.resize(n, P);
   w.e0.resize(n);
@@ -986,7 +987,7 @@ void normalEquations(const WeightedRows& w, const Gradient& dx, int threads, Nor
 
 // Iteratively reweighted Gauss-Newton on the round's linear residuals; the change, within
 // the bounds, and the last normal matrix.
-Gradient solveRound(const std::vector<Residual>& rs, const Eigen::VectorXd& x, int P,
+Gradient solveRound(const std::vector<Residual>& rs, int kept, const Eigen::VectorXd& x, int P,
                     const OverlapOptions& oo, int threads, Normal* H_out, double* chi2_dof) {
   Gradient dx = Gradient::Zero();
   std::vector<int> free;
@@ -995,7 +996,7 @@ Gradient solveRound(const std::vector<Residual>& rs, const Eigen::VectorXd& x, i
   }
   const int F = int(free.size());
   if (F == 0) return dx;
-  const WeightedRows rows = weightedRows(rs, P);  // alive with rs: half as large again
+  const WeightedRows rows = weightedRows(rs, kept, P);  // alive with rs: half as large again
   for (int it = 0; it < oo.irls_iterations; ++it) {
     Normal H;
     Gradient g;
@@ -1252,7 +1253,7 @@ OverlapResult alignOverlap(const std::vector<OverlapRay>& rays, OverlapModel& mo
       return res;
     }
     if (round == 0) res.residual_before_m = plainRms(rs, Gradient::Zero());
-    const Gradient dx = solveRound(rs, res.x, P, oo, threads, &H, &chi2_dof);
+    const Gradient dx = solveRound(rs, kept, res.x, P, oo, threads, &H, &chi2_dof);
     res.residual_after_m = plainRms(rs, dx);
     res.correspondences = kept;
     res.rounds = round + 1;

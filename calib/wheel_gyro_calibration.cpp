@@ -83,9 +83,9 @@ bool solveRows(const std::vector<Row>& rows, const std::vector<char>& use, const
     N += w * rows[i].a * rows[i].a.transpose();
     rhs += w * rows[i].a * rows[i].y;
   }
+  if (!N.allFinite() || !rhs.allFinite()) return false;
   // Singular as judged on N with unit diagonal: the bias's entry may outweigh the wheels'
   // by many orders (the windows at rest weigh 1 / sigma^2 with a small sigma).
-  if (!N.allFinite() || !rhs.allFinite()) return false;
   const Eigen::Vector3d unit = N.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   const Eigen::LDLT<Eigen::Matrix3d> scaled(unit.asDiagonal() * N * unit.asDiagonal());
   if (scaled.info() != Eigen::Success || !(scaled.vectorD().minCoeff() > 1e-12)) return false;
