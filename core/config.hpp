@@ -55,7 +55,7 @@ class ConfigSchema {
     std::string help;
     std::function<void(const std::string& text)> parse;  // throws std::invalid_argument
     std::function<std::string()> format;
-    std::string default_text;  // value when declared
+    std::string default_text = {};  // value when declared (set by addEntry)
   };
   void addEntry(Entry entry);
   void assign(const std::string& key, const std::string& text, const std::string& source);
