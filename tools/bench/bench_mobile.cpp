@@ -18,6 +18,7 @@
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
 #include "tools/bench/proc_stats.hpp"
+#include "tools/offline/calibrate_rig.hpp"
 #include "tools/offline/mobile_log.hpp"
 #include "tools/offline/mobile_rig_calibration.hpp"
 #include "tools/offline/replay_mobile.hpp"
@@ -222,10 +223,13 @@ int benchRigB(const RigBBenchOptions& o, std::ostream& out) {
 // build error at its default, one per seed: its time, and each parameter's error against the
 // truth in sigmas, and the room's size against the scene's.
 void benchRigBCalibrationSeeds(const RigBBenchOptions& o, std::ostream& out) {
-  out << "calib rig (rig B, joint), " << std::setprecision(0) << o.rig_calib_s
-      << " s figure-eight with stops, every build error at its default:\n";
-  const std::vector<std::string> drive = {"sim.path=figure8", "sim.stop_interval_s=20",
-                                          "sim.duration_s=" + std::to_string(o.rig_calib_s)};
+  out << "calib rig (rig B, joint), calib plan's drive ("
+      << calibrationRecordingSimLine(RigKind::kMobileLidar)
+      << "), every build error at its default:\n";
+  std::vector<std::string> drive;  // the plan's --set values
+  for (const std::string& a : calibrationRecordingSimArgs(RigKind::kMobileLidar)) {
+    if (a != "--set") drive.push_back(a);
+  }
   for (int seed = 1; seed <= o.rig_calib_seeds; ++seed) {
     const std::string log_path = o.work + "/rig_b_joint_seed" + std::to_string(seed) + ".lcmlog";
     SimMobileOptions so;

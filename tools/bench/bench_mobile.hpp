@@ -19,7 +19,6 @@ struct RigBBenchOptions {
   double process_feed_s = 12.0;  // log time fed to sweepmap-odometry per IMU rate
   double circle_s = 60.0;        // simulated circle for the replay
   double loop_s = 130.0;         // simulated lab loop for the replay (one lap ~ 125 s)
-  double rig_calib_s = 120.0;    // calib plan's figure-eight for rig B's joint calibration
   int rig_calib_seeds = 5;
 };
 

@@ -43,14 +43,15 @@ const char* const kBenchDescription =
     "point subset), ours (Ceres) against the paper's grid search over its interval at 1 mm "
     "and at 0.1 mm (10x finer), as seconds and a ratio. Then the calibrations (--no-calib "
     "skips them): per rig, `sweepmap calib rig` on the recording `sweepmap calib plan` "
-    "recommends (rig A: 10 mode-7 sweeps; rig B: the 120 s figure-eight with stops; rig C: "
+    "recommends (rig A: 10 mode-7 sweeps; rig B: the 240 s figure-eight with stops; rig C: "
     "the three plates), simulated by `sweepmap sim` with every build error at its default: "
     "the command's wall time, CPU time and peak RSS and each parameter's error against the "
     "simulator's truth; for rig B also the joint calibration on 5 seeds, and the "
     "single-parameter `calib mounting` before issue 23 (its reference solver, minutes) and "
     "today's on the 120 s circle with exact odometry, in the same run: their times and "
-    "mounting errors, and the speed-up of calib rig against the old one. Prints figures; run "
-    "on an idle machine, compare ratios within one run";
+    "mounting errors, and the speed-up against the old one of calib rig on as much driving "
+    "(the plan's drive cut to 120 s). Prints figures; run on an idle machine, compare ratios "
+    "within one run";
 
 struct BenchArgs {
   std::vector<std::string> rigs = {"rig_a", "rig_b", "rig_c"};

@@ -55,6 +55,14 @@ struct RigARecording {
   int sweep_angle_deg = 360;
 };
 
+// The recommended recording of rig B: a figure-eight with a stop after every stop_interval_s
+// of driving, duration_s long (four laps: docs/explanation/results.md, rig B, "The plan's
+// drive: 240 s").
+struct RigBRecording {
+  int duration_s = 240;
+  int stop_interval_s = 20;
+};
+
 // The `sweepmap sim` options after `--rig RIG` that make the recording calib plan recommends
 // for `kind` (its "simulate:" line; `make bench` times calib rig on it), without --out.
 std::vector<std::string> calibrationRecordingSimArgs(RigKind kind);

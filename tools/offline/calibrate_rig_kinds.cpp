@@ -307,7 +307,9 @@ int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
                "heading both ways, so the passes over the same walls separate the mounting's "
                "yaw alpha from the wheels; Miao 2022's circle cannot (it turns one way at one "
                "rate: alpha and the wheels trade off).\n"
-            << "  duration: 120 s (about two laps)\n"
+            << "  duration: " << RigBRecording().duration_s
+            << " s (about four laps; two leave the mounting's pitch beta outside 0.3 mrad on one "
+               "drive in five)\n"
             << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
             << "  simulate: sweepmap sim --rig " << rig_name << " "
             << calibrationRecordingSimLine(RigKind::kMobileLidar) << " --out calib.lcmlog\n"
@@ -325,9 +327,12 @@ std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
               "--set",    "motor.sweep_angle_deg=" + std::to_string(r.sweep_angle_deg),
               "--sweeps", std::to_string(r.sweeps)};
     }
-    case RigKind::kMobileLidar:
-      return {"--set", "sim.path=figure8",  "--set", "sim.stop_interval_s=20",
-              "--set", "sim.duration_s=120"};
+    case RigKind::kMobileLidar: {
+      const RigBRecording r;
+      return {"--set", "sim.path=figure8",
+              "--set", "sim.stop_interval_s=" + std::to_string(r.stop_interval_s),
+              "--set", "sim.duration_s=" + std::to_string(r.duration_s)};
+    }
     case RigKind::kRotatingProfile:
       return {"--set", "sim.scene=plate",
               "--set", "sim.plate_count=" + std::to_string(kPlatePoses),
