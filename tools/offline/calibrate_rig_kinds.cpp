@@ -308,8 +308,8 @@ int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
                "yaw alpha from the wheels; Miao 2022's circle cannot (it turns one way at one "
                "rate: alpha and the wheels trade off).\n"
             << "  duration: " << RigBRecording().duration_s
-            << " s (about four laps; two leave the mounting's pitch beta outside 0.3 mrad on one "
-               "drive in five)\n"
+            << " s (about four laps; two left the mounting's pitch beta outside 0.3 mrad on one "
+               "drive in six)\n"
             << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
             << "  simulate: sweepmap sim --rig " << rig_name << " "
             << calibrationRecordingSimLine(RigKind::kMobileLidar) << " --out calib.lcmlog\n"
