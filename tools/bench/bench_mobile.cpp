@@ -226,10 +226,7 @@ void benchRigBCalibrationSeeds(const RigBBenchOptions& o, std::ostream& out) {
   out << "calib rig (rig B, joint), calib plan's drive ("
       << calibrationRecordingSimLine(RigKind::kMobileLidar)
       << "), every build error at its default:\n";
-  std::vector<std::string> drive;  // the plan's --set values
-  for (const std::string& a : calibrationRecordingSimArgs(RigKind::kMobileLidar)) {
-    if (a != "--set") drive.push_back(a);
-  }
+  const std::vector<std::string> drive = rigBRecordingSets(RigBRecording());  // the plan's
   for (int seed = 1; seed <= o.rig_calib_seeds; ++seed) {
     const std::string log_path = o.work + "/rig_b_joint_seed" + std::to_string(seed) + ".lcmlog";
     SimMobileOptions so;

@@ -63,6 +63,9 @@ struct RigBRecording {
   int stop_interval_s = 20;
 };
 
+// `recording` as the rig file's sim.* values (key=value, for --set) that make it.
+std::vector<std::string> rigBRecordingSets(const RigBRecording& recording);
+
 // The `sweepmap sim` options after `--rig RIG` that make the recording calib plan recommends
 // for `kind` (its "simulate:" line; `make bench` times calib rig on it), without --out.
 std::vector<std::string> calibrationRecordingSimArgs(RigKind kind);

@@ -292,13 +292,21 @@ int printProfileRigPlan(const std::string& rig_name, const Rig& loaded) {
   return 0;
 }
 
-int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
+int printMobileLidarRigPlan(const std::string& rig_name, const Rig& rig) {
+  // The drive's shape and pace: the rig file's sim.* values, which its simulate: line uses. The
+  // floor it needs: the path with 0.25 m to spare at either end and 0.2 m at either side.
+  const SimMobileConfig& drive = std::get<MobileLidarConfig>(rig.config).sim;
+  const RigBRecording recording;
   std::cout << "What to record for `sweepmap calib rig --rig " << rig_name << "` (mobile_lidar):\n"
             << "  scene:    a room with plain walls within the lidar's range on every side (the "
-               "lab), with 4.5 x 2 m of free floor for the car.\n"
-            << "  path:     a figure-eight: two lobes of 0.8 m radius 2.4 m apart, joined by two "
-               "straights that cross in the middle, at 0.2 m/s, stopping for 3 s after every 20 s "
-               "of driving.\n"
+               "lab), with "
+            << drive.figure8_lobe_spacing_m + 2.0 * drive.figure8_radius_m + 0.5 << " x "
+            << 2.0 * drive.figure8_radius_m + 0.4 << " m of free floor for the car.\n"
+            << "  path:     a figure-eight: two lobes of " << drive.figure8_radius_m << " m radius "
+            << drive.figure8_lobe_spacing_m
+            << " m apart, joined by two straights that cross in the middle, at " << drive.speed_m_s
+            << " m/s, stopping for " << drive.stop_duration_s << " s after every "
+            << recording.stop_interval_s << " s of driving.\n"
             << "            Why: the gyro measures the turn rate whatever the wheels are; the "
                "straights fix the ratio of the two radii, the turns both ways fix each radius "
                "against the track, the stops fix the gyro's bias. The distance driven (the radii's "
@@ -307,7 +315,7 @@ int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
                "heading both ways, so the passes over the same walls separate the mounting's "
                "yaw alpha from the wheels; Miao 2022's circle cannot (it turns one way at one "
                "rate: alpha and the wheels trade off).\n"
-            << "  duration: " << RigBRecording().duration_s
+            << "  duration: " << recording.duration_s
             << " s (about four laps; two left the mounting's pitch beta outside 0.3 mrad on one "
                "drive in six)\n"
             << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
@@ -319,6 +327,11 @@ int printMobileLidarRigPlan(const std::string& rig_name, const Rig&) {
   return 0;
 }
 
+std::vector<std::string> rigBRecordingSets(const RigBRecording& recording) {
+  return {"sim.path=figure8", "sim.stop_interval_s=" + std::to_string(recording.stop_interval_s),
+          "sim.duration_s=" + std::to_string(recording.duration_s)};
+}
+
 std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
   switch (kind) {
     case RigKind::kRotatingLidar: {
@@ -328,10 +341,10 @@ std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
               "--sweeps", std::to_string(r.sweeps)};
     }
     case RigKind::kMobileLidar: {
-      const RigBRecording r;
-      return {"--set", "sim.path=figure8",
-              "--set", "sim.stop_interval_s=" + std::to_string(r.stop_interval_s),
-              "--set", "sim.duration_s=" + std::to_string(r.duration_s)};
+      std::vector<std::string> args;
+      for (const std::string& kv : rigBRecordingSets(RigBRecording()))
+        args.insert(args.end(), {"--set", kv});
+      return args;
     }
     case RigKind::kRotatingProfile:
       return {"--set", "sim.scene=plate",
