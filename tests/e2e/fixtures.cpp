@@ -70,10 +70,10 @@ std::vector<std::string> ProcessCommand::operator()(const std::string& name,
 
 namespace {
 
-// The sockets bound to UDP `port` in this process's network namespace (/proc/net/udp: one line
-// per socket, local address as hex "ADDR:PORT").
+// The sockets bound to UDP `port` in the calling thread's network namespace
+// (/proc/thread-self/net/udp: one line per socket, local address as hex "ADDR:PORT").
 size_t udpSocketsOn(uint16_t port) {
-  std::ifstream table("/proc/net/udp");
+  std::ifstream table("/proc/thread-self/net/udp");
   std::string line;
   std::getline(table, line);  // the header
   size_t n = 0;
@@ -90,14 +90,18 @@ size_t udpSocketsOn(uint16_t port) {
 }  // namespace
 
 pid_t Launcher::startSubscriber(const std::string& name, const std::vector<std::string>& argv,
-                                uint16_t port, double timeout_s) {
-  const size_t before = udpSocketsOn(port);
-  const pid_t pid = start(name, argv);
-  for (double t = 0; t < timeout_s && udpSocketsOn(port) <= before && running(pid); t += 0.05) {
-    sleepS(0.05);
-  }
-  EXPECT_GT(udpSocketsOn(port), before) << name << " bound no socket on UDP port " << port
-                                        << " within " << timeout_s << " s: " << said(pid);
+                                uint16_t port, double timeout_s, const NetworkNamespace* ns) {
+  const auto sockets = [&] {
+    size_t n = 0;
+    if (ns == nullptr) return udpSocketsOn(port);
+    ns->run([&] { n = udpSocketsOn(port); });
+    return n;
+  };
+  const size_t before = sockets();
+  const pid_t pid = start(name, argv, ns);
+  for (double t = 0; t < timeout_s && sockets() <= before && running(pid); t += 0.05) sleepS(0.05);
+  EXPECT_GT(sockets(), before) << name << " bound no socket on UDP port " << port << " within "
+                               << timeout_s << " s: " << said(pid);
   return pid;
 }
 

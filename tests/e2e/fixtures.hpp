@@ -83,11 +83,13 @@ class Launcher {
   void setDir(const fs::path& dir) { dir_ = dir; }
   pid_t start(const std::string& name, const std::vector<std::string>& argv,
               const NetworkNamespace* ns = nullptr);
-  // start(), then waits until the process has bound a socket of its own on UDP `port` in this
-  // network namespace (an LCM subscriber is ready: what is sent next reaches it). A test
-  // failure, naming the process and what it said, if none is bound within timeout_s.
+  // start(), then waits until the process has bound a socket of its own on UDP `port` in its
+  // network namespace (`ns`, or this process's) (an LCM subscriber is ready: what is sent next
+  // reaches it). A test failure, naming the process and what it said, if none is bound within
+  // timeout_s.
   pid_t startSubscriber(const std::string& name, const std::vector<std::string>& argv,
-                        uint16_t port, double timeout_s = 30.0);
+                        uint16_t port, double timeout_s = 30.0,
+                        const NetworkNamespace* ns = nullptr);
   // What the process said so far (by its pid or its name).
   std::string said(pid_t pid) const { return said(group_.name(pid)); }
   std::string said(const std::string& name) const;

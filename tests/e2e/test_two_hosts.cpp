@@ -193,15 +193,20 @@ class TwoHostsTest : public ::testing::Test {
     const ProcessCommand proc(shared);
     NetworkNamespace* pi = pi_.get();
     NetworkNamespace* laptop = laptop_.get();
-    const pid_t pi_logger = procs_.start("pi_logger", logger(dir, "pi.lcmlog", o), pi);
+    // Each subscriber has bound its socket before the next starts, and all before the motor
+    // sweeps (the lidar follows the motor's TRUTH_SHAFT).
+    const auto subscriber = [&](const std::string& name, const std::vector<std::string>& argv,
+                                NetworkNamespace* ns) {
+      return procs_.startSubscriber(name, argv, kPort, 30.0, ns);
+    };
+    const pid_t pi_logger = subscriber("pi_logger", logger(dir, "pi.lcmlog", o), pi);
     const pid_t laptop_logger =
-        procs_.start("laptop_logger", logger(dir, "laptop.lcmlog", o), laptop);
-    const pid_t assembler = procs_.start("assembler", proc("assembler"), laptop);
+        subscriber("laptop_logger", logger(dir, "laptop.lcmlog", o), laptop);
+    const pid_t assembler = subscriber("assembler", proc("assembler"), laptop);
     const pid_t mapper =
-        procs_.start("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), laptop);
+        subscriber("mapper", proc("mapper", {"--save", (dir / "live_map.bt").string()}), laptop);
     const pid_t lidar =
-        procs_.start("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "4"}), pi);
-    sleepS(0.7);  // subscribers ready
+        subscriber("lidar", proc("lidar", {"--sim", "--scene", kScene, "--seed", "4"}), pi);
     if (o.intruder) o.intruder->start();
     const pid_t motor = procs_.start(
         "motor", proc("motor", {"--sim", "--sweeps", std::to_string(sweeps), "--seed", "4"}), pi);
