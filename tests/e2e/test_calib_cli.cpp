@@ -13,6 +13,7 @@
 #include <fstream>
 
 #include "core/calibration_file.hpp"
+#include "core/set_arguments.hpp"
 #include "rigs/mobile_lidar.hpp"
 #include "rigs/rotating_lidar.hpp"
 #include "tests/e2e/test_support.hpp"
@@ -171,12 +172,10 @@ std::string circleLog() {
   std::vector<std::string> args = {"--rig",   kRigB,
                                    "--scene", sourcePath("config/scene_lab.yaml"),
                                    "--set",   "sim.duration_s=120"};
-  for (const char* kv :
-       {"sim.wheel_radius_left_error_fraction=0", "sim.wheel_radius_right_error_fraction=0",
-        "sim.wheel_distance_error_m=0", "sim.lever_error_x_m=0", "sim.lever_error_y_m=0",
-        "sim.lever_error_z_m=0", "sim.lidar_time_offset_ms=0"}) {
-    args.insert(args.end(), {"--set", kv});
-  }
+  appendSetArguments(
+      &args, {"sim.wheel_radius_left_error_fraction=0", "sim.wheel_radius_right_error_fraction=0",
+              "sim.wheel_distance_error_m=0", "sim.lever_error_x_m=0", "sim.lever_error_y_m=0",
+              "sim.lever_error_z_m=0", "sim.lidar_time_offset_ms=0"});
   return cachedSimLog("circle_calibration_perfect_build", args);
 }
 

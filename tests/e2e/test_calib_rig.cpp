@@ -17,6 +17,7 @@
 
 #include "core/angles.hpp"
 #include "core/calibration_file.hpp"
+#include "core/set_arguments.hpp"
 #include "rigs/mobile_lidar.hpp"
 #include "rigs/rig_file.hpp"
 #include "rigs/rotating_lidar.hpp"
@@ -162,11 +163,9 @@ TEST(CalibRig, MountingAloneSaysWhenTheWheelsDisagreeWithTheGyro) {
                                       "--set", "sim.path=figure8",
                                       "--set", "sim.stop_interval_s=20",
                                       "--set", "sim.duration_s=40"};
-  for (const char* kv :
-       {"sim.wheel_radius_left_error_fraction=0", "sim.wheel_radius_right_error_fraction=0",
-        "sim.wheel_distance_error_m=0"}) {
-    perfect.insert(perfect.end(), {"--set", kv});
-  }
+  appendSetArguments(&perfect,
+                     {"sim.wheel_radius_left_error_fraction=0",
+                      "sim.wheel_radius_right_error_fraction=0", "sim.wheel_distance_error_m=0"});
   const std::string clean = singleCommandWarnings(
       {"mounting", "--rig", "rig_b", "--logs",
        cachedSimLog("calib_rig_b_figure8_40s_true_wheels", perfect), "--no-paper"},

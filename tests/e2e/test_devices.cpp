@@ -18,6 +18,7 @@
 #include <thread>
 
 #include "core/event_log.hpp"
+#include "core/set_arguments.hpp"
 #include "drivers/io/capture_file.hpp"
 #include "drivers/protocols/wheelboard.hpp"
 #include "processes/channels.hpp"
@@ -187,7 +188,7 @@ class DevicesTest : public PrivateNetworkTest {
               std::vector<std::string> sets = {}) {
     std::vector<std::string> argv = {
         binPath("sweepmap-lidar"), "--rig", rig, "--device", device, "--lcm-url", kUrl};
-    for (const auto& s : sets) argv.insert(argv.end(), {"--set", s});
+    appendSetArguments(&argv, sets);
     return procs_.start("lidar", argv);
   }
   pid_t logger() { return procs_.start("logger", loggerCommand(kUrl, log_)); }
@@ -412,7 +413,7 @@ TEST_P(SerialDevicesTest, PtyStreamsAndComesBackAfterHangUp) {
   const pid_t log = logger();
   std::vector<std::string> args = {"--link", link,          "--rig", "rig_b",    "--truth",
                                    truth_,   "--hangup-at", "5",     "--down-s", "1"};
-  for (const auto& s : c.sets) args.insert(args.end(), {"--set", s});
+  appendSetArguments(&args, c.sets);
   const pid_t emu = emulator(c.model, args);
   sleepS(0.5);
   const pid_t drv = lidar(sourcePath("config/rig_b.yaml"), c.scheme + "://" + link, c.sets);
@@ -563,11 +564,11 @@ TrackError offlineEkfError(const fs::path& dir, const std::vector<std::string>& 
                            const std::string& seed, double* path_max_m = nullptr) {
   const std::string log = (dir / "offline.lcmlog").string();
   std::vector<std::string> sim = {"sim", "--rig", "rig_b", "--seed", seed, "--out", log};
-  for (const auto& s : sets) sim.insert(sim.end(), {"--set", s});
+  appendSetArguments(&sim, sets);
   EXPECT_EQ(sweepmap(sim, dir / "offline_sim.txt"), 0) << readFile(dir / "offline_sim.txt");
   std::vector<std::string> replay = {
       "replay", log, "--rig", "rig_b", "--out", (dir / "offline").string(), "--no-plots"};
-  for (const auto& s : sets) replay.insert(replay.end(), {"--set", s});
+  appendSetArguments(&replay, sets);
   EXPECT_EQ(sweepmap(replay, dir / "offline_replay.txt"), 0)
       << readFile(dir / "offline_replay.txt");
   const auto ekf = poses((dir / "offline" / "derived.lcmlog").string(), channels::kOdometryPose);

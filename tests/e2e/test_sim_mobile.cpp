@@ -8,6 +8,7 @@
 #include <regex>
 
 #include "core/event_log.hpp"
+#include "core/set_arguments.hpp"
 #include "processes/channels.hpp"
 #include "sweepmap/imu_t.hpp"
 #include "sweepmap/lidar_scan_t.hpp"
@@ -32,10 +33,7 @@ std::vector<std::string> simArgs(const std::string& out, const std::string& seed
                                 seed,
                                 "--out",
                                 out};
-  for (const auto& s : sets) {
-    a.push_back("--set");
-    a.push_back(s);
-  }
+  appendSetArguments(&a, sets);
   return a;
 }
 

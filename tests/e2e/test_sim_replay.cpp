@@ -7,6 +7,7 @@
 #include <fstream>
 
 #include "core/event_log.hpp"
+#include "core/set_arguments.hpp"
 #include "sweepmap/truth_sweep_t.hpp"
 #include "tests/e2e/test_support.hpp"
 
@@ -24,7 +25,7 @@ std::vector<std::string> simArgs(int mode, int sweeps, int seed,
                                 "--mode",   std::to_string(mode),
                                 "--sweeps", std::to_string(sweeps),
                                 "--seed",   std::to_string(seed)};
-  for (const auto& s : sets) a.insert(a.end(), {"--set", s});
+  appendSetArguments(&a, sets);
   const auto paper = paperModelArgs();  // the paper's error model
   a.insert(a.end(), paper.begin(), paper.end());
   return a;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "core/rig_components.hpp"
+#include "core/set_arguments.hpp"
 #include "processes/node.hpp"
 #include "sweepmap/pose2d_t.hpp"
 
@@ -71,9 +72,7 @@ std::string cachedSimLog(const std::string& name, const std::vector<std::string>
 // `--set key=0` for each rig-A error and scene artefact the paper's model lacks
 // (SimRigConfig::paperSettings): appended by the tests of the paper's methods.
 inline std::vector<std::string> paperModelArgs() {
-  std::vector<std::string> a;
-  for (const auto& s : SimRigConfig::paperSettings()) a.insert(a.end(), {"--set", s});
-  return a;
+  return setArguments(SimRigConfig::paperSettings());
 }
 // `sweepmap <args> --out DIR` run once per build (as above) for every test process that asks:
 // DIR, the exit status and the command's output (stdout and stderr).

@@ -12,6 +12,7 @@
 #include <variant>
 
 #include "calib/mounting_calibration.hpp"
+#include "core/set_arguments.hpp"
 #include "sim/mobile.hpp"
 #include "tools/bench/proc_stats.hpp"
 #include "tools/offline/calibrate_rig.hpp"
@@ -128,9 +129,7 @@ std::string mrad(const Eigen::Vector3d& e) {
 void benchOldMounting(const CalibrationBenchOptions& o, const Rig& rig, std::ostream& out) {
   RigBRecording cut_recording;
   cut_recording.duration_s = int(std::lround(o.mounting_circle_s));
-  std::vector<std::string> cut;
-  for (const std::string& kv : rigBRecordingSets(cut_recording))
-    cut.insert(cut.end(), {"--set", kv});
+  const std::vector<std::string> cut = setArguments(rigBRecordingSets(cut_recording));
   const std::string cut_path = o.work + "/calib_plan_cut.lcmlog";
   if (!simulateLog(o, rig, cut, cut_path, out)) return;
   ChildRun joint;
@@ -143,10 +142,8 @@ void benchOldMounting(const CalibrationBenchOptions& o, const Rig& rig, std::ost
   out << "  calib rig on the plan's drive cut to " << std::setprecision(0) << o.mounting_circle_s
       << " s: " << std::setprecision(1) << joint.wall_s << " s wall, " << joint.cpu_s << " CPU s\n";
   const std::string log_path = o.work + "/calib_mounting_circle.lcmlog";
-  std::vector<std::string> sim_args;
-  for (const std::string& kv : kExactOdometry) sim_args.insert(sim_args.end(), {"--set", kv});
-  sim_args.insert(sim_args.end(),
-                  {"--set", "sim.duration_s=" + std::to_string(o.mounting_circle_s)});
+  std::vector<std::string> sim_args = setArguments(kExactOdometry);
+  appendSetArguments(&sim_args, {"sim.duration_s=" + std::to_string(o.mounting_circle_s)});
   if (!simulateLog(o, rig, sim_args, log_path, out)) return;
   const auto& config = std::get<MobileLidarConfig>(rig.config);
   const MobileLog log = loadMobileLog(log_path, config);

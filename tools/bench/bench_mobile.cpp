@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/event_log.hpp"
+#include "core/set_arguments.hpp"
 #include "processes/channels.hpp"
 #include "processes/odometry_node.hpp"
 #include "tools/bench/proc_stats.hpp"
@@ -180,7 +181,7 @@ void benchReplay(const RigBBenchOptions& o, std::ostream& out) {
     // --force: the scratch folder of an earlier bench is emptied, not refused.
     std::vector<std::string> args = {o.sweepmap_exe, "replay", log_path,     "--rig",  o.rig,
                                      "--out",        out_dir,  "--no-plots", "--force"};
-    for (const std::string& kv : c.overrides) args.insert(args.end(), {"--set", kv});
+    appendSetArguments(&args, c.overrides);
     const std::string log_txt = out_dir + ".txt";
     const ChildRun run = runChild(args, log_txt, log_txt);
     if (!run.ok) {

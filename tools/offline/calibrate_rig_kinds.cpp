@@ -15,6 +15,7 @@
 #include "core/event_log.hpp"
 #include "core/exit_codes.hpp"
 #include "core/progress.hpp"
+#include "core/set_arguments.hpp"
 #include "tools/offline/calibrate_axis_offset.hpp"
 #include "tools/offline/calibrate_common.hpp"
 #include "tools/offline/calibrate_logs.hpp"
@@ -340,12 +341,8 @@ std::vector<std::string> calibrationRecordingSimArgs(RigKind kind) {
               "--set",    "motor.sweep_angle_deg=" + std::to_string(r.sweep_angle_deg),
               "--sweeps", std::to_string(r.sweeps)};
     }
-    case RigKind::kMobileLidar: {
-      std::vector<std::string> args;
-      for (const std::string& kv : rigBRecordingSets(RigBRecording()))
-        args.insert(args.end(), {"--set", kv});
-      return args;
-    }
+    case RigKind::kMobileLidar:
+      return setArguments(rigBRecordingSets(RigBRecording()));
     case RigKind::kRotatingProfile:
       return {"--set", "sim.scene=plate",
               "--set", "sim.plate_count=" + std::to_string(kPlatePoses),

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/set_arguments.hpp"
 #include "processes/channels.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/offline/runs.hpp"
@@ -44,7 +45,7 @@ struct DemoRun {
   // bin/sweepmap-<name> --rig RIG [--set k=v]... --lcm-url URL <extra>
   pid_t startProcess(const std::string& name, const std::vector<std::string>& extra) {
     std::vector<std::string> argv = {(bin / ("sweepmap-" + name)).string(), "--rig", rig};
-    for (const auto& s : rig_sets) argv.insert(argv.end(), {"--set", s});
+    appendSetArguments(&argv, rig_sets);
     argv.insert(argv.end(), {"--lcm-url", url});
     argv.insert(argv.end(), extra.begin(), extra.end());
     return procs.start(name, argv, logFile(name));
@@ -146,7 +147,7 @@ int rotatingDemo(const DemoOptions& o, const Rig& rig, const std::vector<std::st
                                      run.url,
                                      "--truth",
                                      (run.out / "emulator_truth.lcmlog").string()};
-    for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
+    appendSetArguments(&argv, run.rig_sets);
     emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
     pause(300);  // listening
     lidar = run.startProcess("lidar", {"--device", std::string("scip://") + kDemoEmulatorAddress});
@@ -239,7 +240,7 @@ std::optional<CarProcesses> startEmulatedCar(DemoRun& run, const std::string& sc
   for (const auto& l : links) argv.insert(argv.end(), {"--link", l});
   argv.insert(argv.end(), {"--rig", run.rig, "--scene", scene, "--seed", seed, "--start-utime",
                            start, "--publish-truth", "--lcm-url", run.url});
-  for (const auto& s : run.rig_sets) argv.insert(argv.end(), {"--set", s});
+  appendSetArguments(&argv, run.rig_sets);
   CarProcesses car;
   car.emulator = run.procs.start("emulator", argv, run.logFile("emulator"));
   if (!waitForPaths(links, 10.0)) {
