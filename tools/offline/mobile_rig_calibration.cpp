@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include "calib/mobile_rig_calibration.hpp"
+#include "core/heap_reuse.hpp"
 #include "core/progress.hpp"
 #include "rigs/rig_file.hpp"
 #include "tools/offline/mobile_log.hpp"
@@ -44,6 +45,7 @@ Eigen::Vector3d simulatedRoom(const truth_mounting_t& m) {
 }  // namespace
 
 RigCalibration runMobileRigCalibration(const MobileRigCalibRequest& request) {
+  keepFreedMemoryForReuse();  // the joint solve's rounds: core/heap_reuse.hpp
   const MobileLidarConfig rig = loadMobileLidarConfig(resolveRigFile(request.rig), request.sets);
   ProgressOptions po;
   po.enabled = request.progress;
