@@ -1,7 +1,7 @@
 // Rig B's joint calibration (tools/offline/mobile_rig_calibration.hpp) on the first half of
-// calib plan's drive (a figure-eight with stops, 120 s of its 240, to keep the test's time; the
+// calib plan's drive (a figure-eight with stops, 120 s of its 360, to keep the test's time; the
 // whole drive's figures on 30 seeds are in docs/explanation/results.md, rig B, "The plan's
-// drive: 240 s") with every build error of the simulator at its default (wheel
+// drive: 360 s") with every build error of the simulator at its default (wheel
 // radii, track, lever arm, clock offset, gyro bias, mounting): every parameter determined,
 // the radii within the issue's 0.1 %, alpha within 0.3 mrad, the room's width and height within
 // 1 mm and its length within 5 mm (before the noise-independent weights and the EKF's slip

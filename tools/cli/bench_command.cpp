@@ -43,7 +43,7 @@ const char* const kBenchDescription =
     "point subset), ours (Ceres) against the paper's grid search over its interval at 1 mm "
     "and at 0.1 mm (10x finer), as seconds and a ratio. Then the calibrations (--no-calib "
     "skips them): per rig, `sweepmap calib rig` on the recording `sweepmap calib plan` "
-    "recommends (rig A: 10 mode-7 sweeps; rig B: the 240 s figure-eight with stops; rig C: "
+    "recommends (rig A: 10 mode-7 sweeps; rig B: the 360 s figure-eight with stops; rig C: "
     "the three plates), simulated by `sweepmap sim` with every build error at its default: "
     "the command's wall time, CPU time and peak RSS and each parameter's error against the "
     "simulator's truth; for rig B also the joint calibration on 5 seeds, and the "

@@ -56,10 +56,10 @@ struct RigARecording {
 };
 
 // The recommended recording of rig B: a figure-eight with a stop after every stop_interval_s
-// of driving, duration_s long (four laps: docs/explanation/results.md, rig B, "The plan's
-// drive: 240 s").
+// of driving, duration_s long (about six laps: docs/explanation/results.md, rig B, "The
+// plan's drive: 360 s").
 struct RigBRecording {
-  int duration_s = 240;
+  int duration_s = 360;
   int stop_interval_s = 20;
 };
 

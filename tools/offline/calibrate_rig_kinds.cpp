@@ -317,8 +317,8 @@ int printMobileLidarRigPlan(const std::string& rig_name, const Rig& rig) {
                "yaw alpha from the wheels; Miao 2022's circle cannot (it turns one way at one "
                "rate: alpha and the wheels trade off).\n"
             << "  duration: " << recording.duration_s
-            << " s (about four laps; two left the mounting's pitch beta outside 0.3 mrad on one "
-               "drive in six)\n"
+            << " s (about six laps; four left one of the mounting's angles outside 0.3 mrad on "
+               "three drives in thirty, six on two)\n"
             << "  record:   sweepmap record --rig " << rig_name << " --out calib.lcmlog (live)\n"
             << "  simulate: sweepmap sim --rig " << rig_name << " "
             << calibrationRecordingSimLine(RigKind::kMobileLidar) << " --out calib.lcmlog\n"
