@@ -16,7 +16,8 @@
 //   3. A parameter whose sigma exceeds its observability bound is reported unobservable,
 //      held at nominal, and the least squares solved again without it. (Judged on the patches'
 //      information, before the sigmas are widened: a kept parameter's reported sigma may exceed
-//      its bound on a weak drive.)
+//      its bound on a weak drive.) Chosen in the first iteration; the second, whose odometry
+//      differs only by the scale, solves over the same choice.
 // The covariance: step 1's and step 2's are independent data (block diagonal), carried to the
 // reported parameters by the Jacobian of r = k T0 (1 + e), T = T0 (1 + e).
 // Then the room: its walls, floor and ceiling fitted in the calibrated cloud (RANSAC, one
